@@ -1,0 +1,136 @@
+//! Sets of maps on disk: a folder of PNGs with an optional class list
+//! (`splits.csv` as in the Gibson set, or the generator's `manifest.csv`),
+//! and the names users give them on the command line.
+
+use super::grid::{Grid, SizeClass};
+use super::load::load_png;
+use anyhow::{bail, Context, Result};
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+/// One map file and the class its folder lists for it, if any.
+#[derive(Clone, Debug)]
+pub struct MapEntry {
+    pub name: String,
+    pub path: PathBuf,
+    pub listed_class: Option<SizeClass>,
+}
+
+impl MapEntry {
+    pub fn load(&self) -> Result<Grid> {
+        Ok(load_png(&self.path)?)
+    }
+}
+
+/// Where the Gibson test maps live: `$T2E_GIBSON_DIR`, else `../shared/maps/gibson`
+/// from the working folder or from the project root.
+pub fn gibson_dir() -> Option<PathBuf> {
+    if let Ok(d) = std::env::var("T2E_GIBSON_DIR") {
+        return Some(PathBuf::from(d));
+    }
+    let candidates = [
+        PathBuf::from("../shared/maps/gibson"),
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/maps/gibson"),
+    ];
+    candidates.into_iter().find(|p| p.is_dir())
+}
+
+/// The maps the project ships (its embedded default).
+pub fn shipped_dir() -> PathBuf {
+    let local = PathBuf::from("maps");
+    if local.join("manifest.csv").is_file() {
+        return local;
+    }
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("maps")
+}
+
+/// Reads `map,split[,...]` rows of a class list.
+fn read_class_list(path: &Path) -> Result<BTreeMap<String, SizeClass>> {
+    let mut reader = csv::Reader::from_path(path).with_context(|| format!("{}: cannot read", path.display()))?;
+    let headers = reader.headers()?.clone();
+    let col = |name: &str| headers.iter().position(|h| h.trim() == name);
+    let (Some(map_col), Some(split_col)) = (col("map"), col("split")) else {
+        bail!("{}: needs the columns 'map' and 'split', found {:?}", path.display(), headers);
+    };
+    let mut out = BTreeMap::new();
+    for (i, rec) in reader.records().enumerate() {
+        let rec = rec.with_context(|| format!("{}: row {}", path.display(), i + 2))?;
+        let class: SizeClass = rec[split_col]
+            .parse()
+            .map_err(|e: String| anyhow::anyhow!("{}: row {}, field 'split': {e}", path.display(), i + 2))?;
+        out.insert(rec[map_col].trim().to_string(), class);
+    }
+    Ok(out)
+}
+
+/// All PNG maps of a folder, sorted by name, with their listed classes.
+pub fn list_dir(dir: &Path) -> Result<Vec<MapEntry>> {
+    if !dir.is_dir() {
+        bail!("map folder {} does not exist", dir.display());
+    }
+    let mut classes = BTreeMap::new();
+    for list in ["splits.csv", "manifest.csv"] {
+        let p = dir.join(list);
+        if p.is_file() {
+            classes.extend(read_class_list(&p)?);
+        }
+    }
+    let mut entries = Vec::new();
+    for e in std::fs::read_dir(dir).with_context(|| format!("cannot list {}", dir.display()))? {
+        let path = e?.path();
+        if path.extension().and_then(|x| x.to_str()) != Some("png") {
+            continue;
+        }
+        let name = path.file_stem().unwrap().to_string_lossy().into_owned();
+        entries.push(MapEntry {
+            listed_class: classes.get(&name).copied(),
+            name,
+            path,
+        });
+    }
+    entries.sort_by(|a, b| a.name.cmp(&b.name));
+    if entries.is_empty() {
+        bail!("map folder {} holds no .png map", dir.display());
+    }
+    Ok(entries)
+}
+
+/// Resolves a user's map selection:
+/// - `small`, `medium`, `large`: that class of the Gibson test set;
+/// - `gibson`: all 26 Gibson maps; `shipped`: the project's generated maps;
+/// - a folder, or `FOLDER:CLASS` for one class of a folder;
+/// - a single `.png` file.
+pub fn resolve(spec: &str) -> Result<Vec<MapEntry>> {
+    let gibson = || {
+        gibson_dir().context("the Gibson maps were not found: set T2E_GIBSON_DIR or run from the project root with ../shared/maps/gibson beside it")
+    };
+    let (source, class) = match spec.rsplit_once(':') {
+        Some((dir, c)) if c.parse::<SizeClass>().is_ok() => (dir.to_string(), Some(c.parse::<SizeClass>().unwrap())),
+        _ => (spec.to_string(), None),
+    };
+    let (dir, class) = if let (Ok(c), None) = (source.parse::<SizeClass>(), class) {
+        (gibson()?, Some(c))
+    } else if source == "gibson" {
+        (gibson()?, class)
+    } else if source == "shipped" {
+        (shipped_dir(), class)
+    } else {
+        let p = PathBuf::from(&source);
+        if p.is_file() {
+            let name = p.file_stem().unwrap_or_default().to_string_lossy().into_owned();
+            return Ok(vec![MapEntry { name, path: p, listed_class: None }]);
+        }
+        if !p.is_dir() {
+            bail!("--maps '{spec}': not a size class (small, medium, large), 'gibson', 'shipped', a folder or a .png file");
+        }
+        (p, class)
+    };
+    let mut entries = list_dir(&dir)?;
+    if let Some(c) = class {
+        entries.retain(|e| e.listed_class == Some(c));
+        if entries.is_empty() {
+            bail!("--maps '{spec}': {} lists no {c} map", dir.display());
+        }
+    }
+    Ok(entries)
+}

@@ -1,0 +1,375 @@
+//! Per-map precomputation, so that an environment step does no ray marching
+//! over long distances: an obstacle-padded copy of the grid (patch lookups need
+//! no bounds checks), the clearance of every cell (Euclidean distance
+//! transform), the 12 wall-ray distances of every free cell, and the cells
+//! where robots may be placed.
+
+use super::grid::{Grid, CELL_SIZE};
+use rayon::prelude::*;
+
+/// Obstacle border around the grid in the padded copy; covers the corner of a
+/// rotated 48x48 patch (24 * sqrt 2 < 34 cells) and short rays.
+pub const PAD: usize = 40;
+/// The 12 world ray angles of spec §2 and §7: 0, 30, ..., 330 degrees.
+pub const NUM_RAYS: usize = 12;
+/// Rays of the rule-based robots are searched up to the map's nominal side D.
+pub const LONG_RAY_MAX: f64 = 16.0;
+/// Dilation radius for placement (spec §4).
+pub const PLACEMENT_CLEARANCE: f64 = 0.4;
+/// Half the diagonal of a cell: how far a point can be from its cell centre.
+const HALF_DIAG: f64 = CELL_SIZE * std::f64::consts::SQRT_2 / 2.0;
+
+/// Unit vectors of the 12 world rays, with exact zeros on the axes.
+pub fn ray_dirs() -> [[f64; 2]; NUM_RAYS] {
+    let mut dirs = [[0.0; 2]; NUM_RAYS];
+    for (m, d) in dirs.iter_mut().enumerate() {
+        let a = (m as f64 * 30.0).to_radians();
+        let snap = |v: f64| if v.abs() < 1e-12 { 0.0 } else { v };
+        *d = [snap(a.cos()), snap(a.sin())];
+    }
+    dirs
+}
+
+/// Which kind of cell boundary a ray stopped at.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Face {
+    /// A boundary of constant x (a column boundary).
+    Vertical,
+    /// A boundary of constant y (a row boundary).
+    Horizontal,
+    /// The ray started inside an obstacle, or found none before its limit.
+    None,
+}
+
+pub struct PreparedMap {
+    pub grid: Grid,
+    /// Row stride of `obstacle`.
+    pub stride: usize,
+    /// (side + 2 PAD)^2 cells, 1 = obstacle; the grid sits at offset (PAD, PAD).
+    pub obstacle: Vec<u8>,
+    /// Per grid cell: distance (m) from its centre to the nearest obstacle cell centre.
+    pub clearance: Vec<f32>,
+    /// Per grid cell: distance (m) from its centre along each world ray to the
+    /// first obstacle, capped at LONG_RAY_MAX; zero for obstacle cells.
+    wall_rays: Vec<[f32; NUM_RAYS]>,
+    /// Bit m set: ray m of that cell stopped at a vertical face.
+    wall_faces: Vec<u16>,
+    /// Grid indices of free cells whose centre is more than 0.4 m from any obstacle.
+    pub spawn_cells: Vec<u32>,
+}
+
+impl PreparedMap {
+    pub fn new(grid: Grid) -> PreparedMap {
+        let side = grid.side();
+        let stride = side + 2 * PAD;
+        let mut obstacle = vec![1u8; stride * stride];
+        for r in 0..side {
+            for c in 0..side {
+                if grid.is_free(r as isize, c as isize) {
+                    obstacle[(r + PAD) * stride + c + PAD] = 0;
+                }
+            }
+        }
+        let edt = squared_edt(&obstacle, stride);
+        let clearance: Vec<f32> = (0..side * side)
+            .map(|i| {
+                let (r, c) = (i / side, i % side);
+                (edt[(r + PAD) * stride + c + PAD] as f64).sqrt() as f32 * CELL_SIZE as f32
+            })
+            .collect();
+        let spawn_cells = (0..side * side)
+            .filter(|&i| clearance[i] as f64 > PLACEMENT_CLEARANCE + 1e-9)
+            .map(|i| i as u32)
+            .collect();
+        let mut map = PreparedMap {
+            grid,
+            stride,
+            obstacle,
+            clearance,
+            wall_rays: Vec::new(),
+            wall_faces: Vec::new(),
+            spawn_cells,
+        };
+        let dirs = ray_dirs();
+        let rows: Vec<(Vec<[f32; NUM_RAYS]>, Vec<u16>)> = (0..side)
+            .into_par_iter()
+            .map(|r| {
+                let mut rays = vec![[0f32; NUM_RAYS]; side];
+                let mut faces = vec![0u16; side];
+                for c in 0..side {
+                    if !map.grid.is_free(r as isize, c as isize) {
+                        continue;
+                    }
+                    let p = map.grid.cell_center(r, c);
+                    for (m, dir) in dirs.iter().enumerate() {
+                        let (d, face) = map.ray_distance(p, *dir, LONG_RAY_MAX);
+                        rays[c][m] = d as f32;
+                        if face == Face::Vertical {
+                            faces[c] |= 1 << m;
+                        }
+                    }
+                }
+                (rays, faces)
+            })
+            .collect();
+        for (rays, faces) in rows {
+            map.wall_rays.extend(rays);
+            map.wall_faces.extend(faces);
+        }
+        map
+    }
+
+    pub fn side(&self) -> usize {
+        self.grid.side()
+    }
+
+    /// Index into `obstacle` of grid cell (row, col); valid for rows and
+    /// columns within PAD of the grid.
+    #[inline]
+    pub fn padded_index(&self, row: isize, col: isize) -> usize {
+        ((row + PAD as isize) as usize) * self.stride + (col + PAD as isize) as usize
+    }
+
+    #[inline]
+    fn blocked(&self, row: isize, col: isize) -> bool {
+        let lim = (self.side() + PAD) as isize;
+        if row < -(PAD as isize) || col < -(PAD as isize) || row >= lim || col >= lim {
+            return true;
+        }
+        self.obstacle[self.padded_index(row, col)] != 0
+    }
+
+    /// Clearance (m) of the cell holding `p`; zero outside the grid.
+    #[inline]
+    pub fn clearance_at(&self, p: [f64; 2]) -> f64 {
+        let (r, c) = self.grid.cell_of(p);
+        let side = self.side() as isize;
+        if r < 0 || c < 0 || r >= side || c >= side {
+            return 0.0;
+        }
+        self.clearance[r as usize * self.side() + c as usize] as f64
+    }
+
+    /// Does a disc of radius `radius` at `p` touch an obstacle cell (or leave
+    /// the grid)? Exact test of the whole disc against the cell squares.
+    pub fn disc_touches_obstacle(&self, p: [f64; 2], radius: f64) -> bool {
+        if self.clearance_at(p) >= radius + 2.0 * HALF_DIAG {
+            return false;
+        }
+        let (x, y) = self.grid.to_cell_coords(p);
+        let rr = radius / CELL_SIZE;
+        let (r0, r1) = ((y - rr).floor() as isize, (y + rr).floor() as isize);
+        let (c0, c1) = ((x - rr).floor() as isize, (x + rr).floor() as isize);
+        for row in r0..=r1 {
+            let dy = (row as f64 - y).max(0.0).max(y - (row + 1) as f64);
+            for col in c0..=c1 {
+                if !self.blocked(row, col) {
+                    continue;
+                }
+                let dx = (col as f64 - x).max(0.0).max(x - (col + 1) as f64);
+                if dx * dx + dy * dy < rr * rr {
+                    return true;
+                }
+            }
+        }
+        false
+    }
+
+    /// Exact distance (m) from `p` along unit world direction `dir` to the
+    /// first obstacle cell (grid traversal), capped at `max`.
+    pub fn ray_distance(&self, p: [f64; 2], dir: [f64; 2], max: f64) -> (f64, Face) {
+        let (x, y) = self.grid.to_cell_coords(p);
+        let (dx, dy) = (dir[0], -dir[1]);
+        let (mut col, mut row) = (x.floor() as isize, y.floor() as isize);
+        if self.blocked(row, col) {
+            return (0.0, Face::None);
+        }
+        let axis = |pos: f64, cell: isize, d: f64| -> (isize, f64, f64) {
+            if d > 0.0 {
+                (1, ((cell + 1) as f64 - pos) / d, 1.0 / d)
+            } else if d < 0.0 {
+                (-1, (pos - cell as f64) / -d, -1.0 / d)
+            } else {
+                (0, f64::INFINITY, f64::INFINITY)
+            }
+        };
+        let (step_c, mut t_c, dt_c) = axis(x, col, dx);
+        let (step_r, mut t_r, dt_r) = axis(y, row, dy);
+        let max_cells = max / CELL_SIZE;
+        loop {
+            let (t, face) = if t_c < t_r {
+                col += step_c;
+                let t = t_c;
+                t_c += dt_c;
+                (t, Face::Vertical)
+            } else {
+                row += step_r;
+                let t = t_r;
+                t_r += dt_r;
+                (t, Face::Horizontal)
+            };
+            if t >= max_cells {
+                return (max, Face::None);
+            }
+            if self.blocked(row, col) {
+                return (t * CELL_SIZE, face);
+            }
+        }
+    }
+
+    /// Distance (m) from `p` along world ray m to the first obstacle, up to
+    /// LONG_RAY_MAX, from the table of `p`'s cell corrected for `p`'s offset
+    /// from the cell centre (exact while the ray hits the same wall line).
+    #[inline]
+    pub fn wall_ray(&self, p: [f64; 2], m: usize, dir: [f64; 2]) -> f64 {
+        let (r, c) = self.grid.cell_of(p);
+        let side = self.side() as isize;
+        if r < 0 || c < 0 || r >= side || c >= side {
+            return 0.0;
+        }
+        let i = r as usize * self.side() + c as usize;
+        let d = self.wall_rays[i][m] as f64;
+        if d >= LONG_RAY_MAX || d == 0.0 {
+            return d;
+        }
+        let centre = self.grid.cell_center(r as usize, c as usize);
+        let corrected = if self.wall_faces[i] & (1 << m) != 0 {
+            d - (p[0] - centre[0]) / dir[0]
+        } else {
+            d - (p[1] - centre[1]) / dir[1]
+        };
+        corrected.clamp(0.0, LONG_RAY_MAX)
+    }
+}
+
+/// Squared Euclidean distance (in cells) from every cell centre to the nearest
+/// obstacle cell centre (Felzenszwalb & Huttenlocher, two 1-D passes).
+fn squared_edt(obstacle: &[u8], stride: usize) -> Vec<f32> {
+    const INF: f32 = 1e20;
+    let n = stride;
+    let mut grid: Vec<f32> = obstacle.iter().map(|&o| if o != 0 { 0.0 } else { INF }).collect();
+    let mut f = vec![0f32; n];
+    let mut d = vec![0f32; n];
+    let mut v = vec![0usize; n];
+    let mut z = vec![0f32; n + 1];
+    let mut pass = |get: &mut dyn FnMut(usize) -> f32, f: &mut Vec<f32>, d: &mut Vec<f32>| {
+        for (q, fq) in f.iter_mut().enumerate() {
+            *fq = get(q);
+        }
+        let mut k = 0usize;
+        v[0] = 0;
+        z[0] = -INF;
+        z[1] = INF;
+        for q in 1..n {
+            loop {
+                let p = v[k];
+                let s = ((f[q] + (q * q) as f32) - (f[p] + (p * p) as f32)) / (2.0 * q as f32 - 2.0 * p as f32);
+                if s <= z[k] && k > 0 {
+                    k -= 1;
+                    continue;
+                }
+                if s <= z[k] {
+                    // k == 0: the new parabola replaces the first one.
+                    v[0] = q;
+                    z[0] = -INF;
+                    z[1] = INF;
+                } else {
+                    k += 1;
+                    v[k] = q;
+                    z[k] = s;
+                    z[k + 1] = INF;
+                }
+                break;
+            }
+        }
+        k = 0;
+        for (q, dq) in d.iter_mut().enumerate() {
+            while z[k + 1] < q as f32 {
+                k += 1;
+            }
+            let p = v[k];
+            *dq = (q as f32 - p as f32).powi(2) + f[p];
+        }
+    };
+    for c in 0..n {
+        pass(&mut |r| grid[r * n + c], &mut f, &mut d);
+        for r in 0..n {
+            grid[r * n + c] = d[r];
+        }
+    }
+    for r in 0..n {
+        pass(&mut |c| grid[r * n + c], &mut f, &mut d);
+        grid[r * n..(r + 1) * n].copy_from_slice(&d);
+    }
+    grid
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A 320-cell grid with a free rectangle of rows r0..r1, cols c0..c1.
+    pub fn room(r0: usize, r1: usize, c0: usize, c1: usize) -> Grid {
+        let mut g = Grid::blocked("room", 320);
+        for r in r0..r1 {
+            for c in c0..c1 {
+                g.set_free(r, c, true);
+            }
+        }
+        g
+    }
+
+    #[test]
+    fn clearance_matches_brute_force() {
+        let mut g = room(100, 140, 100, 160);
+        g.set_free(120, 130, false);
+        let m = PreparedMap::new(g.clone());
+        for &(r, c) in &[(101usize, 101usize), (120, 131), (110, 150), (139, 159), (125, 125)] {
+            let mut best = f64::INFINITY;
+            for rr in 0..320 {
+                for cc in 0..320 {
+                    if !g.is_free(rr, cc) {
+                        let d = ((rr - r as isize).pow(2) + (cc - c as isize).pow(2)) as f64;
+                        best = best.min(d.sqrt() * CELL_SIZE);
+                    }
+                }
+            }
+            let got = m.clearance[r * 320 + c] as f64;
+            assert!((got - best).abs() < 1e-5, "({r},{c}): {got} vs {best}");
+        }
+    }
+
+    #[test]
+    fn rays_hit_walls_at_the_right_distance() {
+        // Free rows 100..140, cols 100..160: the room spans x in [-3, 0], y in [1, 3].
+        let m = PreparedMap::new(room(100, 140, 100, 160));
+        let dirs = ray_dirs();
+        let p = [-1.0, 2.0];
+        let (d, face) = m.ray_distance(p, dirs[0], 16.0);
+        assert!((d - 1.0).abs() < 1e-9 && face == Face::Vertical);
+        let (d, face) = m.ray_distance(p, dirs[3], 16.0); // straight up to y = 3
+        assert!((d - 1.0).abs() < 1e-9 && face == Face::Horizontal);
+        let (d, _) = m.ray_distance(p, dirs[1], 16.0); // 30 deg: x hits 0 at 1/cos30 = 1.1547, y at 3 after 2
+        assert!((d - 1.0 / 30f64.to_radians().cos()).abs() < 1e-9);
+        assert_eq!(m.ray_distance(p, dirs[0], 0.4), (0.4, Face::None));
+        // The table, corrected for the offset from the cell centre, agrees with exact rays.
+        for q in [[-1.013, 2.021], [-0.31, 1.27], [-2.7, 2.9]] {
+            for (k, dir) in dirs.iter().enumerate() {
+                let exact = m.ray_distance(q, *dir, LONG_RAY_MAX).0;
+                let table = m.wall_ray(q, k, *dir);
+                assert!((exact - table).abs() < 1e-6, "{q:?} ray {k}: {exact} vs {table}");
+            }
+        }
+    }
+
+    #[test]
+    fn disc_test_is_exact_near_walls() {
+        let m = PreparedMap::new(room(100, 140, 100, 160)); // x in [-3, 0]
+        assert!(!m.disc_touches_obstacle([-0.2001, 2.0], 0.2));
+        assert!(m.disc_touches_obstacle([-0.1999, 2.0], 0.2));
+        // Near the inner corner (0, 3) both walls count.
+        assert!(!m.disc_touches_obstacle([-0.21, 2.79], 0.2));
+        assert!(m.disc_touches_obstacle([-0.19, 2.79], 0.2));
+        assert!(m.disc_touches_obstacle([5.0, 5.0], 0.2));
+    }
+}
