@@ -1,1 +1,4 @@
+pub mod asz;
+pub mod env;
+pub mod heuristics;
 pub mod map;

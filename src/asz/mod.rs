@@ -1,0 +1,356 @@
+//! Arrival times and the Absolutely Safe Zone (spec §3).
+//!
+//! One first-order Fast Marching pass (Sethian) with many labelled fronts:
+//! every robot starts a front at its own speed and each cell is claimed by the
+//! front that arrives first. Because the region a robot reaches first is
+//! star-shaped around that robot (every point of a shortest path to a cell it
+//! wins is also won by it), a front only ever needs the cells it claims, so
+//! one pass replaces the reference's K+2 separate passes, and the target's
+//! region it builds is already "the part the target reaches without crossing
+//! captor-first cells". The march stops as soon as the target's front is
+//! closed in, so a nearly trapped target costs almost nothing.
+
+use crate::map::{PreparedMap, CELL_AREA, CELL_SIZE};
+use std::cmp::Reverse;
+use std::collections::BinaryHeap;
+
+/// A robot seen by the march: where it is and how fast it can go (m/s).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Source {
+    pub pos: [f64; 2],
+    pub speed: f64,
+}
+
+/// No front has reached the cell (or it is an obstacle).
+pub const NO_LABEL: u8 = u8::MAX;
+
+const FAR: u8 = 0;
+const TRIAL: u8 = 1;
+const FROZEN: u8 = 2;
+
+/// |ASZ| at or below which the strict capture rule fires: pi (1.5 r / 0.05)^2 cells.
+pub fn strict_capture_cells(robot_radius: f64) -> f64 {
+    std::f64::consts::PI * (1.5 * robot_radius / CELL_SIZE).powi(2)
+}
+
+/// Reusable buffers of a multi-label fast march over one map size. Only the
+/// cells touched by the last march are reset, so small marches stay cheap.
+#[derive(Default)]
+pub struct FastMarching {
+    stride: usize,
+    time: Vec<f32>,
+    label: Vec<u8>,
+    state: Vec<u8>,
+    touched: Vec<u32>,
+    heap: BinaryHeap<Reverse<u64>>,
+}
+
+/// Heap key: time bits first (non-negative f32 bits order like the floats),
+/// then the label so that at equal times the lower label (a captor) wins,
+/// then the padded cell index.
+#[inline]
+fn key(time: f32, label: u8, cell: usize) -> u64 {
+    ((time.to_bits() as u64) << 32) | ((label as u64) << 24) | cell as u64
+}
+
+impl FastMarching {
+    pub fn new() -> FastMarching {
+        FastMarching::default()
+    }
+
+    fn prepare(&mut self, map: &PreparedMap) {
+        let n = map.stride * map.stride;
+        assert!(n < (1 << 24), "map too large for the march's heap keys");
+        if self.stride != map.stride || self.time.len() != n {
+            self.stride = map.stride;
+            self.time = vec![f32::INFINITY; n];
+            self.label = vec![NO_LABEL; n];
+            self.state = vec![FAR; n];
+            self.touched.clear();
+        } else {
+            for &c in &self.touched {
+                let c = c as usize;
+                self.time[c] = f32::INFINITY;
+                self.label[c] = NO_LABEL;
+                self.state[c] = FAR;
+            }
+            self.touched.clear();
+        }
+        self.heap.clear();
+    }
+
+    /// Arrival time (s) at padded cell `cell` from the front that claimed it.
+    #[inline]
+    pub fn time(&self, cell: usize) -> f32 {
+        if self.state[cell] == FROZEN {
+            self.time[cell]
+        } else {
+            f32::INFINITY
+        }
+    }
+
+    /// Index of the source that reaches padded cell `cell` first, or NO_LABEL.
+    #[inline]
+    pub fn label(&self, cell: usize) -> u8 {
+        if self.state[cell] == FROZEN {
+            self.label[cell]
+        } else {
+            NO_LABEL
+        }
+    }
+
+    /// The padded cells the last march settled, with their labels.
+    pub fn settled(&self) -> impl Iterator<Item = (usize, u8)> + '_ {
+        self.touched
+            .iter()
+            .map(|&c| c as usize)
+            .filter(|&c| self.state[c] == FROZEN)
+            .map(|c| (c, self.label[c]))
+    }
+
+    /// Solves the first-order eikonal update at `cell` from the settled
+    /// neighbours of the same label.
+    #[inline]
+    fn update_value(&self, cell: usize, label: u8, cost: f32) -> f32 {
+        let s = self.stride;
+        let val = |c: usize| {
+            if self.state[c] == FROZEN && self.label[c] == label {
+                self.time[c]
+            } else {
+                f32::INFINITY
+            }
+        };
+        let a = val(cell - 1).min(val(cell + 1));
+        let b = val(cell - s).min(val(cell + s));
+        let (lo, hi) = if a < b { (a, b) } else { (b, a) };
+        if hi - lo >= cost {
+            lo + cost
+        } else {
+            let diff = hi - lo;
+            0.5 * (lo + hi + (2.0 * cost * cost - diff * diff).sqrt())
+        }
+    }
+
+    /// Marches from all `sources` at once; source i labels its cells i.
+    /// With `stop_label`, stops as soon as no cell is pending for that label
+    /// (its region is then complete). Returns the cells settled with `stop_label`
+    /// (0 without one).
+    pub fn march(&mut self, map: &PreparedMap, sources: &[Source], stop_label: Option<u8>) -> usize {
+        assert!(sources.len() < NO_LABEL as usize);
+        self.prepare(map);
+        let s = self.stride;
+        let costs: Vec<f32> = sources.iter().map(|src| (CELL_SIZE / src.speed) as f32).collect();
+        let mut pending_stop = 0usize;
+        let mut settled_stop = 0usize;
+        for (i, src) in sources.iter().enumerate() {
+            let (r, c) = map.grid.cell_of(src.pos);
+            if !map.grid.is_free(r, c) {
+                continue;
+            }
+            let cell = map.padded_index(r, c);
+            let centre = map.grid.cell_center(r as usize, c as usize);
+            let t = ((src.pos[0] - centre[0]).hypot(src.pos[1] - centre[1]) / src.speed) as f32;
+            self.offer(cell, t, i as u8, stop_label, &mut pending_stop);
+        }
+        while let Some(Reverse(k)) = self.heap.pop() {
+            if stop_label.is_some() && pending_stop == 0 {
+                break;
+            }
+            let cell = (k & 0xFF_FFFF) as usize;
+            let label = ((k >> 24) & 0xFF) as u8;
+            let t = f32::from_bits((k >> 32) as u32);
+            if self.state[cell] != TRIAL || self.label[cell] != label || self.time[cell] != t {
+                continue; // stale entry
+            }
+            self.state[cell] = FROZEN;
+            if Some(label) == stop_label {
+                pending_stop -= 1;
+                settled_stop += 1;
+            }
+            let cost = costs[label as usize];
+            for nb in [cell - 1, cell + 1, cell - s, cell + s] {
+                if self.state[nb] == FROZEN || map.obstacle[nb] != 0 {
+                    continue;
+                }
+                let t = self.update_value(nb, label, cost);
+                self.offer(nb, t, label, stop_label, &mut pending_stop);
+            }
+        }
+        settled_stop
+    }
+
+    /// Proposes time `t` from front `label` for a cell not yet settled.
+    #[inline]
+    fn offer(&mut self, cell: usize, t: f32, label: u8, stop_label: Option<u8>, pending_stop: &mut usize) {
+        let better = t < self.time[cell] || (t == self.time[cell] && label < self.label[cell]);
+        if !better {
+            return;
+        }
+        match self.state[cell] {
+            FAR => {
+                self.touched.push(cell as u32);
+                self.state[cell] = TRIAL;
+            }
+            _ => {
+                if Some(self.label[cell]) == stop_label {
+                    *pending_stop -= 1;
+                }
+            }
+        }
+        if Some(label) == stop_label {
+            *pending_stop += 1;
+        }
+        self.time[cell] = t;
+        self.label[cell] = label;
+        self.heap.push(Reverse(key(t, label, cell)));
+    }
+
+    /// Geodesic distance (m) from `from` to every free cell: one full march at
+    /// unit speed. Read it with `time`.
+    pub fn distance_field(&mut self, map: &PreparedMap, from: [f64; 2]) {
+        self.march(map, &[Source { pos: from, speed: 1.0 }], None);
+    }
+
+    /// |ASZ| in cells: the free cells the target reaches strictly before every
+    /// captor, restricted to the part it reaches without crossing captor-first
+    /// cells. Ties go to the captors; cells nobody reaches belong to nobody.
+    pub fn asz_cells(&mut self, map: &PreparedMap, target: Source, captors: &[Source]) -> usize {
+        let mut sources: Vec<Source> = captors.to_vec();
+        sources.push(target);
+        self.march(map, &sources, Some(captors.len() as u8))
+    }
+}
+
+/// |ASZ| in m^2.
+pub fn cells_to_m2(cells: usize) -> f64 {
+    cells as f64 * CELL_AREA
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::map::Grid;
+
+    fn room(r0: usize, r1: usize, c0: usize, c1: usize) -> Grid {
+        let mut g = Grid::blocked("room", 320);
+        for r in r0..r1 {
+            for c in c0..c1 {
+                g.set_free(r, c, true);
+            }
+        }
+        g
+    }
+
+    /// First-order FMM on a 4-neighbour grid overestimates distances off the
+    /// axes; the error is largest along diagonals (about 0.09 * d close to the
+    /// source, shrinking with distance). Accepted: |fmm - euclid| <= 0.08 d + 0.05 m.
+    #[test]
+    fn open_room_distances_match_euclid_within_first_order_error() {
+        let map = PreparedMap::new(room(20, 300, 20, 300));
+        let mut fm = FastMarching::new();
+        let from = map.grid.cell_center(160, 160);
+        fm.distance_field(&map, from);
+        let mut worst_rel: f64 = 0.0;
+        let mut axis_err: f64 = 0.0;
+        for r in (20..300).step_by(7) {
+            for c in (20..300).step_by(7) {
+                let p = map.grid.cell_center(r, c);
+                let d = (p[0] - from[0]).hypot(p[1] - from[1]);
+                let t = fm.time(map.padded_index(r as isize, c as isize)) as f64;
+                assert!((t - d).abs() <= 0.08 * d + 0.05, "cell ({r},{c}): fmm {t} vs {d}");
+                assert!(t >= d - 1e-3, "first-order FMM never underestimates: {t} < {d}");
+                if d > 3.0 {
+                    worst_rel = worst_rel.max((t - d) / d);
+                }
+                if r == 160 || c == 160 {
+                    axis_err = axis_err.max((t - d).abs());
+                }
+            }
+        }
+        assert!(axis_err < 1e-4, "along the axes the march is exact, got {axis_err}");
+        assert!(worst_rel < 0.06, "relative error beyond 3 m: {worst_rel}");
+    }
+
+    #[test]
+    fn l_shaped_corridor_matches_hand_computed_geodesic() {
+        // Horizontal arm: rows 100..120, cols 100..260; vertical arm: rows 100..260, cols 240..260.
+        let mut g = room(100, 120, 100, 260);
+        for r in 100..260 {
+            for c in 240..260 {
+                g.set_free(r, c, true);
+            }
+        }
+        let map = PreparedMap::new(g);
+        let a = map.grid.cell_center(110, 110); // in the horizontal arm
+        let b = map.grid.cell_center(250, 250); // bottom of the vertical arm
+        // The shortest path bends around the inner corner, the grid vertex at
+        // the top-left of cell (120, 240).
+        let half = map.grid.extent() / 2.0;
+        let corner = [240.0 * CELL_SIZE - half, half - 120.0 * CELL_SIZE];
+        let dist = |p: [f64; 2], q: [f64; 2]| (p[0] - q[0]).hypot(p[1] - q[1]);
+        let geodesic = dist(a, corner) + dist(corner, b);
+        let euclid = dist(a, b);
+        let mut fm = FastMarching::new();
+        fm.distance_field(&map, a);
+        let t = fm.time(map.padded_index(250, 250)) as f64;
+        assert!(geodesic - euclid > 0.9, "the corridor must force a detour");
+        assert!((t - geodesic).abs() <= 0.05 * geodesic, "fmm {t} vs geodesic {geodesic}");
+    }
+
+    #[test]
+    fn asz_is_the_whole_room_without_captors_and_empty_when_boxed_in() {
+        let g = room(100, 140, 100, 160);
+        let free = g.free_cells();
+        let map = PreparedMap::new(g);
+        let mut fm = FastMarching::new();
+        let target = Source { pos: map.grid.cell_center(120, 130), speed: 1.0 };
+        assert_eq!(fm.asz_cells(&map, target, &[]), free);
+
+        // Target in a dead end 1 cell wide and 3 long; a captor in its mouth
+        // reaches every other cell first.
+        let mut g = room(100, 140, 100, 160);
+        for r in 97..100 {
+            g.set_free(r, 130, true);
+        }
+        let map = PreparedMap::new(g);
+        let target = Source { pos: map.grid.cell_center(97, 130), speed: 1.0 };
+        let captor = Source { pos: map.grid.cell_center(99, 130), speed: 1.0 };
+        let boxed = fm.asz_cells(&map, target, &[captor]);
+        assert!(boxed <= 2, "target boxed in a dead end keeps {boxed} cells");
+
+        // Equal distance: ties go to the captor. Target and captor mirror each
+        // other around the middle column of a 1-row corridor.
+        let g = room(100, 101, 100, 111);
+        let map = PreparedMap::new(g);
+        let target = Source { pos: map.grid.cell_center(100, 100), speed: 1.0 };
+        let captor = Source { pos: map.grid.cell_center(100, 110), speed: 1.0 };
+        assert_eq!(fm.asz_cells(&map, target, &[captor]), 5);
+    }
+
+    #[test]
+    fn faster_target_wins_more_and_asz_matches_separate_marches() {
+        let map = PreparedMap::new(room(60, 260, 60, 260));
+        let mut fm = FastMarching::new();
+        let captors: Vec<Source> = [(100, 100), (100, 220), (230, 160)]
+            .iter()
+            .map(|&(r, c)| Source { pos: map.grid.cell_center(r, c), speed: 1.0 })
+            .collect();
+        let pos = map.grid.cell_center(150, 150);
+        let slow = fm.asz_cells(&map, Source { pos, speed: 1.0 }, &captors);
+        let fast = fm.asz_cells(&map, Source { pos, speed: 1.4 }, &captors);
+        assert!(fast > slow && slow > 0, "slow {slow}, fast {fast}");
+
+        // The reference's way: one march per robot, then compare arrival times.
+        let times = |fm: &mut FastMarching, p: [f64; 2], v: f64| {
+            fm.distance_field(&map, p);
+            (0..map.obstacle.len()).map(|c| fm.time(c) as f64 / v).collect::<Vec<_>>()
+        };
+        let te = times(&mut fm, pos, 1.4);
+        let tp: Vec<Vec<f64>> = captors.iter().map(|s| times(&mut fm, s.pos, 1.0)).collect();
+        let separate = (0..te.len())
+            .filter(|&c| te[c].is_finite() && tp.iter().all(|t| te[c] < t[c]))
+            .count();
+        let diff = (separate as f64 - fast as f64).abs() / separate as f64;
+        assert!(diff < 0.01, "one pass {fast} vs separate marches {separate}");
+    }
+}

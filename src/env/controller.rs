@@ -1,0 +1,32 @@
+//! The one interface every robot brain implements, per side: rule-based
+//! robots, random ones, and (with the learners) network checkpoints.
+
+use super::action::Action;
+use super::TrapEnv;
+use std::ops::Range;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Side {
+    Captors,
+    Target,
+}
+
+impl Side {
+    /// The agent indices of this side in an env with `num_captors` captors
+    /// (captors first, the target last).
+    pub fn agents(self, num_captors: usize) -> Range<usize> {
+        match self {
+            Side::Captors => 0..num_captors,
+            Side::Target => num_captors..num_captors + 1,
+        }
+    }
+}
+
+pub trait Controller: Send {
+    fn name(&self) -> String;
+    /// Called after every reset; `seed` is the episode's seed, for controllers
+    /// that draw random numbers (same seed, same episode).
+    fn reset(&mut self, _env: &TrapEnv, _seed: u64) {}
+    /// Chooses the actions of `side`'s robots; `out` has one slot per robot of the side.
+    fn act(&mut self, env: &TrapEnv, side: Side, out: &mut [Action]);
+}

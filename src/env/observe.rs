@@ -1,0 +1,71 @@
+//! Observations (spec §5): the agent-related vector and the 48x48 binary
+//! obstacle patch, egocentric and rotated so the robot's heading points up.
+
+use super::physics::Robot;
+use crate::map::PreparedMap;
+
+/// Side of the obstacle patch in cells (2.4 m).
+pub const PATCH: usize = 48;
+pub const PATCH_LEN: usize = PATCH * PATCH;
+
+/// Writes robot `i`'s vector: own velocity, position, heading; then for every
+/// other robot (captors in order, then the target) its velocity (zeros for the
+/// target), position relative to i, heading minus i's.
+pub fn write_vector(robots: &[Robot], i: usize, target: usize, out: &mut [f32]) {
+    let me = &robots[i];
+    out[0] = me.vel[0] as f32;
+    out[1] = me.vel[1] as f32;
+    out[2] = me.pos[0] as f32;
+    out[3] = me.pos[1] as f32;
+    out[4] = me.theta as f32;
+    let mut k = 5;
+    for (j, other) in robots.iter().enumerate() {
+        if j == i {
+            continue;
+        }
+        let (vx, vy) = if j == target { (0.0, 0.0) } else { (other.vel[0], other.vel[1]) };
+        out[k] = vx as f32;
+        out[k + 1] = vy as f32;
+        out[k + 2] = (other.pos[0] - me.pos[0]) as f32;
+        out[k + 3] = (other.pos[1] - me.pos[1]) as f32;
+        out[k + 4] = (other.theta - me.theta) as f32;
+        k += 5;
+    }
+}
+
+/// Writes the 48x48 patch (1 = obstacle, row 0 ahead of the robot, column 0
+/// to its left) centred on the robot's cell: nearest-cell lookup of the
+/// rotated square, so it stays binary; outside the map is obstacle.
+pub fn write_patch(map: &PreparedMap, pos: [f64; 2], theta: f64, out: &mut [u8]) {
+    debug_assert_eq!(out.len(), PATCH_LEN);
+    let (r0, c0) = map.grid.cell_of(pos);
+    let side = map.side() as isize;
+    if r0 < 0 || c0 < 0 || r0 >= side || c0 >= side {
+        out.fill(1);
+        return;
+    }
+    let base = map.padded_index(r0, c0) as isize;
+    let stride = map.stride as isize;
+    let (s, c) = (theta.sin() as f32, theta.cos() as f32);
+    // The robot's cell is pixel (24, 24): the patch reaches 24 cells ahead
+    // and to the left, 23 behind and to the right, like a crop [c-24, c+24)
+    // of the grid, and axis-aligned headings give integer offsets (no ties).
+    let half = (PATCH / 2) as f32;
+    // Offsets (in cells) of a patch pixel from the robot's cell centre: with
+    // right = b - half and forward = half - a,
+    //   column offset = right sin + forward cos, row offset = right cos - forward sin.
+    // Adding BIAS before truncating rounds to nearest for negatives too.
+    const BIAS: f32 = 64.5;
+    const BIAS_I: isize = 64;
+    for (a, row_out) in out.chunks_exact_mut(PATCH).enumerate() {
+        let forward = half - a as f32;
+        let mut dc = -half * s + forward * c + BIAS;
+        let mut dr = -half * c - forward * s + BIAS;
+        for px in row_out.iter_mut() {
+            let idx = base + (dr as isize - BIAS_I) * stride + (dc as isize - BIAS_I);
+            *px = map.obstacle[idx as usize];
+            dc += s;
+            dr += c;
+        }
+    }
+}

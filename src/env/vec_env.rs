@@ -1,0 +1,211 @@
+//! Many worlds stepped in parallel (rayon), with flat observation buffers for
+//! batched networks and auto-reset: when an episode ends, its world starts the
+//! next episode at once and the buffers hold that episode's first observation.
+//! Scripted sides (rule-based robots, frozen checkpoints) act inside the same
+//! parallel pass.
+
+use super::{Action, Controller, EnvConfig, PlacementError, Side, TrapEnv, PATCH_LEN};
+use crate::map::PreparedMap;
+use rayon::prelude::*;
+use std::sync::Arc;
+
+/// The seed of episode `episode` of world `env` in a run seeded `base`:
+/// independent of thread scheduling, so runs are reproducible.
+pub fn episode_seed(base: u64, env: usize, episode: u64) -> u64 {
+    fn mix(mut z: u64) -> u64 {
+        z = z.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+    mix(mix(base) ^ mix((env as u64) << 32 ^ episode))
+}
+
+/// How one finished episode went.
+#[derive(Clone, Debug, PartialEq)]
+pub struct EpisodeStats {
+    pub env: usize,
+    pub seed: u64,
+    pub map: String,
+    pub steps: u32,
+    pub captured: bool,
+    /// Undiscounted return per agent.
+    pub returns: Vec<f64>,
+    /// Mean distance travelled per captor (m).
+    pub captor_path_len: f64,
+}
+
+struct Slot {
+    env: TrapEnv,
+    scripted: Vec<(Side, Box<dyn Controller>)>,
+    episode: u64,
+    returns: Vec<f64>,
+}
+
+pub struct VecEnv {
+    slots: Vec<Slot>,
+    base_seed: u64,
+    pub cfg: EnvConfig,
+    /// [env][agent][5 + 5 K]
+    pub vectors: Vec<f32>,
+    /// [env][agent][48 x 48]; untouched when `cfg.observations` is off.
+    pub patches: Vec<u8>,
+    /// [env][agent]: rewards of the last step.
+    pub rewards: Vec<f32>,
+    /// [env]: the last step ended the episode by capture / by the step limit.
+    pub terminated: Vec<bool>,
+    pub truncated: Vec<bool>,
+    /// Episodes that ended in the last step.
+    pub finished: Vec<EpisodeStats>,
+}
+
+impl VecEnv {
+    pub fn new(cfg: EnvConfig, maps: Arc<Vec<Arc<PreparedMap>>>, num_envs: usize, base_seed: u64) -> Result<VecEnv, String> {
+        if num_envs == 0 {
+            return Err("num_envs must be at least 1".into());
+        }
+        let slots = (0..num_envs)
+            .map(|_| {
+                Ok(Slot {
+                    env: TrapEnv::new(cfg.clone(), maps.clone())?,
+                    scripted: Vec::new(),
+                    episode: 0,
+                    returns: vec![0.0; cfg.num_agents()],
+                })
+            })
+            .collect::<Result<Vec<_>, String>>()?;
+        let n = num_envs * cfg.num_agents();
+        Ok(VecEnv {
+            slots,
+            base_seed,
+            vectors: vec![0.0; n * cfg.vector_len()],
+            patches: if cfg.observations { vec![0; n * PATCH_LEN] } else { Vec::new() },
+            rewards: vec![0.0; n],
+            terminated: vec![false; num_envs],
+            truncated: vec![false; num_envs],
+            finished: Vec::new(),
+            cfg,
+        })
+    }
+
+    /// Lets controllers made by `make` play `side` in every world; the
+    /// actions passed to `step` for that side are then ignored.
+    pub fn script(&mut self, side: Side, make: impl Fn() -> Box<dyn Controller>) {
+        for s in &mut self.slots {
+            s.scripted.retain(|(sd, _)| *sd != side);
+            s.scripted.push((side, make()));
+        }
+    }
+
+    pub fn num_envs(&self) -> usize {
+        self.slots.len()
+    }
+
+    pub fn num_agents(&self) -> usize {
+        self.cfg.num_agents()
+    }
+
+    pub fn env(&self, i: usize) -> &TrapEnv {
+        &self.slots[i].env
+    }
+
+    /// Starts episode 0 in every world.
+    pub fn reset(&mut self) -> Result<(), PlacementError> {
+        let base = self.base_seed;
+        let (na, vl, obs) = (self.num_agents(), self.cfg.vector_len(), self.cfg.observations);
+        let patch_chunk = if obs { na * PATCH_LEN } else { 0 };
+        let mut patches: Vec<&mut [u8]> = if obs { self.patches.chunks_mut(patch_chunk).collect() } else { (0..self.slots.len()).map(|_| &mut [][..]).collect() };
+        self.slots
+            .par_iter_mut()
+            .zip(self.vectors.par_chunks_mut(na * vl))
+            .zip(patches.par_iter_mut())
+            .enumerate()
+            .try_for_each(|(e, ((slot, vec), patch))| {
+                slot.episode = 0;
+                slot.begin(episode_seed(base, e, 0))?;
+                slot.write_obs(vec, patch, vl, obs);
+                Ok(())
+            })
+    }
+
+    /// One step of every world. `actions` holds one action per agent per
+    /// world ([env][agent]); scripted sides overwrite theirs.
+    pub fn step(&mut self, actions: &[Action]) -> Result<(), PlacementError> {
+        let na = self.num_agents();
+        assert_eq!(actions.len(), self.slots.len() * na, "one action per agent per world");
+        let base = self.base_seed;
+        let (vl, obs) = (self.cfg.vector_len(), self.cfg.observations);
+        let patch_chunk = if obs { na * PATCH_LEN } else { 0 };
+        let mut patches: Vec<&mut [u8]> = if obs { self.patches.chunks_mut(patch_chunk).collect() } else { (0..self.slots.len()).map(|_| &mut [][..]).collect() };
+        let results: Vec<Result<Option<EpisodeStats>, PlacementError>> = self
+            .slots
+            .par_iter_mut()
+            .zip(self.vectors.par_chunks_mut(na * vl))
+            .zip(patches.par_iter_mut())
+            .zip(self.rewards.par_chunks_mut(na))
+            .zip(actions.par_chunks(na))
+            .zip(self.terminated.par_iter_mut().zip(self.truncated.par_iter_mut()))
+            .enumerate()
+            .map(|(e, (((((slot, vec), patch), rew), act), (term, trunc)))| {
+                let mut acts = [Action::Stop; 33];
+                acts[..na].copy_from_slice(act);
+                let k = slot.env.num_captors();
+                for (side, ctrl) in &mut slot.scripted {
+                    ctrl.act(&slot.env, *side, &mut acts[side.agents(k)]);
+                }
+                slot.env.step_state(&acts[..na], rew);
+                for (r, x) in slot.returns.iter_mut().zip(rew.iter()) {
+                    *r += *x as f64;
+                }
+                *term = slot.env.captured;
+                *trunc = !slot.env.captured && slot.env.steps >= slot.env.cfg.episode_length;
+                let mut stats = None;
+                if *term || *trunc {
+                    let env = &slot.env;
+                    stats = Some(EpisodeStats {
+                        env: e,
+                        seed: env.seed,
+                        map: env.map().grid.name.clone(),
+                        steps: env.steps,
+                        captured: env.captured,
+                        returns: slot.returns.clone(),
+                        captor_path_len: env.path_len[..k].iter().sum::<f64>() / k as f64,
+                    });
+                    slot.episode += 1;
+                    slot.begin(episode_seed(base, e, slot.episode))?;
+                }
+                slot.write_obs(vec, patch, vl, obs);
+                Ok(stats)
+            })
+            .collect();
+        self.finished.clear();
+        for r in results {
+            if let Some(s) = r? {
+                self.finished.push(s);
+            }
+        }
+        Ok(())
+    }
+}
+
+impl Slot {
+    fn begin(&mut self, seed: u64) -> Result<(), PlacementError> {
+        self.env.reset_state(seed)?;
+        self.returns.iter_mut().for_each(|r| *r = 0.0);
+        for (_, c) in &mut self.scripted {
+            c.reset(&self.env, seed);
+        }
+        Ok(())
+    }
+
+    fn write_obs(&self, vec: &mut [f32], patch: &mut [u8], vl: usize, obs: bool) {
+        for i in 0..self.env.num_agents() {
+            let v = &mut vec[i * vl..(i + 1) * vl];
+            if obs {
+                self.env.write_observation(i, v, &mut patch[i * PATCH_LEN..(i + 1) * PATCH_LEN]);
+            } else {
+                super::observe::write_vector(&self.env.robots, i, self.env.num_captors(), v);
+            }
+        }
+    }
+}

@@ -1,0 +1,269 @@
+//! Rule-based robots (spec §7) and the controller catalogue: every controller
+//! a user can name on the command line (`heuristic`, `greedy`, `random`,
+//! `still`) is built here behind the one `Controller` trait.
+
+use crate::asz::{FastMarching, Source};
+use crate::env::physics::{self, dist};
+use crate::env::{Action, Controller, Side, TrapEnv};
+use crate::map::prepared::{ray_dirs, LONG_RAY_MAX, NUM_RAYS};
+use crate::map::PreparedMap;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use std::fmt;
+use std::str::FromStr;
+
+/// Weight of the wall term against the robot term.
+const WALL_WEIGHT: f64 = 0.6;
+
+/// Wall force of the rule-based robots: -sum_m (D / d_m) u_m over the 12 world
+/// rays, d_m the distance to the first obstacle (searched up to D).
+pub fn wall_force(map: &PreparedMap, pos: [f64; 2], d: f64) -> [f64; 2] {
+    let mut f = [0.0, 0.0];
+    for (m, u) in ray_dirs().iter().enumerate().take(NUM_RAYS) {
+        let dm = map.wall_ray(pos, m, *u).min(d).max(0.01);
+        f[0] -= d / dm * u[0];
+        f[1] -= d / dm * u[1];
+    }
+    f
+}
+
+/// Turns a desired force into an action: project on the forward and right
+/// axes; drive along the larger one, or turn towards it.
+pub fn force_to_action(theta: f64, f: [f64; 2]) -> Action {
+    let forward = f[0] * theta.cos() + f[1] * theta.sin();
+    let right = f[0] * theta.sin() - f[1] * theta.cos();
+    if forward.abs() > right.abs() {
+        if forward > 0.0 {
+            Action::Forward
+        } else {
+            Action::Backward
+        }
+    } else if right > 0.0 {
+        Action::TurnRight
+    } else {
+        Action::TurnLeft
+    }
+}
+
+fn unit(v: [f64; 2]) -> [f64; 2] {
+    let n = v[0].hypot(v[1]);
+    if n == 0.0 {
+        [0.0, 0.0]
+    } else {
+        [v[0] / n, v[1] / n]
+    }
+}
+
+/// The paper's rule-based target (after Janosov et al.): flee every captor,
+/// keep off the walls.
+pub fn target_action(env: &TrapEnv) -> Action {
+    let map = env.map();
+    let d = map.grid.extent().min(LONG_RAY_MAX);
+    let me = env.target();
+    let k = env.num_captors() as f64;
+    let mut f = [0.0, 0.0];
+    for c in env.captors() {
+        let u = unit([me.pos[0] - c.pos[0], me.pos[1] - c.pos[1]]);
+        f[0] += d * u[0] / k;
+        f[1] += d * u[1] / k;
+    }
+    let w = wall_force(map, me.pos, d);
+    f[0] += WALL_WEIGHT * w[0];
+    f[1] += WALL_WEIGHT * w[1];
+    force_to_action(me.theta, f)
+}
+
+/// The expert captor: head for the target, keep a little apart from the other
+/// captors, keep off the walls.
+pub fn expert_captor_action(env: &TrapEnv, i: usize) -> Action {
+    let map = env.map();
+    let d = map.grid.extent().min(LONG_RAY_MAX);
+    let me = &env.robots[i];
+    let t = env.target().pos;
+    let u = unit([t[0] - me.pos[0], t[1] - me.pos[1]]);
+    let mut f = [d * u[0], d * u[1]];
+    for (j, other) in env.captors().iter().enumerate() {
+        let r = dist(me.pos, other.pos);
+        if j != i && r > 0.0 {
+            let s = 0.01 * crate::env::config::RADIUS / r;
+            f[0] += s * (me.pos[0] - other.pos[0]);
+            f[1] += s * (me.pos[1] - other.pos[1]);
+        }
+    }
+    let w = wall_force(map, me.pos, d);
+    f[0] += WALL_WEIGHT * w[0];
+    f[1] += WALL_WEIGHT * w[1];
+    force_to_action(me.theta, f)
+}
+
+/// Rule-based robots for either side: the expert captors or the rule-based target.
+pub struct Heuristic;
+
+impl Controller for Heuristic {
+    fn name(&self) -> String {
+        "heuristic".into()
+    }
+    fn act(&mut self, env: &TrapEnv, side: Side, out: &mut [Action]) {
+        match side {
+            Side::Captors => {
+                for (i, a) in out.iter_mut().enumerate() {
+                    *a = expert_captor_action(env, i);
+                }
+            }
+            Side::Target => out[0] = target_action(env),
+        }
+    }
+}
+
+/// The ASZ-greedy captor, as the spec states it (not the reference's broken
+/// version): try each of forward, backward, turn right, turn left for this
+/// captor alone, keep the one that leaves the smallest ASZ; when no action
+/// changes |ASZ|, the one that most shortens the geodesic distance to the target.
+#[derive(Default)]
+pub struct AszGreedy {
+    marching: FastMarching,
+    distance: FastMarching,
+}
+
+const GREEDY_ACTIONS: [Action; 4] = [Action::Forward, Action::Backward, Action::TurnRight, Action::TurnLeft];
+
+impl AszGreedy {
+    pub fn captor_action(&mut self, env: &TrapEnv, i: usize) -> Action {
+        let map = env.map();
+        let (mut captors, target) = env.asz_sources();
+        let spec = env.spec(i);
+        let mut sizes = [0usize; 4];
+        let mut moved = [[0.0; 2]; 4];
+        for (a, &action) in GREEDY_ACTIONS.iter().enumerate() {
+            let mut alone = [env.robots[i]];
+            let mut travelled = [0.0];
+            physics::step(map, &mut alone, &[spec], &[action], env.cfg.drive_force, &mut travelled);
+            moved[a] = alone[0].pos;
+            captors[i] = Source { pos: alone[0].pos, speed: spec.max_speed };
+            sizes[a] = self.marching.asz_cells(map, target, &captors);
+        }
+        if sizes.iter().any(|&s| s != sizes[0]) {
+            let best = (0..4).min_by_key(|&a| sizes[a]).unwrap();
+            return GREEDY_ACTIONS[best];
+        }
+        self.distance.distance_field(map, target.pos);
+        let geodesic = |p: [f64; 2]| {
+            let (r, c) = map.grid.cell_of(p);
+            if map.grid.is_free(r, c) {
+                self.distance.time(map.padded_index(r, c))
+            } else {
+                f32::INFINITY
+            }
+        };
+        let best = (0..4)
+            .min_by(|&a, &b| geodesic(moved[a]).total_cmp(&geodesic(moved[b])))
+            .unwrap();
+        GREEDY_ACTIONS[best]
+    }
+}
+
+impl Controller for AszGreedy {
+    fn name(&self) -> String {
+        "greedy".into()
+    }
+    fn act(&mut self, env: &TrapEnv, side: Side, out: &mut [Action]) {
+        assert_eq!(side, Side::Captors, "the ASZ-greedy controller plays captors");
+        for (i, a) in out.iter_mut().enumerate() {
+            *a = self.captor_action(env, i);
+        }
+    }
+}
+
+/// Uniformly random actions, drawn from the episode's seed.
+pub struct RandomActions {
+    rng: ChaCha8Rng,
+}
+
+impl RandomActions {
+    pub fn new() -> RandomActions {
+        RandomActions { rng: ChaCha8Rng::seed_from_u64(0) }
+    }
+}
+
+impl Default for RandomActions {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Controller for RandomActions {
+    fn name(&self) -> String {
+        "random".into()
+    }
+    fn reset(&mut self, _env: &TrapEnv, seed: u64) {
+        self.rng = ChaCha8Rng::seed_from_u64(seed ^ 0x5EED_0F_4A11D);
+    }
+    fn act(&mut self, _env: &TrapEnv, _side: Side, out: &mut [Action]) {
+        for a in out {
+            *a = Action::from_index(self.rng.gen_range(0..Action::COUNT));
+        }
+    }
+}
+
+/// Robots that never move (tests, baselines).
+pub struct Still;
+
+impl Controller for Still {
+    fn name(&self) -> String {
+        "still".into()
+    }
+    fn act(&mut self, _env: &TrapEnv, _side: Side, out: &mut [Action]) {
+        out.fill(Action::Stop);
+    }
+}
+
+/// A controller as named on the command line.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum ControllerSpec {
+    Heuristic,
+    Greedy,
+    Random,
+    Still,
+}
+
+impl FromStr for ControllerSpec {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s.trim() {
+            "heuristic" | "rule" | "expert" => Ok(ControllerSpec::Heuristic),
+            "greedy" | "asz-greedy" => Ok(ControllerSpec::Greedy),
+            "random" => Ok(ControllerSpec::Random),
+            "still" => Ok(ControllerSpec::Still),
+            other if other.starts_with("ckpt:") => Err(format!(
+                "'{other}': checkpoint controllers come with the learners; available now: heuristic, greedy, random, still"
+            )),
+            other => Err(format!("unknown controller '{other}' (expected heuristic, greedy, random or still)")),
+        }
+    }
+}
+
+impl fmt::Display for ControllerSpec {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            ControllerSpec::Heuristic => "heuristic",
+            ControllerSpec::Greedy => "greedy",
+            ControllerSpec::Random => "random",
+            ControllerSpec::Still => "still",
+        })
+    }
+}
+
+impl ControllerSpec {
+    /// A fresh controller for `side`; the error says why the pair does not fit.
+    pub fn build(&self, side: Side) -> Result<Box<dyn Controller>, String> {
+        Ok(match self {
+            ControllerSpec::Heuristic => Box::new(Heuristic),
+            ControllerSpec::Greedy if side == Side::Target => {
+                return Err("'greedy' (ASZ-greedy) is a captor controller; the target can be heuristic, random or still".into())
+            }
+            ControllerSpec::Greedy => Box::new(AszGreedy::default()),
+            ControllerSpec::Random => Box::new(RandomActions::new()),
+            ControllerSpec::Still => Box::new(Still),
+        })
+    }
+}
