@@ -11,8 +11,6 @@
 //! closed in, so a nearly trapped target costs almost nothing.
 
 use crate::map::{PreparedMap, CELL_AREA, CELL_SIZE};
-use std::cmp::Reverse;
-use std::collections::BinaryHeap;
 
 /// A robot seen by the march: where it is and how fast it can go (m/s).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -33,24 +31,96 @@ pub fn strict_capture_cells(robot_radius: f64) -> f64 {
     std::f64::consts::PI * (1.5 * robot_radius / CELL_SIZE).powi(2)
 }
 
-/// Reusable buffers of a multi-label fast march over one map size. Only the
-/// cells touched by the last march are reset, so small marches stay cheap.
-#[derive(Default)]
-pub struct FastMarching {
-    stride: usize,
-    time: Vec<f32>,
-    label: Vec<u8>,
-    state: Vec<u8>,
-    touched: Vec<u32>,
-    heap: BinaryHeap<Reverse<u64>>,
+/// A monotone priority queue over non-negative f32 times (a radix heap):
+/// the march never proposes a time below the last one settled, so each entry
+/// moves down at most 32 buckets, O(1) amortised against a binary heap's
+/// O(log n). Times are keyed by their bits, which order like the floats.
+struct RadixHeap {
+    last: u32,
+    len: usize,
+    buckets: [Vec<(u32, u32)>; 33],
 }
 
-/// Heap key: time bits first (non-negative f32 bits order like the floats),
-/// then the label so that at equal times the lower label (a captor) wins,
-/// then the padded cell index.
-#[inline]
-fn key(time: f32, label: u8, cell: usize) -> u64 {
-    ((time.to_bits() as u64) << 32) | ((label as u64) << 24) | cell as u64
+impl Default for RadixHeap {
+    fn default() -> Self {
+        RadixHeap { last: 0, len: 0, buckets: std::array::from_fn(|_| Vec::new()) }
+    }
+}
+
+impl RadixHeap {
+    fn clear(&mut self) {
+        self.last = 0;
+        self.len = 0;
+        for b in &mut self.buckets {
+            b.clear();
+        }
+    }
+
+    /// The smallest time a push may carry.
+    #[inline]
+    fn floor(&self) -> f32 {
+        f32::from_bits(self.last)
+    }
+
+    #[inline]
+    fn bucket(&self, key: u32) -> usize {
+        (32 - (key ^ self.last).leading_zeros()) as usize
+    }
+
+    #[inline]
+    fn push(&mut self, time: f32, payload: u32) {
+        let key = time.to_bits();
+        debug_assert!(key >= self.last);
+        let b = self.bucket(key);
+        self.buckets[b].push((key, payload));
+        self.len += 1;
+    }
+
+    #[inline]
+    fn pop(&mut self) -> Option<(f32, u32)> {
+        if self.len == 0 {
+            return None;
+        }
+        if self.buckets[0].is_empty() {
+            let i = (1..33).find(|&i| !self.buckets[i].is_empty()).unwrap();
+            let mut moved = std::mem::take(&mut self.buckets[i]);
+            self.last = moved.iter().map(|e| e.0).min().unwrap();
+            for e in moved.drain(..) {
+                let b = self.bucket(e.0);
+                self.buckets[b].push(e);
+            }
+            self.buckets[i] = moved; // keep the allocation
+        }
+        self.len -= 1;
+        self.buckets[0].pop().map(|(k, p)| (f32::from_bits(k), p))
+    }
+}
+
+/// One cell of the march, packed so that reading a neighbour is one load.
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(8))]
+struct Cell {
+    time: f32,
+    label: u8,
+    state: u8,
+}
+
+const BLOCKED: u8 = 3;
+
+impl Cell {
+    const FAR: Cell = Cell { time: f32::INFINITY, label: NO_LABEL, state: FAR };
+    const WALL: Cell = Cell { time: f32::INFINITY, label: NO_LABEL, state: BLOCKED };
+}
+
+/// Reusable buffers of a multi-label fast march over one map. Only the cells
+/// touched by the last march are reset, so small marches stay cheap.
+#[derive(Default)]
+pub struct FastMarching {
+    map_id: u64,
+    stride: usize,
+    cells: Vec<Cell>,
+    touched: Vec<u32>,
+    heap: RadixHeap,
 }
 
 impl FastMarching {
@@ -60,30 +130,27 @@ impl FastMarching {
 
     fn prepare(&mut self, map: &PreparedMap) {
         let n = map.stride * map.stride;
-        assert!(n < (1 << 24), "map too large for the march's heap keys");
-        if self.stride != map.stride || self.time.len() != n {
+        assert!(n < (1 << 24), "map too large for the march's heap payload");
+        if self.map_id != map.id {
+            self.map_id = map.id;
             self.stride = map.stride;
-            self.time = vec![f32::INFINITY; n];
-            self.label = vec![NO_LABEL; n];
-            self.state = vec![FAR; n];
-            self.touched.clear();
+            self.cells.clear();
+            self.cells.extend(map.obstacle.iter().map(|&o| if o != 0 { Cell::WALL } else { Cell::FAR }));
         } else {
             for &c in &self.touched {
-                let c = c as usize;
-                self.time[c] = f32::INFINITY;
-                self.label[c] = NO_LABEL;
-                self.state[c] = FAR;
+                self.cells[c as usize] = Cell::FAR;
             }
-            self.touched.clear();
         }
+        self.touched.clear();
         self.heap.clear();
     }
 
     /// Arrival time (s) at padded cell `cell` from the front that claimed it.
     #[inline]
     pub fn time(&self, cell: usize) -> f32 {
-        if self.state[cell] == FROZEN {
-            self.time[cell]
+        let c = self.cells[cell];
+        if c.state == FROZEN {
+            c.time
         } else {
             f32::INFINITY
         }
@@ -92,8 +159,9 @@ impl FastMarching {
     /// Index of the source that reaches padded cell `cell` first, or NO_LABEL.
     #[inline]
     pub fn label(&self, cell: usize) -> u8 {
-        if self.state[cell] == FROZEN {
-            self.label[cell]
+        let c = self.cells[cell];
+        if c.state == FROZEN {
+            c.label
         } else {
             NO_LABEL
         }
@@ -104,8 +172,8 @@ impl FastMarching {
         self.touched
             .iter()
             .map(|&c| c as usize)
-            .filter(|&c| self.state[c] == FROZEN)
-            .map(|c| (c, self.label[c]))
+            .filter(|&c| self.cells[c].state == FROZEN)
+            .map(|c| (c, self.cells[c].label))
     }
 
     /// Solves the first-order eikonal update at `cell` from the settled
@@ -114,8 +182,9 @@ impl FastMarching {
     fn update_value(&self, cell: usize, label: u8, cost: f32) -> f32 {
         let s = self.stride;
         let val = |c: usize| {
-            if self.state[c] == FROZEN && self.label[c] == label {
-                self.time[c]
+            let c = self.cells[c];
+            if c.state == FROZEN && c.label == label {
+                c.time
             } else {
                 f32::INFINITY
             }
@@ -152,25 +221,25 @@ impl FastMarching {
             let t = ((src.pos[0] - centre[0]).hypot(src.pos[1] - centre[1]) / src.speed) as f32;
             self.offer(cell, t, i as u8, stop_label, &mut pending_stop);
         }
-        while let Some(Reverse(k)) = self.heap.pop() {
+        while let Some((t, payload)) = self.heap.pop() {
             if stop_label.is_some() && pending_stop == 0 {
                 break;
             }
-            let cell = (k & 0xFF_FFFF) as usize;
-            let label = ((k >> 24) & 0xFF) as u8;
-            let t = f32::from_bits((k >> 32) as u32);
-            if self.state[cell] != TRIAL || self.label[cell] != label || self.time[cell] != t {
+            let cell = (payload & 0xFF_FFFF) as usize;
+            let label = (payload >> 24) as u8;
+            let c = self.cells[cell];
+            if c.state != TRIAL || c.label != label || c.time != t {
                 continue; // stale entry
             }
-            self.state[cell] = FROZEN;
+            self.cells[cell].state = FROZEN;
             if Some(label) == stop_label {
                 pending_stop -= 1;
                 settled_stop += 1;
             }
             let cost = costs[label as usize];
             for nb in [cell - 1, cell + 1, cell - s, cell + s] {
-                if self.state[nb] == FROZEN || map.obstacle[nb] != 0 {
-                    continue;
+                if self.cells[nb].state >= FROZEN {
+                    continue; // settled or an obstacle
                 }
                 let t = self.update_value(nb, label, cost);
                 self.offer(nb, t, label, stop_label, &mut pending_stop);
@@ -182,27 +251,23 @@ impl FastMarching {
     /// Proposes time `t` from front `label` for a cell not yet settled.
     #[inline]
     fn offer(&mut self, cell: usize, t: f32, label: u8, stop_label: Option<u8>, pending_stop: &mut usize) {
-        let better = t < self.time[cell] || (t == self.time[cell] && label < self.label[cell]);
+        // Rounding can put a one-sided update a hair below the settled front.
+        let t = t.max(self.heap.floor());
+        let old = self.cells[cell];
+        let better = t < old.time || (t == old.time && label < old.label);
         if !better {
             return;
         }
-        match self.state[cell] {
-            FAR => {
-                self.touched.push(cell as u32);
-                self.state[cell] = TRIAL;
-            }
-            _ => {
-                if Some(self.label[cell]) == stop_label {
-                    *pending_stop -= 1;
-                }
-            }
+        if old.state == FAR {
+            self.touched.push(cell as u32);
+        } else if Some(old.label) == stop_label {
+            *pending_stop -= 1;
         }
         if Some(label) == stop_label {
             *pending_stop += 1;
         }
-        self.time[cell] = t;
-        self.label[cell] = label;
-        self.heap.push(Reverse(key(t, label, cell)));
+        self.cells[cell] = Cell { time: t, label, state: TRIAL };
+        self.heap.push(t, ((label as u32) << 24) | cell as u32);
     }
 
     /// Geodesic distance (m) from `from` to every free cell: one full march at

@@ -56,7 +56,11 @@ pub struct PreparedMap {
     wall_faces: Vec<u16>,
     /// Grid indices of free cells whose centre is more than 0.4 m from any obstacle.
     pub spawn_cells: Vec<u32>,
+    /// Unique per prepared map, so reusable buffers know when the map changed.
+    pub id: u64,
 }
+
+static NEXT_MAP_ID: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
 
 impl PreparedMap {
     pub fn new(grid: Grid) -> PreparedMap {
@@ -89,6 +93,7 @@ impl PreparedMap {
             wall_rays: Vec::new(),
             wall_faces: Vec::new(),
             spawn_cells,
+            id: NEXT_MAP_ID.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
         };
         let dirs = ray_dirs();
         let rows: Vec<(Vec<[f32; NUM_RAYS]>, Vec<u16>)> = (0..side)

@@ -1,0 +1,208 @@
+//! `t2e-league bench`: speed of the environment, the ASZ and observations,
+//! printed as a table beside the reference implementation's figures.
+
+use crate::asz::FastMarching;
+use crate::env::{Action, Controller, EnvConfig, Side, TrapEnv, VecEnv, PATCH_LEN};
+use crate::heuristics::{target_action, ControllerSpec, Heuristic};
+use crate::map::{self, PreparedMap};
+use anyhow::Result;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+#[derive(clap::Args, Debug)]
+pub struct BenchArgs {
+    /// Maps for the environment rows (default: the Gibson set, else the shipped maps).
+    #[arg(long)]
+    pub maps: Option<String>,
+    /// Seconds to spend on each row.
+    #[arg(long, default_value_t = 2.0)]
+    pub seconds: f64,
+    /// Worlds in the batched rows.
+    #[arg(long, default_value_t = 64)]
+    pub envs: usize,
+}
+
+struct Row {
+    what: String,
+    per_op: Duration,
+    unit: &'static str,
+    reference: Option<f64>,
+}
+
+/// Repeats `op` (which reports how many units it did) for about `secs` seconds.
+fn measure(secs: f64, mut op: impl FnMut() -> u64) -> Duration {
+    for _ in 0..3 {
+        op();
+    }
+    let start = Instant::now();
+    let mut units = 0u64;
+    while start.elapsed().as_secs_f64() < secs {
+        units += op();
+    }
+    start.elapsed() / units.max(1) as u32
+}
+
+fn prepare(spec: &str) -> Result<Arc<Vec<Arc<PreparedMap>>>> {
+    let entries = map::resolve(spec)?;
+    let maps = entries.iter().map(|e| Ok(Arc::new(PreparedMap::new(e.load()?)))).collect::<Result<Vec<_>>>()?;
+    Ok(Arc::new(maps))
+}
+
+/// Steps one world for `n` steps with the given action source, building
+/// observations of every robot when `obs`; resets on episode end.
+fn single_core_steps(env: &mut TrapEnv, rng: &mut ChaCha8Rng, both_heuristic: bool, obs: bool, n: u64, vec: &mut [f32], patch: &mut [u8]) -> u64 {
+    let k = env.num_captors();
+    let mut acts = vec![Action::Stop; k + 1];
+    let mut rewards = vec![0f32; k + 1];
+    for _ in 0..n {
+        if both_heuristic {
+            Heuristic.act(env, Side::Captors, &mut acts[..k]);
+        } else {
+            for a in &mut acts[..k] {
+                *a = Action::from_index(rng.gen_range(0..Action::COUNT));
+            }
+        }
+        acts[k] = target_action(env);
+        env.step_state(&acts, &mut rewards);
+        if env.is_done() {
+            env.reset_state(rng.gen()).expect("placement");
+        }
+        if obs {
+            let vl = env.cfg.vector_len();
+            for i in 0..=k {
+                env.write_observation(i, &mut vec[i * vl..(i + 1) * vl], &mut patch[i * PATCH_LEN..(i + 1) * PATCH_LEN]);
+            }
+        }
+    }
+    n
+}
+
+pub fn run(args: BenchArgs) -> Result<()> {
+    let gibson = map::catalog::gibson_dir().is_some();
+    let env_spec = args.maps.clone().unwrap_or_else(|| if gibson { "gibson".into() } else { "shipped".into() });
+    let maps = prepare(&env_spec)?;
+    let secs = args.seconds;
+    let mut rows = Vec::new();
+    let cfg = EnvConfig { num_captors: 3, ..EnvConfig::default() };
+
+    let one_pool = rayon::ThreadPoolBuilder::new().num_threads(1).build()?;
+    for (what, both, obs, reference) in [
+        ("env step, 3v1, observations, rule-based target, random captors, 1 core", false, true, Some(275.0)),
+        ("env step, 3v1, no observations, both sides heuristic, 1 core", true, false, Some(160.0)),
+    ] {
+        let mut env = TrapEnv::new(cfg.clone(), maps.clone()).map_err(anyhow::Error::msg)?;
+        env.reset_state(1)?;
+        let mut rng = ChaCha8Rng::seed_from_u64(7);
+        let mut vec = vec![0f32; 4 * cfg.vector_len()];
+        let mut patch = vec![0u8; 4 * PATCH_LEN];
+        let per = one_pool.install(|| measure(secs, || single_core_steps(&mut env, &mut rng, both, obs, 1000, &mut vec, &mut patch)));
+        rows.push(Row { what: what.into(), per_op: per, unit: "steps/s", reference });
+    }
+
+    let threads = rayon::current_num_threads();
+    let mut venv = VecEnv::new(cfg.clone(), maps.clone(), args.envs, 3).map_err(anyhow::Error::msg)?;
+    venv.script(Side::Target, || Box::new(Heuristic));
+    venv.reset()?;
+    let mut rng = ChaCha8Rng::seed_from_u64(9);
+    let mut acts = vec![Action::Stop; args.envs * 4];
+    let per = measure(secs, || {
+        for a in acts.iter_mut() {
+            *a = Action::from_index(rng.gen_range(0..Action::COUNT));
+        }
+        venv.step(&acts).expect("placement");
+        args.envs as u64
+    });
+    rows.push(Row {
+        what: format!("vector env, {} worlds, 3v1, observations, rule-based target, random captors, {threads} cores", args.envs),
+        per_op: per,
+        unit: "steps/s",
+        reference: Some(275.0 * threads as f64),
+    });
+
+    // One observation build (vector + 48x48 patch) of one robot.
+    let mut env = TrapEnv::new(cfg.clone(), maps.clone()).map_err(anyhow::Error::msg)?;
+    env.reset_state(5)?;
+    let mut vec = vec![0f32; cfg.vector_len()];
+    let mut patch = vec![0u8; PATCH_LEN];
+    let per = measure(secs, || {
+        for i in 0..4 {
+            env.write_observation(i, &mut vec, &mut patch);
+        }
+        4
+    });
+    rows.push(Row { what: "one observation build (vector + 48x48 patch)".into(), per_op: per, unit: "obs/s", reference: None });
+
+    // ASZ on the smallest, a medium and the largest Gibson map, over random placements.
+    if gibson {
+        let dir = map::catalog::gibson_dir().unwrap();
+        for (name, reference_ms) in [
+            ("Kettle_floor_trav_0_v3", Some(14.0)),
+            ("Ladue_floor_trav_0_v3", None),
+            ("Graceville_floor_trav_0_v3", Some(23.0)),
+        ] {
+            let m = Arc::new(PreparedMap::new(map::load_png(&dir.join(format!("{name}.png")))?));
+            let free = m.grid.free_cells();
+            let mut env = TrapEnv::new(cfg.clone(), Arc::new(vec![m.clone()])).map_err(anyhow::Error::msg)?;
+            let starts: Vec<_> = (0..64)
+                .map(|s| {
+                    env.reset_state(s).expect("placement");
+                    env.asz_sources()
+                })
+                .collect();
+            let mut fm = FastMarching::new();
+            let mut i = 0;
+            let per = measure(secs, || {
+                let (c, t) = &starts[i % starts.len()];
+                i += 1;
+                std::hint::black_box(fm.asz_cells(&m, *t, c));
+                1
+            });
+            rows.push(Row {
+                what: format!("ASZ (3 captors, random starts) on {name}, {free} free cells"),
+                per_op: per,
+                unit: "ASZ/s",
+                reference: reference_ms.map(|ms: f64| 1000.0 / ms),
+            });
+            let per = measure(secs, || {
+                let (c, t) = &starts[i % starts.len()];
+                i += 1;
+                let mut sources = c.clone();
+                sources.push(*t);
+                fm.march(&m, &sources, None);
+                1
+            });
+            rows.push(Row {
+                what: format!("full arrival-time march (4 fronts, every cell) on {name}"),
+                per_op: per,
+                unit: "marches/s",
+                reference: None,
+            });
+        }
+    }
+
+    // The ASZ-greedy captor does 4 ASZ per captor per step.
+    let mut env = TrapEnv::new(cfg.clone(), maps.clone()).map_err(anyhow::Error::msg)?;
+    env.reset_state(11)?;
+    let mut greedy = ControllerSpec::Greedy.build(Side::Captors).map_err(anyhow::Error::msg)?;
+    let mut acts = [Action::Stop; 3];
+    let per = measure(secs, || {
+        greedy.act(&env, Side::Captors, &mut acts);
+        1
+    });
+    rows.push(Row { what: "ASZ-greedy decision for 3 captors".into(), per_op: per, unit: "decisions/s", reference: None });
+
+    println!("maps for env rows: {env_spec}; {:.1} s per row; {threads} rayon threads\n", secs);
+    println!("| what | time per op | rate | reference (Python, same machine) | speed-up |");
+    println!("|---|---|---|---|---|");
+    for r in rows {
+        let rate = 1.0 / r.per_op.as_secs_f64();
+        let (reference, ratio) = match r.reference {
+            Some(x) => (format!("{x:.0} {}", r.unit), format!("{:.0}x", rate / x)),
+            None => ("-".into(), "-".into()),
+        };
+        println!("| {} | {:.2} us | {:.0} {} | {} | {} |", r.what, r.per_op.as_secs_f64() * 1e6, rate, r.unit, reference, ratio);
+    }
+    Ok(())
+}

@@ -1,0 +1,321 @@
+//! `t2e-league maps`: list map sets, draw one map, generate floor plans.
+
+use crate::map::catalog::{gibson_dir, resolve, shipped_dir};
+use crate::map::generate::{generate, GeneratorConfig};
+use crate::map::{load_png, save_png, Grid, PreparedMap, SizeClass};
+use crate::render::map_image::map_image_prepared;
+use anyhow::{bail, Context, Result};
+use rayon::prelude::*;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+#[derive(clap::Args, Debug)]
+pub struct MapsArgs {
+    #[command(subcommand)]
+    pub command: MapsCommand,
+}
+
+#[derive(clap::Subcommand, Debug)]
+pub enum MapsCommand {
+    /// Print a table of maps with their area and size class.
+    ///
+    /// Columns: side (cells), free cells, traversable area, the class computed
+    /// from the area and the class listed in the folder's splits.csv or
+    /// manifest.csv; rows marked '*' disagree with their list.
+    List {
+        /// Which maps: small | medium | large (Gibson classes), gibson,
+        /// shipped, a folder, FOLDER:CLASS, or a single .png file.
+        #[arg(long, default_value = "shipped", value_name = "SPEC")]
+        maps: String,
+    },
+    /// Draw one map to a PNG.
+    ///
+    /// Free space is light, obstacles dark, cells where robots may be placed
+    /// (more than 0.4 m from obstacles) tinted blue; a 1 m grid and a scale bar.
+    Show {
+        /// A .png path, or the name of a shipped or Gibson map
+        /// (e.g. gen-small-1, Graceville_floor_trav_0_v3).
+        map: String,
+        /// Output PNG file.
+        #[arg(long, value_name = "FILE.png")]
+        out: PathBuf,
+        /// Pixels per 0.05 m cell.
+        #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u32).range(1..=16))]
+        scale: u32,
+    },
+    /// Generate floor plans of one size class as PNG maps.
+    ///
+    /// Maps are written as DIR/gen-CLASS-SEED.png (0.01 m per pixel, 255 free)
+    /// and recorded in DIR/manifest.csv (map, split, area_m2, seed).
+    Generate {
+        /// Size class to generate: small (<40 m^2), medium (40-60), large (>60).
+        #[arg(long)]
+        class: SizeClass,
+        /// Seed of the first map; the others use seed+1, seed+2, ...
+        #[arg(long)]
+        seed: u64,
+        /// How many maps to generate.
+        #[arg(long, default_value_t = 1)]
+        count: u64,
+        /// Output folder (created if missing); existing manifest rows of
+        /// other maps are kept.
+        #[arg(long, value_name = "DIR")]
+        out: PathBuf,
+    },
+}
+
+pub fn run(args: MapsArgs) -> Result<()> {
+    match args.command {
+        MapsCommand::List { maps } => list(&maps),
+        MapsCommand::Show { map, out, scale } => show(&map, &out, scale),
+        MapsCommand::Generate { class, seed, count, out } => generate_maps(class, seed, count, &out),
+    }
+}
+
+fn list(spec: &str) -> Result<()> {
+    let entries = resolve(spec)?;
+    // Decoding a 1600 px PNG takes a while: load in parallel, report in order.
+    let loaded: Vec<Result<Grid>> = entries.par_iter().map(|e| e.load()).collect();
+    let name_w = entries.iter().map(|e| e.name.len()).max().unwrap_or(0).max(4);
+    println!(
+        "{:<name_w$}  {:>5}  {:>10}  {:>9}  {:<8}  listed",
+        "map", "side", "free cells", "area m^2", "class"
+    );
+    let mut failed = Vec::new();
+    let mut mismatches = 0;
+    let mut areas = Vec::new();
+    for (entry, grid) in entries.iter().zip(loaded) {
+        let grid = match grid {
+            Ok(g) => g,
+            Err(e) => {
+                println!("{:<name_w$}  error: {e:#}", entry.name);
+                failed.push(entry.name.clone());
+                continue;
+            }
+        };
+        let class = grid.size_class();
+        let listed = entry.listed_class.map_or("-".to_string(), |c| c.to_string());
+        let mark = match entry.listed_class {
+            Some(c) if c != class => {
+                mismatches += 1;
+                " *"
+            }
+            _ => "",
+        };
+        areas.push(grid.area_m2());
+        let row = format!(
+            "{:<name_w$}  {:>5}  {:>10}  {:>9.2}  {:<8}  {:<8}{mark}",
+            entry.name,
+            grid.side(),
+            grid.free_cells(),
+            grid.area_m2(),
+            class.name(),
+            listed
+        );
+        println!("{}", row.trim_end());
+    }
+    if !areas.is_empty() {
+        let mean = areas.iter().sum::<f64>() / areas.len() as f64;
+        println!("{} maps, mean area {mean:.2} m^2", areas.len());
+    }
+    if mismatches > 0 {
+        println!("* {mismatches} map(s) whose computed class differs from the listed one");
+    }
+    if !failed.is_empty() {
+        bail!("{} of {} maps could not be loaded: {}", failed.len(), entries.len(), failed.join(", "));
+    }
+    Ok(())
+}
+
+/// A map argument: an existing file, else `NAME[.png]` in the shipped or Gibson folder.
+fn find_map(map: &str) -> Result<PathBuf> {
+    let as_path = PathBuf::from(map);
+    if as_path.is_file() {
+        return Ok(as_path);
+    }
+    let file = if map.ends_with(".png") { map.to_string() } else { format!("{map}.png") };
+    let mut folders = vec![shipped_dir()];
+    folders.extend(gibson_dir());
+    for dir in &folders {
+        let candidate = dir.join(&file);
+        if candidate.is_file() {
+            return Ok(candidate);
+        }
+    }
+    let searched: Vec<String> = folders.iter().map(|d| d.display().to_string()).collect();
+    bail!("map '{map}' not found: not a file, and no {file} in {}", searched.join(" or "))
+}
+
+fn show(map: &str, out: &Path, scale: u32) -> Result<()> {
+    let path = find_map(map)?;
+    let grid = load_png(&path)?;
+    let prepared = PreparedMap::new(grid);
+    let img = map_image_prepared(&prepared, scale);
+    if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).with_context(|| format!("cannot create folder {}", dir.display()))?;
+    }
+    img.save_with_format(out, image::ImageFormat::Png)
+        .with_context(|| format!("cannot write {}", out.display()))?;
+    let g = &prepared.grid;
+    println!(
+        "{}: {} ({}x{} px): {:.2} m^2, {}, {} spawn cells",
+        g.name,
+        out.display(),
+        img.width(),
+        img.height(),
+        g.area_m2(),
+        g.size_class(),
+        prepared.spawn_cells.len()
+    );
+    Ok(())
+}
+
+/// One row of a generated folder's manifest.csv.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct ManifestRow {
+    pub map: String,
+    pub split: SizeClass,
+    /// Missing in hand-written manifests.
+    #[serde(default)]
+    pub area_m2: Option<f64>,
+    #[serde(default)]
+    pub seed: Option<u64>,
+}
+
+/// Reads a manifest; a missing file is an empty manifest.
+pub fn read_manifest(path: &Path) -> Result<Vec<ManifestRow>> {
+    if !path.exists() {
+        return Ok(Vec::new());
+    }
+    let mut reader = csv::ReaderBuilder::new()
+        .trim(csv::Trim::All)
+        .from_path(path)
+        .with_context(|| format!("cannot read {}", path.display()))?;
+    let mut rows = Vec::new();
+    for (i, row) in reader.deserialize::<ManifestRow>().enumerate() {
+        // Row 1 is the header.
+        rows.push(row.with_context(|| format!("{}: row {}", path.display(), i + 2))?);
+    }
+    Ok(rows)
+}
+
+/// Merges `new` into the manifest at `path` by map name (new rows win) and
+/// writes it back sorted by name, areas with two decimals.
+pub fn update_manifest(path: &Path, new: &[ManifestRow]) -> Result<()> {
+    let mut by_name: BTreeMap<String, ManifestRow> =
+        read_manifest(path)?.into_iter().map(|r| (r.map.clone(), r)).collect();
+    for row in new {
+        by_name.insert(row.map.clone(), row.clone());
+    }
+    let mut writer = csv::Writer::from_path(path).with_context(|| format!("cannot write {}", path.display()))?;
+    writer.write_record(["map", "split", "area_m2", "seed"])?;
+    for row in by_name.values() {
+        let area = row.area_m2.map_or(String::new(), |a| format!("{a:.2}"));
+        let seed = row.seed.map_or(String::new(), |s| s.to_string());
+        writer.write_record([row.map.as_str(), row.split.name(), &area, &seed])?;
+    }
+    writer.flush().with_context(|| format!("cannot write {}", path.display()))?;
+    Ok(())
+}
+
+/// Generates `count` maps of `class` from seeds `seed..`, writes them to
+/// `out` and merges them into `out/manifest.csv`.
+pub fn generate_maps(class: SizeClass, seed: u64, count: u64, out: &Path) -> Result<()> {
+    if count == 0 {
+        bail!("--count must be at least 1");
+    }
+    let last = seed
+        .checked_add(count - 1)
+        .with_context(|| format!("--seed {seed} with --count {count} runs past the largest seed"))?;
+    std::fs::create_dir_all(out).with_context(|| format!("cannot create folder {}", out.display()))?;
+    let cfg = GeneratorConfig::default();
+    let mut rows = Vec::new();
+    for s in seed..=last {
+        let grid = generate(s, class, &cfg);
+        let path = out.join(format!("{}.png", grid.name));
+        save_png(&grid, &path)?;
+        println!(
+            "{}: {:.2} m^2, {}, {} free cells -> {}",
+            grid.name,
+            grid.area_m2(),
+            grid.size_class(),
+            grid.free_cells(),
+            path.display()
+        );
+        rows.push(ManifestRow { map: grid.name.clone(), split: grid.size_class(), area_m2: Some(grid.area_m2()), seed: Some(s) });
+    }
+    let manifest = out.join("manifest.csv");
+    update_manifest(&manifest, &rows)?;
+    println!("{} map(s) recorded in {}", rows.len(), manifest.display());
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::Parser;
+
+    #[derive(clap::Parser, Debug)]
+    struct TestCli {
+        #[command(subcommand)]
+        command: MapsCommand,
+    }
+
+    #[test]
+    fn arguments_parse() {
+        let cli = TestCli::try_parse_from(["maps", "generate", "--class", "large", "--seed", "5", "--count", "2", "--out", "x"]).unwrap();
+        assert!(matches!(cli.command, MapsCommand::Generate { class: SizeClass::Large, seed: 5, count: 2, .. }));
+        let cli = TestCli::try_parse_from(["maps", "list"]).unwrap();
+        assert!(matches!(cli.command, MapsCommand::List { ref maps } if maps == "shipped"));
+        let err = TestCli::try_parse_from(["maps", "generate", "--class", "huge", "--seed", "1", "--out", "x"]).unwrap_err();
+        assert!(err.to_string().contains("huge"), "{err}");
+        assert!(TestCli::try_parse_from(["maps", "show", "m", "--out", "a.png", "--scale", "0"]).is_err());
+    }
+
+    #[test]
+    fn generate_writes_maps_and_merges_the_manifest() {
+        let dir = tempfile::tempdir().unwrap();
+        let manifest = dir.path().join("manifest.csv");
+        std::fs::write(&manifest, "map,split\nzz-hand-made,large\ngen-small-4,medium\n").unwrap();
+        generate_maps(SizeClass::Small, 3, 2, dir.path()).unwrap();
+        let rows = read_manifest(&manifest).unwrap();
+        let names: Vec<&str> = rows.iter().map(|r| r.map.as_str()).collect();
+        assert_eq!(names, ["gen-small-3", "gen-small-4", "zz-hand-made"]);
+        assert_eq!(rows[1].split, SizeClass::Small); // replaced
+        assert_eq!(rows[2].area_m2, None); // kept as it was
+        for row in &rows[..2] {
+            let g = load_png(&dir.path().join(format!("{}.png", row.map))).unwrap();
+            assert_eq!(format!("{:.2}", g.area_m2()), format!("{:.2}", row.area_m2.unwrap()));
+            assert_eq!(g.size_class(), row.split);
+        }
+        // The catalog reads the manifest's classes.
+        let entries = crate::map::catalog::list_dir(dir.path()).unwrap();
+        assert_eq!(entries.len(), 2);
+        assert!(entries.iter().all(|e| e.listed_class == Some(SizeClass::Small)));
+    }
+
+    #[test]
+    fn bad_input_names_the_culprit() {
+        let dir = tempfile::tempdir().unwrap();
+        let manifest = dir.path().join("manifest.csv");
+        std::fs::write(&manifest, "map,split,area_m2,seed\na,tiny,1.0,3\n").unwrap();
+        let e = format!("{:#}", read_manifest(&manifest).unwrap_err());
+        assert!(e.contains("manifest.csv") && e.contains("row 2"), "{e}");
+        let e = format!("{:#}", find_map("no-such-map").unwrap_err());
+        assert!(e.contains("no-such-map.png"), "{e}");
+        let out = dir.path().join("m.png");
+        let e = format!("{:#}", show("/nonexistent/x.png", &out, 2).unwrap_err());
+        assert!(e.contains("x.png"), "{e}");
+    }
+
+    #[test]
+    fn show_draws_a_generated_map() {
+        let dir = tempfile::tempdir().unwrap();
+        let map = dir.path().join("m.png");
+        save_png(&generate(1, SizeClass::Small, &GeneratorConfig::default()), &map).unwrap();
+        let out = dir.path().join("sub/shown.png");
+        show(map.to_str().unwrap(), &out, 1).unwrap();
+        let img = image::open(&out).unwrap();
+        assert_eq!((img.width(), img.height()), (320, 320));
+    }
+}

@@ -1,0 +1,105 @@
+//! `t2e-league render`: play one episode and write it as an animated GIF.
+
+use crate::env::{CaptureRule, EnvConfig, Side, TrapEnv};
+use crate::heuristics::ControllerSpec;
+use crate::map::{resolve, PreparedMap};
+use crate::render::episode::{render_episode, RenderOptions};
+use anyhow::{anyhow, Context, Result};
+use rayon::prelude::*;
+use std::path::PathBuf;
+use std::sync::Arc;
+
+#[derive(clap::Args, Debug)]
+pub struct RenderArgs {
+    /// Map set to play on: small, medium, large (Gibson classes), gibson,
+    /// shipped, a folder, FOLDER:CLASS, or a single .png file. The seed
+    /// picks the map, as in `eval`.
+    #[arg(long, default_value = "shipped", value_name = "SPEC")]
+    pub maps: String,
+    /// Captor controller: heuristic (expert captors), greedy (ASZ-greedy), random, still.
+    #[arg(long, default_value = "heuristic")]
+    pub captors: ControllerSpec,
+    /// Target controller: heuristic (rule-based target), random, still.
+    #[arg(long, default_value = "heuristic")]
+    pub target: ControllerSpec,
+    /// Number of captors K.
+    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..=32))]
+    pub k: u32,
+    /// Target speed over captor speed (captors move at 1.0 m/s; 1.0, 1.2, 1.4 in the paper).
+    #[arg(long, default_value_t = 1.0)]
+    pub speed_ratio: f64,
+    /// Steps before the episode ends uncaptured (500 in evaluation).
+    #[arg(long, default_value_t = 500)]
+    pub episode_length: u32,
+    /// Episode seed: picks the map and the start positions (same seed, same episode).
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Capture rule: fast (12 probes, the paper's tables) or strict (|ASZ| threshold).
+    #[arg(long, value_enum, default_value = "fast")]
+    pub capture_rule: CaptureRule,
+    /// Output GIF file (parent folders are created).
+    #[arg(long, default_value = "episode.gif", value_name = "FILE.gif")]
+    pub out: PathBuf,
+    /// Pixels per 0.05 m cell.
+    #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u32).range(1..=8))]
+    pub scale: u32,
+    /// Draw every n-th step (the first and last states are always drawn).
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
+    pub every: u32,
+    /// Delay between frames in milliseconds (100 with --every 1 is real time).
+    #[arg(long, default_value_t = 100, value_parser = clap::value_parser!(u32).range(10..=10000))]
+    pub delay_ms: u32,
+    /// Do not shade the ASZ (target-first cells) and the captors' regions.
+    #[arg(long)]
+    pub no_asz: bool,
+    /// Draw the whole grid instead of cropping to the map's free area.
+    #[arg(long)]
+    pub no_crop: bool,
+}
+
+pub fn run(args: RenderArgs) -> Result<()> {
+    if !(args.speed_ratio.is_finite() && args.speed_ratio > 0.0) {
+        return Err(anyhow!("--speed-ratio {}: must be a positive number", args.speed_ratio));
+    }
+    let mut captors = args.captors.build(Side::Captors).map_err(|e| anyhow!("--captors: {e}"))?;
+    let mut target = args.target.build(Side::Target).map_err(|e| anyhow!("--target: {e}"))?;
+    let entries = resolve(&args.maps)?;
+    // All maps of the set, in catalogue order, so the seed picks the same map as in `eval`.
+    let maps: Vec<Arc<PreparedMap>> = entries
+        .par_iter()
+        .map(|e| {
+            let grid = e.load().with_context(|| format!("map {}", e.path.display()))?;
+            Ok(Arc::new(PreparedMap::new(grid)))
+        })
+        .collect::<Result<_>>()?;
+    let cfg = EnvConfig {
+        num_captors: args.k as usize,
+        captor_speed: 1.0,
+        target_speed: args.speed_ratio,
+        episode_length: args.episode_length,
+        capture_rule: args.capture_rule,
+        observations: false,
+        ..EnvConfig::default()
+    };
+    let mut env = TrapEnv::new(cfg, Arc::new(maps)).map_err(|e| anyhow!("environment settings: {e}"))?;
+    let opts = RenderOptions {
+        scale: args.scale,
+        every: args.every,
+        frame_delay_ms: args.delay_ms,
+        crop: !args.no_crop,
+        show_asz: !args.no_asz,
+    };
+    let s = render_episode(&mut env, captors.as_mut(), target.as_mut(), args.seed, &opts, &args.out)?;
+    println!(
+        "map {}, seed {}: {} after {} steps (final |ASZ| {:.2} m^2) -> {} ({} frames, {:.1} MB)",
+        s.map,
+        s.seed,
+        if s.captured { "captured" } else { "not captured" },
+        s.steps,
+        s.final_asz_m2,
+        args.out.display(),
+        s.frames,
+        s.bytes as f64 / 1e6
+    );
+    Ok(())
+}

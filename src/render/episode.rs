@@ -1,0 +1,606 @@
+//! One episode as an animated GIF: the map (free space light, obstacles dark,
+//! a faint 1 m grid), the Absolutely Safe Zone shaded as in the paper's
+//! Fig. 1 (target-first cells green, captor-first cells in faint per-captor
+//! tints), the robots as discs of their true 0.2 m radius with a heading
+//! "nose" (captors in blues with their index, the target red), short trails
+//! of their recent positions, and a header with the step, |ASZ| and whether
+//! the target has been caught.
+//!
+//! Frames use a few dozen flat colours, so the GIF encoder keeps an exact
+//! palette (no dithering noise) and LZW compresses them well; cropping to the
+//! map's free area keeps frames small.
+
+use super::map_image::{FREE_COLOR, OBSTACLE_COLOR};
+use super::text::{draw_circle, draw_line, draw_text, fill_disc, fill_rect, mix, text_size};
+use crate::asz::{cells_to_m2, FastMarching};
+use crate::env::{Action, Controller, Side, TrapEnv};
+use crate::env::config::{PROBE_DIST, RADIUS};
+use crate::map::prepared::PAD;
+use crate::map::{Grid, PreparedMap, CELL_SIZE};
+use anyhow::{anyhow, Context, Result};
+use image::codecs::gif::{GifEncoder, Repeat};
+use image::{Delay, Frame, Rgb, RgbImage, RgbaImage};
+use std::collections::VecDeque;
+use std::path::Path;
+
+/// How an episode is drawn.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RenderOptions {
+    /// Pixels per 0.05 m cell (at least 1).
+    pub scale: u32,
+    /// Draw every n-th step (the first and the last state are always drawn).
+    pub every: u32,
+    /// Delay between frames in milliseconds (GIF resolution: 10 ms). 100 ms
+    /// with `every = 1` is real time (one step is 0.1 s).
+    pub frame_delay_ms: u32,
+    /// Crop to the bounding box of the map's free cells plus a 0.5 m margin.
+    pub crop: bool,
+    /// Shade the ASZ (target-first cells) and the captors' regions.
+    pub show_asz: bool,
+}
+
+impl Default for RenderOptions {
+    fn default() -> Self {
+        RenderOptions { scale: 2, every: 1, frame_delay_ms: 100, crop: true, show_asz: true }
+    }
+}
+
+/// What happened in a rendered episode.
+#[derive(Clone, Debug, PartialEq)]
+pub struct EpisodeSummary {
+    /// Name of the map the seed picked.
+    pub map: String,
+    pub seed: u64,
+    /// Steps played.
+    pub steps: u32,
+    pub captured: bool,
+    /// |ASZ| of the final state, in cells and m².
+    pub final_asz_cells: usize,
+    pub final_asz_m2: f64,
+    /// Frames in the GIF and its size in bytes.
+    pub frames: usize,
+    pub bytes: u64,
+}
+
+/// Target disc.
+pub const TARGET_COLOR: Rgb<u8> = Rgb([225, 35, 35]);
+/// Captor discs, by captor index (cycling).
+pub const CAPTOR_COLORS: [Rgb<u8>; 6] = [
+    Rgb([35, 95, 225]),
+    Rgb([0, 150, 185]),
+    Rgb([115, 70, 215]),
+    Rgb([30, 55, 140]),
+    Rgb([0, 115, 120]),
+    Rgb([80, 120, 255]),
+];
+/// Target-first (ASZ) cells: this colour blended over the map.
+pub const ASZ_COLOR: Rgb<u8> = Rgb([30, 185, 60]);
+const ASZ_ALPHA: f32 = 0.45;
+const CAPTOR_REGION_ALPHA: f32 = 0.13;
+const OUTLINE: Rgb<u8> = Rgb([20, 20, 24]);
+const COLLIDED_OUTLINE: Rgb<u8> = Rgb([255, 150, 0]);
+const HEADER_BG: Rgb<u8> = Rgb([28, 30, 36]);
+const HEADER_TEXT: Rgb<u8> = Rgb([245, 245, 245]);
+const HEADER_MUTED: Rgb<u8> = Rgb([165, 170, 180]);
+const CAPTURED_COLOR: Rgb<u8> = Rgb([255, 200, 0]);
+const GRID_LINE: f32 = 0.07;
+/// Steps of trail kept behind each robot (3 s).
+const TRAIL_STEPS: usize = 30;
+/// Margin around the free area when cropping (cells; 0.5 m).
+const CROP_MARGIN: i64 = 10;
+/// Frames are at least this many pixels wide (per text scale) so the header fits.
+const MIN_WIDTH: u32 = 400;
+/// The last frame stays this long (ms) before the animation loops.
+const FINAL_HOLD_MS: u32 = 1500;
+
+/// The colour of captor `i`.
+pub fn captor_color(i: usize) -> Rgb<u8> {
+    CAPTOR_COLORS[i % CAPTOR_COLORS.len()]
+}
+
+/// Where a map's cells land in a frame.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FrameLayout {
+    pub scale: u32,
+    /// Grid row and column drawn at the top-left of the map area (may lie
+    /// outside the grid: such cells are drawn as obstacle).
+    pub row0: i64,
+    pub col0: i64,
+    /// Cells drawn down and across.
+    pub rows: i64,
+    pub cols: i64,
+    /// Height of the text band above the map.
+    pub header_h: u32,
+    pub text_scale: u32,
+    pub width: u32,
+    pub height: u32,
+    /// Grid side and extent, for the world-to-pixel mapping.
+    side: usize,
+}
+
+impl FrameLayout {
+    pub fn new(grid: &Grid, opts: &RenderOptions) -> FrameLayout {
+        let scale = opts.scale.max(1);
+        let text_scale = if scale >= 4 { 2 } else { 1 };
+        let side = grid.side() as i64;
+        let (mut r0, mut r1, mut c0, mut c1) = (0, side, 0, side);
+        if opts.crop {
+            let (mut rl, mut rh, mut cl, mut ch) = (side, -1, side, -1);
+            for r in 0..side {
+                for c in 0..side {
+                    if grid.is_free(r as isize, c as isize) {
+                        rl = rl.min(r);
+                        rh = rh.max(r);
+                        cl = cl.min(c);
+                        ch = ch.max(c);
+                    }
+                }
+            }
+            if rh >= 0 {
+                r0 = (rl - CROP_MARGIN).max(0);
+                r1 = (rh + 1 + CROP_MARGIN).min(side);
+                c0 = (cl - CROP_MARGIN).max(0);
+                c1 = (ch + 1 + CROP_MARGIN).min(side);
+            }
+        }
+        // Widen narrow crops (around their centre) so the header text fits.
+        let min_cols = (MIN_WIDTH * text_scale).div_ceil(scale) as i64;
+        if c1 - c0 < min_cols {
+            let extra = min_cols - (c1 - c0);
+            c0 -= extra / 2;
+            c1 += extra - extra / 2;
+        }
+        let header_h = 3 * 4 * text_scale + 2 * 8 * text_scale;
+        let (rows, cols) = (r1 - r0, c1 - c0);
+        FrameLayout {
+            scale,
+            row0: r0,
+            col0: c0,
+            rows,
+            cols,
+            header_h,
+            text_scale,
+            width: cols as u32 * scale,
+            height: rows as u32 * scale + header_h,
+            side: grid.side(),
+        }
+    }
+
+    /// Pixel position (x, y, fractional) of a world point (m).
+    pub fn to_pixel(&self, p: [f64; 2]) -> (f64, f64) {
+        let half = self.side as f64 * CELL_SIZE / 2.0;
+        let (col, row) = ((p[0] + half) / CELL_SIZE, (half - p[1]) / CELL_SIZE);
+        let s = self.scale as f64;
+        ((col - self.col0 as f64) * s, (row - self.row0 as f64) * s + self.header_h as f64)
+    }
+
+    /// Pixels per metre.
+    pub fn pixels_per_metre(&self) -> f64 {
+        self.scale as f64 / CELL_SIZE
+    }
+}
+
+/// The static part of every frame: header band, map cells, 1 m grid, scale bar.
+fn base_image(grid: &Grid, l: &FrameLayout) -> RgbImage {
+    let mut img = RgbImage::from_pixel(l.width, l.height, HEADER_BG);
+    let s = l.scale as i64;
+    let cells_per_metre = (1.0 / CELL_SIZE).round() as i64;
+    let centre = (l.side / 2) as i64;
+    let grid_free = mix(FREE_COLOR, Rgb([0, 0, 0]), GRID_LINE);
+    for r in 0..l.rows {
+        for c in 0..l.cols {
+            let (gr, gc) = (l.row0 + r, l.col0 + c);
+            let free = grid.is_free(gr as isize, gc as isize);
+            let color = if free { FREE_COLOR } else { OBSTACLE_COLOR };
+            let (x, y) = (c * s, r * s + l.header_h as i64);
+            fill_rect(&mut img, x, y, s, s, color);
+            if free && s >= 2 {
+                // Metre lines on cell boundaries aligned with the world origin.
+                if (gc - centre).rem_euclid(cells_per_metre) == 0 {
+                    fill_rect(&mut img, x, y, 1, s, grid_free);
+                }
+                if (gr - centre).rem_euclid(cells_per_metre) == 0 {
+                    fill_rect(&mut img, x, y, s, 1, grid_free);
+                }
+            }
+        }
+    }
+    // 1 m scale bar, bottom left, on a dark box.
+    let ts = l.text_scale;
+    let metre = l.pixels_per_metre().round() as i64;
+    let pad = 3 * ts as i64;
+    let (lw, lh) = text_size("1 m", ts);
+    let box_w = metre.max(lw as i64) + 2 * pad;
+    let box_h = lh as i64 + 3 * pad + 2;
+    if box_w + 8 < l.width as i64 && box_h + 8 < (l.height - l.header_h) as i64 {
+        let (x0, y0) = (4, l.height as i64 - 4 - box_h);
+        fill_rect(&mut img, x0, y0, box_w, box_h, OBSTACLE_COLOR);
+        draw_text(&mut img, (x0 + pad) as i32, (y0 + pad) as i32, "1 m", HEADER_TEXT, ts);
+        fill_rect(&mut img, x0 + pad, y0 + 2 * pad + lh as i64, metre, 2, HEADER_TEXT);
+    }
+    img
+}
+
+/// Labels every free cell with the robot that reaches it first (a full
+/// multi-label march: captors 0..K, the target K) and returns |ASZ| in cells.
+/// The target's region of a full march is the same as the stopped march of
+/// `FastMarching::asz_cells` (a target-labelled cell is only ever proposed
+/// from a settled target cell), so the count matches `TrapEnv::asz_cells`.
+fn march_regions(fm: &mut FastMarching, env: &TrapEnv) -> usize {
+    let (captors, target) = env.asz_sources();
+    let k = captors.len() as u8;
+    let mut sources = captors;
+    sources.push(target);
+    fm.march(env.map(), &sources, None);
+    fm.settled().filter(|&(_, label)| label == k).count()
+}
+
+/// Per-step state kept for drawing.
+struct Painter<'a> {
+    layout: FrameLayout,
+    base: RgbImage,
+    map: &'a PreparedMap,
+    fm: FastMarching,
+    trails: Vec<VecDeque<[f64; 2]>>,
+    footer: String,
+    show_asz: bool,
+}
+
+impl Painter<'_> {
+    fn record(&mut self, env: &TrapEnv) {
+        for (t, r) in self.trails.iter_mut().zip(&env.robots) {
+            if t.len() == TRAIL_STEPS + 1 {
+                t.pop_front();
+            }
+            t.push_back(r.pos);
+        }
+    }
+
+    /// Draws the current state; returns the frame and |ASZ| in cells.
+    fn frame(&mut self, env: &TrapEnv) -> (RgbImage, usize) {
+        let asz = march_regions(&mut self.fm, env);
+        let l = &self.layout;
+        let mut img = self.base.clone();
+        let k = env.num_captors();
+        let s = l.scale as i64;
+        if self.show_asz {
+            let stride = self.map.stride;
+            for (cell, label) in self.fm.settled() {
+                let (color, alpha) = if label as usize == k {
+                    (ASZ_COLOR, ASZ_ALPHA)
+                } else {
+                    (captor_color(label as usize), CAPTOR_REGION_ALPHA)
+                };
+                let (r, c) = ((cell / stride) as i64 - PAD as i64, (cell % stride) as i64 - PAD as i64);
+                let (x, y) = ((c - l.col0) * s, (r - l.row0) * s + l.header_h as i64);
+                if x < 0 || y < l.header_h as i64 || x >= l.width as i64 || y >= l.height as i64 {
+                    continue;
+                }
+                for yy in y..(y + s).min(l.height as i64) {
+                    for xx in x..(x + s).min(l.width as i64) {
+                        let p = img.get_pixel_mut(xx as u32, yy as u32);
+                        *p = mix(*p, color, alpha);
+                    }
+                }
+            }
+        }
+        let ppm = l.pixels_per_metre();
+        let color_of = |i: usize| if i == k { TARGET_COLOR } else { captor_color(i) };
+        // Trails under the robots.
+        let trail_w = (0.06 * ppm).max(1.0);
+        for (i, trail) in self.trails.iter().enumerate() {
+            let c = mix(color_of(i), Rgb([255, 255, 255]), 0.45);
+            for (a, b) in trail.iter().zip(trail.iter().skip(1)) {
+                let (pa, pb) = (l.to_pixel(*a), l.to_pixel(*b));
+                draw_line(&mut img, pa.0, pa.1, pb.0, pb.1, trail_w, c);
+            }
+        }
+        if env.captured {
+            let (x, y) = l.to_pixel(env.target().pos);
+            draw_circle(&mut img, x, y, (PROBE_DIST + RADIUS) * ppm, (0.04 * ppm).max(1.5), CAPTURED_COLOR);
+        }
+        // Robots: outline, disc, heading nose, captor index.
+        let r_px = RADIUS * ppm;
+        let outline = (0.025 * ppm).max(1.0);
+        for (i, robot) in env.robots.iter().enumerate() {
+            let (x, y) = l.to_pixel(robot.pos);
+            let edge = if robot.collided { COLLIDED_OUTLINE } else { OUTLINE };
+            fill_disc(&mut img, x, y, r_px + outline, edge);
+            fill_disc(&mut img, x, y, r_px, color_of(i));
+            let (dx, dy) = (robot.theta.cos(), -robot.theta.sin());
+            draw_line(&mut img, x + dx * r_px * 0.3, y + dy * r_px * 0.3, x + dx * r_px * 1.6, y + dy * r_px * 1.6, (0.04 * ppm).max(1.0), OUTLINE);
+            if i < k {
+                let label = i.to_string();
+                let (tw, th) = text_size(&label, 1);
+                if r_px >= 6.0 {
+                    // Centred in the disc, shifted against the nose.
+                    let (cx, cy) = (x - dx * r_px * 0.2, y - dy * r_px * 0.2);
+                    draw_text(&mut img, (cx - tw as f64 / 2.0).round() as i32, (cy - th as f64 / 2.0).round() as i32, &label, HEADER_TEXT, 1);
+                } else {
+                    draw_text(&mut img, (x + r_px + 2.0) as i32, (y - r_px - th as f64) as i32, &label, OUTLINE, 1);
+                }
+            }
+        }
+        // Header.
+        let ts = l.text_scale;
+        let pad = 4 * ts as i32;
+        let line_h = 8 * ts as i32;
+        let head = format!("step {}/{}   |ASZ| = {:.2} m\u{00B2} ({asz} cells)", env.steps, env.cfg.episode_length, cells_to_m2(asz));
+        let w = draw_text(&mut img, pad, pad, &head, HEADER_TEXT, ts);
+        if env.captured {
+            draw_text(&mut img, pad + w as i32 + 3 * pad, pad, "CAPTURED", CAPTURED_COLOR, ts);
+        }
+        draw_text(&mut img, pad, 2 * pad + line_h, &self.footer, HEADER_MUTED, ts);
+        (img, asz)
+    }
+}
+
+fn to_frame(img: RgbImage, delay_ms: u32) -> Frame {
+    let rgba: RgbaImage = image::DynamicImage::ImageRgb8(img).into_rgba8();
+    Frame::from_parts(rgba, 0, 0, Delay::from_numer_denom_ms(delay_ms, 1))
+}
+
+/// Plays one episode from `seed` with the two controllers and writes it to
+/// `out` as a looping GIF (parent folders are created). The environment is
+/// left in the episode's final state.
+pub fn render_episode(
+    env: &mut TrapEnv,
+    captors: &mut dyn Controller,
+    target: &mut dyn Controller,
+    seed: u64,
+    opts: &RenderOptions,
+    out: &Path,
+) -> Result<EpisodeSummary> {
+    env.reset_state(seed).map_err(|e| anyhow!("episode seed {seed}: {e}"))?;
+    captors.reset(env, seed);
+    target.reset(env, seed);
+    let map = env.map().clone();
+    let layout = FrameLayout::new(&map.grid, opts);
+    let k = env.num_captors();
+    let footer = format!(
+        "{}   {} captors: {}   target: {}   v_e/v_p = {:.1}",
+        map.grid.name,
+        k,
+        captors.name(),
+        target.name(),
+        env.cfg.speed_ratio()
+    );
+    let mut painter = Painter {
+        base: base_image(&map.grid, &layout),
+        layout,
+        map: &map,
+        fm: FastMarching::new(),
+        trails: vec![VecDeque::with_capacity(TRAIL_STEPS + 1); env.num_agents()],
+        footer,
+        show_asz: opts.show_asz,
+    };
+    painter.record(env);
+
+    let delay = opts.frame_delay_ms.max(10);
+    let every = opts.every.max(1);
+    let mut bytes: Vec<u8> = Vec::new();
+    let mut frames = 0usize;
+    let mut final_asz = 0usize;
+    {
+        let mut enc = GifEncoder::new_with_speed(&mut bytes, 10);
+        enc.set_repeat(Repeat::Infinite).context("GIF encoder")?;
+        let mut pending: Option<RgbImage> = None;
+        let mut acts = vec![Action::Stop; k + 1];
+        let mut rewards = vec![0f32; k + 1];
+        loop {
+            let done = env.is_done();
+            if env.steps % every == 0 || done {
+                let (img, asz) = painter.frame(env);
+                final_asz = asz;
+                if let Some(prev) = pending.replace(img) {
+                    enc.encode_frame(to_frame(prev, delay)).context("encoding a GIF frame")?;
+                }
+                frames += 1;
+            }
+            if done {
+                break;
+            }
+            captors.act(env, Side::Captors, &mut acts[..k]);
+            target.act(env, Side::Target, &mut acts[k..]);
+            env.step_state(&acts, &mut rewards);
+            painter.record(env);
+        }
+        if let Some(last) = pending {
+            enc.encode_frame(to_frame(last, delay.max(FINAL_HOLD_MS))).context("encoding a GIF frame")?;
+        }
+    } // the encoder writes the GIF trailer when dropped
+    if let Some(parent) = out.parent().filter(|p| !p.as_os_str().is_empty()) {
+        std::fs::create_dir_all(parent).with_context(|| format!("cannot create folder {} for {}", parent.display(), out.display()))?;
+    }
+    std::fs::write(out, &bytes).with_context(|| format!("cannot write GIF {}", out.display()))?;
+    Ok(EpisodeSummary {
+        map: map.grid.name.clone(),
+        seed,
+        steps: env.steps,
+        captured: env.captured,
+        final_asz_cells: final_asz,
+        final_asz_m2: cells_to_m2(final_asz),
+        frames,
+        bytes: bytes.len() as u64,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::env::{EnvConfig, Robot};
+    use crate::heuristics::ControllerSpec;
+    use image::codecs::gif::GifDecoder;
+    use image::AnimationDecoder;
+    use std::sync::Arc;
+
+    /// A 6 m x 5 m room in the middle of a 16 m world, with a pillar.
+    fn room_map() -> Arc<Vec<Arc<PreparedMap>>> {
+        let mut g = Grid::blocked("test-room", 320);
+        for r in 110..210 {
+            for c in 100..220 {
+                g.set_free(r, c, true);
+            }
+        }
+        for r in 150..165 {
+            for c in 150..160 {
+                g.set_free(r, c, false);
+            }
+        }
+        Arc::new(vec![Arc::new(PreparedMap::new(g))])
+    }
+
+    fn env(len: u32) -> TrapEnv {
+        let cfg = EnvConfig { episode_length: len, observations: false, ..EnvConfig::default() };
+        TrapEnv::new(cfg, room_map()).unwrap()
+    }
+
+    fn decode(path: &Path) -> Vec<RgbaImage> {
+        let file = std::io::BufReader::new(std::fs::File::open(path).unwrap());
+        GifDecoder::new(file)
+            .unwrap()
+            .into_frames()
+            .collect_frames()
+            .unwrap()
+            .into_iter()
+            .map(|f| f.into_buffer())
+            .collect()
+    }
+
+    /// Pixels of exactly `color` within / beyond `r` pixels of (x, y).
+    fn count_near(img: &RgbaImage, color: Rgb<u8>, (x, y): (f64, f64), r: f64) -> (usize, usize) {
+        let (mut near, mut far) = (0, 0);
+        for (px, py, p) in img.enumerate_pixels() {
+            if p.0[..3] == color.0 && p.0[3] == 255 {
+                let d = (px as f64 + 0.5 - x).hypot(py as f64 + 0.5 - y);
+                if d <= r {
+                    near += 1;
+                } else {
+                    far += 1;
+                }
+            }
+        }
+        (near, far)
+    }
+
+    fn play(every: u32, seed: u64, dir: &Path) -> (TrapEnv, EpisodeSummary, Vec<RgbaImage>, FrameLayout) {
+        let mut env = env(20);
+        let mut captors = ControllerSpec::Heuristic.build(Side::Captors).unwrap();
+        let mut target = ControllerSpec::Heuristic.build(Side::Target).unwrap();
+        let opts = RenderOptions { every, ..RenderOptions::default() };
+        let out = dir.join(format!("sub/ep-{every}.gif"));
+        let summary = render_episode(&mut env, captors.as_mut(), target.as_mut(), seed, &opts, &out).unwrap();
+        assert_eq!(summary.bytes, std::fs::metadata(&out).unwrap().len());
+        let frames = decode(&out);
+        let layout = FrameLayout::new(&env.map().grid, &opts);
+        (env, summary, frames, layout)
+    }
+
+    #[test]
+    fn episode_gif_has_one_frame_per_drawn_step_and_shows_the_target() {
+        let dir = tempfile::tempdir().unwrap();
+        let seed = 7;
+        let (mut env, summary, frames, layout) = play(1, seed, dir.path());
+        assert!(summary.steps >= 1 && summary.steps <= 20);
+        assert_eq!(summary.steps, env.steps);
+        assert_eq!(frames.len(), summary.steps as usize + 1);
+        assert_eq!(summary.frames, frames.len());
+        for f in &frames {
+            assert_eq!(f.dimensions(), (layout.width, layout.height));
+        }
+        // Cropped: the 6 m x 5 m room plus margins, widened to 400 px for the header.
+        assert_eq!((layout.width, layout.height), (400, (100 + 20) * 2 + layout.header_h));
+
+        // The final |ASZ| is the one the environment computes.
+        let env_asz = env.asz_cells();
+        assert_eq!(summary.final_asz_cells, env_asz);
+        assert!(env_asz > 0 || summary.captured);
+
+        // The target's red disc sits where the target is in the last frame...
+        let r_px = RADIUS * layout.pixels_per_metre();
+        let last_pos = env.target().pos;
+        let (near, far) = count_near(frames.last().unwrap(), TARGET_COLOR, layout.to_pixel(last_pos), r_px + 0.8);
+        assert!(near as f64 > 0.6 * std::f64::consts::PI * r_px * r_px, "only {near} red pixels at the target");
+        assert_eq!(far, 0, "red pixels away from the target");
+        // ... and where it started in the first one.
+        env.reset_state(seed).unwrap();
+        let first_pos = env.target().pos;
+        let (near0, far0) = count_near(&frames[0], TARGET_COLOR, layout.to_pixel(first_pos), r_px + 0.8);
+        assert!(near0 as f64 > 0.6 * std::f64::consts::PI * r_px * r_px);
+        assert_eq!(far0, 0);
+        // The captors are drawn in their colours near their positions.
+        for i in 0..3 {
+            let (n, _) = count_near(&frames[0], captor_color(i), layout.to_pixel(env.robots[i].pos), r_px + 0.8);
+            assert!(n > 50, "captor {i}: {n} pixels");
+        }
+        // The ASZ is shaded green (blended over free space) in the first frame.
+        let asz_free = mix(FREE_COLOR, ASZ_COLOR, ASZ_ALPHA);
+        let green = frames[0].pixels().filter(|p| p.0[..3] == asz_free.0).count();
+        assert!(green > 100, "{green} ASZ pixels");
+        // The robots moved, so first and last frames differ in the map area.
+        assert!(first_pos != last_pos || env.robots.iter().any(|r| r.pos != first_pos));
+        assert_ne!(frames[0], *frames.last().unwrap());
+    }
+
+    #[test]
+    fn every_nth_step_plus_the_last() {
+        let dir = tempfile::tempdir().unwrap();
+        let (_, summary, frames, _) = play(3, 11, dir.path());
+        let s = summary.steps as usize;
+        let expected = s / 3 + 1 + usize::from(s % 3 != 0);
+        assert_eq!(frames.len(), expected, "steps {s}");
+    }
+
+    #[test]
+    fn without_asz_shading_no_green() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut env = env(3);
+        let mut captors = ControllerSpec::Still.build(Side::Captors).unwrap();
+        let mut target = ControllerSpec::Still.build(Side::Target).unwrap();
+        let opts = RenderOptions { show_asz: false, crop: false, scale: 1, ..RenderOptions::default() };
+        let out = dir.path().join("plain.gif");
+        let summary = render_episode(&mut env, captors.as_mut(), target.as_mut(), 1, &opts, &out).unwrap();
+        assert_eq!(summary.steps, 3);
+        let frames = decode(&out);
+        assert_eq!(frames.len(), 4);
+        assert_eq!(frames[0].dimensions(), (400, 320 + FrameLayout::new(&env.map().grid, &opts).header_h));
+        let asz_free = mix(FREE_COLOR, ASZ_COLOR, ASZ_ALPHA);
+        assert!(frames[0].pixels().all(|p| p.0[..3] != asz_free.0));
+        assert!(summary.final_asz_cells > 0);
+    }
+
+    #[test]
+    fn full_march_count_matches_env_asz() {
+        let mut env = env(10);
+        let mut fm = FastMarching::new();
+        for seed in 0..5 {
+            env.reset_state(seed).unwrap();
+            assert_eq!(march_regions(&mut fm, &env), env.asz_cells(), "seed {seed}");
+        }
+        // A target boxed in by captors: small ASZ.
+        let t = [0.5, 0.0];
+        let robots = vec![
+            Robot { pos: [0.9, 0.0], ..Robot::default() },
+            Robot { pos: [0.1, 0.3], ..Robot::default() },
+            Robot { pos: [0.1, -0.3], ..Robot::default() },
+            Robot { pos: t, ..Robot::default() },
+        ];
+        env.set_robots(0, robots);
+        assert_eq!(march_regions(&mut fm, &env), env.asz_cells());
+    }
+
+    #[test]
+    fn layout_maps_world_to_pixels() {
+        let maps = room_map();
+        let grid = &maps[0].grid;
+        let l = FrameLayout::new(grid, &RenderOptions { crop: false, scale: 2, ..RenderOptions::default() });
+        // World origin = grid centre = cell boundary 160 -> pixel 320 (+ header).
+        assert_eq!(l.to_pixel([0.0, 0.0]), (320.0, 320.0 + l.header_h as f64));
+        assert_eq!(l.to_pixel([1.0, 1.0]), (360.0, 280.0 + l.header_h as f64));
+        let c = FrameLayout::new(grid, &RenderOptions::default());
+        assert_eq!((c.row0, c.rows), (100, 120));
+        let (x, _) = c.to_pixel(grid.cell_center(150, 100));
+        let (x_full, _) = l.to_pixel(grid.cell_center(150, 100));
+        assert_eq!(x_full - x, c.col0 as f64 * 2.0);
+    }
+}

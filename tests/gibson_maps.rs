@@ -1,0 +1,91 @@
+//! The map facts of spec §1 on the real Gibson test maps (kept outside the
+//! project, in ../shared/maps/gibson), and the maps the project ships in maps/.
+
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+use t2e::map::catalog::{gibson_dir, list_dir, shipped_dir};
+use t2e::map::{Grid, SizeClass};
+
+/// The Gibson folder, or None (after a note) when it is absent outside CI.
+fn gibson_or_skip() -> Option<PathBuf> {
+    match gibson_dir() {
+        Some(dir) => Some(dir),
+        None if std::env::var_os("CI").is_some() => {
+            panic!("the Gibson maps were not found (../shared/maps/gibson or $T2E_GIBSON_DIR) and CI is set")
+        }
+        None => {
+            eprintln!("note: Gibson maps not found (../shared/maps/gibson or $T2E_GIBSON_DIR); test skipped");
+            None
+        }
+    }
+}
+
+fn load_gibson() -> Option<BTreeMap<String, (Grid, Option<SizeClass>)>> {
+    let dir = gibson_or_skip()?;
+    let entries = list_dir(&dir).unwrap();
+    Some(
+        entries
+            .iter()
+            .map(|e| (e.name.clone(), (e.load().unwrap(), e.listed_class)))
+            .collect(),
+    )
+}
+
+fn area_of(maps: &BTreeMap<String, (Grid, Option<SizeClass>)>, name: &str) -> f64 {
+    maps.get(name).unwrap_or_else(|| panic!("{name} missing")).0.area_m2()
+}
+
+#[test]
+fn all_26_gibson_maps_load_in_their_listed_class() {
+    let Some(maps) = load_gibson() else { return };
+    assert_eq!(maps.len(), 26);
+    for (name, (grid, listed)) in &maps {
+        let listed = listed.unwrap_or_else(|| panic!("{name} is not in splits.csv"));
+        assert_eq!(grid.size_class(), listed, "{name}: {:.2} m^2", grid.area_m2());
+    }
+    // One map is 1800 px: a 360x360 grid; the others are padded to 320.
+    assert_eq!(maps.values().filter(|(g, _)| g.side() == 360).count(), 1);
+}
+
+#[test]
+fn gibson_areas_match_the_paper() {
+    let Some(maps) = load_gibson() else { return };
+    let mean = maps.values().map(|(g, _)| g.area_m2()).sum::<f64>() / maps.len() as f64;
+    assert!((mean - 42.52).abs() <= 0.01, "mean area {mean:.4} m^2");
+    let kettle = area_of(&maps, "Kettle_floor_trav_0_v3");
+    assert!((kettle - 15.7).abs() < 0.05, "Kettle {kettle:.3}");
+    let grace = area_of(&maps, "Graceville_floor_trav_0_v3");
+    assert!((grace - 74.1).abs() < 0.05, "Graceville {grace:.3}");
+    assert_eq!(maps["Graceville_floor_trav_0_v3"].0.free_cells(), 29_649);
+    // They are the extremes of the set.
+    let (min, max) = maps.values().fold((f64::MAX, 0f64), |(lo, hi), (g, _)| (lo.min(g.area_m2()), hi.max(g.area_m2())));
+    assert_eq!((min, max), (kettle, grace));
+}
+
+#[derive(serde::Deserialize)]
+struct ManifestRow {
+    map: String,
+    split: SizeClass,
+    area_m2: f64,
+}
+
+#[test]
+fn shipped_maps_match_their_manifest_and_are_connected() {
+    let dir = shipped_dir();
+    let manifest = dir.join("manifest.csv");
+    let mut reader = csv::Reader::from_path(&manifest).unwrap_or_else(|e| panic!("{}: {e}", manifest.display()));
+    let rows: Vec<ManifestRow> = reader.deserialize().map(|r| r.unwrap()).collect();
+    let entries = list_dir(&dir).unwrap();
+    assert_eq!(entries.len(), rows.len(), "PNG files and manifest rows differ");
+    for class in SizeClass::ALL {
+        assert!(rows.iter().filter(|r| r.split == class).count() >= 3, "fewer than 3 {class} maps shipped");
+    }
+    for row in &rows {
+        let entry = entries.iter().find(|e| e.name == row.map).unwrap_or_else(|| panic!("{}.png missing", row.map));
+        let mut grid = entry.load().unwrap();
+        assert_eq!(grid.size_class(), row.split, "{}: {:.2} m^2", row.map, grid.area_m2());
+        assert_eq!(entry.listed_class, Some(row.split));
+        assert!((grid.area_m2() - row.area_m2).abs() < 0.006, "{}: {:.3} vs manifest {}", row.map, grid.area_m2(), row.area_m2);
+        assert_eq!(grid.keep_largest_component(), 0, "{}: more than one free component", row.map);
+    }
+}
