@@ -11,6 +11,8 @@
 //! closed in, so a nearly trapped target costs almost nothing.
 
 use crate::map::{PreparedMap, CELL_AREA, CELL_SIZE};
+use std::cmp::Reverse;
+use std::collections::BinaryHeap;
 
 /// A robot seen by the march: where it is and how fast it can go (m/s).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -31,27 +33,36 @@ pub fn strict_capture_cells(robot_radius: f64) -> f64 {
     std::f64::consts::PI * (1.5 * robot_radius / CELL_SIZE).powi(2)
 }
 
-/// A monotone priority queue over non-negative f32 times (a radix heap):
-/// the march never proposes a time below the last one settled, so each entry
-/// moves down at most 32 buckets, O(1) amortised against a binary heap's
-/// O(log n). Times are keyed by their bits, which order like the floats.
-struct RadixHeap {
-    last: u32,
+/// The march's priority queue. Every time it is offered lies within one
+/// step cost (h / v) of the last time it settled, so a ring of a few coarse
+/// buckets, each a quarter of the largest step cost wide, holds the whole
+/// front; only the bucket being settled is kept in a (small) binary heap,
+/// which keeps the exact FMM order at a fraction of a full heap's cost.
+/// Heap keys are the time's bits (non-negative f32 bits order like the
+/// floats) above the payload, so at equal times the lower label (a captor)
+/// settles first.
+#[derive(Default)]
+struct BucketQueue {
+    width: f32,
+    inv_width: f32,
+    /// Absolute index of the bucket in `current`.
+    cur: usize,
+    ring: [Vec<u64>; RING],
+    current: BinaryHeap<Reverse<u64>>,
     len: usize,
-    buckets: [Vec<(u32, u32)>; 33],
 }
 
-impl Default for RadixHeap {
-    fn default() -> Self {
-        RadixHeap { last: 0, len: 0, buckets: std::array::from_fn(|_| Vec::new()) }
-    }
-}
+const RING: usize = 8;
+const BUCKETS_PER_STEP: f32 = 4.0;
 
-impl RadixHeap {
-    fn clear(&mut self) {
-        self.last = 0;
+impl BucketQueue {
+    fn reset(&mut self, max_step_cost: f32) {
+        self.width = max_step_cost / BUCKETS_PER_STEP;
+        self.inv_width = 1.0 / self.width;
+        self.cur = 0;
         self.len = 0;
-        for b in &mut self.buckets {
+        self.current.clear();
+        for b in &mut self.ring {
             b.clear();
         }
     }
@@ -59,20 +70,20 @@ impl RadixHeap {
     /// The smallest time a push may carry.
     #[inline]
     fn floor(&self) -> f32 {
-        f32::from_bits(self.last)
-    }
-
-    #[inline]
-    fn bucket(&self, key: u32) -> usize {
-        (32 - (key ^ self.last).leading_zeros()) as usize
+        self.cur as f32 * self.width
     }
 
     #[inline]
     fn push(&mut self, time: f32, payload: u32) {
-        let key = time.to_bits();
-        debug_assert!(key >= self.last);
-        let b = self.bucket(key);
-        self.buckets[b].push((key, payload));
+        let key = ((time.to_bits() as u64) << 32) | payload as u64;
+        // Offers lie within one step cost (4 buckets) of the settled front;
+        // the clamp only guards against rounding.
+        let b = ((time * self.inv_width) as usize).min(self.cur + RING - 1);
+        if b <= self.cur {
+            self.current.push(Reverse(key));
+        } else {
+            self.ring[b % RING].push(key);
+        }
         self.len += 1;
     }
 
@@ -81,18 +92,21 @@ impl RadixHeap {
         if self.len == 0 {
             return None;
         }
-        if self.buckets[0].is_empty() {
-            let i = (1..33).find(|&i| !self.buckets[i].is_empty()).unwrap();
-            let mut moved = std::mem::take(&mut self.buckets[i]);
-            self.last = moved.iter().map(|e| e.0).min().unwrap();
-            for e in moved.drain(..) {
-                let b = self.bucket(e.0);
-                self.buckets[b].push(e);
+        loop {
+            if let Some(Reverse(key)) = self.current.pop() {
+                self.len -= 1;
+                return Some((f32::from_bits((key >> 32) as u32), key as u32));
             }
-            self.buckets[i] = moved; // keep the allocation
+            self.cur += 1;
+            let slot = self.cur % RING;
+            let bucket = std::mem::take(&mut self.ring[slot]);
+            let mut heap = std::mem::take(&mut self.current).into_vec();
+            heap.extend(bucket.iter().map(|&k| Reverse(k)));
+            self.current = BinaryHeap::from(heap);
+            let mut bucket = bucket;
+            bucket.clear();
+            self.ring[slot] = bucket; // keep the allocation
         }
-        self.len -= 1;
-        self.buckets[0].pop().map(|(k, p)| (f32::from_bits(k), p))
     }
 }
 
@@ -120,7 +134,7 @@ pub struct FastMarching {
     stride: usize,
     cells: Vec<Cell>,
     touched: Vec<u32>,
-    heap: RadixHeap,
+    heap: BucketQueue,
 }
 
 impl FastMarching {
@@ -142,7 +156,6 @@ impl FastMarching {
             }
         }
         self.touched.clear();
-        self.heap.clear();
     }
 
     /// Arrival time (s) at padded cell `cell` from the front that claimed it.
@@ -178,19 +191,22 @@ impl FastMarching {
 
     /// Solves the first-order eikonal update at `cell` from the settled
     /// neighbours of the same label.
-    #[inline]
+    #[inline(always)]
     fn update_value(&self, cell: usize, label: u8, cost: f32) -> f32 {
         let s = self.stride;
+        let cells = &self.cells[cell - s..=cell + s];
         let val = |c: usize| {
-            let c = self.cells[c];
+            let c = cells[c];
             if c.state == FROZEN && c.label == label {
                 c.time
             } else {
                 f32::INFINITY
             }
         };
-        let a = val(cell - 1).min(val(cell + 1));
-        let b = val(cell - s).min(val(cell + s));
+        let (cell, s) = (s, s); // the neighbourhood slice starts at cell - s
+        let min = |x: f32, y: f32| if x < y { x } else { y };
+        let a = min(val(cell - 1), val(cell + 1));
+        let b = min(val(cell - s), val(cell + s));
         let (lo, hi) = if a < b { (a, b) } else { (b, a) };
         if hi - lo >= cost {
             lo + cost
@@ -209,6 +225,7 @@ impl FastMarching {
         self.prepare(map);
         let s = self.stride;
         let costs: Vec<f32> = sources.iter().map(|src| (CELL_SIZE / src.speed) as f32).collect();
+        self.heap.reset(costs.iter().copied().fold(CELL_SIZE as f32, f32::max));
         let mut pending_stop = 0usize;
         let mut settled_stop = 0usize;
         for (i, src) in sources.iter().enumerate() {
@@ -221,6 +238,9 @@ impl FastMarching {
             let t = ((src.pos[0] - centre[0]).hypot(src.pos[1] - centre[1]) / src.speed) as f32;
             self.offer(cell, t, i as u8, stop_label, &mut pending_stop);
         }
+        // Every cell the march settles is free, hence inside the grid and at
+        // least PAD cells from the edge of the padded array, so its four
+        // neighbours are valid indices.
         while let Some((t, payload)) = self.heap.pop() {
             if stop_label.is_some() && pending_stop == 0 {
                 break;
@@ -237,6 +257,7 @@ impl FastMarching {
                 settled_stop += 1;
             }
             let cost = costs[label as usize];
+            debug_assert!(cell >= s && cell + s < self.cells.len());
             for nb in [cell - 1, cell + 1, cell - s, cell + s] {
                 if self.cells[nb].state >= FROZEN {
                     continue; // settled or an obstacle
@@ -249,7 +270,7 @@ impl FastMarching {
     }
 
     /// Proposes time `t` from front `label` for a cell not yet settled.
-    #[inline]
+    #[inline(always)]
     fn offer(&mut self, cell: usize, t: f32, label: u8, stop_label: Option<u8>, pending_stop: &mut usize) {
         // Rounding can put a one-sided update a hair below the settled front.
         let t = t.max(self.heap.floor());
