@@ -88,8 +88,8 @@ const GRID_LINE: f32 = 0.07;
 const TRAIL_STEPS: usize = 30;
 /// Margin around the free area when cropping (cells; 0.5 m).
 const CROP_MARGIN: i64 = 10;
-/// Frames are at least this many pixels wide (per text scale) so the header fits.
-const MIN_WIDTH: u32 = 400;
+/// Frames are at least this many pixels wide (per text scale).
+const MIN_WIDTH: u32 = 320;
 /// The last frame stays this long (ms) before the animation loops.
 const FINAL_HOLD_MS: u32 = 1500;
 
@@ -118,10 +118,26 @@ pub struct FrameLayout {
     side: usize,
 }
 
+/// Text scale of the header at `scale` pixels per cell.
+fn text_scale_for(scale: u32) -> u32 {
+    if scale >= 4 {
+        2
+    } else {
+        1
+    }
+}
+
 impl FrameLayout {
+    /// The layout for `grid`, at least `MIN_WIDTH` pixels (per text scale) wide.
     pub fn new(grid: &Grid, opts: &RenderOptions) -> FrameLayout {
+        FrameLayout::with_min_width(grid, opts, 0)
+    }
+
+    /// The layout for `grid`, widened (around the map's centre, with
+    /// obstacle cells) to at least `min_width` pixels so header text fits.
+    pub fn with_min_width(grid: &Grid, opts: &RenderOptions, min_width: u32) -> FrameLayout {
         let scale = opts.scale.max(1);
-        let text_scale = if scale >= 4 { 2 } else { 1 };
+        let text_scale = text_scale_for(scale);
         let side = grid.side() as i64;
         let (mut r0, mut r1, mut c0, mut c1) = (0, side, 0, side);
         if opts.crop {
@@ -144,7 +160,7 @@ impl FrameLayout {
             }
         }
         // Widen narrow crops (around their centre) so the header text fits.
-        let min_cols = (MIN_WIDTH * text_scale).div_ceil(scale) as i64;
+        let min_cols = (MIN_WIDTH * text_scale).max(min_width).div_ceil(scale) as i64;
         if c1 - c0 < min_cols {
             let extra = min_cols - (c1 - c0);
             c0 -= extra / 2;
@@ -311,11 +327,12 @@ impl Painter<'_> {
             draw_line(&mut img, x + dx * r_px * 0.3, y + dy * r_px * 0.3, x + dx * r_px * 1.6, y + dy * r_px * 1.6, (0.04 * ppm).max(1.0), OUTLINE);
             if i < k {
                 let label = i.to_string();
-                let (tw, th) = text_size(&label, 1);
+                let digit_scale = ((r_px / 7.0).floor() as u32).max(1);
+                let (tw, th) = text_size(&label, digit_scale);
                 if r_px >= 6.0 {
                     // Centred in the disc, shifted against the nose.
                     let (cx, cy) = (x - dx * r_px * 0.2, y - dy * r_px * 0.2);
-                    draw_text(&mut img, (cx - tw as f64 / 2.0).round() as i32, (cy - th as f64 / 2.0).round() as i32, &label, HEADER_TEXT, 1);
+                    draw_text(&mut img, (cx - tw as f64 / 2.0).round() as i32, (cy - th as f64 / 2.0).round() as i32, &label, HEADER_TEXT, digit_scale);
                 } else {
                     draw_text(&mut img, (x + r_px + 2.0) as i32, (y - r_px - th as f64) as i32, &label, OUTLINE, 1);
                 }
@@ -325,14 +342,30 @@ impl Painter<'_> {
         let ts = l.text_scale;
         let pad = 4 * ts as i32;
         let line_h = 8 * ts as i32;
-        let head = format!("step {}/{}   |ASZ| = {:.2} m\u{00B2} ({asz} cells)", env.steps, env.cfg.episode_length, cells_to_m2(asz));
-        let w = draw_text(&mut img, pad, pad, &head, HEADER_TEXT, ts);
+        draw_text(&mut img, pad, pad, &head_line(env.steps, env.cfg.episode_length, asz), HEADER_TEXT, ts);
         if env.captured {
-            draw_text(&mut img, pad + w as i32 + 3 * pad, pad, "CAPTURED", CAPTURED_COLOR, ts);
+            let (w, _) = text_size(CAPTURED, ts);
+            draw_text(&mut img, l.width as i32 - pad - w as i32, pad, CAPTURED, CAPTURED_COLOR, ts);
         }
         draw_text(&mut img, pad, 2 * pad + line_h, &self.footer, HEADER_MUTED, ts);
         (img, asz)
     }
+}
+
+const CAPTURED: &str = "CAPTURED";
+
+/// First header line: step and |ASZ|.
+fn head_line(step: u32, episode_length: u32, asz_cells: usize) -> String {
+    format!("step {step}/{episode_length}   |ASZ| = {:.2} m\u{00B2}", cells_to_m2(asz_cells))
+}
+
+/// Width in pixels the header needs.
+fn header_width(episode_length: u32, footer: &str, text_scale: u32) -> u32 {
+    let pad = 4 * text_scale;
+    // Widest first line: the longest step count, a 3-digit area, and the capture flag.
+    let head = head_line(episode_length, episode_length, 400 * 400);
+    let head_w = text_size(&head, text_scale).0 + 3 * pad + text_size(CAPTURED, text_scale).0;
+    head_w.max(text_size(footer, text_scale).0) + 2 * pad
 }
 
 fn to_frame(img: RgbImage, delay_ms: u32) -> Frame {
@@ -355,16 +388,17 @@ pub fn render_episode(
     captors.reset(env, seed);
     target.reset(env, seed);
     let map = env.map().clone();
-    let layout = FrameLayout::new(&map.grid, opts);
     let k = env.num_captors();
     let footer = format!(
-        "{}   {} captors: {}   target: {}   v_e/v_p = {:.1}",
+        "{}  {}v1  {} vs {}  v_e/v_p = {:.1}",
         map.grid.name,
         k,
         captors.name(),
         target.name(),
         env.cfg.speed_ratio()
     );
+    let min_width = header_width(env.cfg.episode_length, &footer, text_scale_for(opts.scale.max(1)));
+    let layout = FrameLayout::with_min_width(&map.grid, opts, min_width);
     let mut painter = Painter {
         base: base_image(&map.grid, &layout),
         layout,
@@ -389,7 +423,7 @@ pub fn render_episode(
         let mut rewards = vec![0f32; k + 1];
         loop {
             let done = env.is_done();
-            if env.steps % every == 0 || done {
+            if env.steps.is_multiple_of(every) || done {
                 let (img, asz) = painter.frame(env);
                 final_asz = asz;
                 if let Some(prev) = pending.replace(img) {
@@ -492,7 +526,12 @@ mod tests {
         let summary = render_episode(&mut env, captors.as_mut(), target.as_mut(), seed, &opts, &out).unwrap();
         assert_eq!(summary.bytes, std::fs::metadata(&out).unwrap().len());
         let frames = decode(&out);
+        let (w, h) = frames[0].dimensions();
         let layout = FrameLayout::new(&env.map().grid, &opts);
+        // The header may widen the frame; the map part keeps its rows.
+        assert!(w >= layout.width && h == layout.height, "{w}x{h} vs {}x{}", layout.width, layout.height);
+        let layout = FrameLayout::with_min_width(&env.map().grid, &opts, w);
+        assert_eq!(layout.width, w);
         (env, summary, frames, layout)
     }
 
@@ -508,8 +547,11 @@ mod tests {
         for f in &frames {
             assert_eq!(f.dimensions(), (layout.width, layout.height));
         }
-        // Cropped: the 6 m x 5 m room plus margins, widened to 400 px for the header.
-        assert_eq!((layout.width, layout.height), (400, (100 + 20) * 2 + layout.header_h));
+        // Cropped: the 6 m x 5 m room plus margins, widened for the header.
+        assert_eq!(layout.height, (100 + 20) * 2 + layout.header_h);
+        assert!(layout.width >= 280 && layout.width < 640, "{}", layout.width);
+        let footer_w = text_size("test-room  3v1  heuristic vs heuristic  v_e/v_p = 1.0", 1).0;
+        assert!(layout.width >= footer_w + 8);
 
         // The final |ASZ| is the one the environment computes.
         let env_asz = env.asz_cells();
@@ -519,6 +561,11 @@ mod tests {
         // The target's red disc sits where the target is in the last frame...
         let r_px = RADIUS * layout.pixels_per_metre();
         let last_pos = env.target().pos;
+        // Independently of `to_pixel`: the target's cell, relative to the crop.
+        let (row, col) = env.map().grid.cell_of(last_pos);
+        let cell_px = ((col as i64 - layout.col0) as f64 * 2.0 + 1.0, ((row as i64 - layout.row0) * 2) as f64 + 1.0 + layout.header_h as f64);
+        let (n_cell, _) = count_near(frames.last().unwrap(), TARGET_COLOR, cell_px, r_px + 2.5);
+        assert!(n_cell as f64 > 0.6 * std::f64::consts::PI * r_px * r_px);
         let (near, far) = count_near(frames.last().unwrap(), TARGET_COLOR, layout.to_pixel(last_pos), r_px + 0.8);
         assert!(near as f64 > 0.6 * std::f64::consts::PI * r_px * r_px, "only {near} red pixels at the target");
         assert_eq!(far, 0, "red pixels away from the target");
@@ -547,7 +594,7 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let (_, summary, frames, _) = play(3, 11, dir.path());
         let s = summary.steps as usize;
-        let expected = s / 3 + 1 + usize::from(s % 3 != 0);
+        let expected = s / 3 + 1 + usize::from(!s.is_multiple_of(3));
         assert_eq!(frames.len(), expected, "steps {s}");
     }
 
@@ -563,7 +610,10 @@ mod tests {
         assert_eq!(summary.steps, 3);
         let frames = decode(&out);
         assert_eq!(frames.len(), 4);
-        assert_eq!(frames[0].dimensions(), (400, 320 + FrameLayout::new(&env.map().grid, &opts).header_h));
+        let l = FrameLayout::new(&env.map().grid, &opts);
+        assert_eq!((l.rows, l.cols), (320, 320));
+        assert_eq!(frames[0].height(), 320 + l.header_h);
+        assert!(frames[0].width() >= 320);
         let asz_free = mix(FREE_COLOR, ASZ_COLOR, ASZ_ALPHA);
         assert!(frames[0].pixels().all(|p| p.0[..3] != asz_free.0));
         assert!(summary.final_asz_cells > 0);

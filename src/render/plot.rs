@@ -53,7 +53,8 @@ const MUTED: Rgb<u8> = Rgb([120, 120, 120]);
 pub fn nice_ticks(lo: f64, hi: f64, target: usize) -> Vec<f64> {
     let (lo, hi) = widen(lo, hi);
     let target = target.max(2);
-    let step = nice_step((hi - lo) / (target - 1) as f64);
+    let (m, e) = nice_step_parts((hi - lo) / (target - 1) as f64);
+    let step = scaled(m, e);
     let first = (lo / step).floor();
     let last = (hi / step).ceil();
     if !(step.is_finite() && step > 0.0 && first.is_finite() && last.is_finite()) || last - first > 1000.0 {
@@ -62,7 +63,7 @@ pub fn nice_ticks(lo: f64, hi: f64, target: usize) -> Vec<f64> {
     let n = (last - first).round() as i64;
     let ticks: Vec<f64> = (0..=n.max(1))
         .map(|i| {
-            let t = (first + i as f64) * step;
+            let t = scaled((first + i as f64) * m, e);
             // (first + i) * step can come out as 0.30000000000000004 or -0.
             if t.abs() < step * 1e-9 {
                 0.0
@@ -93,23 +94,32 @@ fn widen(lo: f64, hi: f64) -> (f64, f64) {
     (v - d, v + d)
 }
 
-/// 1, 2, 5 or 10 times a power of ten, the smallest >= x (for x > 0).
-fn nice_step(x: f64) -> f64 {
-    if !(x.is_finite() && x > 0.0) {
-        return 1.0;
+/// `m * 10^e` computed so that steps like 0.2 come out as the double nearest 0.2.
+fn scaled(m: f64, e: i32) -> f64 {
+    if e < 0 {
+        m / 10f64.powi(-e)
+    } else {
+        m * 10f64.powi(e)
     }
-    let p = 10f64.powf(x.log10().floor());
-    let f = x / p;
-    let m = if f <= 1.0 + 1e-9 {
+}
+
+/// (mantissa 1, 2, 5 or 10, decimal exponent) of the 1-2-5 step nearest to x (x > 0).
+fn nice_step_parts(x: f64) -> (f64, i32) {
+    if !(x.is_finite() && x > 0.0) {
+        return (1.0, 0);
+    }
+    let e = x.log10().floor() as i32;
+    let f = x / 10f64.powi(e);
+    let m = if f < 1.5 {
         1.0
-    } else if f <= 2.0 + 1e-9 {
+    } else if f < 3.0 {
         2.0
-    } else if f <= 5.0 + 1e-9 {
+    } else if f < 7.0 {
         5.0
     } else {
         10.0
     };
-    m * p
+    (m, e)
 }
 
 /// Tick labels with as many decimals as the tick spacing needs; scientific
@@ -123,7 +133,8 @@ pub fn tick_labels(ticks: &[f64]) -> Vec<String> {
             .map(|&t| if t == 0.0 { "0".to_string() } else { format!("{t:.1e}") })
             .collect();
     }
-    let decimals = if step > 0.0 { (-step.log10().floor()).clamp(0.0, 6.0) as usize } else { 0 };
+    // The tick spacing carries float noise (2.8 - 2.7 = 0.09999999999999964).
+    let decimals = if step > 0.0 { (-step.log10() - 1e-6).ceil().clamp(0.0, 6.0) as usize } else { 0 };
     // A step like 0.25 is never produced (1-2-5 steps), but 2.5e-n can come
     // from a fallback range: one more decimal keeps labels distinct.
     let decimals = if decimals < 6 && ((step * 10f64.powi(decimals as i32)).round() - step * 10f64.powi(decimals as i32)).abs() > 1e-6 {
@@ -215,7 +226,7 @@ pub fn plot_frame(series: &[Series], title: &str, x_label: &str, y_label: &str, 
     let x_target = ((plot_w / (ch * 10)).clamp(2, 10)) as usize;
     let x_ticks = nice_ticks(xl, xh, x_target);
     let x_last_w = tick_labels(&x_ticks).last().map(|l| text_size(l, ts).0 as i64).unwrap_or(0);
-    let right_margin = pad.max(x_last_w / 2 + 2);
+    let right_margin = pad.max(x_last_w / 2 + pad);
     let right = (width as i64 - 1 - right_margin).max(left + 1);
     let bottom = (height as i64 - 1 - bottom_margin).max(top + 1);
     PlotFrame { left, top, right, bottom, x_ticks, y_ticks }
@@ -399,6 +410,10 @@ mod tests {
         assert_eq!(tick_labels(&t)[1], "0.002");
         assert_eq!(tick_labels(&[0.0, 0.1, 0.2, 0.30000000000000004]), vec!["0.0", "0.1", "0.2", "0.3"]);
         assert_eq!(tick_labels(&[-0.0, 500.0, 1000.0]), vec!["0", "500", "1000"]);
+        assert_eq!(tick_labels(&[2.7, 2.8, 2.9]), vec!["2.7", "2.8", "2.9"]);
+        assert_eq!(tick_labels(&[0.0, 0.05, 0.1]), vec!["0.00", "0.05", "0.10"]);
+        assert_eq!(tick_labels(&[0.0, 0.25, 0.5]), vec!["0.00", "0.25", "0.50"]);
+        assert_eq!(tick_labels(&[-2.0, 0.0, 2.0]), vec!["-2", "0", "2"]);
         // Degenerate ranges widen instead of dividing by zero.
         let flat = nice_ticks(5.0, 5.0, 5);
         assert!(flat.len() >= 2 && flat[0] < 5.0 && *flat.last().unwrap() > 5.0, "{flat:?}");
@@ -432,8 +447,10 @@ mod tests {
         }
         // The data's corners land where the frame says.
         let f = plot_frame(&[Series::new("", vec![(0.0, 0.0), (199.0, 199f64.sqrt() * 3.0)], RED)], "rising", "step", "value", 640, 400);
-        let (x0, y0) = f.to_pixel(0.0, 0.0);
-        assert!(px.iter().any(|p| (p.0 as f64 - x0).abs() < 2.0 && (p.1 as f64 - y0).abs() < 2.0));
+        for x in [25.0, 100.0, 160.0] {
+            let (x0, y0) = f.to_pixel(x, f64::sqrt(x) * 3.0);
+            assert!(px.iter().any(|p| (p.0 as f64 + 0.5 - x0).abs() < 1.5 && (p.1 as f64 + 0.5 - y0).abs() < 1.5), "no line at x = {x}");
+        }
         // Title text is drawn above the data area.
         assert!(img.enumerate_pixels().any(|(_, y, p)| (y as i64) < f.top && *p == TEXT));
     }

@@ -102,7 +102,7 @@ pub fn draw_rect(img: &mut RgbImage, x: i64, y: i64, w: i64, h: i64, color: Rgb<
 fn pixel_range(c: f64, r: f64, len: u32) -> Option<(u32, u32)> {
     let lo = (c - r - 0.5).floor().max(0.0);
     let hi = (c + r - 0.5).ceil().min(len as f64 - 1.0);
-    (lo.is_finite() && hi.is_finite() && lo <= hi).then(|| (lo as u32, hi as u32))
+    (lo.is_finite() && hi.is_finite() && lo <= hi).then_some((lo as u32, hi as u32))
 }
 
 /// Fills the pixels whose centres lie within `r` of (cx, cy); a disc smaller
@@ -156,14 +156,6 @@ pub fn draw_circle(img: &mut RgbImage, cx: f64, cy: f64, r: f64, thickness: f64,
 /// has no gaps) of the segment.
 pub fn draw_line(img: &mut RgbImage, x0: f64, y0: f64, x1: f64, y1: f64, thickness: f64, color: Rgb<u8>) {
     line_pixels(img, x0, y0, x1, y1, thickness, |img, x, y| img.put_pixel(x, y, color));
-}
-
-/// [`draw_line`] blending `color` with opacity `alpha`.
-pub fn blend_line(img: &mut RgbImage, x0: f64, y0: f64, x1: f64, y1: f64, thickness: f64, color: Rgb<u8>, alpha: f32) {
-    line_pixels(img, x0, y0, x1, y1, thickness, |img, x, y| {
-        let p = img.get_pixel_mut(x, y);
-        *p = mix(*p, color, alpha);
-    });
 }
 
 fn line_pixels(img: &mut RgbImage, x0: f64, y0: f64, x1: f64, y1: f64, thickness: f64, mut f: impl FnMut(&mut RgbImage, u32, u32)) {
