@@ -29,7 +29,12 @@ fn big_room() -> Arc<Vec<Arc<PreparedMap>>> {
 }
 
 fn robot(x: f64, y: f64, theta: f64) -> Robot {
-    Robot { pos: [x, y], vel: [0.0, 0.0], theta, collided: false }
+    Robot {
+        pos: [x, y],
+        vel: [0.0, 0.0],
+        theta,
+        collided: false,
+    }
 }
 
 fn env_with(cfg: EnvConfig, m: Arc<Vec<Arc<PreparedMap>>>, robots: Vec<Robot>) -> TrapEnv {
@@ -39,12 +44,19 @@ fn env_with(cfg: EnvConfig, m: Arc<Vec<Arc<PreparedMap>>>, robots: Vec<Robot>) -
 }
 
 fn cfg(k: usize) -> EnvConfig {
-    EnvConfig { num_captors: k, ..EnvConfig::default() }
+    EnvConfig {
+        num_captors: k,
+        ..EnvConfig::default()
+    }
 }
 
 #[test]
 fn drive_reaches_the_speed_limit_in_two_steps() {
-    let mut env = env_with(cfg(1), big_room(), vec![robot(-3.0, 0.0, 0.0), robot(3.0, 0.0, 0.0)]);
+    let mut env = env_with(
+        cfg(1),
+        big_room(),
+        vec![robot(-3.0, 0.0, 0.0), robot(3.0, 0.0, 0.0)],
+    );
     let s = env.step(&[Action::Forward, Action::Forward]);
     // Captor: F = 1 * 3^2 = 9, v = 0.9 after one step, moved 0.09 m.
     assert!((env.robots[0].vel[0] - 0.9).abs() < 1e-12);
@@ -52,23 +64,40 @@ fn drive_reaches_the_speed_limit_in_two_steps() {
     // Target: F = 16, v = 1.6 -> clamped to 1.0.
     assert!((env.robots[1].vel[0] - 1.0).abs() < 1e-12);
     env.step(&[Action::Forward, Action::Forward]);
-    assert!((env.robots[0].vel[0] - 1.0).abs() < 1e-12, "0.9 * 0.75 + 0.9 > 1 is clamped");
+    assert!(
+        (env.robots[0].vel[0] - 1.0).abs() < 1e-12,
+        "0.9 * 0.75 + 0.9 > 1 is clamped"
+    );
     assert!(!s.info.collided[0] && !s.terminations[0] && !s.truncations[0]);
 
     // Single-factor drive: F = 3, v = 0.3.
-    let single = EnvConfig { drive_force: DriveForce::Single, ..cfg(1) };
-    let mut env = env_with(single, big_room(), vec![robot(-3.0, 0.0, 0.0), robot(3.0, 0.0, 0.0)]);
+    let single = EnvConfig {
+        drive_force: DriveForce::Single,
+        ..cfg(1)
+    };
+    let mut env = env_with(
+        single,
+        big_room(),
+        vec![robot(-3.0, 0.0, 0.0), robot(3.0, 0.0, 0.0)],
+    );
     env.step(&[Action::Forward, Action::Stop]);
     assert!((env.robots[0].vel[0] - 0.3).abs() < 1e-12);
 }
 
 #[test]
 fn turning_rotates_by_thirty_degrees_and_drives_at_point_eight() {
-    let mut env = env_with(cfg(1), big_room(), vec![robot(0.0, 0.0, 0.0), robot(3.0, 3.0, 0.0)]);
+    let mut env = env_with(
+        cfg(1),
+        big_room(),
+        vec![robot(0.0, 0.0, 0.0), robot(3.0, 3.0, 0.0)],
+    );
     env.step(&[Action::TurnLeft, Action::TurnRight]);
     let pi6 = std::f64::consts::PI / 6.0;
     assert!((env.robots[0].theta - pi6).abs() < 1e-12);
-    assert!((env.robots[1].theta - (2.0 * std::f64::consts::PI - pi6)).abs() < 1e-12, "kept in [0, 2pi)");
+    assert!(
+        (env.robots[1].theta - (2.0 * std::f64::consts::PI - pi6)).abs() < 1e-12,
+        "kept in [0, 2pi)"
+    );
     // 0.8 * 9 * 0.1 = 0.72 along the new heading.
     let v = env.robots[0].vel;
     assert!((v[0] - 0.72 * pi6.cos()).abs() < 1e-12 && (v[1] - 0.72 * pi6.sin()).abs() < 1e-12);
@@ -78,17 +107,27 @@ fn turning_rotates_by_thirty_degrees_and_drives_at_point_eight() {
 fn walls_repel_and_block_and_cost_a_point() {
     // Room x in [-5, 5]: a captor heading for the east wall.
     let m = big_room();
-    let mut env = env_with(cfg(1), m.clone(), vec![robot(4.5, 0.0, 0.0), robot(-3.0, 0.0, 0.0)]);
+    let mut env = env_with(
+        cfg(1),
+        m.clone(),
+        vec![robot(4.5, 0.0, 0.0), robot(-3.0, 0.0, 0.0)],
+    );
     let mut collided_steps = 0;
     for _ in 0..30 {
         let s = env.step(&[Action::Forward, Action::Stop]);
-        assert!(!m[0].disc_touches_obstacle(env.robots[0].pos, 0.2), "never overlaps a wall");
+        assert!(
+            !m[0].disc_touches_obstacle(env.robots[0].pos, 0.2),
+            "never overlaps a wall"
+        );
         assert!(env.robots[0].pos[0] <= 4.8 + 1e-9);
         collided_steps += s.info.collided[0] as usize;
     }
     // Drive and repulsion balance about 0.3 m from the wall; the robot hovers
     // there, flagged on most steps (as in the reference).
-    assert!(collided_steps > 10, "pressing into the wall keeps the robot flagged");
+    assert!(
+        collided_steps > 10,
+        "pressing into the wall keeps the robot flagged"
+    );
     // A one-cell pillar between two rays (at 15 degrees, 0.3 m away) does not
     // repel, but the disc reaches it: the robot stays, stops, and the step
     // costs exactly 1 + 0.4.
@@ -103,9 +142,17 @@ fn walls_repel_and_block_and_cost_a_point() {
     let s = env.step(&[Action::Forward, Action::Stop]);
     assert_eq!(env.robots[0].pos, start);
     assert_eq!(env.robots[0].vel, [0.0, 0.0]);
-    assert!(s.info.collided[0] && (s.rewards[0] + 1.4).abs() < 1e-6, "{:?}", s.rewards);
+    assert!(
+        s.info.collided[0] && (s.rewards[0] + 1.4).abs() < 1e-6,
+        "{:?}",
+        s.rewards
+    );
     // Repulsion: standing still 0.25 m from the wall (d_east = 0.25 < 0.3) pushes west.
-    let mut env = env_with(cfg(1), m.clone(), vec![robot(4.75, 0.0, 0.0), robot(-3.0, 0.0, 0.0)]);
+    let mut env = env_with(
+        cfg(1),
+        m.clone(),
+        vec![robot(4.75, 0.0, 0.0), robot(-3.0, 0.0, 0.0)],
+    );
     let s = env.step(&[Action::Stop, Action::Stop]);
     assert!(s.info.collided[0] && env.robots[0].vel[0] < 0.0);
     // F = (1 - ln(0.25/0.3)) * 1 * 3 * 3 = 10.64, v = 1.064 -> clamped 1.0 westwards.
@@ -114,12 +161,23 @@ fn walls_repel_and_block_and_cost_a_point() {
 
 #[test]
 fn overlapping_robots_are_pushed_apart() {
-    let mut env = env_with(cfg(1), big_room(), vec![robot(0.0, 0.0, 0.0), robot(0.39, 0.0, 0.0)]);
+    let mut env = env_with(
+        cfg(1),
+        big_room(),
+        vec![robot(0.0, 0.0, 0.0), robot(0.39, 0.0, 0.0)],
+    );
     env.step(&[Action::Stop, Action::Stop]);
     assert!(env.robots[0].vel[0] < 0.0 && env.robots[1].vel[0] > 0.0);
-    assert!((env.robots[0].vel[0] + env.robots[1].vel[0]).abs() < 1e-9, "equal and opposite");
+    assert!(
+        (env.robots[0].vel[0] + env.robots[1].vel[0]).abs() < 1e-9,
+        "equal and opposite"
+    );
     // Far apart: no force at all.
-    let mut env = env_with(cfg(1), big_room(), vec![robot(0.0, 0.0, 0.0), robot(1.0, 0.0, 0.0)]);
+    let mut env = env_with(
+        cfg(1),
+        big_room(),
+        vec![robot(0.0, 0.0, 0.0), robot(1.0, 0.0, 0.0)],
+    );
     env.step(&[Action::Stop, Action::Stop]);
     assert_eq!(env.robots[0].vel, [0.0, 0.0]);
 }
@@ -160,7 +218,14 @@ fn rewards_follow_the_spec() {
     let mut out = [0f32; 4];
     // Captor 0 closed in by 0.1 m and touches; captor 1 fell back 0.2 m and
     // collided; captor 2 unchanged; not captured.
-    rewards(3, &[-0.1, 0.2, 0.0], &[true, false, false], &[false, true, false, true], false, &mut out);
+    rewards(
+        3,
+        &[-0.1, 0.2, 0.0],
+        &[true, false, false],
+        &[false, true, false, true],
+        false,
+        &mut out,
+    );
     assert!((out[0] - (5.0 + 5.0 - 0.4)).abs() < 1e-5);
     assert!((out[1] - (-10.0 - 1.0 - 0.4)).abs() < 1e-5);
     assert!((out[2] - (-0.4)).abs() < 1e-5);
@@ -178,7 +243,9 @@ fn placement_respects_the_distances_and_fails_cleanly() {
         let r = &env.robots;
         for i in 0..5 {
             assert!(env.map().clearance_at(r[i].pos) > 0.4);
-            assert!(r[i].theta >= 0.0 && r[i].theta < std::f64::consts::TAU && r[i].vel == [0.0, 0.0]);
+            assert!(
+                r[i].theta >= 0.0 && r[i].theta < std::f64::consts::TAU && r[i].vel == [0.0, 0.0]
+            );
             for j in 0..i {
                 let d = physics::dist(r[i].pos, r[j].pos);
                 assert!(d >= 1.0, "seed {seed}: robots {i},{j} only {d} m apart");
@@ -193,27 +260,56 @@ fn placement_respects_the_distances_and_fails_cleanly() {
     // A 1 m x 1 m room has no room for 3 captors 1 m apart.
     let mut env = TrapEnv::new(cfg(3), maps(room(150, 170, 150, 170))).unwrap();
     let e = env.reset(1).unwrap_err().to_string();
-    assert!(e.contains("room") && e.contains("no valid initial placement"), "{e}");
+    assert!(
+        e.contains("room") && e.contains("no valid initial placement"),
+        "{e}"
+    );
     // Impossible settings name the field.
-    let e = TrapEnv::new(EnvConfig { target_speed: -1.0, ..cfg(3) }, big_room()).err().unwrap();
+    let e = TrapEnv::new(
+        EnvConfig {
+            target_speed: -1.0,
+            ..cfg(3)
+        },
+        big_room(),
+    )
+    .err()
+    .unwrap();
     assert!(e.contains("target_speed"), "{e}");
 }
 
 #[test]
 fn observations_have_the_reference_layout() {
-    let mut env = env_with(cfg(3), big_room(), vec![
-        robot(0.0, 0.0, 0.0),
-        robot(2.0, 0.0, 1.0),
-        robot(0.0, 2.0, 0.5),
-        robot(-2.0, -1.0, 3.0),
+    let mut env = env_with(
+        cfg(3),
+        big_room(),
+        vec![
+            robot(0.0, 0.0, 0.0),
+            robot(2.0, 0.0, 1.0),
+            robot(0.0, 2.0, 0.5),
+            robot(-2.0, -1.0, 3.0),
+        ],
+    );
+    env.step(&[
+        Action::Forward,
+        Action::Forward,
+        Action::Stop,
+        Action::Forward,
     ]);
-    env.step(&[Action::Forward, Action::Forward, Action::Stop, Action::Forward]);
     let obs = env.observations();
     assert_eq!(obs.len(), 4);
     assert_eq!(obs[0].vector.len(), 20, "3v1: 20 numbers");
     let r = &env.robots;
     let v = &obs[0].vector;
-    assert_eq!(&v[..5], &[r[0].vel[0] as f32, r[0].vel[1] as f32, r[0].pos[0] as f32, r[0].pos[1] as f32, r[0].theta as f32]);
+    assert_eq!(
+        &v[..5],
+        &[
+            r[0].vel[0] as f32,
+            r[0].vel[1] as f32,
+            r[0].pos[0] as f32,
+            r[0].pos[1] as f32,
+            r[0].theta as f32
+        ]
+    );
     // Other captor 1: velocity visible, relative position, heading difference.
     assert_eq!(v[5], r[1].vel[0] as f32);
     assert!((v[7] - (r[1].pos[0] - r[0].pos[0]) as f32).abs() < 1e-6);
@@ -232,31 +328,72 @@ fn patch_is_binary_egocentric_and_rotates_with_the_robot() {
     // Wall 0.6 m east of the robot (room x in [-5, 0.6]).
     let m = maps(room(60, 260, 60, 172));
     let mut patch = vec![0u8; PATCH_LEN];
-    let count_rows = |p: &[u8], rows: std::ops::Range<usize>| rows.map(|a| p[a * PATCH..(a + 1) * PATCH].iter().map(|&x| x as usize).sum::<usize>()).sum::<usize>();
+    let count_rows = |p: &[u8], rows: std::ops::Range<usize>| {
+        rows.map(|a| {
+            p[a * PATCH..(a + 1) * PATCH]
+                .iter()
+                .map(|&x| x as usize)
+                .sum::<usize>()
+        })
+        .sum::<usize>()
+    };
     // Facing east: the wall is ahead, at the top of the patch (row a is
     // 24 - a cells ahead: rows 0..=12 are 12 to 24 cells ahead).
-    let mut env = env_with(cfg(1), m.clone(), vec![robot(0.0, 0.0, 0.0), robot(-3.0, 0.0, 0.0)]);
+    let mut env = env_with(
+        cfg(1),
+        m.clone(),
+        vec![robot(0.0, 0.0, 0.0), robot(-3.0, 0.0, 0.0)],
+    );
     env.write_observation(0, &mut [0.0; 10], &mut patch);
     assert!(patch.iter().all(|&x| x <= 1));
     assert_eq!(count_rows(&patch, 0..13), 13 * 48, "ahead is all wall");
     assert_eq!(count_rows(&patch, 13..48), 0, "behind is free");
     // Facing west: the wall is behind, at the bottom.
-    env.set_robots(0, vec![robot(0.0, 0.0, std::f64::consts::PI), robot(-3.0, 0.0, 0.0)]);
+    env.set_robots(
+        0,
+        vec![robot(0.0, 0.0, std::f64::consts::PI), robot(-3.0, 0.0, 0.0)],
+    );
     env.write_observation(0, &mut [0.0; 10], &mut patch);
     assert_eq!(count_rows(&patch, 36..48), 12 * 48);
     assert_eq!(count_rows(&patch, 0..36), 0);
     // Facing north: the wall is on the right, columns 36..48.
-    env.set_robots(0, vec![robot(0.0, 0.0, std::f64::consts::FRAC_PI_2), robot(-3.0, 0.0, 0.0)]);
+    env.set_robots(
+        0,
+        vec![
+            robot(0.0, 0.0, std::f64::consts::FRAC_PI_2),
+            robot(-3.0, 0.0, 0.0),
+        ],
+    );
     env.write_observation(0, &mut [0.0; 10], &mut patch);
-    let right: usize = (0..48).map(|a| patch[a * 48 + 36..a * 48 + 48].iter().map(|&x| x as usize).sum::<usize>()).sum();
+    let right: usize = (0..48)
+        .map(|a| {
+            patch[a * 48 + 36..a * 48 + 48]
+                .iter()
+                .map(|&x| x as usize)
+                .sum::<usize>()
+        })
+        .sum();
     assert_eq!(right, 12 * 48);
     assert_eq!(patch.iter().map(|&x| x as usize).sum::<usize>(), 12 * 48);
     // At 45 degrees the wall cuts a triangle off the top-right corner.
-    env.set_robots(0, vec![robot(0.0, 0.0, std::f64::consts::FRAC_PI_4), robot(-3.0, 0.0, 0.0)]);
+    env.set_robots(
+        0,
+        vec![
+            robot(0.0, 0.0, std::f64::consts::FRAC_PI_4),
+            robot(-3.0, 0.0, 0.0),
+        ],
+    );
     env.write_observation(0, &mut [0.0; 10], &mut patch);
-    assert_eq!(patch[0 * 48 + 47], 1);
-    assert_eq!(patch[47 * 48 + 0], 0);
-    assert_eq!(patch[47 * 48 + 47], 0, "bottom-right is 0.85 m behind-right: west of the wall");
+    assert_eq!(
+        patch[47], 1,
+        "top-right corner is ahead-right: past the wall"
+    );
+    assert_eq!(patch[47 * 48], 0);
+    assert_eq!(
+        patch[47 * 48 + 47],
+        0,
+        "bottom-right is 0.85 m behind-right: west of the wall"
+    );
 }
 
 /// Plays one episode with rule-based target and random captors; returns every state.
@@ -291,7 +428,10 @@ fn same_seed_same_episode_bit_for_bit() {
 #[test]
 fn vec_env_matches_single_envs_and_auto_resets() {
     let m = big_room();
-    let short = EnvConfig { episode_length: 30, ..cfg(3) };
+    let short = EnvConfig {
+        episode_length: 30,
+        ..cfg(3)
+    };
     let mut venv = VecEnv::new(short.clone(), m.clone(), 3, 99).unwrap();
     venv.script(Side::Target, || Box::new(Heuristic));
     venv.reset().unwrap();
@@ -304,13 +444,19 @@ fn vec_env_matches_single_envs_and_auto_resets() {
         .collect();
     let mut finished = 0;
     for t in 0..45 {
-        let acts: Vec<Action> = (0..12).map(|i| Action::from_index((i * 7 + t * 3) % 5)).collect();
+        let acts: Vec<Action> = (0..12)
+            .map(|i| Action::from_index((i * 7 + t * 3) % 5))
+            .collect();
         venv.step(&acts).unwrap();
         for (e, env) in singles.iter_mut().enumerate() {
             let mut a = acts[e * 4..e * 4 + 4].to_vec();
             a[3] = t2e::heuristics::target_action(env);
             let s = env.step(&a);
-            assert_eq!(&venv.rewards[e * 4..e * 4 + 4], &s.rewards[..], "env {e} step {t}");
+            assert_eq!(
+                &venv.rewards[e * 4..e * 4 + 4],
+                &s.rewards[..],
+                "env {e} step {t}"
+            );
             if s.truncations[0] || s.terminations[0] {
                 assert!(venv.terminated[e] || venv.truncated[e]);
                 finished += 1;
@@ -318,11 +464,20 @@ fn vec_env_matches_single_envs_and_auto_resets() {
             }
             let obs = env.observations();
             let vl = 20;
-            for i in 0..4 {
-                assert_eq!(&venv.vectors[(e * 4 + i) * vl..(e * 4 + i + 1) * vl], &obs[i].vector[..]);
-                assert_eq!(&venv.patches[(e * 4 + i) * PATCH_LEN..(e * 4 + i + 1) * PATCH_LEN], &obs[i].patch[..]);
+            for (i, o) in obs.iter().enumerate() {
+                assert_eq!(
+                    &venv.vectors[(e * 4 + i) * vl..(e * 4 + i + 1) * vl],
+                    &o.vector[..]
+                );
+                assert_eq!(
+                    &venv.patches[(e * 4 + i) * PATCH_LEN..(e * 4 + i + 1) * PATCH_LEN],
+                    &o.patch[..]
+                );
             }
         }
     }
-    assert!(finished >= 3, "every world finished its first episode and restarted");
+    assert!(
+        finished >= 3,
+        "every world finished its first episode and restarted"
+    );
 }

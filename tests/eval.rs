@@ -7,39 +7,76 @@ use t2e::map::{self, PreparedMap};
 
 fn shipped_small() -> Arc<Vec<Arc<PreparedMap>>> {
     let entries = map::resolve("shipped:small").unwrap();
-    Arc::new(entries.iter().map(|e| Arc::new(PreparedMap::new(e.load().unwrap()))).collect())
+    Arc::new(
+        entries
+            .iter()
+            .map(|e| Arc::new(PreparedMap::new(e.load().unwrap())))
+            .collect(),
+    )
 }
 
 #[test]
 fn same_seed_same_records_and_paired_starts() {
     let maps = shipped_small();
-    let setting = EvalSetting { episodes: 12, episode_length: 150, soa_every: 5, ..EvalSetting::default() };
+    let setting = EvalSetting {
+        episodes: 12,
+        episode_length: 150,
+        soa_every: 5,
+        ..EvalSetting::default()
+    };
     let (a, ra) = eval::run(&setting, &maps, "shipped:small", false).unwrap();
     let (b, rb) = eval::run(&setting, &maps, "shipped:small", false).unwrap();
     assert_eq!(ra, rb, "evaluation is reproducible");
     assert_eq!(a, b);
     // Another captor controller faces the same seeds and maps.
-    let random = EvalSetting { captors: ControllerSpec::Random, ..setting.clone() };
+    let random = EvalSetting {
+        captors: ControllerSpec::Random,
+        ..setting.clone()
+    };
     let (_, rr) = eval::run(&random, &maps, "shipped:small", false).unwrap();
     for (x, y) in ra.iter().zip(&rr) {
         assert_eq!((x.seed, &x.map), (y.seed, &y.map));
     }
-    assert!(ra.iter().any(|r| r.map != ra[0].map), "episodes sample maps from the set");
+    assert!(
+        ra.iter().any(|r| r.map != ra[0].map),
+        "episodes sample maps from the set"
+    );
 }
 
 #[test]
 fn heuristic_captors_beat_random_ones() {
     let maps = shipped_small();
-    let base = EvalSetting { episodes: 40, episode_length: 300, soa_every: 1, ..EvalSetting::default() };
+    let base = EvalSetting {
+        episodes: 40,
+        episode_length: 300,
+        soa_every: 1,
+        ..EvalSetting::default()
+    };
     let (heur, records) = eval::run(&base, &maps, "small", false).unwrap();
-    let random = EvalSetting { captors: ControllerSpec::Random, ..base.clone() };
+    let random = EvalSetting {
+        captors: ControllerSpec::Random,
+        ..base.clone()
+    };
     let (rand, _) = eval::run(&random, &maps, "small", false).unwrap();
-    assert!(heur.sr >= 40.0, "expert captors trap the rule-based target often: SR {}", heur.sr);
-    assert!(rand.sr < heur.sr - 25.0, "random captors {} vs expert {}", rand.sr, heur.sr);
+    assert!(
+        heur.sr >= 40.0,
+        "expert captors trap the rule-based target often: SR {}",
+        heur.sr
+    );
+    assert!(
+        rand.sr < heur.sr - 25.0,
+        "random captors {} vs expert {}",
+        rand.sr,
+        heur.sr
+    );
     assert!(heur.time < rand.time);
     assert!(heur.sr_low <= heur.sr && heur.sr <= heur.sr_high);
     for r in records.iter().filter(|r| r.captured) {
-        assert_eq!(r.soa_m2.len() as u32, r.steps + 1, "one SoA sample per step plus the start");
+        assert_eq!(
+            r.soa_m2.len() as u32,
+            r.steps + 1,
+            "one SoA sample per step plus the start"
+        );
     }
 }
 
@@ -49,7 +86,13 @@ fn heuristic_captors_beat_random_ones() {
 #[test]
 fn strict_capture_ends_episodes_at_the_asz_threshold() {
     let maps = shipped_small();
-    let strict = EvalSetting { episodes: 30, episode_length: 300, soa_every: 1, capture_rule: t2e::env::CaptureRule::Strict, ..EvalSetting::default() };
+    let strict = EvalSetting {
+        episodes: 30,
+        episode_length: 300,
+        soa_every: 1,
+        capture_rule: t2e::env::CaptureRule::Strict,
+        ..EvalSetting::default()
+    };
     let (summary, records) = eval::run(&strict, &maps, "small", false).unwrap();
     assert!(summary.sr > 0.0, "some strict captures happen");
     let threshold = t2e::asz::cells_to_m2(t2e::asz::strict_capture_cells(0.2).floor() as usize);
@@ -57,7 +100,12 @@ fn strict_capture_ends_episodes_at_the_asz_threshold() {
         let last = *r.soa_m2.last().unwrap();
         if r.captured {
             assert!(last <= threshold + 1e-9, "captured at |ASZ| {last} m^2");
-            assert!(r.soa_m2[..r.soa_m2.len() - 1].iter().all(|&s| s > threshold), "no earlier step was below the threshold");
+            assert!(
+                r.soa_m2[..r.soa_m2.len() - 1]
+                    .iter()
+                    .all(|&s| s > threshold),
+                "no earlier step was below the threshold"
+            );
         } else {
             assert!(r.soa_m2.iter().all(|&s| s > threshold));
         }

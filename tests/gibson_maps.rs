@@ -32,7 +32,10 @@ fn load_gibson() -> Option<BTreeMap<String, (Grid, Option<SizeClass>)>> {
 }
 
 fn area_of(maps: &BTreeMap<String, (Grid, Option<SizeClass>)>, name: &str) -> f64 {
-    maps.get(name).unwrap_or_else(|| panic!("{name} missing")).0.area_m2()
+    maps.get(name)
+        .unwrap_or_else(|| panic!("{name} missing"))
+        .0
+        .area_m2()
 }
 
 #[test]
@@ -41,7 +44,12 @@ fn all_26_gibson_maps_load_in_their_listed_class() {
     assert_eq!(maps.len(), 26);
     for (name, (grid, listed)) in &maps {
         let listed = listed.unwrap_or_else(|| panic!("{name} is not in splits.csv"));
-        assert_eq!(grid.size_class(), listed, "{name}: {:.2} m^2", grid.area_m2());
+        assert_eq!(
+            grid.size_class(),
+            listed,
+            "{name}: {:.2} m^2",
+            grid.area_m2()
+        );
     }
     // One map is 1800 px: a 360x360 grid; the others are padded to 320.
     assert_eq!(maps.values().filter(|(g, _)| g.side() == 360).count(), 1);
@@ -58,7 +66,9 @@ fn gibson_areas_match_the_paper() {
     assert!((grace - 74.1).abs() < 0.05, "Graceville {grace:.3}");
     assert_eq!(maps["Graceville_floor_trav_0_v3"].0.free_cells(), 29_649);
     // They are the extremes of the set.
-    let (min, max) = maps.values().fold((f64::MAX, 0f64), |(lo, hi), (g, _)| (lo.min(g.area_m2()), hi.max(g.area_m2())));
+    let (min, max) = maps.values().fold((f64::MAX, 0f64), |(lo, hi), (g, _)| {
+        (lo.min(g.area_m2()), hi.max(g.area_m2()))
+    });
     assert_eq!((min, max), (kettle, grace));
 }
 
@@ -73,19 +83,47 @@ struct ManifestRow {
 fn shipped_maps_match_their_manifest_and_are_connected() {
     let dir = shipped_dir();
     let manifest = dir.join("manifest.csv");
-    let mut reader = csv::Reader::from_path(&manifest).unwrap_or_else(|e| panic!("{}: {e}", manifest.display()));
+    let mut reader =
+        csv::Reader::from_path(&manifest).unwrap_or_else(|e| panic!("{}: {e}", manifest.display()));
     let rows: Vec<ManifestRow> = reader.deserialize().map(|r| r.unwrap()).collect();
     let entries = list_dir(&dir).unwrap();
-    assert_eq!(entries.len(), rows.len(), "PNG files and manifest rows differ");
+    assert_eq!(
+        entries.len(),
+        rows.len(),
+        "PNG files and manifest rows differ"
+    );
     for class in SizeClass::ALL {
-        assert!(rows.iter().filter(|r| r.split == class).count() >= 3, "fewer than 3 {class} maps shipped");
+        assert!(
+            rows.iter().filter(|r| r.split == class).count() >= 3,
+            "fewer than 3 {class} maps shipped"
+        );
     }
     for row in &rows {
-        let entry = entries.iter().find(|e| e.name == row.map).unwrap_or_else(|| panic!("{}.png missing", row.map));
+        let entry = entries
+            .iter()
+            .find(|e| e.name == row.map)
+            .unwrap_or_else(|| panic!("{}.png missing", row.map));
         let mut grid = entry.load().unwrap();
-        assert_eq!(grid.size_class(), row.split, "{}: {:.2} m^2", row.map, grid.area_m2());
+        assert_eq!(
+            grid.size_class(),
+            row.split,
+            "{}: {:.2} m^2",
+            row.map,
+            grid.area_m2()
+        );
         assert_eq!(entry.listed_class, Some(row.split));
-        assert!((grid.area_m2() - row.area_m2).abs() < 0.006, "{}: {:.3} vs manifest {}", row.map, grid.area_m2(), row.area_m2);
-        assert_eq!(grid.keep_largest_component(), 0, "{}: more than one free component", row.map);
+        assert!(
+            (grid.area_m2() - row.area_m2).abs() < 0.006,
+            "{}: {:.3} vs manifest {}",
+            row.map,
+            grid.area_m2(),
+            row.area_m2
+        );
+        assert_eq!(
+            grid.keep_largest_component(),
+            0,
+            "{}: more than one free component",
+            row.map
+        );
     }
 }

@@ -18,11 +18,20 @@ fn room(r0: usize, r1: usize, c0: usize, c1: usize) -> Grid {
 }
 
 fn robot(x: f64, y: f64, theta: f64) -> Robot {
-    Robot { pos: [x, y], vel: [0.0, 0.0], theta, collided: false }
+    Robot {
+        pos: [x, y],
+        vel: [0.0, 0.0],
+        theta,
+        collided: false,
+    }
 }
 
 fn env_with(k: usize, g: Grid, robots: Vec<Robot>) -> TrapEnv {
-    let cfg = EnvConfig { num_captors: k, episode_length: 500, ..EnvConfig::default() };
+    let cfg = EnvConfig {
+        num_captors: k,
+        episode_length: 500,
+        ..EnvConfig::default()
+    };
     let mut env = TrapEnv::new(cfg, Arc::new(vec![Arc::new(PreparedMap::new(g))])).unwrap();
     env.set_robots(0, robots);
     env
@@ -36,24 +45,50 @@ fn forces_become_actions_along_the_larger_axis() {
     assert_eq!(force_to_action(0.0, [0.1, -1.0]), Action::TurnRight);
     assert_eq!(force_to_action(0.0, [0.1, 1.0]), Action::TurnLeft);
     // Heading +y: forward is +y, right is +x.
-    assert_eq!(force_to_action(std::f64::consts::FRAC_PI_2, [1.0, 0.0]), Action::TurnRight);
+    assert_eq!(
+        force_to_action(std::f64::consts::FRAC_PI_2, [1.0, 0.0]),
+        Action::TurnRight
+    );
 }
 
 #[test]
 fn target_flees_and_captor_chases() {
     // Big room, captor east of the target, both facing east (+x).
     let g = room(60, 260, 60, 260);
-    let env = env_with(1, g.clone(), vec![robot(1.0, 0.0, 0.0), robot(0.0, 0.0, 0.0)]);
-    assert_eq!(target_action(&env), Action::Backward, "away from the captor is -x, behind it");
-    assert_eq!(expert_captor_action(&env, 0), Action::Backward, "the target is behind the captor");
+    let env = env_with(
+        1,
+        g.clone(),
+        vec![robot(1.0, 0.0, 0.0), robot(0.0, 0.0, 0.0)],
+    );
+    assert_eq!(
+        target_action(&env),
+        Action::Backward,
+        "away from the captor is -x, behind it"
+    );
+    assert_eq!(
+        expert_captor_action(&env, 0),
+        Action::Backward,
+        "the target is behind the captor"
+    );
     // Facing west, both go forward.
-    let env = env_with(1, g.clone(), vec![robot(1.0, 0.0, std::f64::consts::PI), robot(0.0, 0.0, std::f64::consts::PI)]);
+    let env = env_with(
+        1,
+        g.clone(),
+        vec![
+            robot(1.0, 0.0, std::f64::consts::PI),
+            robot(0.0, 0.0, std::f64::consts::PI),
+        ],
+    );
     assert_eq!(target_action(&env), Action::Forward);
     assert_eq!(expert_captor_action(&env, 0), Action::Forward);
     // A wall 0.3 m ahead outweighs a far captor behind: the target turns or backs off.
     let g = room(60, 260, 60, 166); // east wall at x = 0.3
     let env = env_with(1, g, vec![robot(-4.0, 0.0, 0.0), robot(0.0, 0.0, 0.0)]);
-    assert_ne!(target_action(&env), Action::Forward, "does not drive into the wall");
+    assert_ne!(
+        target_action(&env),
+        Action::Forward,
+        "does not drive into the wall"
+    );
 }
 
 /// In the open, three expert captors closing in from three sides ring a
@@ -66,7 +101,11 @@ fn expert_captors_ring_a_still_target_in_the_open() {
     let robots: Vec<Robot> = (0..3)
         .map(|i| {
             let a = i as f64 * 2.0 * std::f64::consts::PI / 3.0 + 0.3;
-            robot(2.0 * a.cos(), 2.0 * a.sin(), (a + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU))
+            robot(
+                2.0 * a.cos(),
+                2.0 * a.sin(),
+                (a + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU),
+            )
         })
         .chain([robot(0.0, 0.0, 0.0)])
         .collect();
@@ -84,7 +123,12 @@ fn expert_captors_ring_a_still_target_in_the_open() {
 #[test]
 fn greedy_captor_picks_the_action_that_shrinks_the_asz_most() {
     let g = room(60, 260, 60, 260);
-    let robots = vec![robot(-1.0, 0.0, 0.3), robot(1.0, 1.5, 2.0), robot(1.0, -1.5, 4.0), robot(0.0, 0.0, 0.0)];
+    let robots = vec![
+        robot(-1.0, 0.0, 0.3),
+        robot(1.0, 1.5, 2.0),
+        robot(1.0, -1.5, 4.0),
+        robot(0.0, 0.0, 0.0),
+    ];
     let env = env_with(3, g, robots);
     let mut greedy = AszGreedy::default();
     let (captors, target) = env.asz_sources();
@@ -93,18 +137,40 @@ fn greedy_captor_picks_the_action_that_shrinks_the_asz_most() {
         let chosen = greedy.captor_action(&env, i);
         let asz_after = |a: Action, fm: &mut t2e::asz::FastMarching| {
             let mut alone = [env.robots[i]];
-            physics::step(env.map(), &mut alone, &[env.spec(i)], &[a], env.cfg.drive_force, &mut [0.0]);
+            physics::step(
+                env.map(),
+                &mut alone,
+                &[env.spec(i)],
+                &[a],
+                env.cfg.drive_force,
+                &mut [0.0],
+            );
             let mut c = captors.clone();
-            c[i] = Source { pos: alone[0].pos, speed: 1.0 };
+            c[i] = Source {
+                pos: alone[0].pos,
+                speed: 1.0,
+            };
             fm.asz_cells(env.map(), target, &c)
         };
-        let sizes: Vec<usize> = [Action::Forward, Action::Backward, Action::TurnRight, Action::TurnLeft]
-            .iter()
-            .map(|&a| asz_after(a, &mut fm))
-            .collect();
+        let sizes: Vec<usize> = [
+            Action::Forward,
+            Action::Backward,
+            Action::TurnRight,
+            Action::TurnLeft,
+        ]
+        .iter()
+        .map(|&a| asz_after(a, &mut fm))
+        .collect();
         let best = *sizes.iter().min().unwrap();
-        assert!(sizes.iter().any(|&s| s != best), "the actions must differ here: {sizes:?}");
-        assert_eq!(asz_after(chosen, &mut fm), best, "captor {i} chose {chosen:?} among {sizes:?}");
+        assert!(
+            sizes.iter().any(|&s| s != best),
+            "the actions must differ here: {sizes:?}"
+        );
+        assert_eq!(
+            asz_after(chosen, &mut fm),
+            best,
+            "captor {i} chose {chosen:?} among {sizes:?}"
+        );
     }
 }
 
@@ -115,14 +181,30 @@ fn controllers_are_named_and_checked_per_side() {
         assert_eq!(spec.to_string(), name);
         assert!(spec.build(Side::Captors).is_ok());
     }
-    assert!(ControllerSpec::Greedy.build(Side::Target).err().unwrap().contains("captor controller"));
-    assert!("magic".parse::<ControllerSpec>().unwrap_err().contains("unknown controller"));
+    assert!(ControllerSpec::Greedy
+        .build(Side::Target)
+        .err()
+        .unwrap()
+        .contains("captor controller"));
+    assert!("magic"
+        .parse::<ControllerSpec>()
+        .unwrap_err()
+        .contains("unknown controller"));
 }
 
 #[test]
 fn random_controller_replays_with_the_seed() {
     let g = room(60, 260, 60, 260);
-    let env = env_with(3, g, vec![robot(-1.0, 0.0, 0.0), robot(1.0, 1.0, 0.0), robot(1.0, -1.0, 0.0), robot(3.0, 3.0, 0.0)]);
+    let env = env_with(
+        3,
+        g,
+        vec![
+            robot(-1.0, 0.0, 0.0),
+            robot(1.0, 1.0, 0.0),
+            robot(1.0, -1.0, 0.0),
+            robot(3.0, 3.0, 0.0),
+        ],
+    );
     let draw = |seed| {
         let mut r = RandomActions::new();
         r.reset(&env, seed);
@@ -135,5 +217,8 @@ fn random_controller_replays_with_the_seed() {
     assert_eq!(draw(5), draw(5));
     assert_ne!(draw(5), draw(6));
     let all = draw(5);
-    assert!(Action::ALL.iter().all(|a| all.contains(a)), "all five actions occur in 30 draws");
+    assert!(
+        Action::ALL.iter().all(|a| all.contains(a)),
+        "all five actions occur in 30 draws"
+    );
 }

@@ -8,8 +8,8 @@ fn forward_and_backward_on_cpu_match_hand_computed_gradients() {
     let vs = nn::VarStore::new(Device::Cpu);
     let mut lin = nn::linear(vs.root(), 1, 1, Default::default());
     tch::no_grad(|| {
-        lin.ws.fill_(2.0);
-        lin.bs.as_mut().unwrap().fill_(1.0);
+        let _ = lin.ws.fill_(2.0);
+        let _ = lin.bs.as_mut().unwrap().fill_(1.0);
     });
     let x = Tensor::from_slice(&[1.0f32, 2.0, 3.0]).view([3, 1]);
     let y = lin.forward(&x).pow_tensor_scalar(2).sum(Kind::Float);

@@ -124,8 +124,16 @@ struct Cell {
 const BLOCKED: u8 = 3;
 
 impl Cell {
-    const FAR: Cell = Cell { time: f32::INFINITY, label: NO_LABEL, state: FAR };
-    const WALL: Cell = Cell { time: f32::INFINITY, label: NO_LABEL, state: BLOCKED };
+    const FAR: Cell = Cell {
+        time: f32::INFINITY,
+        label: NO_LABEL,
+        state: FAR,
+    };
+    const WALL: Cell = Cell {
+        time: f32::INFINITY,
+        label: NO_LABEL,
+        state: BLOCKED,
+    };
 }
 
 /// Reusable buffers of a multi-label fast march over one map. Only the cells
@@ -151,7 +159,11 @@ impl FastMarching {
             self.map_id = map.id;
             self.stride = map.stride;
             self.cells.clear();
-            self.cells.extend(map.obstacle.iter().map(|&o| if o != 0 { Cell::WALL } else { Cell::FAR }));
+            self.cells.extend(
+                map.obstacle
+                    .iter()
+                    .map(|&o| if o != 0 { Cell::WALL } else { Cell::FAR }),
+            );
         } else {
             for &c in &self.touched {
                 self.cells[c as usize] = Cell::FAR;
@@ -222,12 +234,21 @@ impl FastMarching {
     /// With `stop_label`, stops as soon as no cell is pending for that label
     /// (its region is then complete). Returns the cells settled with `stop_label`
     /// (0 without one).
-    pub fn march(&mut self, map: &PreparedMap, sources: &[Source], stop_label: Option<u8>) -> usize {
+    pub fn march(
+        &mut self,
+        map: &PreparedMap,
+        sources: &[Source],
+        stop_label: Option<u8>,
+    ) -> usize {
         assert!(sources.len() < NO_LABEL as usize);
         self.prepare(map);
         let s = self.stride;
-        let costs: Vec<f32> = sources.iter().map(|src| (CELL_SIZE / src.speed) as f32).collect();
-        self.heap.reset(costs.iter().copied().fold(CELL_SIZE as f32, f32::max));
+        let costs: Vec<f32> = sources
+            .iter()
+            .map(|src| (CELL_SIZE / src.speed) as f32)
+            .collect();
+        self.heap
+            .reset(costs.iter().copied().fold(CELL_SIZE as f32, f32::max));
         let mut pending_stop = 0usize;
         let mut settled_stop = 0usize;
         for (i, src) in sources.iter().enumerate() {
@@ -273,7 +294,14 @@ impl FastMarching {
 
     /// Proposes time `t` from front `label` for a cell not yet settled.
     #[inline(always)]
-    fn offer(&mut self, cell: usize, t: f32, label: u8, stop_label: Option<u8>, pending_stop: &mut usize) {
+    fn offer(
+        &mut self,
+        cell: usize,
+        t: f32,
+        label: u8,
+        stop_label: Option<u8>,
+        pending_stop: &mut usize,
+    ) {
         // Rounding can put a one-sided update a hair below the settled front.
         let t = t.max(self.heap.floor());
         let old = self.cells[cell];
@@ -289,14 +317,25 @@ impl FastMarching {
         if Some(label) == stop_label {
             *pending_stop += 1;
         }
-        self.cells[cell] = Cell { time: t, label, state: TRIAL };
+        self.cells[cell] = Cell {
+            time: t,
+            label,
+            state: TRIAL,
+        };
         self.heap.push(t, ((label as u32) << 24) | cell as u32);
     }
 
     /// Geodesic distance (m) from `from` to every free cell: one full march at
     /// unit speed. Read it with `time`.
     pub fn distance_field(&mut self, map: &PreparedMap, from: [f64; 2]) {
-        self.march(map, &[Source { pos: from, speed: 1.0 }], None);
+        self.march(
+            map,
+            &[Source {
+                pos: from,
+                speed: 1.0,
+            }],
+            None,
+        );
     }
 
     /// |ASZ| in cells: the free cells the target reaches strictly before every
@@ -345,8 +384,14 @@ mod tests {
                 let p = map.grid.cell_center(r, c);
                 let d = (p[0] - from[0]).hypot(p[1] - from[1]);
                 let t = fm.time(map.padded_index(r as isize, c as isize)) as f64;
-                assert!((t - d).abs() <= 0.08 * d + 0.05, "cell ({r},{c}): fmm {t} vs {d}");
-                assert!(t >= d - 1e-3, "first-order FMM never underestimates: {t} < {d}");
+                assert!(
+                    (t - d).abs() <= 0.08 * d + 0.05,
+                    "cell ({r},{c}): fmm {t} vs {d}"
+                );
+                assert!(
+                    t >= d - 1e-3,
+                    "first-order FMM never underestimates: {t} < {d}"
+                );
                 if d > 3.0 {
                     worst_rel = worst_rel.max((t - d) / d);
                 }
@@ -355,7 +400,10 @@ mod tests {
                 }
             }
         }
-        assert!(axis_err < 1e-4, "along the axes the march is exact, got {axis_err}");
+        assert!(
+            axis_err < 1e-4,
+            "along the axes the march is exact, got {axis_err}"
+        );
         assert!(worst_rel < 0.06, "relative error beyond 3 m: {worst_rel}");
     }
 
@@ -371,8 +419,8 @@ mod tests {
         let map = PreparedMap::new(g);
         let a = map.grid.cell_center(110, 110); // in the horizontal arm
         let b = map.grid.cell_center(250, 250); // bottom of the vertical arm
-        // The shortest path bends around the inner corner, the grid vertex at
-        // the top-left of cell (120, 240).
+                                                // The shortest path bends around the inner corner, the grid vertex at
+                                                // the top-left of cell (120, 240).
         let half = map.grid.extent() / 2.0;
         let corner = [240.0 * CELL_SIZE - half, half - 120.0 * CELL_SIZE];
         let dist = |p: [f64; 2], q: [f64; 2]| (p[0] - q[0]).hypot(p[1] - q[1]);
@@ -382,7 +430,10 @@ mod tests {
         fm.distance_field(&map, a);
         let t = fm.time(map.padded_index(250, 250)) as f64;
         assert!(geodesic - euclid > 0.9, "the corridor must force a detour");
-        assert!((t - geodesic).abs() <= 0.05 * geodesic, "fmm {t} vs geodesic {geodesic}");
+        assert!(
+            (t - geodesic).abs() <= 0.05 * geodesic,
+            "fmm {t} vs geodesic {geodesic}"
+        );
     }
 
     #[test]
@@ -391,7 +442,10 @@ mod tests {
         let free = g.free_cells();
         let map = PreparedMap::new(g);
         let mut fm = FastMarching::new();
-        let target = Source { pos: map.grid.cell_center(120, 130), speed: 1.0 };
+        let target = Source {
+            pos: map.grid.cell_center(120, 130),
+            speed: 1.0,
+        };
         assert_eq!(fm.asz_cells(&map, target, &[]), free);
 
         // Target in a dead end 1 cell wide and 3 long; a captor in its mouth
@@ -401,8 +455,14 @@ mod tests {
             g.set_free(r, 130, true);
         }
         let map = PreparedMap::new(g);
-        let target = Source { pos: map.grid.cell_center(97, 130), speed: 1.0 };
-        let captor = Source { pos: map.grid.cell_center(99, 130), speed: 1.0 };
+        let target = Source {
+            pos: map.grid.cell_center(97, 130),
+            speed: 1.0,
+        };
+        let captor = Source {
+            pos: map.grid.cell_center(99, 130),
+            speed: 1.0,
+        };
         let boxed = fm.asz_cells(&map, target, &[captor]);
         assert!(boxed <= 2, "target boxed in a dead end keeps {boxed} cells");
 
@@ -410,8 +470,14 @@ mod tests {
         // other around the middle column of a 1-row corridor.
         let g = room(100, 101, 100, 111);
         let map = PreparedMap::new(g);
-        let target = Source { pos: map.grid.cell_center(100, 100), speed: 1.0 };
-        let captor = Source { pos: map.grid.cell_center(100, 110), speed: 1.0 };
+        let target = Source {
+            pos: map.grid.cell_center(100, 100),
+            speed: 1.0,
+        };
+        let captor = Source {
+            pos: map.grid.cell_center(100, 110),
+            speed: 1.0,
+        };
         assert_eq!(fm.asz_cells(&map, target, &[captor]), 5);
     }
 
@@ -421,7 +487,10 @@ mod tests {
         let mut fm = FastMarching::new();
         let captors: Vec<Source> = [(100, 100), (100, 220), (230, 160)]
             .iter()
-            .map(|&(r, c)| Source { pos: map.grid.cell_center(r, c), speed: 1.0 })
+            .map(|&(r, c)| Source {
+                pos: map.grid.cell_center(r, c),
+                speed: 1.0,
+            })
             .collect();
         let pos = map.grid.cell_center(150, 150);
         let slow = fm.asz_cells(&map, Source { pos, speed: 1.0 }, &captors);
@@ -431,7 +500,9 @@ mod tests {
         // The reference's way: one march per robot, then compare arrival times.
         let times = |fm: &mut FastMarching, p: [f64; 2], v: f64| {
             fm.distance_field(&map, p);
-            (0..map.obstacle.len()).map(|c| fm.time(c) as f64 / v).collect::<Vec<_>>()
+            (0..map.obstacle.len())
+                .map(|c| fm.time(c) as f64 / v)
+                .collect::<Vec<_>>()
         };
         let te = times(&mut fm, pos, 1.4);
         let tp: Vec<Vec<f64>> = captors.iter().map(|s| times(&mut fm, s.pos, 1.0)).collect();
@@ -439,6 +510,9 @@ mod tests {
             .filter(|&c| te[c].is_finite() && tp.iter().all(|t| te[c] < t[c]))
             .count();
         let diff = (separate as f64 - fast as f64).abs() / separate as f64;
-        assert!(diff < 0.01, "one pass {fast} vs separate marches {separate}");
+        assert!(
+            diff < 0.01,
+            "one pass {fast} vs separate marches {separate}"
+        );
     }
 }

@@ -44,15 +44,17 @@ fn measure(secs: f64, mut op: impl FnMut() -> u64) -> Duration {
     start.elapsed() / units.max(1) as u32
 }
 
-fn prepare(spec: &str) -> Result<Arc<Vec<Arc<PreparedMap>>>> {
-    let entries = map::resolve(spec)?;
-    let maps = entries.iter().map(|e| Ok(Arc::new(PreparedMap::new(e.load()?)))).collect::<Result<Vec<_>>>()?;
-    Ok(Arc::new(maps))
-}
-
 /// Steps one world for `n` steps with the given action source, building
 /// observations of every robot when `obs`; resets on episode end.
-fn single_core_steps(env: &mut TrapEnv, rng: &mut ChaCha8Rng, both_heuristic: bool, obs: bool, n: u64, vec: &mut [f32], patch: &mut [u8]) -> u64 {
+fn single_core_steps(
+    env: &mut TrapEnv,
+    rng: &mut ChaCha8Rng,
+    both_heuristic: bool,
+    obs: bool,
+    n: u64,
+    vec: &mut [f32],
+    patch: &mut [u8],
+) -> u64 {
     let k = env.num_captors();
     let mut acts = vec![Action::Stop; k + 1];
     let mut rewards = vec![0f32; k + 1];
@@ -72,7 +74,11 @@ fn single_core_steps(env: &mut TrapEnv, rng: &mut ChaCha8Rng, both_heuristic: bo
         if obs {
             let vl = env.cfg.vector_len();
             for i in 0..=k {
-                env.write_observation(i, &mut vec[i * vl..(i + 1) * vl], &mut patch[i * PATCH_LEN..(i + 1) * PATCH_LEN]);
+                env.write_observation(
+                    i,
+                    &mut vec[i * vl..(i + 1) * vl],
+                    &mut patch[i * PATCH_LEN..(i + 1) * PATCH_LEN],
+                );
             }
         }
     }
@@ -81,28 +87,57 @@ fn single_core_steps(env: &mut TrapEnv, rng: &mut ChaCha8Rng, both_heuristic: bo
 
 pub fn run(args: BenchArgs) -> Result<()> {
     let gibson = map::catalog::gibson_dir().is_some();
-    let env_spec = args.maps.clone().unwrap_or_else(|| if gibson { "gibson".into() } else { "shipped".into() });
-    let maps = prepare(&env_spec)?;
+    let env_spec = args.maps.clone().unwrap_or_else(|| {
+        if gibson {
+            "gibson".into()
+        } else {
+            "shipped".into()
+        }
+    });
+    let maps = map::catalog::load_prepared(&env_spec)?;
     let secs = args.seconds;
     let mut rows = Vec::new();
-    let cfg = EnvConfig { num_captors: 3, ..EnvConfig::default() };
+    let cfg = EnvConfig {
+        num_captors: 3,
+        ..EnvConfig::default()
+    };
 
     let one_pool = rayon::ThreadPoolBuilder::new().num_threads(1).build()?;
     for (what, both, obs, reference) in [
-        ("env step, 3v1, observations, rule-based target, random captors, 1 core", false, true, Some(275.0)),
-        ("env step, 3v1, no observations, both sides heuristic, 1 core", true, false, Some(160.0)),
+        (
+            "env step, 3v1, observations, rule-based target, random captors, 1 core",
+            false,
+            true,
+            Some(275.0),
+        ),
+        (
+            "env step, 3v1, no observations, both sides heuristic, 1 core",
+            true,
+            false,
+            Some(160.0),
+        ),
     ] {
         let mut env = TrapEnv::new(cfg.clone(), maps.clone()).map_err(anyhow::Error::msg)?;
         env.reset_state(1)?;
         let mut rng = ChaCha8Rng::seed_from_u64(7);
         let mut vec = vec![0f32; 4 * cfg.vector_len()];
         let mut patch = vec![0u8; 4 * PATCH_LEN];
-        let per = one_pool.install(|| measure(secs, || single_core_steps(&mut env, &mut rng, both, obs, 1000, &mut vec, &mut patch)));
-        rows.push(Row { what: what.into(), per_op: per, unit: "steps/s", reference });
+        let per = one_pool.install(|| {
+            measure(secs, || {
+                single_core_steps(&mut env, &mut rng, both, obs, 1000, &mut vec, &mut patch)
+            })
+        });
+        rows.push(Row {
+            what: what.into(),
+            per_op: per,
+            unit: "steps/s",
+            reference,
+        });
     }
 
     let threads = rayon::current_num_threads();
-    let mut venv = VecEnv::new(cfg.clone(), maps.clone(), args.envs, 3).map_err(anyhow::Error::msg)?;
+    let mut venv =
+        VecEnv::new(cfg.clone(), maps.clone(), args.envs, 3).map_err(anyhow::Error::msg)?;
     venv.script(Side::Target, || Box::new(Heuristic));
     venv.reset()?;
     let mut rng = ChaCha8Rng::seed_from_u64(9);
@@ -132,7 +167,12 @@ pub fn run(args: BenchArgs) -> Result<()> {
         }
         4
     });
-    rows.push(Row { what: "one observation build (vector + 48x48 patch)".into(), per_op: per, unit: "obs/s", reference: None });
+    rows.push(Row {
+        what: "one observation build (vector + 48x48 patch)".into(),
+        per_op: per,
+        unit: "obs/s",
+        reference: None,
+    });
 
     // ASZ on the smallest, a medium and the largest Gibson map, over random placements.
     if gibson {
@@ -142,9 +182,12 @@ pub fn run(args: BenchArgs) -> Result<()> {
             ("Ladue_floor_trav_0_v3", None),
             ("Graceville_floor_trav_0_v3", Some(23.0)),
         ] {
-            let m = Arc::new(PreparedMap::new(map::load_png(&dir.join(format!("{name}.png")))?));
+            let m = Arc::new(PreparedMap::new(map::load_png(
+                &dir.join(format!("{name}.png")),
+            )?));
             let free = m.grid.free_cells();
-            let mut env = TrapEnv::new(cfg.clone(), Arc::new(vec![m.clone()])).map_err(anyhow::Error::msg)?;
+            let mut env =
+                TrapEnv::new(cfg.clone(), Arc::new(vec![m.clone()])).map_err(anyhow::Error::msg)?;
             let starts: Vec<_> = (0..64)
                 .map(|s| {
                     env.reset_state(s).expect("placement");
@@ -185,15 +228,25 @@ pub fn run(args: BenchArgs) -> Result<()> {
     // The ASZ-greedy captor does 4 ASZ per captor per step.
     let mut env = TrapEnv::new(cfg.clone(), maps.clone()).map_err(anyhow::Error::msg)?;
     env.reset_state(11)?;
-    let mut greedy = ControllerSpec::Greedy.build(Side::Captors).map_err(anyhow::Error::msg)?;
+    let mut greedy = ControllerSpec::Greedy
+        .build(Side::Captors)
+        .map_err(anyhow::Error::msg)?;
     let mut acts = [Action::Stop; 3];
     let per = measure(secs, || {
         greedy.act(&env, Side::Captors, &mut acts);
         1
     });
-    rows.push(Row { what: "ASZ-greedy decision for 3 captors".into(), per_op: per, unit: "decisions/s", reference: None });
+    rows.push(Row {
+        what: "ASZ-greedy decision for 3 captors".into(),
+        per_op: per,
+        unit: "decisions/s",
+        reference: None,
+    });
 
-    println!("maps for env rows: {env_spec}; {:.1} s per row; {threads} rayon threads\n", secs);
+    println!(
+        "maps for env rows: {env_spec}; {:.1} s per row; {threads} rayon threads\n",
+        secs
+    );
     println!("| what | time per op | rate | reference (Python, same machine) | speed-up |");
     println!("|---|---|---|---|---|");
     for r in rows {
@@ -202,7 +255,15 @@ pub fn run(args: BenchArgs) -> Result<()> {
             Some(x) => (format!("{x:.0} {}", r.unit), format!("{:.0}x", rate / x)),
             None => ("-".into(), "-".into()),
         };
-        println!("| {} | {:.2} us | {:.0} {} | {} | {} |", r.what, r.per_op.as_secs_f64() * 1e6, rate, r.unit, reference, ratio);
+        println!(
+            "| {} | {:.2} us | {:.0} {} | {} | {} |",
+            r.what,
+            r.per_op.as_secs_f64() * 1e6,
+            rate,
+            r.unit,
+            reference,
+            ratio
+        );
     }
     Ok(())
 }

@@ -6,7 +6,6 @@ use crate::heuristics::ControllerSpec;
 use crate::map::{self, PreparedMap};
 use crate::render::plot::{self, Series};
 use anyhow::{Context, Result};
-use rayon::prelude::*;
 use std::collections::BTreeMap;
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -56,8 +55,18 @@ pub struct EvalArgs {
 /// Distinct line colours for up to a dozen settings, then repeating.
 fn palette(i: usize) -> [u8; 3] {
     const COLORS: [[u8; 3]; 12] = [
-        [31, 119, 180], [214, 39, 40], [44, 160, 44], [255, 127, 14], [148, 103, 189], [140, 86, 75],
-        [227, 119, 194], [127, 127, 127], [188, 189, 34], [23, 190, 207], [0, 0, 0], [255, 187, 120],
+        [31, 119, 180],
+        [214, 39, 40],
+        [44, 160, 44],
+        [255, 127, 14],
+        [148, 103, 189],
+        [140, 86, 75],
+        [227, 119, 194],
+        [127, 127, 127],
+        [188, 189, 34],
+        [23, 190, 207],
+        [0, 0, 0],
+        [255, 187, 120],
     ];
     COLORS[i % COLORS.len()]
 }
@@ -66,31 +75,59 @@ fn palette(i: usize) -> [u8; 3] {
 fn load_map_sets(specs: &[String]) -> Result<BTreeMap<String, Arc<Vec<Arc<PreparedMap>>>>> {
     let mut sets = BTreeMap::new();
     for spec in specs {
-        let entries = map::resolve(spec)?;
-        let prepared = entries
-            .par_iter()
-            .map(|e| Ok(Arc::new(PreparedMap::new(e.load()?))))
-            .collect::<Result<Vec<_>>>()?;
-        sets.insert(spec.clone(), Arc::new(prepared));
+        sets.insert(spec.clone(), map::catalog::load_prepared(spec)?);
     }
     Ok(sets)
 }
 
 fn setting_dir(out: &Path, s: &Summary) -> PathBuf {
     let maps = s.maps.replace(['/', ':', '.'], "_");
-    out.join(format!("{}-vs-{}_k{}_r{:.1}_{}", s.captors, s.target, s.num_captors, s.speed_ratio, maps.trim_matches('_')))
+    out.join(format!(
+        "{}-vs-{}_k{}_r{:.1}_{}",
+        s.captors,
+        s.target,
+        s.num_captors,
+        s.speed_ratio,
+        maps.trim_matches('_')
+    ))
 }
 
 fn write_setting(dir: &Path, summary: &Summary, records: &[eval::EpisodeRecord]) -> Result<()> {
     std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
     let mut w = csv::Writer::from_path(dir.join("episodes.csv"))?;
-    w.write_record(["episode", "seed", "map", "steps", "captured", "captor_path_len_m", "mean_soa_m2"])?;
+    w.write_record([
+        "episode",
+        "seed",
+        "map",
+        "steps",
+        "captured",
+        "captor_path_len_m",
+        "mean_soa_m2",
+    ])?;
     for r in records {
-        let soa = if r.soa_m2.is_empty() { String::new() } else { format!("{:.4}", r.soa_m2.iter().sum::<f64>() / r.soa_m2.len() as f64) };
-        w.write_record([r.episode.to_string(), r.seed.to_string(), r.map.clone(), r.steps.to_string(), r.captured.to_string(), format!("{:.4}", r.captor_path_len), soa])?;
+        let soa = if r.soa_m2.is_empty() {
+            String::new()
+        } else {
+            format!(
+                "{:.4}",
+                r.soa_m2.iter().sum::<f64>() / r.soa_m2.len() as f64
+            )
+        };
+        w.write_record([
+            r.episode.to_string(),
+            r.seed.to_string(),
+            r.map.clone(),
+            r.steps.to_string(),
+            r.captured.to_string(),
+            format!("{:.4}", r.captor_path_len),
+            soa,
+        ])?;
     }
     w.flush()?;
-    std::fs::write(dir.join("summary.json"), serde_json::to_string_pretty(summary)?)?;
+    std::fs::write(
+        dir.join("summary.json"),
+        serde_json::to_string_pretty(summary)?,
+    )?;
     if !summary.soa_curve.is_empty() {
         let mut w = csv::Writer::from_path(dir.join("soa.csv"))?;
         w.write_record(["step", "mean_asz_m2", "episodes_running"])?;
@@ -104,7 +141,8 @@ fn write_setting(dir: &Path, summary: &Summary, records: &[eval::EpisodeRecord])
 
 pub fn run(args: EvalArgs) -> Result<()> {
     let sets = load_map_sets(&args.maps)?;
-    std::fs::create_dir_all(&args.out).with_context(|| format!("cannot create {}", args.out.display()))?;
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("cannot create {}", args.out.display()))?;
     let mut summaries = Vec::new();
     let mut curves = Vec::new();
     println!("{TABLE_HEADER}");
@@ -127,11 +165,32 @@ pub fn run(args: EvalArgs) -> Result<()> {
                 let dir = setting_dir(&args.out, &summary);
                 write_setting(&dir, &summary, &records)?;
                 if !summary.soa_curve.is_empty() {
-                    let points: Vec<(f64, f64)> = summary.soa_curve.iter().map(|&(t, m, _)| (t as f64, m)).collect();
+                    let points: Vec<(f64, f64)> = summary
+                        .soa_curve
+                        .iter()
+                        .map(|&(t, m, _)| (t as f64, m))
+                        .collect();
                     let label = format!("{}:1 x{:.1} {}", k, ratio, spec);
-                    let series = Series { label: label.clone(), points, color: palette(curves.len()) };
-                    let title = format!("mean |ASZ| over time: {} vs {}, {label}", args.captors, args.target);
-                    plot::save_png(&plot::line_plot(std::slice::from_ref(&series), &title, "step", "|ASZ| (m^2)", 800, 500), &dir.join("soa.png"))?;
+                    let series = Series {
+                        label: label.clone(),
+                        points,
+                        color: palette(curves.len()),
+                    };
+                    let title = format!(
+                        "mean |ASZ| over time: {} vs {}, {label}",
+                        args.captors, args.target
+                    );
+                    plot::save_png(
+                        &plot::line_plot(
+                            std::slice::from_ref(&series),
+                            &title,
+                            "step",
+                            "|ASZ| (m^2)",
+                            800,
+                            500,
+                        ),
+                        dir.join("soa.png"),
+                    )?;
                     curves.push(series);
                 }
                 summaries.push(summary);
@@ -143,10 +202,16 @@ pub fn run(args: EvalArgs) -> Result<()> {
     for s in &summaries {
         writeln!(table, "{}", s.table_row())?;
     }
-    std::fs::write(args.out.join("summary.json"), serde_json::to_string_pretty(&summaries)?)?;
+    std::fs::write(
+        args.out.join("summary.json"),
+        serde_json::to_string_pretty(&summaries)?,
+    )?;
     if curves.len() > 1 {
         let title = format!("mean |ASZ| over time: {} vs {}", args.captors, args.target);
-        plot::save_png(&plot::line_plot(&curves, &title, "step", "|ASZ| (m^2)", 1000, 600), &args.out.join("soa.png"))?;
+        plot::save_png(
+            &plot::line_plot(&curves, &title, "step", "|ASZ| (m^2)", 1000, 600),
+            args.out.join("soa.png"),
+        )?;
     }
     eprintln!("wrote {}", args.out.display());
     Ok(())

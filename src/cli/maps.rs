@@ -68,7 +68,12 @@ pub fn run(args: MapsArgs) -> Result<()> {
     match args.command {
         MapsCommand::List { maps } => list(&maps),
         MapsCommand::Show { map, out, scale } => show(&map, &out, scale),
-        MapsCommand::Generate { class, seed, count, out } => generate_maps(class, seed, count, &out),
+        MapsCommand::Generate {
+            class,
+            seed,
+            count,
+            out,
+        } => generate_maps(class, seed, count, &out),
     }
 }
 
@@ -76,7 +81,12 @@ fn list(spec: &str) -> Result<()> {
     let entries = resolve(spec)?;
     // Decoding a 1600 px PNG takes a while: load in parallel, report in order.
     let loaded: Vec<Result<Grid>> = entries.par_iter().map(|e| e.load()).collect();
-    let name_w = entries.iter().map(|e| e.name.len()).max().unwrap_or(0).max(4);
+    let name_w = entries
+        .iter()
+        .map(|e| e.name.len())
+        .max()
+        .unwrap_or(0)
+        .max(4);
     println!(
         "{:<name_w$}  {:>5}  {:>10}  {:>9}  {:<8}  listed",
         "map", "side", "free cells", "area m^2", "class"
@@ -94,7 +104,9 @@ fn list(spec: &str) -> Result<()> {
             }
         };
         let class = grid.size_class();
-        let listed = entry.listed_class.map_or("-".to_string(), |c| c.to_string());
+        let listed = entry
+            .listed_class
+            .map_or("-".to_string(), |c| c.to_string());
         let mark = match entry.listed_class {
             Some(c) if c != class => {
                 mismatches += 1;
@@ -122,7 +134,12 @@ fn list(spec: &str) -> Result<()> {
         println!("* {mismatches} map(s) whose computed class differs from the listed one");
     }
     if !failed.is_empty() {
-        bail!("{} of {} maps could not be loaded: {}", failed.len(), entries.len(), failed.join(", "));
+        bail!(
+            "{} of {} maps could not be loaded: {}",
+            failed.len(),
+            entries.len(),
+            failed.join(", ")
+        );
     }
     Ok(())
 }
@@ -133,7 +150,11 @@ fn find_map(map: &str) -> Result<PathBuf> {
     if as_path.is_file() {
         return Ok(as_path);
     }
-    let file = if map.ends_with(".png") { map.to_string() } else { format!("{map}.png") };
+    let file = if map.ends_with(".png") {
+        map.to_string()
+    } else {
+        format!("{map}.png")
+    };
     let mut folders = vec![shipped_dir()];
     folders.extend(gibson_dir());
     for dir in &folders {
@@ -143,7 +164,10 @@ fn find_map(map: &str) -> Result<PathBuf> {
         }
     }
     let searched: Vec<String> = folders.iter().map(|d| d.display().to_string()).collect();
-    bail!("map '{map}' not found: not a file, and no {file} in {}", searched.join(" or "))
+    bail!(
+        "map '{map}' not found: not a file, and no {file} in {}",
+        searched.join(" or ")
+    )
 }
 
 fn show(map: &str, out: &Path, scale: u32) -> Result<()> {
@@ -152,7 +176,8 @@ fn show(map: &str, out: &Path, scale: u32) -> Result<()> {
     let prepared = PreparedMap::new(grid);
     let img = map_image_prepared(&prepared, scale);
     if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).with_context(|| format!("cannot create folder {}", dir.display()))?;
+        std::fs::create_dir_all(dir)
+            .with_context(|| format!("cannot create folder {}", dir.display()))?;
     }
     img.save_with_format(out, image::ImageFormat::Png)
         .with_context(|| format!("cannot write {}", out.display()))?;
@@ -202,19 +227,24 @@ pub fn read_manifest(path: &Path) -> Result<Vec<ManifestRow>> {
 /// Merges `new` into the manifest at `path` by map name (new rows win) and
 /// writes it back sorted by name, areas with two decimals.
 pub fn update_manifest(path: &Path, new: &[ManifestRow]) -> Result<()> {
-    let mut by_name: BTreeMap<String, ManifestRow> =
-        read_manifest(path)?.into_iter().map(|r| (r.map.clone(), r)).collect();
+    let mut by_name: BTreeMap<String, ManifestRow> = read_manifest(path)?
+        .into_iter()
+        .map(|r| (r.map.clone(), r))
+        .collect();
     for row in new {
         by_name.insert(row.map.clone(), row.clone());
     }
-    let mut writer = csv::Writer::from_path(path).with_context(|| format!("cannot write {}", path.display()))?;
+    let mut writer =
+        csv::Writer::from_path(path).with_context(|| format!("cannot write {}", path.display()))?;
     writer.write_record(["map", "split", "area_m2", "seed"])?;
     for row in by_name.values() {
         let area = row.area_m2.map_or(String::new(), |a| format!("{a:.2}"));
         let seed = row.seed.map_or(String::new(), |s| s.to_string());
         writer.write_record([row.map.as_str(), row.split.name(), &area, &seed])?;
     }
-    writer.flush().with_context(|| format!("cannot write {}", path.display()))?;
+    writer
+        .flush()
+        .with_context(|| format!("cannot write {}", path.display()))?;
     Ok(())
 }
 
@@ -224,10 +254,11 @@ pub fn generate_maps(class: SizeClass, seed: u64, count: u64, out: &Path) -> Res
     if count == 0 {
         bail!("--count must be at least 1");
     }
-    let last = seed
-        .checked_add(count - 1)
-        .with_context(|| format!("--seed {seed} with --count {count} runs past the largest seed"))?;
-    std::fs::create_dir_all(out).with_context(|| format!("cannot create folder {}", out.display()))?;
+    let last = seed.checked_add(count - 1).with_context(|| {
+        format!("--seed {seed} with --count {count} runs past the largest seed")
+    })?;
+    std::fs::create_dir_all(out)
+        .with_context(|| format!("cannot create folder {}", out.display()))?;
     let cfg = GeneratorConfig::default();
     let mut rows = Vec::new();
     for s in seed..=last {
@@ -242,7 +273,12 @@ pub fn generate_maps(class: SizeClass, seed: u64, count: u64, out: &Path) -> Res
             grid.free_cells(),
             path.display()
         );
-        rows.push(ManifestRow { map: grid.name.clone(), split: grid.size_class(), area_m2: Some(grid.area_m2()), seed: Some(s) });
+        rows.push(ManifestRow {
+            map: grid.name.clone(),
+            split: grid.size_class(),
+            area_m2: Some(grid.area_m2()),
+            seed: Some(s),
+        });
     }
     let manifest = out.join("manifest.csv");
     update_manifest(&manifest, &rows)?;
@@ -263,20 +299,41 @@ mod tests {
 
     #[test]
     fn arguments_parse() {
-        let cli = TestCli::try_parse_from(["maps", "generate", "--class", "large", "--seed", "5", "--count", "2", "--out", "x"]).unwrap();
-        assert!(matches!(cli.command, MapsCommand::Generate { class: SizeClass::Large, seed: 5, count: 2, .. }));
+        let cli = TestCli::try_parse_from([
+            "maps", "generate", "--class", "large", "--seed", "5", "--count", "2", "--out", "x",
+        ])
+        .unwrap();
+        assert!(matches!(
+            cli.command,
+            MapsCommand::Generate {
+                class: SizeClass::Large,
+                seed: 5,
+                count: 2,
+                ..
+            }
+        ));
         let cli = TestCli::try_parse_from(["maps", "list"]).unwrap();
         assert!(matches!(cli.command, MapsCommand::List { ref maps } if maps == "shipped"));
-        let err = TestCli::try_parse_from(["maps", "generate", "--class", "huge", "--seed", "1", "--out", "x"]).unwrap_err();
+        let err = TestCli::try_parse_from([
+            "maps", "generate", "--class", "huge", "--seed", "1", "--out", "x",
+        ])
+        .unwrap_err();
         assert!(err.to_string().contains("huge"), "{err}");
-        assert!(TestCli::try_parse_from(["maps", "show", "m", "--out", "a.png", "--scale", "0"]).is_err());
+        assert!(
+            TestCli::try_parse_from(["maps", "show", "m", "--out", "a.png", "--scale", "0"])
+                .is_err()
+        );
     }
 
     #[test]
     fn generate_writes_maps_and_merges_the_manifest() {
         let dir = tempfile::tempdir().unwrap();
         let manifest = dir.path().join("manifest.csv");
-        std::fs::write(&manifest, "map,split\nzz-hand-made,large\ngen-small-4,medium\n").unwrap();
+        std::fs::write(
+            &manifest,
+            "map,split\nzz-hand-made,large\ngen-small-4,medium\n",
+        )
+        .unwrap();
         generate_maps(SizeClass::Small, 3, 2, dir.path()).unwrap();
         let rows = read_manifest(&manifest).unwrap();
         let names: Vec<&str> = rows.iter().map(|r| r.map.as_str()).collect();
@@ -285,13 +342,18 @@ mod tests {
         assert_eq!(rows[2].area_m2, None); // kept as it was
         for row in &rows[..2] {
             let g = load_png(&dir.path().join(format!("{}.png", row.map))).unwrap();
-            assert_eq!(format!("{:.2}", g.area_m2()), format!("{:.2}", row.area_m2.unwrap()));
+            assert_eq!(
+                format!("{:.2}", g.area_m2()),
+                format!("{:.2}", row.area_m2.unwrap())
+            );
             assert_eq!(g.size_class(), row.split);
         }
         // The catalog reads the manifest's classes.
         let entries = crate::map::catalog::list_dir(dir.path()).unwrap();
         assert_eq!(entries.len(), 2);
-        assert!(entries.iter().all(|e| e.listed_class == Some(SizeClass::Small)));
+        assert!(entries
+            .iter()
+            .all(|e| e.listed_class == Some(SizeClass::Small)));
     }
 
     #[test]
@@ -312,7 +374,11 @@ mod tests {
     fn show_draws_a_generated_map() {
         let dir = tempfile::tempdir().unwrap();
         let map = dir.path().join("m.png");
-        save_png(&generate(1, SizeClass::Small, &GeneratorConfig::default()), &map).unwrap();
+        save_png(
+            &generate(1, SizeClass::Small, &GeneratorConfig::default()),
+            &map,
+        )
+        .unwrap();
         let out = dir.path().join("sub/shown.png");
         show(map.to_str().unwrap(), &out, 1).unwrap();
         let img = image::open(&out).unwrap();

@@ -7,7 +7,11 @@ pub mod maps;
 pub mod render;
 
 #[derive(Parser, Debug)]
-#[command(name = "t2e-league", version, about = "Multi-robot target trapping (T2E): environment, heuristics, evaluation and league training")]
+#[command(
+    name = "t2e-league",
+    version,
+    about = "Multi-robot target trapping (T2E): environment, heuristics, evaluation and league training"
+)]
 pub struct Cli {
     #[command(subcommand)]
     pub command: Command,
@@ -27,7 +31,9 @@ pub enum Command {
 
 pub fn main() -> anyhow::Result<()> {
     tracing_subscriber::fmt()
-        .with_env_filter(tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| "warn".into()))
+        .with_env_filter(
+            tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| "warn".into()),
+        )
         .with_writer(std::io::stderr)
         .init();
     let cli = Cli::parse();

@@ -2,12 +2,9 @@
 
 use crate::env::{CaptureRule, EnvConfig, Side, TrapEnv};
 use crate::heuristics::ControllerSpec;
-use crate::map::{resolve, PreparedMap};
 use crate::render::episode::{render_episode, RenderOptions};
-use anyhow::{anyhow, Context, Result};
-use rayon::prelude::*;
+use anyhow::{anyhow, Result};
 use std::path::PathBuf;
-use std::sync::Arc;
 
 #[derive(clap::Args, Debug)]
 pub struct RenderArgs {
@@ -59,19 +56,21 @@ pub struct RenderArgs {
 
 pub fn run(args: RenderArgs) -> Result<()> {
     if !(args.speed_ratio.is_finite() && args.speed_ratio > 0.0) {
-        return Err(anyhow!("--speed-ratio {}: must be a positive number", args.speed_ratio));
+        return Err(anyhow!(
+            "--speed-ratio {}: must be a positive number",
+            args.speed_ratio
+        ));
     }
-    let mut captors = args.captors.build(Side::Captors).map_err(|e| anyhow!("--captors: {e}"))?;
-    let mut target = args.target.build(Side::Target).map_err(|e| anyhow!("--target: {e}"))?;
-    let entries = resolve(&args.maps)?;
+    let mut captors = args
+        .captors
+        .build(Side::Captors)
+        .map_err(|e| anyhow!("--captors: {e}"))?;
+    let mut target = args
+        .target
+        .build(Side::Target)
+        .map_err(|e| anyhow!("--target: {e}"))?;
     // All maps of the set, in catalogue order, so the seed picks the same map as in `eval`.
-    let maps: Vec<Arc<PreparedMap>> = entries
-        .par_iter()
-        .map(|e| {
-            let grid = e.load().with_context(|| format!("map {}", e.path.display()))?;
-            Ok(Arc::new(PreparedMap::new(grid)))
-        })
-        .collect::<Result<_>>()?;
+    let maps = crate::map::catalog::load_prepared(&args.maps)?;
     let cfg = EnvConfig {
         num_captors: args.k as usize,
         captor_speed: 1.0,
@@ -81,7 +80,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
         observations: false,
         ..EnvConfig::default()
     };
-    let mut env = TrapEnv::new(cfg, Arc::new(maps)).map_err(|e| anyhow!("environment settings: {e}"))?;
+    let mut env = TrapEnv::new(cfg, maps).map_err(|e| anyhow!("environment settings: {e}"))?;
     let opts = RenderOptions {
         scale: args.scale,
         every: args.every,
@@ -89,12 +88,23 @@ pub fn run(args: RenderArgs) -> Result<()> {
         crop: !args.no_crop,
         show_asz: !args.no_asz,
     };
-    let s = render_episode(&mut env, captors.as_mut(), target.as_mut(), args.seed, &opts, &args.out)?;
+    let s = render_episode(
+        &mut env,
+        captors.as_mut(),
+        target.as_mut(),
+        args.seed,
+        &opts,
+        &args.out,
+    )?;
     println!(
         "map {}, seed {}: {} after {} steps (final |ASZ| {:.2} m^2) -> {} ({} frames, {:.1} MB)",
         s.map,
         s.seed,
-        if s.captured { "captured" } else { "not captured" },
+        if s.captured {
+            "captured"
+        } else {
+            "not captured"
+        },
         s.steps,
         s.final_asz_m2,
         args.out.display(),

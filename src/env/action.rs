@@ -14,7 +14,13 @@ pub enum Action {
 }
 
 impl Action {
-    pub const ALL: [Action; 5] = [Action::Forward, Action::TurnLeft, Action::TurnRight, Action::Stop, Action::Backward];
+    pub const ALL: [Action; 5] = [
+        Action::Forward,
+        Action::TurnLeft,
+        Action::TurnRight,
+        Action::Stop,
+        Action::Backward,
+    ];
     pub const COUNT: usize = 5;
 
     pub fn from_index(i: usize) -> Action {

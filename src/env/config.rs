@@ -85,9 +85,15 @@ impl EnvConfig {
     /// Checks the settings; the error names the field.
     pub fn validate(&self) -> Result<(), String> {
         if self.num_captors == 0 || self.num_captors > 32 {
-            return Err(format!("num_captors = {}: must be between 1 and 32", self.num_captors));
+            return Err(format!(
+                "num_captors = {}: must be between 1 and 32",
+                self.num_captors
+            ));
         }
-        for (name, v) in [("captor_speed", self.captor_speed), ("target_speed", self.target_speed)] {
+        for (name, v) in [
+            ("captor_speed", self.captor_speed),
+            ("target_speed", self.target_speed),
+        ] {
             if !(v.is_finite() && v > 0.0 && v <= 10.0) {
                 return Err(format!("{name} = {v}: must be a speed in (0, 10] m/s"));
             }
@@ -108,11 +114,19 @@ impl EnvConfig {
     }
 
     pub fn captor_spec(&self) -> RobotSpec {
-        RobotSpec { accel: 3.0, max_speed: self.captor_speed, mass: 1.0 }
+        RobotSpec {
+            accel: 3.0,
+            max_speed: self.captor_speed,
+            mass: 1.0,
+        }
     }
 
     pub fn target_spec(&self) -> RobotSpec {
-        RobotSpec { accel: 4.0, max_speed: self.target_speed, mass: 1.0 }
+        RobotSpec {
+            accel: 4.0,
+            max_speed: self.target_speed,
+            mass: 1.0,
+        }
     }
 
     /// The speed ratio v_e / v_p.

@@ -57,7 +57,14 @@ pub struct StepResult {
 }
 
 /// Rewards of one step (spec §6), per agent, captors first.
-pub fn rewards(num_captors: usize, dist_change: &[f64], contact: &[bool], collided: &[bool], captured: bool, out: &mut [f32]) {
+pub fn rewards(
+    num_captors: usize,
+    dist_change: &[f64],
+    contact: &[bool],
+    collided: &[bool],
+    captured: bool,
+    out: &mut [f32],
+) {
     let k = num_captors as f64;
     let mut mean_change = 0.0;
     let mut contacts = 0usize;
@@ -151,7 +158,9 @@ impl TrapEnv {
     }
 
     pub fn agent_names(&self) -> Vec<String> {
-        let mut names: Vec<String> = (0..self.cfg.num_captors).map(|i| format!("captor_{i}")).collect();
+        let mut names: Vec<String> = (0..self.cfg.num_captors)
+            .map(|i| format!("captor_{i}"))
+            .collect();
         names.push("target".into());
         names
     }
@@ -185,16 +194,10 @@ impl TrapEnv {
     /// `reset` without building observations.
     pub fn reset_state(&mut self, seed: u64) -> Result<(), PlacementError> {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
-        self.map = self.maps[rng.gen_range(0..self.maps.len())].clone();
-        self.robots = placement::place(&self.map, self.cfg.num_captors, &mut rng)?;
+        let map = rng.gen_range(0..self.maps.len());
+        let robots = placement::place(&self.maps[map], self.cfg.num_captors, &mut rng)?;
+        self.set_robots(map, robots);
         self.seed = seed;
-        self.steps = 0;
-        self.captured = false;
-        self.path_len.iter_mut().for_each(|p| *p = 0.0);
-        let t = self.target().pos;
-        for i in 0..self.cfg.num_captors {
-            self.prev_dist[i] = dist(self.robots[i].pos, t);
-        }
         Ok(())
     }
 
@@ -217,7 +220,14 @@ impl TrapEnv {
     pub fn step_state(&mut self, actions: &[Action], rewards_out: &mut [f32]) -> StepInfo {
         assert_eq!(actions.len(), self.num_agents(), "one action per agent");
         let drive = self.cfg.drive_force;
-        physics::step(&self.map, &mut self.robots, &self.specs, actions, drive, &mut self.travelled);
+        physics::step(
+            &self.map,
+            &mut self.robots,
+            &self.specs,
+            actions,
+            drive,
+            &mut self.travelled,
+        );
         self.steps += 1;
         for (p, t) in self.path_len.iter_mut().zip(&self.travelled) {
             *p += t;
@@ -242,7 +252,14 @@ impl TrapEnv {
                 cells as f64 <= strict_capture_cells(config::RADIUS)
             }
         };
-        rewards(k, &self.dist_change, &self.contact, &self.collided, self.captured, rewards_out);
+        rewards(
+            k,
+            &self.dist_change,
+            &self.contact,
+            &self.collided,
+            self.captured,
+            rewards_out,
+        );
         StepInfo {
             captured: self.captured,
             collided: self.collided.clone(),
@@ -291,9 +308,15 @@ impl TrapEnv {
         let captors = self
             .captors()
             .iter()
-            .map(|r| Source { pos: r.pos, speed: self.cfg.captor_speed })
+            .map(|r| Source {
+                pos: r.pos,
+                speed: self.cfg.captor_speed,
+            })
             .collect();
-        let target = Source { pos: self.target().pos, speed: self.cfg.target_speed };
+        let target = Source {
+            pos: self.target().pos,
+            speed: self.cfg.target_speed,
+        };
         (captors, target)
     }
 

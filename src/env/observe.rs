@@ -23,7 +23,11 @@ pub fn write_vector(robots: &[Robot], i: usize, target: usize, out: &mut [f32]) 
         if j == i {
             continue;
         }
-        let (vx, vy) = if j == target { (0.0, 0.0) } else { (other.vel[0], other.vel[1]) };
+        let (vx, vy) = if j == target {
+            (0.0, 0.0)
+        } else {
+            (other.vel[0], other.vel[1])
+        };
         out[k] = vx as f32;
         out[k + 1] = vy as f32;
         out[k + 2] = (other.pos[0] - me.pos[0]) as f32;

@@ -70,7 +70,14 @@ pub fn wall_repulsion(map: &PreparedMap, pos: [f64; 2]) -> [f64; 2] {
 
 /// Advances all robots by one step. `specs[i]` are robot i's limits.
 /// Returns each robot's travelled distance.
-pub fn step(map: &PreparedMap, robots: &mut [Robot], specs: &[RobotSpec], actions: &[Action], drive: DriveForce, travelled: &mut [f64]) {
+pub fn step(
+    map: &PreparedMap,
+    robots: &mut [Robot],
+    specs: &[RobotSpec],
+    actions: &[Action],
+    drive: DriveForce,
+    travelled: &mut [f64],
+) {
     let n = robots.len();
     debug_assert!(n <= 33);
     let mut force = [[0.0f64; 2]; 33];
@@ -139,6 +146,7 @@ pub fn step(map: &PreparedMap, robots: &mut [Robot], specs: &[RobotSpec], action
 pub fn target_is_trapped(map: &PreparedMap, target: [f64; 2], captors: &[Robot]) -> bool {
     ray_dirs().iter().all(|u| {
         let probe = [target[0] + PROBE_DIST * u[0], target[1] + PROBE_DIST * u[1]];
-        captors.iter().any(|c| dist(c.pos, probe) < CONTACT_DIST) || map.disc_touches_obstacle(probe, RADIUS)
+        captors.iter().any(|c| dist(c.pos, probe) < CONTACT_DIST)
+            || map.disc_touches_obstacle(probe, RADIUS)
     })
 }

@@ -25,7 +25,11 @@ pub struct PlacementError {
 /// within 4 m of each other; then the target, 1 m to 10 m from every captor.
 /// Centres are cell centres of free cells that stay free after dilating the
 /// obstacles by 0.4 m; headings uniform, velocities zero.
-pub fn place<R: Rng>(map: &PreparedMap, num_captors: usize, rng: &mut R) -> Result<Vec<Robot>, PlacementError> {
+pub fn place<R: Rng>(
+    map: &PreparedMap,
+    num_captors: usize,
+    rng: &mut R,
+) -> Result<Vec<Robot>, PlacementError> {
     let fail = |reason: &str| PlacementError {
         map: map.grid.name.clone(),
         captors: num_captors,
@@ -46,7 +50,7 @@ pub fn place<R: Rng>(map: &PreparedMap, num_captors: usize, rng: &mut R) -> Resu
             let found = (0..DRAWS).map(|_| draw(rng)).find(|p| {
                 positions.iter().all(|q| {
                     let d = dist(*p, *q);
-                    d >= MIN_GAP && d <= CAPTOR_SPREAD
+                    (MIN_GAP..=CAPTOR_SPREAD).contains(&d)
                 })
             });
             match found {
@@ -57,7 +61,7 @@ pub fn place<R: Rng>(map: &PreparedMap, num_captors: usize, rng: &mut R) -> Resu
         let target = (0..DRAWS).map(|_| draw(rng)).find(|p| {
             positions.iter().all(|q| {
                 let d = dist(*p, *q);
-                d >= MIN_GAP && d <= TARGET_MAX_DIST
+                (MIN_GAP..=TARGET_MAX_DIST).contains(&d)
             })
         });
         if let Some(t) = target {
@@ -73,5 +77,7 @@ pub fn place<R: Rng>(map: &PreparedMap, num_captors: usize, rng: &mut R) -> Resu
                 .collect());
         }
     }
-    Err(fail("the placeable area is too small or too fragmented for these distances"))
+    Err(fail(
+        "the placeable area is too small or too fragmented for these distances",
+    ))
 }

@@ -60,7 +60,12 @@ pub struct VecEnv {
 }
 
 impl VecEnv {
-    pub fn new(cfg: EnvConfig, maps: Arc<Vec<Arc<PreparedMap>>>, num_envs: usize, base_seed: u64) -> Result<VecEnv, String> {
+    pub fn new(
+        cfg: EnvConfig,
+        maps: Arc<Vec<Arc<PreparedMap>>>,
+        num_envs: usize,
+        base_seed: u64,
+    ) -> Result<VecEnv, String> {
         if num_envs == 0 {
             return Err("num_envs must be at least 1".into());
         }
@@ -79,7 +84,11 @@ impl VecEnv {
             slots,
             base_seed,
             vectors: vec![0.0; n * cfg.vector_len()],
-            patches: if cfg.observations { vec![0; n * PATCH_LEN] } else { Vec::new() },
+            patches: if cfg.observations {
+                vec![0; n * PATCH_LEN]
+            } else {
+                Vec::new()
+            },
             rewards: vec![0.0; n],
             terminated: vec![false; num_envs],
             truncated: vec![false; num_envs],
@@ -112,9 +121,17 @@ impl VecEnv {
     /// Starts episode 0 in every world.
     pub fn reset(&mut self) -> Result<(), PlacementError> {
         let base = self.base_seed;
-        let (na, vl, obs) = (self.num_agents(), self.cfg.vector_len(), self.cfg.observations);
+        let (na, vl, obs) = (
+            self.num_agents(),
+            self.cfg.vector_len(),
+            self.cfg.observations,
+        );
         let patch_chunk = if obs { na * PATCH_LEN } else { 0 };
-        let mut patches: Vec<&mut [u8]> = if obs { self.patches.chunks_mut(patch_chunk).collect() } else { (0..self.slots.len()).map(|_| &mut [][..]).collect() };
+        let mut patches: Vec<&mut [u8]> = if obs {
+            self.patches.chunks_mut(patch_chunk).collect()
+        } else {
+            (0..self.slots.len()).map(|_| &mut [][..]).collect()
+        };
         self.slots
             .par_iter_mut()
             .zip(self.vectors.par_chunks_mut(na * vl))
@@ -132,11 +149,19 @@ impl VecEnv {
     /// world ([env][agent]); scripted sides overwrite theirs.
     pub fn step(&mut self, actions: &[Action]) -> Result<(), PlacementError> {
         let na = self.num_agents();
-        assert_eq!(actions.len(), self.slots.len() * na, "one action per agent per world");
+        assert_eq!(
+            actions.len(),
+            self.slots.len() * na,
+            "one action per agent per world"
+        );
         let base = self.base_seed;
         let (vl, obs) = (self.cfg.vector_len(), self.cfg.observations);
         let patch_chunk = if obs { na * PATCH_LEN } else { 0 };
-        let mut patches: Vec<&mut [u8]> = if obs { self.patches.chunks_mut(patch_chunk).collect() } else { (0..self.slots.len()).map(|_| &mut [][..]).collect() };
+        let mut patches: Vec<&mut [u8]> = if obs {
+            self.patches.chunks_mut(patch_chunk).collect()
+        } else {
+            (0..self.slots.len()).map(|_| &mut [][..]).collect()
+        };
         let results: Vec<Result<Option<EpisodeStats>, PlacementError>> = self
             .slots
             .par_iter_mut()
@@ -144,7 +169,11 @@ impl VecEnv {
             .zip(patches.par_iter_mut())
             .zip(self.rewards.par_chunks_mut(na))
             .zip(actions.par_chunks(na))
-            .zip(self.terminated.par_iter_mut().zip(self.truncated.par_iter_mut()))
+            .zip(
+                self.terminated
+                    .par_iter_mut()
+                    .zip(self.truncated.par_iter_mut()),
+            )
             .enumerate()
             .map(|(e, (((((slot, vec), patch), rew), act), (term, trunc)))| {
                 let mut acts = [Action::Stop; 33];
@@ -202,7 +231,8 @@ impl Slot {
         for i in 0..self.env.num_agents() {
             let v = &mut vec[i * vl..(i + 1) * vl];
             if obs {
-                self.env.write_observation(i, v, &mut patch[i * PATCH_LEN..(i + 1) * PATCH_LEN]);
+                self.env
+                    .write_observation(i, v, &mut patch[i * PATCH_LEN..(i + 1) * PATCH_LEN]);
             } else {
                 super::observe::write_vector(&self.env.robots, i, self.env.num_captors(), v);
             }

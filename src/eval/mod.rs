@@ -117,10 +117,21 @@ pub fn wilson_interval(successes: usize, n: usize) -> (f64, f64) {
 /// Plays test episode `episode` of a setting: seed, map and placement come
 /// from the setting's seed and the episode index alone, so two controllers
 /// evaluated with the same seed face the same starts.
-pub fn play_episode(setting: &EvalSetting, maps: &Arc<Vec<Arc<PreparedMap>>>, episode: usize, marching: &mut FastMarching) -> anyhow::Result<EpisodeRecord> {
+pub fn play_episode(
+    setting: &EvalSetting,
+    maps: &Arc<Vec<Arc<PreparedMap>>>,
+    episode: usize,
+    marching: &mut FastMarching,
+) -> anyhow::Result<EpisodeRecord> {
     let mut env = TrapEnv::new(setting.env_config(), maps.clone()).map_err(anyhow::Error::msg)?;
-    let mut captors = setting.captors.build(Side::Captors).map_err(anyhow::Error::msg)?;
-    let mut target = setting.target.build(Side::Target).map_err(anyhow::Error::msg)?;
+    let mut captors = setting
+        .captors
+        .build(Side::Captors)
+        .map_err(anyhow::Error::msg)?;
+    let mut target = setting
+        .target
+        .build(Side::Target)
+        .map_err(anyhow::Error::msg)?;
     let seed = episode_seed(setting.seed, 0, episode as u64);
     env.reset_state(seed)?;
     captors.reset(&env, seed);
@@ -151,7 +162,11 @@ pub fn play_episode(setting: &EvalSetting, maps: &Arc<Vec<Arc<PreparedMap>>>, ep
         episode,
         seed,
         map: env.map().grid.name.clone(),
-        steps: if env.captured { env.steps } else { setting.episode_length },
+        steps: if env.captured {
+            env.steps
+        } else {
+            setting.episode_length
+        },
         captured: env.captured,
         captor_path_len: env.path_len[..k].iter().sum::<f64>() / k as f64,
         soa_m2: soa,
@@ -159,18 +174,37 @@ pub fn play_episode(setting: &EvalSetting, maps: &Arc<Vec<Arc<PreparedMap>>>, ep
 }
 
 /// Runs all episodes of a setting in parallel, with a progress bar when `progress`.
-pub fn run(setting: &EvalSetting, maps: &Arc<Vec<Arc<PreparedMap>>>, maps_label: &str, progress: bool) -> anyhow::Result<(Summary, Vec<EpisodeRecord>)> {
-    setting.env_config().validate().map_err(|e| anyhow::anyhow!("evaluation setting: {e}"))?;
-    setting.captors.build(Side::Captors).map_err(|e| anyhow::anyhow!("--captors: {e}"))?;
-    setting.target.build(Side::Target).map_err(|e| anyhow::anyhow!("--target: {e}"))?;
+pub fn run(
+    setting: &EvalSetting,
+    maps: &Arc<Vec<Arc<PreparedMap>>>,
+    maps_label: &str,
+    progress: bool,
+) -> anyhow::Result<(Summary, Vec<EpisodeRecord>)> {
+    setting
+        .env_config()
+        .validate()
+        .map_err(|e| anyhow::anyhow!("evaluation setting: {e}"))?;
+    setting
+        .captors
+        .build(Side::Captors)
+        .map_err(|e| anyhow::anyhow!("--captors: {e}"))?;
+    setting
+        .target
+        .build(Side::Target)
+        .map_err(|e| anyhow::anyhow!("--target: {e}"))?;
     let bar = if progress {
         let b = ProgressBar::new(setting.episodes as u64);
         b.set_style(
-            ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} episodes, {per_sec}, eta {eta}")
-                .unwrap()
-                .progress_chars("=> "),
+            ProgressStyle::with_template(
+                "{msg} [{bar:30}] {pos}/{len} episodes, {per_sec}, eta {eta}",
+            )
+            .unwrap()
+            .progress_chars("=> "),
         );
-        b.set_message(format!("{} vs {} {}:1 x{} {}", setting.captors, setting.target, setting.num_captors, setting.speed_ratio, maps_label));
+        b.set_message(format!(
+            "{} vs {} {}:1 x{} {}",
+            setting.captors, setting.target, setting.num_captors, setting.speed_ratio, maps_label
+        ));
         b
     } else {
         ProgressBar::hidden()
@@ -195,10 +229,17 @@ pub fn summarise(setting: &EvalSetting, maps_label: &str, records: &[EpisodeReco
     let mut curve = Vec::with_capacity(longest);
     let (mut soa_sum, mut soa_n) = (0.0, 0usize);
     for t in 0..longest {
-        let vals: Vec<f64> = records.iter().filter_map(|r| r.soa_m2.get(t).copied()).collect();
+        let vals: Vec<f64> = records
+            .iter()
+            .filter_map(|r| r.soa_m2.get(t).copied())
+            .collect();
         soa_sum += vals.iter().sum::<f64>();
         soa_n += vals.len();
-        curve.push((t as u32 * setting.soa_every.max(1), vals.iter().sum::<f64>() / vals.len() as f64, vals.len()));
+        curve.push((
+            t as u32 * setting.soa_every.max(1),
+            vals.iter().sum::<f64>() / vals.len() as f64,
+            vals.len(),
+        ));
     }
     Summary {
         captors: setting.captors.to_string(),
@@ -237,7 +278,9 @@ impl Summary {
             self.sr_low,
             self.sr_high,
             self.path_len,
-            self.mean_soa_m2.map(|s| format!("{s:.2}")).unwrap_or_else(|| "-".into()),
+            self.mean_soa_m2
+                .map(|s| format!("{s:.2}"))
+                .unwrap_or_else(|| "-".into()),
         )
     }
 }
@@ -250,7 +293,10 @@ mod tests {
     fn wilson_interval_matches_known_values() {
         // 71 of 100: [0.615, 0.790] (standard tables).
         let (lo, hi) = wilson_interval(71, 100);
-        assert!((lo - 0.6146).abs() < 1e-3 && (hi - 0.7898).abs() < 1e-3, "{lo} {hi}");
+        assert!(
+            (lo - 0.6146).abs() < 1e-3 && (hi - 0.7898).abs() < 1e-3,
+            "{lo} {hi}"
+        );
         let (lo, hi) = wilson_interval(0, 50);
         assert!(lo.abs() < 1e-12);
         assert!((hi - 0.0714).abs() < 1e-3);
@@ -260,7 +306,11 @@ mod tests {
 
     #[test]
     fn summary_counts_failures_as_full_length_and_averages_soa_over_running_episodes() {
-        let setting = EvalSetting { episode_length: 10, soa_every: 1, ..EvalSetting::default() };
+        let setting = EvalSetting {
+            episode_length: 10,
+            soa_every: 1,
+            ..EvalSetting::default()
+        };
         let rec = |captured, steps, soa: Vec<f64>| EpisodeRecord {
             episode: 0,
             seed: 0,
@@ -270,7 +320,10 @@ mod tests {
             captor_path_len: 2.0,
             soa_m2: soa,
         };
-        let records = vec![rec(true, 2, vec![4.0, 2.0, 0.0]), rec(false, 10, vec![8.0; 11])];
+        let records = vec![
+            rec(true, 2, vec![4.0, 2.0, 0.0]),
+            rec(false, 10, vec![8.0; 11]),
+        ];
         let s = summarise(&setting, "m", &records);
         assert_eq!(s.time, 6.0);
         assert_eq!(s.sr, 50.0);

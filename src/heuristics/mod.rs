@@ -125,7 +125,12 @@ pub struct AszGreedy {
     distance: FastMarching,
 }
 
-const GREEDY_ACTIONS: [Action; 4] = [Action::Forward, Action::Backward, Action::TurnRight, Action::TurnLeft];
+const GREEDY_ACTIONS: [Action; 4] = [
+    Action::Forward,
+    Action::Backward,
+    Action::TurnRight,
+    Action::TurnLeft,
+];
 
 impl AszGreedy {
     pub fn captor_action(&mut self, env: &TrapEnv, i: usize) -> Action {
@@ -137,9 +142,19 @@ impl AszGreedy {
         for (a, &action) in GREEDY_ACTIONS.iter().enumerate() {
             let mut alone = [env.robots[i]];
             let mut travelled = [0.0];
-            physics::step(map, &mut alone, &[spec], &[action], env.cfg.drive_force, &mut travelled);
+            physics::step(
+                map,
+                &mut alone,
+                &[spec],
+                &[action],
+                env.cfg.drive_force,
+                &mut travelled,
+            );
             moved[a] = alone[0].pos;
-            captors[i] = Source { pos: alone[0].pos, speed: spec.max_speed };
+            captors[i] = Source {
+                pos: alone[0].pos,
+                speed: spec.max_speed,
+            };
             sizes[a] = self.marching.asz_cells(map, target, &captors);
         }
         if sizes.iter().any(|&s| s != sizes[0]) {
@@ -167,7 +182,11 @@ impl Controller for AszGreedy {
         "greedy".into()
     }
     fn act(&mut self, env: &TrapEnv, side: Side, out: &mut [Action]) {
-        assert_eq!(side, Side::Captors, "the ASZ-greedy controller plays captors");
+        assert_eq!(
+            side,
+            Side::Captors,
+            "the ASZ-greedy controller plays captors"
+        );
         for (i, a) in out.iter_mut().enumerate() {
             *a = self.captor_action(env, i);
         }
@@ -181,7 +200,9 @@ pub struct RandomActions {
 
 impl RandomActions {
     pub fn new() -> RandomActions {
-        RandomActions { rng: ChaCha8Rng::seed_from_u64(0) }
+        RandomActions {
+            rng: ChaCha8Rng::seed_from_u64(0),
+        }
     }
 }
 
@@ -196,7 +217,7 @@ impl Controller for RandomActions {
         "random".into()
     }
     fn reset(&mut self, _env: &TrapEnv, seed: u64) {
-        self.rng = ChaCha8Rng::seed_from_u64(seed ^ 0x5EED_0F_4A11D);
+        self.rng = ChaCha8Rng::seed_from_u64(seed ^ 0x0005_EED0_F4A1_1D00);
     }
     fn act(&mut self, _env: &TrapEnv, _side: Side, out: &mut [Action]) {
         for a in out {

@@ -4,9 +4,12 @@
 
 use super::grid::{Grid, SizeClass};
 use super::load::load_png;
+use super::prepared::PreparedMap;
 use anyhow::{bail, Context, Result};
+use rayon::prelude::*;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 /// One map file and the class its folder lists for it, if any.
 #[derive(Clone, Debug)]
@@ -46,18 +49,23 @@ pub fn shipped_dir() -> PathBuf {
 
 /// Reads `map,split[,...]` rows of a class list.
 fn read_class_list(path: &Path) -> Result<BTreeMap<String, SizeClass>> {
-    let mut reader = csv::Reader::from_path(path).with_context(|| format!("{}: cannot read", path.display()))?;
+    let mut reader =
+        csv::Reader::from_path(path).with_context(|| format!("{}: cannot read", path.display()))?;
     let headers = reader.headers()?.clone();
     let col = |name: &str| headers.iter().position(|h| h.trim() == name);
     let (Some(map_col), Some(split_col)) = (col("map"), col("split")) else {
-        bail!("{}: needs the columns 'map' and 'split', found {:?}", path.display(), headers);
+        bail!(
+            "{}: needs the columns 'map' and 'split', found {:?}",
+            path.display(),
+            headers
+        );
     };
     let mut out = BTreeMap::new();
     for (i, rec) in reader.records().enumerate() {
         let rec = rec.with_context(|| format!("{}: row {}", path.display(), i + 2))?;
-        let class: SizeClass = rec[split_col]
-            .parse()
-            .map_err(|e: String| anyhow::anyhow!("{}: row {}, field 'split': {e}", path.display(), i + 2))?;
+        let class: SizeClass = rec[split_col].parse().map_err(|e: String| {
+            anyhow::anyhow!("{}: row {}, field 'split': {e}", path.display(), i + 2)
+        })?;
         out.insert(rec[map_col].trim().to_string(), class);
     }
     Ok(out)
@@ -105,7 +113,9 @@ pub fn resolve(spec: &str) -> Result<Vec<MapEntry>> {
         gibson_dir().context("the Gibson maps were not found: set T2E_GIBSON_DIR or run from the project root with ../shared/maps/gibson beside it")
     };
     let (source, class) = match spec.rsplit_once(':') {
-        Some((dir, c)) if c.parse::<SizeClass>().is_ok() => (dir.to_string(), Some(c.parse::<SizeClass>().unwrap())),
+        Some((dir, c)) if c.parse::<SizeClass>().is_ok() => {
+            (dir.to_string(), Some(c.parse::<SizeClass>().unwrap()))
+        }
         _ => (spec.to_string(), None),
     };
     let (dir, class) = if let (Ok(c), None) = (source.parse::<SizeClass>(), class) {
@@ -117,8 +127,16 @@ pub fn resolve(spec: &str) -> Result<Vec<MapEntry>> {
     } else {
         let p = PathBuf::from(&source);
         if p.is_file() {
-            let name = p.file_stem().unwrap_or_default().to_string_lossy().into_owned();
-            return Ok(vec![MapEntry { name, path: p, listed_class: None }]);
+            let name = p
+                .file_stem()
+                .unwrap_or_default()
+                .to_string_lossy()
+                .into_owned();
+            return Ok(vec![MapEntry {
+                name,
+                path: p,
+                listed_class: None,
+            }]);
         }
         if !p.is_dir() {
             bail!("--maps '{spec}': not a size class (small, medium, large), 'gibson', 'shipped', a folder or a .png file");
@@ -133,4 +151,15 @@ pub fn resolve(spec: &str) -> Result<Vec<MapEntry>> {
         }
     }
     Ok(entries)
+}
+
+/// The maps a user named, loaded and prepared in parallel: what an
+/// environment plays on.
+pub fn load_prepared(spec: &str) -> Result<Arc<Vec<Arc<PreparedMap>>>> {
+    let entries = resolve(spec)?;
+    let maps = entries
+        .par_iter()
+        .map(|e| Ok(Arc::new(PreparedMap::new(e.load()?))))
+        .collect::<Result<Vec<_>>>()?;
+    Ok(Arc::new(maps))
 }

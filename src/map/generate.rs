@@ -215,7 +215,11 @@ pub enum Furniture {
     Block(CellRect),
     /// Centre (row, col) and radius in cells, continuous: a cell is covered
     /// when its centre lies within the radius.
-    Disc { row: f64, col: f64, radius: f64 },
+    Disc {
+        row: f64,
+        col: f64,
+        radius: f64,
+    },
 }
 
 impl Furniture {
@@ -297,7 +301,12 @@ pub fn generate_plan(seed: u64, class: SizeClass, cfg: &GeneratorConfig) -> Floo
         }
         fill_ratio = (area / footprint_m2).clamp(0.3, 1.0);
         let closer = |p: &FloorPlan| {
-            let key = |q: &FloorPlan| (q.grid.size_class() != class, ((q.grid.area_m2() - target).abs() * 1e3) as u64);
+            let key = |q: &FloorPlan| {
+                (
+                    q.grid.size_class() != class,
+                    ((q.grid.area_m2() - target).abs() * 1e3) as u64,
+                )
+            };
             best.as_ref().is_none_or(|b| key(p) < key(b))
         };
         if closer(&plan) {
@@ -311,11 +320,20 @@ pub fn generate_plan(seed: u64, class: SizeClass, cfg: &GeneratorConfig) -> Floo
         let side = ((target / INITIAL_FILL_RATIO).sqrt() / CELL_SIZE) as usize;
         let mut grid = Grid::blocked(name, GENERATED_SIDE);
         let r0 = (GENERATED_SIDE - side.min(GENERATED_SIDE - 2)) / 2;
-        let room = CellRect { r0, c0: r0, r1: r0 + side, c1: r0 + side };
+        let room = CellRect {
+            r0,
+            c0: r0,
+            r1: r0 + side,
+            c1: r0 + side,
+        };
         room.iter().for_each(|(r, c)| grid.set_free(r, c, true));
         FloorPlan {
             grid,
-            rooms: vec![Room { bounds: room, interior: room, kind: RoomKind::Room }],
+            rooms: vec![Room {
+                bounds: room,
+                interior: room,
+                kind: RoomKind::Room,
+            }],
             doors: Vec::new(),
             furniture: Vec::new(),
             target_area_m2: target,
@@ -348,7 +366,12 @@ fn cells(m: f64) -> usize {
 
 /// Builds one plan on a footprint of about `footprint_m2`; None when the
 /// layout cannot be made connected for a robot.
-fn build_plan(name: &str, layout_seed: u64, footprint_m2: f64, cfg: &GeneratorConfig) -> Option<FloorPlan> {
+fn build_plan(
+    name: &str,
+    layout_seed: u64,
+    footprint_m2: f64,
+    cfg: &GeneratorConfig,
+) -> Option<FloorPlan> {
     let mut rng = ChaCha8Rng::seed_from_u64(layout_seed);
     let side = GENERATED_SIDE;
     let margin = cells(cfg.border_margin_m).clamp(1, side / 4);
@@ -357,13 +380,21 @@ fn build_plan(name: &str, layout_seed: u64, footprint_m2: f64, cfg: &GeneratorCo
     // Footprint rectangle, placed anywhere inside the margin.
     let aspect = uniform(&mut rng, cfg.aspect_ratio);
     let long_m = (footprint_m2 * aspect).sqrt();
-    let (mut h, mut w) = (cells(footprint_m2 / long_m).clamp(1, max_side), cells(long_m).clamp(1, max_side));
+    let (mut h, mut w) = (
+        cells(footprint_m2 / long_m).clamp(1, max_side),
+        cells(long_m).clamp(1, max_side),
+    );
     if rng.gen_bool(0.5) {
         std::mem::swap(&mut h, &mut w);
     }
     let r0 = margin + rng.gen_range(0..=max_side - h);
     let c0 = margin + rng.gen_range(0..=max_side - w);
-    let footprint = CellRect { r0, c0, r1: r0 + h, c1: c0 + w };
+    let footprint = CellRect {
+        r0,
+        c0,
+        r1: r0 + h,
+        c1: c0 + w,
+    };
 
     // Walls straddle partition lines: `lo` cells before the line, `hi` after.
     let wall = cells(cfg.wall_thickness_m).max(1);
@@ -375,7 +406,12 @@ fn build_plan(name: &str, layout_seed: u64, footprint_m2: f64, cfg: &GeneratorCo
         .into_iter()
         .map(|(bounds, kind)| Room {
             bounds,
-            interior: CellRect { r0: bounds.r0 + hi, c0: bounds.c0 + hi, r1: bounds.r1 - lo, c1: bounds.c1 - lo },
+            interior: CellRect {
+                r0: bounds.r0 + hi,
+                c0: bounds.c0 + hi,
+                r1: bounds.r1 - lo,
+                c1: bounds.c1 - lo,
+            },
             kind,
         })
         .collect();
@@ -393,7 +429,8 @@ fn build_plan(name: &str, layout_seed: u64, footprint_m2: f64, cfg: &GeneratorCo
         .iter()
         .enumerate()
         .map(|(k, cand)| {
-            let corridor = rooms[cand.a].kind == RoomKind::Corridor || rooms[cand.b].kind == RoomKind::Corridor;
+            let corridor = rooms[cand.a].kind == RoomKind::Corridor
+                || rooms[cand.b].kind == RoomKind::Corridor;
             (rng.gen::<f64>() + if corridor { 0.0 } else { 0.7 }, k)
         })
         .collect();
@@ -419,7 +456,10 @@ fn build_plan(name: &str, layout_seed: u64, footprint_m2: f64, cfg: &GeneratorCo
 
     // Door widths: some narrow passages, at least one when there is a door,
     // preferably on a loop door so that no room hangs on it alone.
-    let mut narrow: Vec<bool> = chosen.iter().map(|_| rng.gen_bool(cfg.narrow_passage_fraction.clamp(0.0, 1.0))).collect();
+    let mut narrow: Vec<bool> = chosen
+        .iter()
+        .map(|_| rng.gen_bool(cfg.narrow_passage_fraction.clamp(0.0, 1.0)))
+        .collect();
     if !narrow.is_empty() && !narrow.iter().any(|&n| n) {
         let n = narrow.len();
         narrow[n - 1] = true; // extra doors come last
@@ -429,14 +469,28 @@ fn build_plan(name: &str, layout_seed: u64, footprint_m2: f64, cfg: &GeneratorCo
     let mut doors = Vec::new();
     for (&k, &is_narrow) in chosen.iter().zip(&narrow) {
         let cand = &candidates[k];
-        let width_range = if is_narrow { cfg.narrow_passage_width_m } else { cfg.door_width_m };
+        let width_range = if is_narrow {
+            cfg.narrow_passage_width_m
+        } else {
+            cfg.door_width_m
+        };
         let width = cells(uniform(&mut rng, width_range)).clamp(1, cand.span.1 - cand.span.0);
         let start = cand.span.0 + rng.gen_range(0..=cand.span.1 - cand.span.0 - width);
         let (cells_rect, keep_clear) = if cand.vertical {
-            let r = CellRect { r0: start, r1: start + width, c0: cand.line - lo, c1: cand.line + hi };
+            let r = CellRect {
+                r0: start,
+                r1: start + width,
+                c0: cand.line - lo,
+                c1: cand.line + hi,
+            };
             (r, r.grown(keep_side, clearance))
         } else {
-            let r = CellRect { r0: cand.line - lo, r1: cand.line + hi, c0: start, c1: start + width };
+            let r = CellRect {
+                r0: cand.line - lo,
+                r1: cand.line + hi,
+                c0: start,
+                c1: start + width,
+            };
             (r, r.grown(clearance, keep_side))
         };
         doors.push(Door {
@@ -450,27 +504,56 @@ fn build_plan(name: &str, layout_seed: u64, footprint_m2: f64, cfg: &GeneratorCo
 
     let mut grid = Grid::blocked(name, side);
     for room in &rooms {
-        room.interior.iter().for_each(|(r, c)| grid.set_free(r, c, true));
+        room.interior
+            .iter()
+            .for_each(|(r, c)| grid.set_free(r, c, true));
     }
     for door in &doors {
-        door.cells.iter().for_each(|(r, c)| grid.set_free(r, c, true));
+        door.cells
+            .iter()
+            .for_each(|(r, c)| grid.set_free(r, c, true));
     }
 
-    let mut space = RobotSpace::new(&grid, cells(cfg.robot_clearance_m).max(1), footprint.grown(1, 1));
+    let mut space = RobotSpace::new(
+        &grid,
+        cells(cfg.robot_clearance_m).max(1),
+        footprint.grown(1, 1),
+    );
     if !space.is_connected(&space.ok.clone()) {
         return None;
     }
 
     let mut furniture = Vec::new();
     for room in rooms.iter().filter(|r| r.kind == RoomKind::Room) {
-        furnish_room(room, &doors, cfg, &mut rng, &mut grid, &mut space, &mut furniture);
+        furnish_room(
+            room,
+            &doors,
+            cfg,
+            &mut rng,
+            &mut grid,
+            &mut space,
+            &mut furniture,
+        );
     }
     grid.keep_largest_component();
-    Some(FloorPlan { grid, rooms, doors, furniture, target_area_m2: 0.0, attempts: 0 })
+    Some(FloorPlan {
+        grid,
+        rooms,
+        doors,
+        furniture,
+        target_area_m2: 0.0,
+        attempts: 0,
+    })
 }
 
 /// Recursive binary split of `rect` into rooms (and corridors).
-fn split_bsp(rect: CellRect, depth: usize, rng: &mut ChaCha8Rng, cfg: &GeneratorConfig, out: &mut Vec<(CellRect, RoomKind)>) {
+fn split_bsp(
+    rect: CellRect,
+    depth: usize,
+    rng: &mut ChaCha8Rng,
+    cfg: &GeneratorConfig,
+    out: &mut Vec<(CellRect, RoomKind)>,
+) {
     let min_side = cells(cfg.min_room_side_m);
     let area_m2 = rect.cells() as f64 * CELL_AREA;
     let max_area = uniform(rng, cfg.room_area_m2);
@@ -496,14 +579,26 @@ fn split_bsp(rect: CellRect, depth: usize, rng: &mut ChaCha8Rng, cfg: &Generator
     // Pieces along the cut axis: (start offset, end offset, kind).
     let cut = |a: usize, b: usize| -> CellRect {
         if across_rows {
-            CellRect { r0: rect.r0 + a, r1: rect.r0 + b, ..rect }
+            CellRect {
+                r0: rect.r0 + a,
+                r1: rect.r0 + b,
+                ..rect
+            }
         } else {
-            CellRect { c0: rect.c0 + a, c1: rect.c0 + b, ..rect }
+            CellRect {
+                c0: rect.c0 + a,
+                c1: rect.c0 + b,
+                ..rect
+            }
         }
     };
     let corridor_w = cells(uniform(rng, cfg.corridor_width_m));
     let corridor_roll = rng.gen_bool(cfg.corridor_probability.clamp(0.0, 1.0));
-    if depth <= 1 && corridor_roll && area_m2 >= cfg.corridor_min_split_area_m2 && len >= 2 * min_side + corridor_w {
+    if depth <= 1
+        && corridor_roll
+        && area_m2 >= cfg.corridor_min_split_area_m2
+        && len >= 2 * min_side + corridor_w
+    {
         let at = rng.gen_range(min_side..=len - min_side - corridor_w);
         split_bsp(cut(0, at), depth + 1, rng, cfg, out);
         out.push((cut(at, at + corridor_w), RoomKind::Corridor));
@@ -546,7 +641,13 @@ fn door_candidates(rooms: &[Room], door_max: usize, corner: usize) -> Vec<DoorCa
             };
             if let Some((vertical, line, s0, s1)) = shared {
                 if s1 >= s0 + 2 * corner + door_max {
-                    out.push(DoorCandidate { a, b, vertical, line, span: (s0 + corner, s1 - corner) });
+                    out.push(DoorCandidate {
+                        a,
+                        b,
+                        vertical,
+                        line,
+                        span: (s0 + corner, s1 - corner),
+                    });
                 }
             }
         }
@@ -556,7 +657,12 @@ fn door_candidates(rooms: &[Room], door_max: usize, corner: usize) -> Vec<DoorCa
 
 /// Removes one non-corridor room that fills a corner of the footprint, if the
 /// others stay connected without it; keeps indices of the rest consistent.
-fn cut_corner_room(rooms: &mut Vec<Room>, candidates: &mut Vec<DoorCandidate>, footprint: &CellRect, rng: &mut ChaCha8Rng) {
+fn cut_corner_room(
+    rooms: &mut Vec<Room>,
+    candidates: &mut Vec<DoorCandidate>,
+    footprint: &CellRect,
+    rng: &mut ChaCha8Rng,
+) {
     let total: usize = rooms.iter().map(|r| r.bounds.cells()).sum();
     let corner_rooms: Vec<usize> = (0..rooms.len())
         .filter(|&i| {
@@ -607,7 +713,9 @@ fn furnish_room(
         if placed >= wanted {
             break;
         }
-        let Some(piece) = random_piece(&floor, cfg, rng) else { continue };
+        let Some(piece) = random_piece(&floor, cfg, rng) else {
+            continue;
+        };
         let bbox = piece.bounding_box();
         if doors.iter().any(|d| d.keep_clear.intersects(&bbox)) {
             continue;
@@ -635,7 +743,11 @@ fn furnish_room(
 }
 
 /// One random piece of furniture lying on `floor`, or None if it does not fit.
-fn random_piece(floor: &CellRect, cfg: &GeneratorConfig, rng: &mut ChaCha8Rng) -> Option<Furniture> {
+fn random_piece(
+    floor: &CellRect,
+    cfg: &GeneratorConfig,
+    rng: &mut ChaCha8Rng,
+) -> Option<Furniture> {
     let (fh, fw) = (floor.height(), floor.width());
     let roll = rng.gen::<f64>();
     if roll < 0.5 {
@@ -651,10 +763,30 @@ fn random_piece(floor: &CellRect, cfg: &GeneratorConfig, rng: &mut ChaCha8Rng) -
         }
         let s = rng.gen_range(0..=run - along);
         Some(Furniture::Block(match side {
-            0 => CellRect { r0: floor.r0, r1: floor.r0 + depth, c0: floor.c0 + s, c1: floor.c0 + s + along },
-            1 => CellRect { r0: floor.r1 - depth, r1: floor.r1, c0: floor.c0 + s, c1: floor.c0 + s + along },
-            2 => CellRect { r0: floor.r0 + s, r1: floor.r0 + s + along, c0: floor.c0, c1: floor.c0 + depth },
-            _ => CellRect { r0: floor.r0 + s, r1: floor.r0 + s + along, c0: floor.c1 - depth, c1: floor.c1 },
+            0 => CellRect {
+                r0: floor.r0,
+                r1: floor.r0 + depth,
+                c0: floor.c0 + s,
+                c1: floor.c0 + s + along,
+            },
+            1 => CellRect {
+                r0: floor.r1 - depth,
+                r1: floor.r1,
+                c0: floor.c0 + s,
+                c1: floor.c0 + s + along,
+            },
+            2 => CellRect {
+                r0: floor.r0 + s,
+                r1: floor.r0 + s + along,
+                c0: floor.c0,
+                c1: floor.c0 + depth,
+            },
+            _ => CellRect {
+                r0: floor.r0 + s,
+                r1: floor.r0 + s + along,
+                c0: floor.c1 - depth,
+                c1: floor.c1,
+            },
         }))
     } else if roll < 0.8 {
         // Free-standing block.
@@ -665,7 +797,12 @@ fn random_piece(floor: &CellRect, cfg: &GeneratorConfig, rng: &mut ChaCha8Rng) -
         }
         let r0 = floor.r0 + rng.gen_range(0..=fh - bh);
         let c0 = floor.c0 + rng.gen_range(0..=fw - bw);
-        Some(Furniture::Block(CellRect { r0, c0, r1: r0 + bh, c1: c0 + bw }))
+        Some(Furniture::Block(CellRect {
+            r0,
+            c0,
+            r1: r0 + bh,
+            c1: c0 + bw,
+        }))
     } else {
         let radius = uniform(rng, cfg.disc_radius_m) / CELL_SIZE;
         let d = (2.0 * radius).ceil() as usize + 1;
@@ -698,15 +835,26 @@ impl RobotSpace {
             .filter(|&(dr, dc)| dr * dr + dc * dc < rad * rad)
             .collect();
         let side = grid.side();
-        let bounds = CellRect { r1: bounds.r1.min(side), c1: bounds.c1.min(side), ..bounds };
-        let mut space = RobotSpace { ok: grid.free_mask().to_vec(), side, disc, bounds };
+        let bounds = CellRect {
+            r1: bounds.r1.min(side),
+            c1: bounds.c1.min(side),
+            ..bounds
+        };
+        let mut space = RobotSpace {
+            ok: grid.free_mask().to_vec(),
+            side,
+            disc,
+            bounds,
+        };
         // Only obstacle cells next to free space can be the nearest obstacle.
         let edge: Vec<(usize, usize)> = bounds
             .iter()
             .filter(|&(r, c)| {
                 let (r, c) = (r as isize, c as isize);
                 !grid.is_free(r, c)
-                    && [(0, 1), (0, -1), (1, 0), (-1, 0)].iter().any(|&(dr, dc)| grid.is_free(r + dr, c + dc))
+                    && [(0, 1), (0, -1), (1, 0), (-1, 0)]
+                        .iter()
+                        .any(|&(dr, dc)| grid.is_free(r + dr, c + dc))
             })
             .collect();
         let mut ok = std::mem::take(&mut space.ok);
@@ -739,7 +887,9 @@ impl RobotSpace {
         let n = self.side;
         let b = self.bounds;
         let mut in_bounds = b.iter().filter(|&(r, c)| ok[r * n + c]);
-        let Some((r, c)) = in_bounds.next() else { return false };
+        let Some((r, c)) = in_bounds.next() else {
+            return false;
+        };
         let total = 1 + in_bounds.count();
         let mut seen = vec![false; n * n];
         let mut stack = vec![r * n + c];
@@ -777,7 +927,9 @@ struct UnionFind {
 
 impl UnionFind {
     fn new(n: usize) -> UnionFind {
-        UnionFind { parent: (0..n).collect() }
+        UnionFind {
+            parent: (0..n).collect(),
+        }
     }
 
     fn find(&mut self, mut x: usize) -> usize {
@@ -842,7 +994,10 @@ mod tests {
                 let p = plan(seed, class);
                 let area = p.grid.area_m2();
                 assert_eq!(p.grid.size_class(), class, "seed {seed}: {area:.2} m^2");
-                assert!(area > lo - 3.0 && area < hi + 3.0, "{class} seed {seed}: {area:.2} m^2 far from {lo}..{hi}");
+                assert!(
+                    area > lo - 3.0 && area < hi + 3.0,
+                    "{class} seed {seed}: {area:.2} m^2 far from {lo}..{hi}"
+                );
                 assert_eq!(p.grid.name, format!("gen-{class}-{seed}"));
                 assert_eq!(p.grid.side(), GENERATED_SIDE);
             }
@@ -859,7 +1014,10 @@ mod tests {
             assert_ne!(a.free_mask(), b.free_mask());
         }
         // Same seed, different class: different maps too.
-        assert_ne!(generate(7, SizeClass::Small, &cfg).free_mask(), generate(7, SizeClass::Large, &cfg).free_mask());
+        assert_ne!(
+            generate(7, SizeClass::Small, &cfg).free_mask(),
+            generate(7, SizeClass::Large, &cfg).free_mask()
+        );
     }
 
     #[test]
@@ -869,7 +1027,10 @@ mod tests {
                 let g = generate(seed, class, &GeneratorConfig::default());
                 assert_eq!(components(&g), 1, "{class} seed {seed}");
                 let spawn = PreparedMap::new(g).spawn_cells.len();
-                assert!(spawn >= 500, "{class} seed {seed}: only {spawn} spawn cells");
+                assert!(
+                    spawn >= 500,
+                    "{class} seed {seed}: only {spawn} spawn cells"
+                );
             }
         }
     }
@@ -899,16 +1060,34 @@ mod tests {
                     .flat_map(|room| room.interior.iter())
                     .filter(|&(r, c)| !g.is_free(r as isize, c as isize))
                     .count();
-                assert!(on_floors >= 50, "{class} seed {seed}: {on_floors} furniture cells");
+                assert!(
+                    on_floors >= 50,
+                    "{class} seed {seed}: {on_floors} furniture cells"
+                );
                 for piece in &p.furniture {
                     let inside = p.rooms.iter().any(|room| {
-                        room.kind == RoomKind::Room && piece.cells().iter().all(|&(r, c)| room.interior.contains(r, c))
+                        room.kind == RoomKind::Room
+                            && piece
+                                .cells()
+                                .iter()
+                                .all(|&(r, c)| room.interior.contains(r, c))
                     });
-                    assert!(inside, "{class} seed {seed}: {piece:?} is not on one room's floor");
-                    assert!(p.doors.iter().all(|d| !d.keep_clear.intersects(&piece.bounding_box())));
+                    assert!(
+                        inside,
+                        "{class} seed {seed}: {piece:?} is not on one room's floor"
+                    );
+                    assert!(p
+                        .doors
+                        .iter()
+                        .all(|d| !d.keep_clear.intersects(&piece.bounding_box())));
                 }
                 for door in &p.doors {
-                    assert!(door.cells.iter().all(|(r, c)| g.is_free(r as isize, c as isize)), "{door:?} blocked");
+                    assert!(
+                        door.cells
+                            .iter()
+                            .all(|(r, c)| g.is_free(r as isize, c as isize)),
+                        "{door:?} blocked"
+                    );
                 }
             }
         }
@@ -939,9 +1118,13 @@ mod tests {
         for class in SizeClass::ALL {
             for seed in 100..130 {
                 let g = generate(seed, class, &cfg);
-                assert_eq!(g.size_class(), class, "{class} seed {seed}: {:.2} m^2", g.area_m2());
+                assert_eq!(
+                    g.size_class(),
+                    class,
+                    "{class} seed {seed}: {:.2} m^2",
+                    g.area_m2()
+                );
             }
         }
     }
 }
-

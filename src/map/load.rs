@@ -24,7 +24,8 @@ impl MapError {
 
 /// Loads a traversability PNG into a working grid named after the file stem.
 pub fn load_png(path: &Path) -> Result<Grid, MapError> {
-    let bytes = std::fs::read(path).map_err(|e| MapError::new(path, format!("cannot read: {e}")))?;
+    let bytes =
+        std::fs::read(path).map_err(|e| MapError::new(path, format!("cannot read: {e}")))?;
     if !bytes.starts_with(b"\x89PNG\r\n\x1a\n") {
         return Err(MapError::new(path, "not a PNG file (bad signature)"));
     }
@@ -66,7 +67,10 @@ pub fn grid_from_pixels(name: &str, img: &GrayImage) -> Result<Grid, String> {
     }
     let grid = Grid::new(name, side, free);
     if grid.free_cells() == 0 {
-        return Err("no free cell: every sampled pixel is an obstacle (free pixels must be exactly 255)".into());
+        return Err(
+            "no free cell: every sampled pixel is an obstacle (free pixels must be exactly 255)"
+                .into(),
+        );
     }
     Ok(grid)
 }
@@ -76,11 +80,15 @@ pub fn grid_from_pixels(name: &str, img: &GrayImage) -> Result<Grid, String> {
 pub fn save_png(grid: &Grid, path: &Path) -> Result<(), MapError> {
     let side_px = grid.side() as u32 * PIXELS_PER_CELL;
     let img = GrayImage::from_fn(side_px, side_px, |x, y| {
-        let free = grid.is_free((y / PIXELS_PER_CELL) as isize, (x / PIXELS_PER_CELL) as isize);
+        let free = grid.is_free(
+            (y / PIXELS_PER_CELL) as isize,
+            (x / PIXELS_PER_CELL) as isize,
+        );
         image::Luma([if free { 255 } else { 0 }])
     });
     if let Some(dir) = path.parent() {
-        std::fs::create_dir_all(dir).map_err(|e| MapError::new(path, format!("cannot create folder: {e}")))?;
+        std::fs::create_dir_all(dir)
+            .map_err(|e| MapError::new(path, format!("cannot create folder: {e}")))?;
     }
     img.save_with_format(path, image::ImageFormat::Png)
         .map_err(|e| MapError::new(path, format!("cannot write PNG: {e}")))
@@ -112,14 +120,24 @@ mod tests {
         assert!(e.contains("cut.png") && e.contains("broken PNG"), "{e}");
 
         let rect = dir.path().join("rect.png");
-        GrayImage::from_pixel(100, 80, image::Luma([255])).save(&rect).unwrap();
+        GrayImage::from_pixel(100, 80, image::Luma([255]))
+            .save(&rect)
+            .unwrap();
         let e = load_png(&rect).unwrap_err().to_string();
-        assert!(e.contains("rect.png") && e.contains("not square: 100x80"), "{e}");
+        assert!(
+            e.contains("rect.png") && e.contains("not square: 100x80"),
+            "{e}"
+        );
 
         let blocked = dir.path().join("blocked.png");
-        GrayImage::from_pixel(50, 50, image::Luma([254])).save(&blocked).unwrap();
+        GrayImage::from_pixel(50, 50, image::Luma([254]))
+            .save(&blocked)
+            .unwrap();
         let e = load_png(&blocked).unwrap_err().to_string();
-        assert!(e.contains("blocked.png") && e.contains("no free cell"), "{e}");
+        assert!(
+            e.contains("blocked.png") && e.contains("no free cell"),
+            "{e}"
+        );
     }
 
     #[test]

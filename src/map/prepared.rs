@@ -252,7 +252,10 @@ impl PreparedMap {
 fn squared_edt(obstacle: &[u8], stride: usize) -> Vec<f32> {
     const INF: f32 = 1e20;
     let n = stride;
-    let mut grid: Vec<f32> = obstacle.iter().map(|&o| if o != 0 { 0.0 } else { INF }).collect();
+    let mut grid: Vec<f32> = obstacle
+        .iter()
+        .map(|&o| if o != 0 { 0.0 } else { INF })
+        .collect();
     let mut f = vec![0f32; n];
     let mut d = vec![0f32; n];
     let mut v = vec![0usize; n];
@@ -268,7 +271,8 @@ fn squared_edt(obstacle: &[u8], stride: usize) -> Vec<f32> {
         for q in 1..n {
             loop {
                 let p = v[k];
-                let s = ((f[q] + (q * q) as f32) - (f[p] + (p * p) as f32)) / (2.0 * q as f32 - 2.0 * p as f32);
+                let s = ((f[q] + (q * q) as f32) - (f[p] + (p * p) as f32))
+                    / (2.0 * q as f32 - 2.0 * p as f32);
                 if s <= z[k] && k > 0 {
                     k -= 1;
                     continue;
@@ -329,7 +333,13 @@ mod tests {
         let mut g = room(100, 140, 100, 160);
         g.set_free(120, 130, false);
         let m = PreparedMap::new(g.clone());
-        for &(r, c) in &[(101usize, 101usize), (120, 131), (110, 150), (139, 159), (125, 125)] {
+        for &(r, c) in &[
+            (101usize, 101usize),
+            (120, 131),
+            (110, 150),
+            (139, 159),
+            (125, 125),
+        ] {
             let mut best = f64::INFINITY;
             for rr in 0..320 {
                 for cc in 0..320 {
@@ -362,7 +372,10 @@ mod tests {
             for (k, dir) in dirs.iter().enumerate() {
                 let exact = m.ray_distance(q, *dir, LONG_RAY_MAX).0;
                 let table = m.wall_ray(q, k, *dir);
-                assert!((exact - table).abs() < 1e-6, "{q:?} ray {k}: {exact} vs {table}");
+                assert!(
+                    (exact - table).abs() < 1e-6,
+                    "{q:?} ray {k}: {exact} vs {table}"
+                );
             }
         }
     }

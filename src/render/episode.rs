@@ -13,8 +13,8 @@
 use super::map_image::{FREE_COLOR, OBSTACLE_COLOR};
 use super::text::{draw_circle, draw_line, draw_text, fill_disc, fill_rect, mix, text_size};
 use crate::asz::{cells_to_m2, FastMarching};
-use crate::env::{Action, Controller, Side, TrapEnv};
 use crate::env::config::{PROBE_DIST, RADIUS};
+use crate::env::{Action, Controller, Side, TrapEnv};
 use crate::map::prepared::PAD;
 use crate::map::{Grid, PreparedMap, CELL_SIZE};
 use anyhow::{anyhow, Context, Result};
@@ -41,7 +41,13 @@ pub struct RenderOptions {
 
 impl Default for RenderOptions {
     fn default() -> Self {
-        RenderOptions { scale: 2, every: 1, frame_delay_ms: 100, crop: true, show_asz: true }
+        RenderOptions {
+            scale: 2,
+            every: 1,
+            frame_delay_ms: 100,
+            crop: true,
+            show_asz: true,
+        }
     }
 }
 
@@ -187,7 +193,10 @@ impl FrameLayout {
         let half = self.side as f64 * CELL_SIZE / 2.0;
         let (col, row) = ((p[0] + half) / CELL_SIZE, (half - p[1]) / CELL_SIZE);
         let s = self.scale as f64;
-        ((col - self.col0 as f64) * s, (row - self.row0 as f64) * s + self.header_h as f64)
+        (
+            (col - self.col0 as f64) * s,
+            (row - self.row0 as f64) * s + self.header_h as f64,
+        )
     }
 
     /// Pixels per metre.
@@ -231,8 +240,22 @@ fn base_image(grid: &Grid, l: &FrameLayout) -> RgbImage {
     if box_w + 8 < l.width as i64 && box_h + 8 < (l.height - l.header_h) as i64 {
         let (x0, y0) = (4, l.height as i64 - 4 - box_h);
         fill_rect(&mut img, x0, y0, box_w, box_h, OBSTACLE_COLOR);
-        draw_text(&mut img, (x0 + pad) as i32, (y0 + pad) as i32, "1 m", HEADER_TEXT, ts);
-        fill_rect(&mut img, x0 + pad, y0 + 2 * pad + lh as i64, metre, 2, HEADER_TEXT);
+        draw_text(
+            &mut img,
+            (x0 + pad) as i32,
+            (y0 + pad) as i32,
+            "1 m",
+            HEADER_TEXT,
+            ts,
+        );
+        fill_rect(
+            &mut img,
+            x0 + pad,
+            y0 + 2 * pad + lh as i64,
+            metre,
+            2,
+            HEADER_TEXT,
+        );
     }
     img
 }
@@ -287,7 +310,10 @@ impl Painter<'_> {
                 } else {
                     (captor_color(label as usize), CAPTOR_REGION_ALPHA)
                 };
-                let (r, c) = ((cell / stride) as i64 - PAD as i64, (cell % stride) as i64 - PAD as i64);
+                let (r, c) = (
+                    (cell / stride) as i64 - PAD as i64,
+                    (cell % stride) as i64 - PAD as i64,
+                );
                 let (x, y) = ((c - l.col0) * s, (r - l.row0) * s + l.header_h as i64);
                 if x < 0 || y < l.header_h as i64 || x >= l.width as i64 || y >= l.height as i64 {
                     continue;
@@ -301,7 +327,13 @@ impl Painter<'_> {
             }
         }
         let ppm = l.pixels_per_metre();
-        let color_of = |i: usize| if i == k { TARGET_COLOR } else { captor_color(i) };
+        let color_of = |i: usize| {
+            if i == k {
+                TARGET_COLOR
+            } else {
+                captor_color(i)
+            }
+        };
         // Trails under the robots.
         let trail_w = (0.06 * ppm).max(1.0);
         for (i, trail) in self.trails.iter().enumerate() {
@@ -313,18 +345,37 @@ impl Painter<'_> {
         }
         if env.captured {
             let (x, y) = l.to_pixel(env.target().pos);
-            draw_circle(&mut img, x, y, (PROBE_DIST + RADIUS) * ppm, (0.04 * ppm).max(1.5), CAPTURED_COLOR);
+            draw_circle(
+                &mut img,
+                x,
+                y,
+                (PROBE_DIST + RADIUS) * ppm,
+                (0.04 * ppm).max(1.5),
+                CAPTURED_COLOR,
+            );
         }
         // Robots: outline, disc, heading nose, captor index.
         let r_px = RADIUS * ppm;
         let outline = (0.025 * ppm).max(1.0);
         for (i, robot) in env.robots.iter().enumerate() {
             let (x, y) = l.to_pixel(robot.pos);
-            let edge = if robot.collided { COLLIDED_OUTLINE } else { OUTLINE };
+            let edge = if robot.collided {
+                COLLIDED_OUTLINE
+            } else {
+                OUTLINE
+            };
             fill_disc(&mut img, x, y, r_px + outline, edge);
             fill_disc(&mut img, x, y, r_px, color_of(i));
             let (dx, dy) = (robot.theta.cos(), -robot.theta.sin());
-            draw_line(&mut img, x + dx * r_px * 0.3, y + dy * r_px * 0.3, x + dx * r_px * 1.6, y + dy * r_px * 1.6, (0.04 * ppm).max(1.0), OUTLINE);
+            draw_line(
+                &mut img,
+                x + dx * r_px * 0.3,
+                y + dy * r_px * 0.3,
+                x + dx * r_px * 1.6,
+                y + dy * r_px * 1.6,
+                (0.04 * ppm).max(1.0),
+                OUTLINE,
+            );
             if i < k {
                 let label = i.to_string();
                 let digit_scale = ((r_px / 7.0).floor() as u32).max(1);
@@ -332,9 +383,23 @@ impl Painter<'_> {
                 if r_px >= 6.0 {
                     // Centred in the disc, shifted against the nose.
                     let (cx, cy) = (x - dx * r_px * 0.2, y - dy * r_px * 0.2);
-                    draw_text(&mut img, (cx - tw as f64 / 2.0).round() as i32, (cy - th as f64 / 2.0).round() as i32, &label, HEADER_TEXT, digit_scale);
+                    draw_text(
+                        &mut img,
+                        (cx - tw as f64 / 2.0).round() as i32,
+                        (cy - th as f64 / 2.0).round() as i32,
+                        &label,
+                        HEADER_TEXT,
+                        digit_scale,
+                    );
                 } else {
-                    draw_text(&mut img, (x + r_px + 2.0) as i32, (y - r_px - th as f64) as i32, &label, OUTLINE, 1);
+                    draw_text(
+                        &mut img,
+                        (x + r_px + 2.0) as i32,
+                        (y - r_px - th as f64) as i32,
+                        &label,
+                        OUTLINE,
+                        1,
+                    );
                 }
             }
         }
@@ -342,12 +407,33 @@ impl Painter<'_> {
         let ts = l.text_scale;
         let pad = 4 * ts as i32;
         let line_h = 8 * ts as i32;
-        draw_text(&mut img, pad, pad, &head_line(env.steps, env.cfg.episode_length, asz), HEADER_TEXT, ts);
+        draw_text(
+            &mut img,
+            pad,
+            pad,
+            &head_line(env.steps, env.cfg.episode_length, asz),
+            HEADER_TEXT,
+            ts,
+        );
         if env.captured {
             let (w, _) = text_size(CAPTURED, ts);
-            draw_text(&mut img, l.width as i32 - pad - w as i32, pad, CAPTURED, CAPTURED_COLOR, ts);
+            draw_text(
+                &mut img,
+                l.width as i32 - pad - w as i32,
+                pad,
+                CAPTURED,
+                CAPTURED_COLOR,
+                ts,
+            );
         }
-        draw_text(&mut img, pad, 2 * pad + line_h, &self.footer, HEADER_MUTED, ts);
+        draw_text(
+            &mut img,
+            pad,
+            2 * pad + line_h,
+            &self.footer,
+            HEADER_MUTED,
+            ts,
+        );
         (img, asz)
     }
 }
@@ -356,7 +442,10 @@ const CAPTURED: &str = "CAPTURED";
 
 /// First header line: step and |ASZ|.
 fn head_line(step: u32, episode_length: u32, asz_cells: usize) -> String {
-    format!("step {step}/{episode_length}   |ASZ| = {:.2} m\u{00B2}", cells_to_m2(asz_cells))
+    format!(
+        "step {step}/{episode_length}   |ASZ| = {:.2} m\u{00B2}",
+        cells_to_m2(asz_cells)
+    )
 }
 
 /// Width in pixels the header needs.
@@ -384,7 +473,8 @@ pub fn render_episode(
     opts: &RenderOptions,
     out: &Path,
 ) -> Result<EpisodeSummary> {
-    env.reset_state(seed).map_err(|e| anyhow!("episode seed {seed}: {e}"))?;
+    env.reset_state(seed)
+        .map_err(|e| anyhow!("episode seed {seed}: {e}"))?;
     captors.reset(env, seed);
     target.reset(env, seed);
     let map = env.map().clone();
@@ -397,7 +487,11 @@ pub fn render_episode(
         target.name(),
         env.cfg.speed_ratio()
     );
-    let min_width = header_width(env.cfg.episode_length, &footer, text_scale_for(opts.scale.max(1)));
+    let min_width = header_width(
+        env.cfg.episode_length,
+        &footer,
+        text_scale_for(opts.scale.max(1)),
+    );
     let layout = FrameLayout::with_min_width(&map.grid, opts, min_width);
     let mut painter = Painter {
         base: base_image(&map.grid, &layout),
@@ -427,7 +521,8 @@ pub fn render_episode(
                 let (img, asz) = painter.frame(env);
                 final_asz = asz;
                 if let Some(prev) = pending.replace(img) {
-                    enc.encode_frame(to_frame(prev, delay)).context("encoding a GIF frame")?;
+                    enc.encode_frame(to_frame(prev, delay))
+                        .context("encoding a GIF frame")?;
                 }
                 frames += 1;
             }
@@ -440,11 +535,18 @@ pub fn render_episode(
             painter.record(env);
         }
         if let Some(last) = pending {
-            enc.encode_frame(to_frame(last, delay.max(FINAL_HOLD_MS))).context("encoding a GIF frame")?;
+            enc.encode_frame(to_frame(last, delay.max(FINAL_HOLD_MS)))
+                .context("encoding a GIF frame")?;
         }
     } // the encoder writes the GIF trailer when dropped
     if let Some(parent) = out.parent().filter(|p| !p.as_os_str().is_empty()) {
-        std::fs::create_dir_all(parent).with_context(|| format!("cannot create folder {} for {}", parent.display(), out.display()))?;
+        std::fs::create_dir_all(parent).with_context(|| {
+            format!(
+                "cannot create folder {} for {}",
+                parent.display(),
+                out.display()
+            )
+        })?;
     }
     std::fs::write(out, &bytes).with_context(|| format!("cannot write GIF {}", out.display()))?;
     Ok(EpisodeSummary {
@@ -485,7 +587,11 @@ mod tests {
     }
 
     fn env(len: u32) -> TrapEnv {
-        let cfg = EnvConfig { episode_length: len, observations: false, ..EnvConfig::default() };
+        let cfg = EnvConfig {
+            episode_length: len,
+            observations: false,
+            ..EnvConfig::default()
+        };
         TrapEnv::new(cfg, room_map()).unwrap()
     }
 
@@ -517,19 +623,39 @@ mod tests {
         (near, far)
     }
 
-    fn play(every: u32, seed: u64, dir: &Path) -> (TrapEnv, EpisodeSummary, Vec<RgbaImage>, FrameLayout) {
+    fn play(
+        every: u32,
+        seed: u64,
+        dir: &Path,
+    ) -> (TrapEnv, EpisodeSummary, Vec<RgbaImage>, FrameLayout) {
         let mut env = env(20);
         let mut captors = ControllerSpec::Heuristic.build(Side::Captors).unwrap();
         let mut target = ControllerSpec::Heuristic.build(Side::Target).unwrap();
-        let opts = RenderOptions { every, ..RenderOptions::default() };
+        let opts = RenderOptions {
+            every,
+            ..RenderOptions::default()
+        };
         let out = dir.join(format!("sub/ep-{every}.gif"));
-        let summary = render_episode(&mut env, captors.as_mut(), target.as_mut(), seed, &opts, &out).unwrap();
+        let summary = render_episode(
+            &mut env,
+            captors.as_mut(),
+            target.as_mut(),
+            seed,
+            &opts,
+            &out,
+        )
+        .unwrap();
         assert_eq!(summary.bytes, std::fs::metadata(&out).unwrap().len());
         let frames = decode(&out);
         let (w, h) = frames[0].dimensions();
         let layout = FrameLayout::new(&env.map().grid, &opts);
         // The header may widen the frame; the map part keeps its rows.
-        assert!(w >= layout.width && h == layout.height, "{w}x{h} vs {}x{}", layout.width, layout.height);
+        assert!(
+            w >= layout.width && h == layout.height,
+            "{w}x{h} vs {}x{}",
+            layout.width,
+            layout.height
+        );
         let layout = FrameLayout::with_min_width(&env.map().grid, &opts, w);
         assert_eq!(layout.width, w);
         (env, summary, frames, layout)
@@ -549,7 +675,11 @@ mod tests {
         }
         // Cropped: the 6 m x 5 m room plus margins, widened for the header.
         assert_eq!(layout.height, (100 + 20) * 2 + layout.header_h);
-        assert!(layout.width >= 280 && layout.width < 640, "{}", layout.width);
+        assert!(
+            layout.width >= 280 && layout.width < 640,
+            "{}",
+            layout.width
+        );
         let footer_w = text_size("test-room  3v1  heuristic vs heuristic  v_e/v_p = 1.0", 1).0;
         assert!(layout.width >= footer_w + 8);
 
@@ -563,26 +693,50 @@ mod tests {
         let last_pos = env.target().pos;
         // Independently of `to_pixel`: the target's cell, relative to the crop.
         let (row, col) = env.map().grid.cell_of(last_pos);
-        let cell_px = ((col as i64 - layout.col0) as f64 * 2.0 + 1.0, ((row as i64 - layout.row0) * 2) as f64 + 1.0 + layout.header_h as f64);
+        let cell_px = (
+            (col as i64 - layout.col0) as f64 * 2.0 + 1.0,
+            ((row as i64 - layout.row0) * 2) as f64 + 1.0 + layout.header_h as f64,
+        );
         let (n_cell, _) = count_near(frames.last().unwrap(), TARGET_COLOR, cell_px, r_px + 2.5);
         assert!(n_cell as f64 > 0.6 * std::f64::consts::PI * r_px * r_px);
-        let (near, far) = count_near(frames.last().unwrap(), TARGET_COLOR, layout.to_pixel(last_pos), r_px + 0.8);
-        assert!(near as f64 > 0.6 * std::f64::consts::PI * r_px * r_px, "only {near} red pixels at the target");
+        let (near, far) = count_near(
+            frames.last().unwrap(),
+            TARGET_COLOR,
+            layout.to_pixel(last_pos),
+            r_px + 0.8,
+        );
+        assert!(
+            near as f64 > 0.6 * std::f64::consts::PI * r_px * r_px,
+            "only {near} red pixels at the target"
+        );
         assert_eq!(far, 0, "red pixels away from the target");
         // ... and where it started in the first one.
         env.reset_state(seed).unwrap();
         let first_pos = env.target().pos;
-        let (near0, far0) = count_near(&frames[0], TARGET_COLOR, layout.to_pixel(first_pos), r_px + 0.8);
+        let (near0, far0) = count_near(
+            &frames[0],
+            TARGET_COLOR,
+            layout.to_pixel(first_pos),
+            r_px + 0.8,
+        );
         assert!(near0 as f64 > 0.6 * std::f64::consts::PI * r_px * r_px);
         assert_eq!(far0, 0);
         // The captors are drawn in their colours near their positions.
         for i in 0..3 {
-            let (n, _) = count_near(&frames[0], captor_color(i), layout.to_pixel(env.robots[i].pos), r_px + 0.8);
+            let (n, _) = count_near(
+                &frames[0],
+                captor_color(i),
+                layout.to_pixel(env.robots[i].pos),
+                r_px + 0.8,
+            );
             assert!(n > 50, "captor {i}: {n} pixels");
         }
         // The ASZ is shaded green (blended over free space) in the first frame.
         let asz_free = mix(FREE_COLOR, ASZ_COLOR, ASZ_ALPHA);
-        let green = frames[0].pixels().filter(|p| p.0[..3] == asz_free.0).count();
+        let green = frames[0]
+            .pixels()
+            .filter(|p| p.0[..3] == asz_free.0)
+            .count();
         assert!(green > 100, "{green} ASZ pixels");
         // The robots moved, so first and last frames differ in the map area.
         assert!(first_pos != last_pos || env.robots.iter().any(|r| r.pos != first_pos));
@@ -604,9 +758,15 @@ mod tests {
         let mut env = env(3);
         let mut captors = ControllerSpec::Still.build(Side::Captors).unwrap();
         let mut target = ControllerSpec::Still.build(Side::Target).unwrap();
-        let opts = RenderOptions { show_asz: false, crop: false, scale: 1, ..RenderOptions::default() };
+        let opts = RenderOptions {
+            show_asz: false,
+            crop: false,
+            scale: 1,
+            ..RenderOptions::default()
+        };
         let out = dir.path().join("plain.gif");
-        let summary = render_episode(&mut env, captors.as_mut(), target.as_mut(), 1, &opts, &out).unwrap();
+        let summary =
+            render_episode(&mut env, captors.as_mut(), target.as_mut(), 1, &opts, &out).unwrap();
         assert_eq!(summary.steps, 3);
         let frames = decode(&out);
         assert_eq!(frames.len(), 4);
@@ -630,10 +790,22 @@ mod tests {
         // A target boxed in by captors: small ASZ.
         let t = [0.5, 0.0];
         let robots = vec![
-            Robot { pos: [0.9, 0.0], ..Robot::default() },
-            Robot { pos: [0.1, 0.3], ..Robot::default() },
-            Robot { pos: [0.1, -0.3], ..Robot::default() },
-            Robot { pos: t, ..Robot::default() },
+            Robot {
+                pos: [0.9, 0.0],
+                ..Robot::default()
+            },
+            Robot {
+                pos: [0.1, 0.3],
+                ..Robot::default()
+            },
+            Robot {
+                pos: [0.1, -0.3],
+                ..Robot::default()
+            },
+            Robot {
+                pos: t,
+                ..Robot::default()
+            },
         ];
         env.set_robots(0, robots);
         assert_eq!(march_regions(&mut fm, &env), env.asz_cells());
@@ -643,7 +815,14 @@ mod tests {
     fn layout_maps_world_to_pixels() {
         let maps = room_map();
         let grid = &maps[0].grid;
-        let l = FrameLayout::new(grid, &RenderOptions { crop: false, scale: 2, ..RenderOptions::default() });
+        let l = FrameLayout::new(
+            grid,
+            &RenderOptions {
+                crop: false,
+                scale: 2,
+                ..RenderOptions::default()
+            },
+        );
         // World origin = grid centre = cell boundary 160 -> pixel 320 (+ header).
         assert_eq!(l.to_pixel([0.0, 0.0]), (320.0, 320.0 + l.header_h as f64));
         assert_eq!(l.to_pixel([1.0, 1.0]), (360.0, 280.0 + l.header_h as f64));

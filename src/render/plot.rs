@@ -3,7 +3,10 @@
 //! Non-finite values (NaN, ±inf) are skipped and break the line; empty and
 //! flat data give a plot with a sensible range instead of a panic.
 
-use super::text::{draw_line, draw_rect, draw_text, draw_text_centered, draw_text_up, fill_disc, fill_rect, text_size};
+use super::text::{
+    draw_line, draw_rect, draw_text, draw_text_centered, draw_text_up, fill_disc, fill_rect,
+    text_size,
+};
 use anyhow::{Context, Result};
 use image::{ImageFormat, Rgb, RgbImage};
 use std::path::Path;
@@ -18,7 +21,11 @@ pub struct Series {
 
 impl Series {
     pub fn new(label: impl Into<String>, points: Vec<(f64, f64)>, color: [u8; 3]) -> Series {
-        Series { label: label.into(), points, color }
+        Series {
+            label: label.into(),
+            points,
+            color,
+        }
     }
 }
 
@@ -57,7 +64,9 @@ pub fn nice_ticks(lo: f64, hi: f64, target: usize) -> Vec<f64> {
     let step = scaled(m, e);
     let first = (lo / step).floor();
     let last = (hi / step).ceil();
-    if !(step.is_finite() && step > 0.0 && first.is_finite() && last.is_finite()) || last - first > 1000.0 {
+    if !(step.is_finite() && step > 0.0 && first.is_finite() && last.is_finite())
+        || last - first > 1000.0
+    {
         return vec![lo, hi];
     }
     let n = (last - first).round() as i64;
@@ -90,7 +99,11 @@ fn widen(lo: f64, hi: f64) -> (f64, f64) {
         return (lo, hi);
     }
     let v = (lo + hi) / 2.0;
-    let d = if v == 0.0 { 1.0 } else { (v.abs() / 10.0).min(1.0).max(v.abs() * 1e-3) };
+    let d = if v == 0.0 {
+        1.0
+    } else {
+        (v.abs() / 10.0).min(1.0).max(v.abs() * 1e-3)
+    };
     (v - d, v + d)
 }
 
@@ -125,19 +138,36 @@ fn nice_step_parts(x: f64) -> (f64, i32) {
 /// Tick labels with as many decimals as the tick spacing needs; scientific
 /// notation for very large or very small magnitudes.
 pub fn tick_labels(ticks: &[f64]) -> Vec<String> {
-    let step = if ticks.len() >= 2 { (ticks[1] - ticks[0]).abs() } else { 1.0 };
+    let step = if ticks.len() >= 2 {
+        (ticks[1] - ticks[0]).abs()
+    } else {
+        1.0
+    };
     let max = ticks.iter().fold(0f64, |m, t| m.max(t.abs()));
     if max >= 1e6 || (step > 0.0 && step < 1e-4) {
         return ticks
             .iter()
-            .map(|&t| if t == 0.0 { "0".to_string() } else { format!("{t:.1e}") })
+            .map(|&t| {
+                if t == 0.0 {
+                    "0".to_string()
+                } else {
+                    format!("{t:.1e}")
+                }
+            })
             .collect();
     }
     // The tick spacing carries float noise (2.8 - 2.7 = 0.09999999999999964).
-    let decimals = if step > 0.0 { (-step.log10() - 1e-6).ceil().clamp(0.0, 6.0) as usize } else { 0 };
+    let decimals = if step > 0.0 {
+        (-step.log10() - 1e-6).ceil().clamp(0.0, 6.0) as usize
+    } else {
+        0
+    };
     // A step like 0.25 is never produced (1-2-5 steps), but 2.5e-n can come
     // from a fallback range: one more decimal keeps labels distinct.
-    let decimals = if decimals < 6 && ((step * 10f64.powi(decimals as i32)).round() - step * 10f64.powi(decimals as i32)).abs() > 1e-6 {
+    let decimals = if decimals < 6
+        && ((step * 10f64.powi(decimals as i32)).round() - step * 10f64.powi(decimals as i32)).abs()
+            > 1e-6
+    {
         decimals + 1
     } else {
         decimals
@@ -146,7 +176,11 @@ pub fn tick_labels(ticks: &[f64]) -> Vec<String> {
         .iter()
         .map(|&t| {
             let s = format!("{t:.decimals$}");
-            if s.starts_with('-') && s.trim_start_matches('-').chars().all(|c| c == '0' || c == '.') {
+            if s.starts_with('-')
+                && s.trim_start_matches('-')
+                    .chars()
+                    .all(|c| c == '0' || c == '.')
+            {
                 s[1..].to_string()
             } else {
                 s
@@ -209,7 +243,14 @@ fn data_range(series: &[Series]) -> Option<((f64, f64), (f64, f64))> {
 }
 
 /// Lays out a plot of `width x height` pixels for this data.
-pub fn plot_frame(series: &[Series], title: &str, x_label: &str, y_label: &str, width: u32, height: u32) -> PlotFrame {
+pub fn plot_frame(
+    series: &[Series],
+    title: &str,
+    x_label: &str,
+    y_label: &str,
+    width: u32,
+    height: u32,
+) -> PlotFrame {
     let ts = text_scale(width, height);
     let ch = (8 * ts) as i64;
     let pad = (6 * ts) as i64;
@@ -217,26 +258,48 @@ pub fn plot_frame(series: &[Series], title: &str, x_label: &str, y_label: &str, 
     let ((xl, xh), (yl, yh)) = data_range(series).unwrap_or(((0.0, 1.0), (0.0, 1.0)));
     let y_target = ((height as i64 / (ch * 5)).clamp(2, 8)) as usize;
     let y_ticks = nice_ticks(yl, yh, y_target);
-    let y_label_w = tick_labels(&y_ticks).iter().map(|l| text_size(l, ts).0 as i64).max().unwrap_or(0);
+    let y_label_w = tick_labels(&y_ticks)
+        .iter()
+        .map(|l| text_size(l, ts).0 as i64)
+        .max()
+        .unwrap_or(0);
     let top = pad + if title.is_empty() { 0 } else { ch + pad };
     let left = pad + if y_label.is_empty() { 0 } else { ch + pad } + y_label_w + pad / 2 + tick;
-    let bottom_margin = tick + pad / 2 + ch + pad + if x_label.is_empty() { 0 } else { ch + pad / 2 };
+    let bottom_margin =
+        tick + pad / 2 + ch + pad + if x_label.is_empty() { 0 } else { ch + pad / 2 };
     // Room for about 10 characters per x tick label.
     let plot_w = (width as i64 - left - pad * 3).max(1);
     let x_target = ((plot_w / (ch * 10)).clamp(2, 10)) as usize;
     let x_ticks = nice_ticks(xl, xh, x_target);
-    let x_last_w = tick_labels(&x_ticks).last().map(|l| text_size(l, ts).0 as i64).unwrap_or(0);
+    let x_last_w = tick_labels(&x_ticks)
+        .last()
+        .map(|l| text_size(l, ts).0 as i64)
+        .unwrap_or(0);
     let right_margin = pad.max(x_last_w / 2 + pad);
     let right = (width as i64 - 1 - right_margin).max(left + 1);
     let bottom = (height as i64 - 1 - bottom_margin).max(top + 1);
-    PlotFrame { left, top, right, bottom, x_ticks, y_ticks }
+    PlotFrame {
+        left,
+        top,
+        right,
+        bottom,
+        x_ticks,
+        y_ticks,
+    }
 }
 
 /// Draws `series` as lines on one pair of axes. Non-finite points are skipped
 /// and split their line; points with no finite neighbour, and every point of
 /// a series with at most 25 points, get a marker. Never panics on odd input
 /// (no series, no points, NaN, a single value, a tiny image).
-pub fn line_plot(series: &[Series], title: &str, x_label: &str, y_label: &str, width: u32, height: u32) -> RgbImage {
+pub fn line_plot(
+    series: &[Series],
+    title: &str,
+    x_label: &str,
+    y_label: &str,
+    width: u32,
+    height: u32,
+) -> RgbImage {
     let (width, height) = (width.max(1), height.max(1));
     let mut img = RgbImage::from_pixel(width, height, BACKGROUND);
     let ts = text_scale(width, height);
@@ -301,14 +364,28 @@ pub fn line_plot(series: &[Series], title: &str, x_label: &str, y_label: &str, w
         let (px, _) = f.to_pixel(*t, 0.0);
         let px = px.floor() as i64;
         fill_rect(&mut img, px, f.bottom + 1, 1, tick, AXIS);
-        draw_text_centered(&mut img, px as i32, (f.bottom + 1 + tick) as i32 + pad / 2, &label, TEXT, ts);
+        draw_text_centered(
+            &mut img,
+            px as i32,
+            (f.bottom + 1 + tick) as i32 + pad / 2,
+            &label,
+            TEXT,
+            ts,
+        );
     }
     for (t, label) in f.y_ticks.iter().zip(tick_labels(&f.y_ticks)) {
         let (_, py) = f.to_pixel(0.0, *t);
         let py = py.floor() as i64;
         fill_rect(&mut img, f.left - tick, py, tick, 1, AXIS);
         let (tw, _) = text_size(&label, ts);
-        draw_text(&mut img, (f.left - tick - tw as i64) as i32 - pad / 2, py as i32 - ch / 2, &label, TEXT, ts);
+        draw_text(
+            &mut img,
+            (f.left - tick - tw as i64) as i32 - pad / 2,
+            py as i32 - ch / 2,
+            &label,
+            TEXT,
+            ts,
+        );
     }
 
     // Title and axis labels.
@@ -316,11 +393,25 @@ pub fn line_plot(series: &[Series], title: &str, x_label: &str, y_label: &str, w
         draw_text_centered(&mut img, (width / 2) as i32, pad, title, TEXT, ts);
     }
     if !x_label.is_empty() {
-        draw_text_centered(&mut img, ((f.left + f.right) / 2) as i32, height as i32 - pad / 2 - ch, x_label, TEXT, ts);
+        draw_text_centered(
+            &mut img,
+            ((f.left + f.right) / 2) as i32,
+            height as i32 - pad / 2 - ch,
+            x_label,
+            TEXT,
+            ts,
+        );
     }
     if !y_label.is_empty() {
         let (tw, _) = text_size(y_label, ts);
-        draw_text_up(&mut img, pad, ((f.top + f.bottom) / 2 - tw as i64 / 2) as i32, y_label, TEXT, ts);
+        draw_text_up(
+            &mut img,
+            pad,
+            ((f.top + f.bottom) / 2 - tw as i64 / 2) as i32,
+            y_label,
+            TEXT,
+            ts,
+        );
     }
 
     draw_legend(&mut img, series, &f, ts);
@@ -337,29 +428,43 @@ fn draw_legend(img: &mut RgbImage, series: &[Series], f: &PlotFrame, ts: u32) {
     let pad = (4 * ts) as i64;
     let swatch = (16 * ts) as i64;
     let row_h = ch + pad;
-    let label_w = entries.iter().map(|s| text_size(&s.label, ts).0 as i64).max().unwrap_or(0);
+    let label_w = entries
+        .iter()
+        .map(|s| text_size(&s.label, ts).0 as i64)
+        .max()
+        .unwrap_or(0);
     let box_w = pad + swatch + pad + label_w + pad;
     let box_h = pad + entries.len() as i64 * row_h;
     let margin = pad;
     let corners = [
-        (f.right - margin - box_w, f.top + margin),  // top right
-        (f.left + margin + 1, f.top + margin),       // top left
+        (f.right - margin - box_w, f.top + margin), // top right
+        (f.left + margin + 1, f.top + margin),      // top left
         (f.right - margin - box_w, f.bottom - margin - box_h), // bottom right
-        (f.left + margin + 1, f.bottom - margin - box_h),      // bottom left
+        (f.left + margin + 1, f.bottom - margin - box_h), // bottom left
     ];
     // Count data samples (points and segment midpoints) under each box.
     let covered = |(bx, by): (i64, i64)| -> usize {
-        let inside = |p: (f64, f64)| p.0 >= bx as f64 && p.0 <= (bx + box_w) as f64 && p.1 >= by as f64 && p.1 <= (by + box_h) as f64;
+        let inside = |p: (f64, f64)| {
+            p.0 >= bx as f64
+                && p.0 <= (bx + box_w) as f64
+                && p.1 >= by as f64
+                && p.1 <= (by + box_h) as f64
+        };
         let mut n = 0;
         for s in series {
-            let px: Vec<Option<(f64, f64)>> =
-                s.points.iter().map(|&(x, y)| (x.is_finite() && y.is_finite()).then(|| f.to_pixel(x, y))).collect();
+            let px: Vec<Option<(f64, f64)>> = s
+                .points
+                .iter()
+                .map(|&(x, y)| (x.is_finite() && y.is_finite()).then(|| f.to_pixel(x, y)))
+                .collect();
             for (i, p) in px.iter().enumerate() {
                 let Some(p) = *p else { continue };
                 n += inside(p) as usize;
                 if let Some(Some(q)) = px.get(i + 1) {
                     // Sample long segments so a line crossing the box counts.
-                    let steps = (((q.0 - p.0).abs() + (q.1 - p.1).abs()) / 4.0).ceil().clamp(1.0, 200.0) as usize;
+                    let steps = (((q.0 - p.0).abs() + (q.1 - p.1).abs()) / 4.0)
+                        .ceil()
+                        .clamp(1.0, 200.0) as usize;
                     for k in 1..steps {
                         let t = k as f64 / steps as f64;
                         n += inside((p.0 + (q.0 - p.0) * t, p.1 + (q.1 - p.1) * t)) as usize;
@@ -375,8 +480,23 @@ fn draw_legend(img: &mut RgbImage, series: &[Series], f: &PlotFrame, ts: u32) {
     for (i, s) in entries.iter().enumerate() {
         let y = by + pad + i as i64 * row_h;
         let mid = y as f64 + ch as f64 / 2.0;
-        draw_line(img, (bx + pad) as f64, mid, (bx + pad + swatch) as f64, mid, 2.0 * ts as f64, Rgb(s.color));
-        draw_text(img, (bx + pad + swatch + pad) as i32, y as i32, &s.label, TEXT, ts);
+        draw_line(
+            img,
+            (bx + pad) as f64,
+            mid,
+            (bx + pad + swatch) as f64,
+            mid,
+            2.0 * ts as f64,
+            Rgb(s.color),
+        );
+        draw_text(
+            img,
+            (bx + pad + swatch + pad) as i32,
+            y as i32,
+            &s.label,
+            TEXT,
+            ts,
+        );
     }
 }
 
@@ -384,8 +504,13 @@ fn draw_legend(img: &mut RgbImage, series: &[Series], f: &PlotFrame, ts: u32) {
 pub fn save_png(img: &RgbImage, path: impl AsRef<Path>) -> Result<()> {
     let path = path.as_ref();
     if let Some(parent) = path.parent().filter(|p| !p.as_os_str().is_empty()) {
-        std::fs::create_dir_all(parent)
-            .with_context(|| format!("cannot create folder {} for {}", parent.display(), path.display()))?;
+        std::fs::create_dir_all(parent).with_context(|| {
+            format!(
+                "cannot create folder {} for {}",
+                parent.display(),
+                path.display()
+            )
+        })?;
     }
     img.save_with_format(path, ImageFormat::Png)
         .with_context(|| format!("cannot write PNG {}", path.display()))
@@ -398,26 +523,50 @@ mod tests {
     const RED: [u8; 3] = [214, 39, 40];
 
     fn pixels_of(img: &RgbImage, c: [u8; 3]) -> Vec<(u32, u32)> {
-        img.enumerate_pixels().filter(|(_, _, p)| p.0 == c).map(|(x, y, _)| (x, y)).collect()
+        img.enumerate_pixels()
+            .filter(|(_, _, p)| p.0 == c)
+            .map(|(x, y, _)| (x, y))
+            .collect()
     }
 
     #[test]
     fn ticks_are_nice_and_cover_the_data() {
-        assert_eq!(nice_ticks(0.0, 97.0, 6), vec![0.0, 20.0, 40.0, 60.0, 80.0, 100.0]);
-        assert_eq!(nice_ticks(-3.0, 3.0, 7), vec![-3.0, -2.0, -1.0, 0.0, 1.0, 2.0, 3.0]);
+        assert_eq!(
+            nice_ticks(0.0, 97.0, 6),
+            vec![0.0, 20.0, 40.0, 60.0, 80.0, 100.0]
+        );
+        assert_eq!(
+            nice_ticks(-3.0, 3.0, 7),
+            vec![-3.0, -2.0, -1.0, 0.0, 1.0, 2.0, 3.0]
+        );
         let t = nice_ticks(0.0013, 0.0042, 5);
-        assert!(t[0] <= 0.0013 && *t.last().unwrap() >= 0.0042 && t.len() >= 3 && t.len() <= 8, "{t:?}");
+        assert!(
+            t[0] <= 0.0013 && *t.last().unwrap() >= 0.0042 && t.len() >= 3 && t.len() <= 8,
+            "{t:?}"
+        );
         assert_eq!(tick_labels(&t)[1], "0.002");
-        assert_eq!(tick_labels(&[0.0, 0.1, 0.2, 0.30000000000000004]), vec!["0.0", "0.1", "0.2", "0.3"]);
-        assert_eq!(tick_labels(&[-0.0, 500.0, 1000.0]), vec!["0", "500", "1000"]);
+        assert_eq!(
+            tick_labels(&[0.0, 0.1, 0.2, 0.30000000000000004]),
+            vec!["0.0", "0.1", "0.2", "0.3"]
+        );
+        assert_eq!(
+            tick_labels(&[-0.0, 500.0, 1000.0]),
+            vec!["0", "500", "1000"]
+        );
         assert_eq!(tick_labels(&[2.7, 2.8, 2.9]), vec!["2.7", "2.8", "2.9"]);
         assert_eq!(tick_labels(&[0.0, 0.05, 0.1]), vec!["0.00", "0.05", "0.10"]);
         assert_eq!(tick_labels(&[0.0, 0.25, 0.5]), vec!["0.00", "0.25", "0.50"]);
         assert_eq!(tick_labels(&[-2.0, 0.0, 2.0]), vec!["-2", "0", "2"]);
         // Degenerate ranges widen instead of dividing by zero.
         let flat = nice_ticks(5.0, 5.0, 5);
-        assert!(flat.len() >= 2 && flat[0] < 5.0 && *flat.last().unwrap() > 5.0, "{flat:?}");
-        assert_eq!(nice_ticks(f64::NAN, 1.0, 5), vec![0.0, 0.2, 0.4, 0.6, 0.8, 1.0]);
+        assert!(
+            flat.len() >= 2 && flat[0] < 5.0 && *flat.last().unwrap() > 5.0,
+            "{flat:?}"
+        );
+        assert_eq!(
+            nice_ticks(f64::NAN, 1.0, 5),
+            vec![0.0, 0.2, 0.4, 0.6, 0.8, 1.0]
+        );
         let zero = nice_ticks(0.0, 0.0, 3);
         assert!(zero[0] < 0.0 && *zero.last().unwrap() > 0.0, "{zero:?}");
         let huge = nice_ticks(0.0, 3e9, 4);
@@ -428,31 +577,70 @@ mod tests {
 
     #[test]
     fn rising_series_goes_up_left_to_right() {
-        let pts: Vec<(f64, f64)> = (0..200).map(|i| (i as f64, (i as f64).sqrt() * 3.0)).collect();
-        let img = line_plot(&[Series::new("", pts, RED)], "rising", "step", "value", 640, 400);
+        let pts: Vec<(f64, f64)> = (0..200)
+            .map(|i| (i as f64, (i as f64).sqrt() * 3.0))
+            .collect();
+        let img = line_plot(
+            &[Series::new("", pts, RED)],
+            "rising",
+            "step",
+            "value",
+            640,
+            400,
+        );
         assert_eq!(img.dimensions(), (640, 400));
         let px = pixels_of(&img, RED);
         assert!(px.len() > 300, "only {} series pixels", px.len());
         let mean_y = |lo: u32, hi: u32| {
-            let ys: Vec<f64> = px.iter().filter(|p| p.0 >= lo && p.0 < hi).map(|p| p.1 as f64).collect();
+            let ys: Vec<f64> = px
+                .iter()
+                .filter(|p| p.0 >= lo && p.0 < hi)
+                .map(|p| p.1 as f64)
+                .collect();
             assert!(!ys.is_empty(), "no line pixels in columns {lo}..{hi}");
             ys.iter().sum::<f64>() / ys.len() as f64
         };
-        let (xmin, xmax) = (px.iter().map(|p| p.0).min().unwrap(), px.iter().map(|p| p.0).max().unwrap());
+        let (xmin, xmax) = (
+            px.iter().map(|p| p.0).min().unwrap(),
+            px.iter().map(|p| p.0).max().unwrap(),
+        );
         assert!(xmax - xmin > 400, "line spans only {xmin}..{xmax}");
         let q = (xmax - xmin) / 4;
-        let quarters: Vec<f64> = (0..4).map(|i| mean_y(xmin + i * q, xmin + (i + 1) * q)).collect();
+        let quarters: Vec<f64> = (0..4)
+            .map(|i| mean_y(xmin + i * q, xmin + (i + 1) * q))
+            .collect();
         for w in quarters.windows(2) {
-            assert!(w[1] < w[0] - 5.0, "line does not rise: mean rows per quarter {quarters:?}");
+            assert!(
+                w[1] < w[0] - 5.0,
+                "line does not rise: mean rows per quarter {quarters:?}"
+            );
         }
         // The data's corners land where the frame says.
-        let f = plot_frame(&[Series::new("", vec![(0.0, 0.0), (199.0, 199f64.sqrt() * 3.0)], RED)], "rising", "step", "value", 640, 400);
+        let f = plot_frame(
+            &[Series::new(
+                "",
+                vec![(0.0, 0.0), (199.0, 199f64.sqrt() * 3.0)],
+                RED,
+            )],
+            "rising",
+            "step",
+            "value",
+            640,
+            400,
+        );
         for x in [25.0, 100.0, 160.0] {
             let (x0, y0) = f.to_pixel(x, f64::sqrt(x) * 3.0);
-            assert!(px.iter().any(|p| (p.0 as f64 + 0.5 - x0).abs() < 1.5 && (p.1 as f64 + 0.5 - y0).abs() < 1.5), "no line at x = {x}");
+            assert!(
+                px.iter()
+                    .any(|p| (p.0 as f64 + 0.5 - x0).abs() < 1.5
+                        && (p.1 as f64 + 0.5 - y0).abs() < 1.5),
+                "no line at x = {x}"
+            );
         }
         // Title text is drawn above the data area.
-        assert!(img.enumerate_pixels().any(|(_, y, p)| (y as i64) < f.top && *p == TEXT));
+        assert!(img
+            .enumerate_pixels()
+            .any(|(_, y, p)| (y as i64) < f.top && *p == TEXT));
     }
 
     #[test]
@@ -461,11 +649,17 @@ mod tests {
         let plain = line_plot(&[Series::new("", pts.clone(), RED)], "", "", "", 400, 300);
         let labelled_series = [Series::new("captors", pts, RED)];
         let labelled = line_plot(&labelled_series, "", "", "", 400, 300);
-        let (a, b) = (pixels_of(&plain, RED).len(), pixels_of(&labelled, RED).len());
+        let (a, b) = (
+            pixels_of(&plain, RED).len(),
+            pixels_of(&labelled, RED).len(),
+        );
         assert!(b > a + 20, "legend swatch missing: {a} vs {b} pixels");
         // The rising line leaves the top-left corner empty: the legend goes there.
         let f = plot_frame(&labelled_series, "", "", "", 400, 300);
-        let in_legend = pixels_of(&labelled, RED).iter().filter(|p| (p.0 as i64) < f.left + 40 && (p.1 as i64) < f.top + 20).count();
+        let in_legend = pixels_of(&labelled, RED)
+            .iter()
+            .filter(|p| (p.0 as i64) < f.left + 40 && (p.1 as i64) < f.top + 20)
+            .count();
         assert!(in_legend >= 10, "{in_legend}");
     }
 
@@ -474,11 +668,26 @@ mod tests {
         let cases: Vec<Vec<Series>> = vec![
             vec![],
             vec![Series::new("empty", vec![], RED)],
-            vec![Series::new("nan", vec![(f64::NAN, 1.0), (2.0, f64::NAN), (f64::INFINITY, 3.0)], RED)],
-            vec![Series::new("flat", (0..10).map(|i| (i as f64, 7.0)).collect(), RED)],
+            vec![Series::new(
+                "nan",
+                vec![(f64::NAN, 1.0), (2.0, f64::NAN), (f64::INFINITY, 3.0)],
+                RED,
+            )],
+            vec![Series::new(
+                "flat",
+                (0..10).map(|i| (i as f64, 7.0)).collect(),
+                RED,
+            )],
             vec![Series::new("one", vec![(3.0, 4.0)], RED)],
-            vec![Series::new("gap", vec![(0.0, 1.0), (1.0, f64::NAN), (2.0, 3.0), (3.0, 4.0)], palette(1))],
-            vec![Series::new("huge", vec![(0.0, -1e300), (1.0, 1e300)], RED), Series::new("b", vec![(0.0, 0.0)], palette(2))],
+            vec![Series::new(
+                "gap",
+                vec![(0.0, 1.0), (1.0, f64::NAN), (2.0, 3.0), (3.0, 4.0)],
+                palette(1),
+            )],
+            vec![
+                Series::new("huge", vec![(0.0, -1e300), (1.0, 1e300)], RED),
+                Series::new("b", vec![(0.0, 0.0)], palette(2)),
+            ],
         ];
         for series in &cases {
             for (w, h) in [(640, 480), (60, 40), (1, 1), (0, 0), (1200, 1100)] {
@@ -488,11 +697,19 @@ mod tests {
         }
         // A flat series is drawn as a horizontal line in the middle of the frame.
         let img = line_plot(&cases[3], "", "", "", 400, 300);
-        let rows: std::collections::BTreeSet<u32> = pixels_of(&img, RED).iter().filter(|p| p.0 > 100 && p.0 < 250).map(|p| p.1).collect();
+        let rows: std::collections::BTreeSet<u32> = pixels_of(&img, RED)
+            .iter()
+            .filter(|p| p.0 > 100 && p.0 < 250)
+            .map(|p| p.1)
+            .collect();
         assert!(!rows.is_empty() && rows.len() <= 6, "{rows:?}");
         let f = plot_frame(&cases[3], "", "", "", 400, 300);
         let mid = (f.top + f.bottom) as f64 / 2.0;
-        assert!(rows.iter().all(|&r| (r as f64 - mid).abs() < (f.bottom - f.top) as f64 / 4.0), "{rows:?} vs {mid}");
+        assert!(
+            rows.iter()
+                .all(|&r| (r as f64 - mid).abs() < (f.bottom - f.top) as f64 / 4.0),
+            "{rows:?} vs {mid}"
+        );
         // An isolated point still shows (as a marker).
         let img = line_plot(&cases[5], "", "", "", 400, 300);
         assert!(pixels_of(&img, palette(1)).len() > 20);
@@ -502,7 +719,14 @@ mod tests {
     fn save_png_creates_folders_and_names_the_path_on_error() {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("a/b/plot.png");
-        let img = line_plot(&[Series::new("s", vec![(0.0, 0.0), (1.0, 1.0)], RED)], "t", "x", "y", 200, 150);
+        let img = line_plot(
+            &[Series::new("s", vec![(0.0, 0.0), (1.0, 1.0)], RED)],
+            "t",
+            "x",
+            "y",
+            200,
+            150,
+        );
         save_png(&img, &path).unwrap();
         let back = image::open(&path).unwrap().to_rgb8();
         assert_eq!(back, img);

@@ -42,8 +42,16 @@ pub fn put(img: &mut RgbImage, x: i64, y: i64, color: Rgb<u8>) {
 #[inline]
 pub fn mix(under: Rgb<u8>, color: Rgb<u8>, alpha: f32) -> Rgb<u8> {
     let a = alpha.clamp(0.0, 1.0);
-    let m = |u: u8, c: u8| (u as f32 + (c as f32 - u as f32) * a).round().clamp(0.0, 255.0) as u8;
-    Rgb([m(under.0[0], color.0[0]), m(under.0[1], color.0[1]), m(under.0[2], color.0[2])])
+    let m = |u: u8, c: u8| {
+        (u as f32 + (c as f32 - u as f32) * a)
+            .round()
+            .clamp(0.0, 255.0) as u8
+    };
+    Rgb([
+        m(under.0[0], color.0[0]),
+        m(under.0[1], color.0[1]),
+        m(under.0[2], color.0[2]),
+    ])
 }
 
 /// Blends `color` over one pixel with opacity `alpha` (0..1); clipped.
@@ -111,7 +119,10 @@ pub fn fill_disc(img: &mut RgbImage, cx: f64, cy: f64, r: f64, color: Rgb<u8>) {
     if !(cx.is_finite() && cy.is_finite() && r.is_finite()) || r < 0.0 {
         return;
     }
-    let (Some((x0, x1)), Some((y0, y1))) = (pixel_range(cx, r, img.width()), pixel_range(cy, r, img.height())) else {
+    let (Some((x0, x1)), Some((y0, y1))) = (
+        pixel_range(cx, r, img.width()),
+        pixel_range(cy, r, img.height()),
+    ) else {
         return;
     };
     let mut any = false;
@@ -137,7 +148,10 @@ pub fn draw_circle(img: &mut RgbImage, cx: f64, cy: f64, r: f64, thickness: f64,
     }
     let half = (thickness / 2.0).max(0.5);
     let (r_in, r_out) = ((r - half).max(0.0), r + half);
-    let (Some((x0, x1)), Some((y0, y1))) = (pixel_range(cx, r_out, img.width()), pixel_range(cy, r_out, img.height())) else {
+    let (Some((x0, x1)), Some((y0, y1))) = (
+        pixel_range(cx, r_out, img.width()),
+        pixel_range(cy, r_out, img.height()),
+    ) else {
         return;
     };
     for y in y0..=y1 {
@@ -154,11 +168,29 @@ pub fn draw_circle(img: &mut RgbImage, cx: f64, cy: f64, r: f64, thickness: f64,
 /// A straight segment from (x0, y0) to (x1, y1) with round ends: the pixels
 /// whose centres lie within `thickness / 2` (at least 0.5, so a thin line
 /// has no gaps) of the segment.
-pub fn draw_line(img: &mut RgbImage, x0: f64, y0: f64, x1: f64, y1: f64, thickness: f64, color: Rgb<u8>) {
-    line_pixels(img, x0, y0, x1, y1, thickness, |img, x, y| img.put_pixel(x, y, color));
+pub fn draw_line(
+    img: &mut RgbImage,
+    x0: f64,
+    y0: f64,
+    x1: f64,
+    y1: f64,
+    thickness: f64,
+    color: Rgb<u8>,
+) {
+    line_pixels(img, x0, y0, x1, y1, thickness, |img, x, y| {
+        img.put_pixel(x, y, color)
+    });
 }
 
-fn line_pixels(img: &mut RgbImage, x0: f64, y0: f64, x1: f64, y1: f64, thickness: f64, mut f: impl FnMut(&mut RgbImage, u32, u32)) {
+fn line_pixels(
+    img: &mut RgbImage,
+    x0: f64,
+    y0: f64,
+    x1: f64,
+    y1: f64,
+    thickness: f64,
+    mut f: impl FnMut(&mut RgbImage, u32, u32),
+) {
     if ![x0, y0, x1, y1, thickness].iter().all(|v| v.is_finite()) {
         return;
     }
@@ -175,7 +207,11 @@ fn line_pixels(img: &mut RgbImage, x0: f64, y0: f64, x1: f64, y1: f64, thickness
     for y in py0..=py1 {
         for x in px0..=px1 {
             let (px, py) = (x as f64 + 0.5, y as f64 + 0.5);
-            let t = if len2 > 0.0 { (((px - x0) * dx + (py - y0) * dy) / len2).clamp(0.0, 1.0) } else { 0.0 };
+            let t = if len2 > 0.0 {
+                (((px - x0) * dx + (py - y0) * dy) / len2).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
             let (ex, ey) = (px - (x0 + t * dx), py - (y0 + t * dy));
             if ex * ex + ey * ey <= half * half {
                 f(img, x, y);
@@ -187,7 +223,14 @@ fn line_pixels(img: &mut RgbImage, x0: f64, y0: f64, x1: f64, y1: f64, thickness
 /// Writes `text` left to right with its top-left corner at (x, y), each font
 /// pixel a `scale x scale` block; clipped. Characters the font lacks are
 /// left blank (but take their place). Returns the width drawn over, in pixels.
-pub fn draw_text(img: &mut RgbImage, x: i32, y: i32, text: &str, color: Rgb<u8>, scale: u32) -> u32 {
+pub fn draw_text(
+    img: &mut RgbImage,
+    x: i32,
+    y: i32,
+    text: &str,
+    color: Rgb<u8>,
+    scale: u32,
+) -> u32 {
     let s = scale.max(1) as i64;
     let mut n = 0i64;
     for ch in text.chars() {
@@ -229,7 +272,14 @@ pub fn draw_text_up(img: &mut RgbImage, x: i32, y: i32, text: &str, color: Rgb<u
 }
 
 /// Writes `text` centred horizontally on `cx`, top at `y`.
-pub fn draw_text_centered(img: &mut RgbImage, cx: i32, y: i32, text: &str, color: Rgb<u8>, scale: u32) {
+pub fn draw_text_centered(
+    img: &mut RgbImage,
+    cx: i32,
+    y: i32,
+    text: &str,
+    color: Rgb<u8>,
+    scale: u32,
+) {
     let (w, _) = text_size(text, scale);
     draw_text(img, cx - (w / 2) as i32, y, text, color, scale);
 }
@@ -242,7 +292,10 @@ mod tests {
     const FG: Rgb<u8> = Rgb([255, 255, 255]);
 
     fn lit(img: &RgbImage) -> Vec<(u32, u32)> {
-        img.enumerate_pixels().filter(|(_, _, p)| **p != BG).map(|(x, y, _)| (x, y)).collect()
+        img.enumerate_pixels()
+            .filter(|(_, _, p)| **p != BG)
+            .map(|(x, y, _)| (x, y))
+            .collect()
     }
 
     #[test]
@@ -253,7 +306,10 @@ mod tests {
         let px = lit(&img);
         assert!(px.len() > 20, "only {} pixels lit", px.len());
         for &(x, y) in &px {
-            assert!((10..42).contains(&x) && (5..21).contains(&y), "pixel ({x}, {y}) outside the text box");
+            assert!(
+                (10..42).contains(&x) && (5..21).contains(&y),
+                "pixel ({x}, {y}) outside the text box"
+            );
         }
         // 'H' has both vertical strokes: lit pixels in its left and right halves.
         assert!(px.iter().any(|&(x, _)| x < 18) && px.iter().any(|&(x, _)| (18..26).contains(&x)));
@@ -310,7 +366,10 @@ mod tests {
         let mut img = RgbImage::from_pixel(50, 50, BG);
         draw_line(&mut img, 2.5, 2.5, 47.5, 30.5, 1.0, FG);
         for x in 2..48 {
-            assert!((0..50).any(|y| *img.get_pixel(x, y) == FG), "gap at column {x}");
+            assert!(
+                (0..50).any(|y| *img.get_pixel(x, y) == FG),
+                "gap at column {x}"
+            );
         }
         assert_eq!(*img.get_pixel(49, 49), BG);
         let mut thick = RgbImage::from_pixel(50, 50, BG);
@@ -333,6 +392,9 @@ mod tests {
         assert_eq!(*img.get_pixel(7, 7), BG);
         blend_rect(&mut img, 6, 6, 2, 2, Rgb([200, 100, 0]), 0.5);
         assert_eq!(*img.get_pixel(6, 6), Rgb([100, 50, 0]));
-        assert_eq!(mix(Rgb([10, 20, 30]), Rgb([110, 120, 130]), 0.25), Rgb([35, 45, 55]));
+        assert_eq!(
+            mix(Rgb([10, 20, 30]), Rgb([110, 120, 130]), 0.25),
+            Rgb([35, 45, 55])
+        );
     }
 }
