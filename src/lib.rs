@@ -2,6 +2,33 @@
 //! trains captor and target teams against pools of each other's checkpoints.
 //!
 //! See ARCHITECTURE.md for the map of the code.
+//!
+//! The environment, PettingZoo-style: agents are the captors, then the target.
+//!
+//! ```
+//! use std::sync::Arc;
+//! use t2e::env::{Action, EnvConfig, TrapEnv};
+//! use t2e::map::{Grid, PreparedMap};
+//!
+//! // A 6 m x 6 m room in the middle of a 16 m map.
+//! let mut grid = Grid::blocked("room", 320);
+//! for row in 100..220 {
+//!     for col in 100..220 {
+//!         grid.set_free(row, col, true);
+//!     }
+//! }
+//! let maps = Arc::new(vec![Arc::new(PreparedMap::new(grid))]);
+//! let cfg = EnvConfig { num_captors: 3, target_speed: 1.2, ..EnvConfig::default() };
+//! let mut env = TrapEnv::new(cfg, maps).unwrap();
+//! let first = env.reset(42).unwrap();
+//! assert_eq!(first.len(), 4);
+//! assert_eq!(first[0].vector.len(), 20);
+//! let step = env.step(&[Action::Forward; 4]);
+//! assert_eq!(step.rewards.len(), 4);
+//! assert!(!step.terminations[0] && !step.truncations[0]);
+//! // Same seed, same episode.
+//! assert_eq!(env.reset(42).unwrap(), first);
+//! ```
 pub mod asz;
 pub mod cli;
 pub mod env;

@@ -1,6 +1,6 @@
 //! `t2e-league eval`: the paper's protocol over one or more settings.
 
-use crate::env::CaptureRule;
+use crate::env::{CaptureRule, Side};
 use crate::eval::{self, EvalSetting, Summary, TABLE_HEADER};
 use crate::heuristics::ControllerSpec;
 use crate::map::{self, PreparedMap};
@@ -50,25 +50,6 @@ pub struct EvalArgs {
     /// No progress bars.
     #[arg(long)]
     pub quiet: bool,
-}
-
-/// Distinct line colours for up to a dozen settings, then repeating.
-fn palette(i: usize) -> [u8; 3] {
-    const COLORS: [[u8; 3]; 12] = [
-        [31, 119, 180],
-        [214, 39, 40],
-        [44, 160, 44],
-        [255, 127, 14],
-        [148, 103, 189],
-        [140, 86, 75],
-        [227, 119, 194],
-        [127, 127, 127],
-        [188, 189, 34],
-        [23, 190, 207],
-        [0, 0, 0],
-        [255, 187, 120],
-    ];
-    COLORS[i % COLORS.len()]
 }
 
 /// Loads and prepares the maps of every spec once.
@@ -140,6 +121,12 @@ fn write_setting(dir: &Path, summary: &Summary, records: &[eval::EpisodeRecord])
 }
 
 pub fn run(args: EvalArgs) -> Result<()> {
+    args.captors
+        .build(Side::Captors)
+        .map_err(|e| anyhow::anyhow!("--captors: {e}"))?;
+    args.target
+        .build(Side::Target)
+        .map_err(|e| anyhow::anyhow!("--target: {e}"))?;
     let sets = load_map_sets(&args.maps)?;
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("cannot create {}", args.out.display()))?;
@@ -174,7 +161,7 @@ pub fn run(args: EvalArgs) -> Result<()> {
                     let series = Series {
                         label: label.clone(),
                         points,
-                        color: palette(curves.len()),
+                        color: plot::palette(curves.len()),
                     };
                     let title = format!(
                         "mean |ASZ| over time: {} vs {}, {label}",
