@@ -35,33 +35,39 @@ pub fn strict_capture_cells(robot_radius: f64) -> f64 {
 
 /// The march's priority queue. Every time it is offered lies within one
 /// step cost (h / v) of the last time it settled, so a ring of buckets, each
-/// 1/64 of the largest step cost wide, holds the whole front; only the bucket
-/// being settled is kept in a (tiny) binary heap, which keeps the exact FMM
-/// order at a fraction of a full heap's cost (64 per step measured fastest
-/// on Graceville against 4, 16 and 256).
-/// Heap keys are the time's bits (non-negative f32 bits order like the
-/// floats) above the payload, so at equal times the lower label (a captor)
-/// settles first.
+/// a fraction of the largest step cost wide, holds the whole front. Ring
+/// buckets hold cell indices only: a cell whose time improves within the
+/// bucket it already sits in needs no new entry (its time is read when the
+/// bucket comes up), which removes most of the duplicate entries a lazy heap
+/// carries. Only the bucket being settled is kept in a (small) binary heap,
+/// so the order is the exact FMM order. Heap keys are the time's bits
+/// (non-negative f32 bits order like the floats) above the label and cell,
+/// so at equal times the lower label (a captor) settles first.
 #[derive(Default)]
 struct BucketQueue {
     width: f32,
     inv_width: f32,
     /// Absolute index of the bucket in `current`.
     cur: usize,
-    ring: Vec<Vec<u64>>,
+    ring: Vec<Vec<u32>>,
+    ring_len: usize,
     current: BinaryHeap<Reverse<u64>>,
-    len: usize,
 }
 
 const RING: usize = 128;
 const BUCKETS_PER_STEP: f32 = 64.0;
+
+#[inline]
+fn heap_key(time: f32, label: u8, cell: usize) -> u64 {
+    ((time.to_bits() as u64) << 32) | ((label as u64) << 24) | cell as u64
+}
 
 impl BucketQueue {
     fn reset(&mut self, max_step_cost: f32) {
         self.width = max_step_cost / BUCKETS_PER_STEP;
         self.inv_width = 1.0 / self.width;
         self.cur = 0;
-        self.len = 0;
+        self.ring_len = 0;
         self.current.clear();
         self.ring.resize_with(RING, Vec::new);
         for b in &mut self.ring {
@@ -76,36 +82,46 @@ impl BucketQueue {
     }
 
     #[inline]
-    fn push(&mut self, time: f32, payload: u32) {
-        let key = ((time.to_bits() as u64) << 32) | payload as u64;
-        // Offers lie within one step cost (64 buckets) of the settled front;
-        // the clamp only guards against rounding.
-        let b = ((time * self.inv_width) as usize).min(self.cur + RING - 1);
-        if b <= self.cur {
-            self.current.push(Reverse(key));
-        } else {
-            self.ring[b % RING].push(key);
-        }
-        self.len += 1;
+    fn bucket(&self, time: f32) -> usize {
+        // Offers lie within one step cost of the settled front; the clamp
+        // only guards against rounding.
+        ((time * self.inv_width) as usize).min(self.cur + RING - 1)
     }
 
+    /// Queues `cell` at `time`; `old` is the cell as it was before this offer.
     #[inline]
-    fn pop(&mut self) -> Option<(f32, u32)> {
-        if self.len == 0 {
-            return None;
+    fn push(&mut self, cell: usize, time: f32, label: u8, old: Cell) {
+        let b = self.bucket(time);
+        if b <= self.cur {
+            self.current.push(Reverse(heap_key(time, label, cell)));
+        } else if !(old.state == TRIAL && self.bucket(old.time) == b) {
+            self.ring[b % RING].push(cell as u32);
+            self.ring_len += 1;
         }
+    }
+
+    /// The next (time, label, cell) in FMM order; entries may be stale.
+    #[inline]
+    fn pop(&mut self, cells: &[Cell]) -> Option<(f32, u8, usize)> {
         loop {
             if let Some(Reverse(key)) = self.current.pop() {
-                self.len -= 1;
-                return Some((f32::from_bits((key >> 32) as u32), key as u32));
+                let t = f32::from_bits((key >> 32) as u32);
+                return Some((t, (key >> 24) as u8, (key & 0xFF_FFFF) as usize));
+            }
+            if self.ring_len == 0 {
+                return None;
             }
             self.cur += 1;
             let slot = self.cur % RING;
-            let bucket = std::mem::take(&mut self.ring[slot]);
-            let mut heap = std::mem::take(&mut self.current).into_vec();
-            heap.extend(bucket.iter().map(|&k| Reverse(k)));
-            self.current = BinaryHeap::from(heap);
-            let mut bucket = bucket;
+            let mut bucket = std::mem::take(&mut self.ring[slot]);
+            self.ring_len -= bucket.len();
+            for &cell in &bucket {
+                let c = cells[cell as usize];
+                if c.state == TRIAL && self.bucket(c.time) <= self.cur {
+                    self.current
+                        .push(Reverse(heap_key(c.time, c.label, cell as usize)));
+                }
+            }
             bucket.clear();
             self.ring[slot] = bucket; // keep the allocation
         }
@@ -264,12 +280,10 @@ impl FastMarching {
         // Every cell the march settles is free, hence inside the grid and at
         // least PAD cells from the edge of the padded array, so its four
         // neighbours are valid indices.
-        while let Some((t, payload)) = self.heap.pop() {
+        while let Some((t, label, cell)) = self.heap.pop(&self.cells) {
             if stop_label.is_some() && pending_stop == 0 {
                 break;
             }
-            let cell = (payload & 0xFF_FFFF) as usize;
-            let label = (payload >> 24) as u8;
             let c = self.cells[cell];
             if c.state != TRIAL || c.label != label || c.time != t {
                 continue; // stale entry
@@ -322,7 +336,7 @@ impl FastMarching {
             label,
             state: TRIAL,
         };
-        self.heap.push(t, ((label as u32) << 24) | cell as u32);
+        self.heap.push(cell, t, label, old);
     }
 
     /// Geodesic distance (m) from `from` to every free cell: one full march at
