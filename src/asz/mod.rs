@@ -85,7 +85,12 @@ impl BucketQueue {
     fn bucket(&self, time: f32) -> usize {
         // Offers lie within one step cost of the settled front; the clamp
         // only guards against rounding.
-        ((time * self.inv_width) as usize).min(self.cur + RING - 1)
+        let scaled = time * self.inv_width;
+        debug_assert!(scaled.is_finite() && scaled >= 0.0 && scaled < u32::MAX as f32);
+        // SAFETY: offered times are finite, non-negative and below a few
+        // hundred seconds, so the scaled time fits a u32 (checked in debug).
+        let b = unsafe { scaled.to_int_unchecked::<u32>() } as usize;
+        b.min(self.cur + RING - 1)
     }
 
     /// Queues `cell` at `time`; `old` is the cell as it was before this offer.
