@@ -8,6 +8,9 @@ use crate::map::PreparedMap;
 pub const PATCH: usize = 48;
 pub const PATCH_LEN: usize = PATCH * PATCH;
 
+// A rotated patch reaches 24 sqrt 2 < 35 cells from the robot's cell.
+const _: () = assert!(crate::map::prepared::PAD >= 35);
+
 /// Writes robot `i`'s vector: own velocity, position, heading; then for every
 /// other robot (captors in order, then the target) its velocity (zeros for the
 /// target), position relative to i, heading minus i's.
@@ -50,26 +53,33 @@ pub fn write_patch(map: &PreparedMap, pos: [f64; 2], theta: f64, out: &mut [u8])
     }
     let base = map.padded_index(r0, c0) as isize;
     let stride = map.stride as isize;
-    let (s, c) = (theta.sin() as f32, theta.cos() as f32);
     // The robot's cell is pixel (24, 24): the patch reaches 24 cells ahead
     // and to the left, 23 behind and to the right, like a crop [c-24, c+24)
     // of the grid, and axis-aligned headings give integer offsets (no ties).
-    let half = (PATCH / 2) as f32;
     // Offsets (in cells) of a patch pixel from the robot's cell centre: with
-    // right = b - half and forward = half - a,
-    //   column offset = right sin + forward cos, row offset = right cos - forward sin.
-    // Adding BIAS before truncating rounds to nearest for negatives too.
-    const BIAS: f32 = 64.5;
-    const BIAS_I: isize = 64;
+    // right = b - 24 and forward = 24 - a,
+    //   column offset = right sin + forward cos, row offset = right cos - forward sin,
+    // stepped along each patch row in 16.16 fixed point (integer adds and
+    // shifts; the sin/cos rounding error stays below 1e-3 cells over a row).
+    const ONE: f64 = 65536.0;
+    const ROUND: i32 = 1 << 15;
+    let half = (PATCH / 2) as i32;
+    let (sf, cf) = (
+        (theta.sin() * ONE).round() as i32,
+        (theta.cos() * ONE).round() as i32,
+    );
     for (a, row_out) in out.chunks_exact_mut(PATCH).enumerate() {
-        let forward = half - a as f32;
-        let mut dc = -half * s + forward * c + BIAS;
-        let mut dr = -half * c - forward * s + BIAS;
+        let forward = half - a as i32;
+        let mut dc = -half * sf + forward * cf + ROUND;
+        let mut dr = -half * cf - forward * sf + ROUND;
         for px in row_out.iter_mut() {
-            let idx = base + (dr as isize - BIAS_I) * stride + (dc as isize - BIAS_I);
-            *px = map.obstacle[idx as usize];
-            dc += s;
-            dr += c;
+            let idx = (base + (dr >> 16) as isize * stride + (dc >> 16) as isize) as usize;
+            debug_assert!(idx < map.obstacle.len());
+            // SAFETY: the robot's cell is inside the grid and every offset is
+            // at most 24 sqrt 2 < 35 cells, inside the PAD = 40 obstacle border.
+            *px = unsafe { *map.obstacle.get_unchecked(idx) };
+            dc += sf;
+            dr += cf;
         }
     }
 }
