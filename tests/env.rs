@@ -481,3 +481,51 @@ fn vec_env_matches_single_envs_and_auto_resets() {
         "every world finished its first episode and restarted"
     );
 }
+
+/// The fast fixed-point patch agrees with a direct f64 rotation of the grid
+/// (nearest cell, robot's cell at pixel (24, 24)) on a real floor plan, up to
+/// pixels whose source point lies within rounding distance of a cell edge.
+#[test]
+fn patch_matches_a_direct_rotation_on_a_floor_plan() {
+    use rand::{Rng, SeedableRng};
+    let entries = t2e::map::resolve("shipped:medium").unwrap();
+    let m = PreparedMap::new(entries[0].load().unwrap());
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(1);
+    let mut patch = vec![0u8; PATCH_LEN];
+    let (mut mismatches, mut total) = (0usize, 0usize);
+    for _ in 0..200 {
+        let cell = m.spawn_cells[rng.gen_range(0..m.spawn_cells.len())] as usize;
+        let centre = m.grid.cell_center(cell / m.side(), cell % m.side());
+        let pos = [
+            centre[0] + rng.gen_range(-0.02..0.02),
+            centre[1] + rng.gen_range(-0.02..0.02),
+        ];
+        let theta: f64 = rng.gen_range(0.0..std::f64::consts::TAU);
+        t2e::env::observe::write_patch(&m, pos, theta, &mut patch);
+        let (r0, c0) = m.grid.cell_of(pos);
+        for a in 0..PATCH {
+            for b in 0..PATCH {
+                let (right, forward) = (b as f64 - 24.0, 24.0 - a as f64);
+                let dc = right * theta.sin() + forward * theta.cos();
+                let dr = right * theta.cos() - forward * theta.sin();
+                let expect = !m
+                    .grid
+                    .is_free(r0 + dr.round() as isize, c0 + dc.round() as isize)
+                    as u8;
+                total += 1;
+                if patch[a * PATCH + b] != expect {
+                    mismatches += 1;
+                    let near_edge = |x: f64| (x - x.floor() - 0.5).abs() < 1e-3;
+                    assert!(
+                        near_edge(dc) || near_edge(dr),
+                        "pixel ({a},{b}) differs away from a cell edge"
+                    );
+                }
+            }
+        }
+    }
+    assert!(
+        mismatches * 1000 < total,
+        "{mismatches} of {total} pixels differ"
+    );
+}
