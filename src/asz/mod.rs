@@ -388,8 +388,10 @@ mod tests {
     }
 
     /// First-order FMM on a 4-neighbour grid overestimates distances off the
-    /// axes; the error is largest along diagonals (about 0.09 * d close to the
-    /// source, shrinking with distance). Accepted: |fmm - euclid| <= 0.08 d + 0.05 m.
+    /// axes, most along the diagonals (measured here: at most 0.083 m over a
+    /// 14 m x 14 m room, 2.1% beyond 3 m from the source, 1.1% on the
+    /// diagonal at 6.5 m). Accepted: |fmm - euclid| <= 0.025 d + 0.05 m, and
+    /// under 3% beyond 3 m.
     #[test]
     fn open_room_distances_match_euclid_within_first_order_error() {
         let map = PreparedMap::new(room(20, 300, 20, 300));
@@ -404,7 +406,7 @@ mod tests {
                 let d = (p[0] - from[0]).hypot(p[1] - from[1]);
                 let t = fm.time(map.padded_index(r as isize, c as isize)) as f64;
                 assert!(
-                    (t - d).abs() <= 0.08 * d + 0.05,
+                    (t - d).abs() <= 0.025 * d + 0.05,
                     "cell ({r},{c}): fmm {t} vs {d}"
                 );
                 assert!(
@@ -423,7 +425,7 @@ mod tests {
             axis_err < 1e-4,
             "along the axes the march is exact, got {axis_err}"
         );
-        assert!(worst_rel < 0.06, "relative error beyond 3 m: {worst_rel}");
+        assert!(worst_rel < 0.03, "relative error beyond 3 m: {worst_rel}");
     }
 
     #[test]
@@ -449,8 +451,9 @@ mod tests {
         fm.distance_field(&map, a);
         let t = fm.time(map.padded_index(250, 250)) as f64;
         assert!(geodesic - euclid > 0.9, "the corridor must force a detour");
+        // Measured: 13.100 m against 13.038 m (0.5%); accepted within 1%.
         assert!(
-            (t - geodesic).abs() <= 0.05 * geodesic,
+            (t - geodesic).abs() <= 0.01 * geodesic,
             "fmm {t} vs geodesic {geodesic}"
         );
     }
