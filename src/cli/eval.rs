@@ -50,6 +50,11 @@ pub struct EvalArgs {
     /// No progress bars.
     #[arg(long)]
     pub quiet: bool,
+    /// Keep the settings a previous (killed) run of the same command already
+    /// finished in --out, and run only the rest. Each setting is written as
+    /// soon as it finishes.
+    #[arg(long)]
+    pub resume: bool,
 }
 
 /// Loads and prepares the maps of every spec once.
@@ -61,8 +66,8 @@ fn load_map_sets(specs: &[String]) -> Result<BTreeMap<String, Arc<Vec<Arc<Prepar
     Ok(sets)
 }
 
-fn setting_dir(out: &Path, s: &Summary) -> PathBuf {
-    let maps = s.maps.replace(['/', ':', '.'], "_");
+fn setting_dir(out: &Path, s: &EvalSetting, maps: &str) -> PathBuf {
+    let maps = maps.replace(['/', ':', '.'], "_");
     out.join(format!(
         "{}-vs-{}_k{}_r{:.1}_{}",
         s.captors,
@@ -71,6 +76,17 @@ fn setting_dir(out: &Path, s: &Summary) -> PathBuf {
         s.speed_ratio,
         maps.trim_matches('_')
     ))
+}
+
+/// The summary a previous run left for this setting, if it matches.
+fn finished_setting(dir: &Path, setting: &EvalSetting) -> Option<Summary> {
+    let text = std::fs::read_to_string(dir.join("summary.json")).ok()?;
+    let s: Summary = serde_json::from_str(&text).ok()?;
+    let same = s.episodes == setting.episodes
+        && s.episode_length == setting.episode_length
+        && s.seed == setting.seed
+        && s.mean_soa_m2.is_some() == (setting.soa_every > 0);
+    same.then_some(s)
 }
 
 fn write_setting(dir: &Path, summary: &Summary, records: &[eval::EpisodeRecord]) -> Result<()> {
@@ -147,10 +163,17 @@ pub fn run(args: EvalArgs) -> Result<()> {
                     capture_rule: args.capture_rule,
                     soa_every: args.soa_every,
                 };
-                let (summary, records) = eval::run(&setting, &sets[spec], spec, !args.quiet)?;
+                let dir = setting_dir(&args.out, &setting, spec);
+                let summary = match finished_setting(&dir, &setting).filter(|_| args.resume) {
+                    Some(done) => done,
+                    None => {
+                        let (summary, records) =
+                            eval::run(&setting, &sets[spec], spec, !args.quiet)?;
+                        write_setting(&dir, &summary, &records)?;
+                        summary
+                    }
+                };
                 println!("{}", summary.table_row());
-                let dir = setting_dir(&args.out, &summary);
-                write_setting(&dir, &summary, &records)?;
                 if !summary.soa_curve.is_empty() {
                     let points: Vec<(f64, f64)> = summary
                         .soa_curve
@@ -202,4 +225,47 @@ pub fn run(args: EvalArgs) -> Result<()> {
     }
     eprintln!("wrote {}", args.out.display());
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn resume_reuses_only_a_matching_finished_setting() {
+        let dir = tempfile::tempdir().unwrap();
+        let setting = EvalSetting {
+            episodes: 3,
+            episode_length: 20,
+            soa_every: 0,
+            ..EvalSetting::default()
+        };
+        let record = |captured| eval::EpisodeRecord {
+            episode: 0,
+            seed: 1,
+            map: "m".into(),
+            steps: 20,
+            captured,
+            captor_path_len: 1.0,
+            soa_m2: vec![],
+        };
+        let records = vec![record(true), record(false), record(false)];
+        let summary = eval::summarise(&setting, "m", &records);
+        assert!(
+            finished_setting(dir.path(), &setting).is_none(),
+            "nothing written yet"
+        );
+        write_setting(dir.path(), &summary, &records).unwrap();
+        assert_eq!(finished_setting(dir.path(), &setting), Some(summary));
+        let longer = EvalSetting {
+            episodes: 500,
+            ..setting.clone()
+        };
+        assert!(finished_setting(dir.path(), &longer).is_none());
+        let with_soa = EvalSetting {
+            soa_every: 1,
+            ..setting
+        };
+        assert!(finished_setting(dir.path(), &with_soa).is_none());
+    }
 }

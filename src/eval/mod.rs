@@ -9,7 +9,7 @@ use crate::heuristics::ControllerSpec;
 use crate::map::PreparedMap;
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use std::sync::Arc;
 
 /// One evaluation setting (one cell of the paper's tables).
@@ -75,7 +75,7 @@ pub struct EpisodeRecord {
 }
 
 /// The table row of one setting.
-#[derive(Clone, Debug, Serialize, PartialEq)]
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct Summary {
     pub captors: String,
     pub target: String,
