@@ -10,13 +10,7 @@ use t2e::map::{Grid, PreparedMap};
 
 /// Free rectangle rows r0..r1, cols c0..c1 of a 320-cell grid.
 fn room(r0: usize, r1: usize, c0: usize, c1: usize) -> Grid {
-    let mut g = Grid::blocked("room", 320);
-    for r in r0..r1 {
-        for c in c0..c1 {
-            g.set_free(r, c, true);
-        }
-    }
-    g
+    Grid::with_free_rects("room", 320, &[(r0..r1, c0..c1)])
 }
 
 fn maps(g: Grid) -> Arc<Vec<Arc<PreparedMap>>> {

@@ -100,6 +100,24 @@ impl Grid {
         Grid::new(name, side, vec![false; side * side])
     }
 
+    /// A `side x side` grid, obstacle except the given rectangles of free
+    /// cells, each `(rows, cols)` as half-open ranges (synthetic maps, tests).
+    pub fn with_free_rects(
+        name: impl Into<String>,
+        side: usize,
+        rects: &[(std::ops::Range<usize>, std::ops::Range<usize>)],
+    ) -> Grid {
+        let mut g = Grid::blocked(name, side);
+        for (rows, cols) in rects {
+            for r in rows.clone() {
+                for c in cols.clone() {
+                    g.set_free(r, c, true);
+                }
+            }
+        }
+        g
+    }
+
     /// Cells per side.
     pub fn side(&self) -> usize {
         self.side
