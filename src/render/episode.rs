@@ -443,7 +443,7 @@ const CAPTURED: &str = "CAPTURED";
 /// First header line: step and |ASZ|.
 fn head_line(step: u32, episode_length: u32, asz_cells: usize) -> String {
     format!(
-        "step {step}/{episode_length}   |ASZ| = {:.2} m\u{00B2}",
+        "step {step}/{episode_length}   |ASZ| = {:.2} m\u{00B2} ({asz_cells} cells)",
         cells_to_m2(asz_cells)
     )
 }
