@@ -304,17 +304,24 @@ fn observations_have_the_reference_layout() {
             r[0].theta as f32
         ]
     );
-    // Other captor 1: velocity visible, relative position, heading difference.
-    assert_eq!(v[5], r[1].vel[0] as f32);
-    assert!((v[7] - (r[1].pos[0] - r[0].pos[0]) as f32).abs() < 1e-6);
-    assert!((v[9] - (r[1].theta - r[0].theta) as f32).abs() < 1e-6);
+    // Then, as the reference groups them: the others' velocities (captor 1,
+    // captor 2, target), their positions relative to robot 0, their heading
+    // differences.
+    assert_eq!(&v[5..7], &[r[1].vel[0] as f32, r[1].vel[1] as f32]);
+    assert_eq!(&v[7..9], &[r[2].vel[0] as f32, r[2].vel[1] as f32]);
     // The target's velocity is hidden from everyone.
     assert_ne!(r[3].vel, [0.0, 0.0]);
-    assert_eq!(&v[15..17], &[0.0, 0.0]);
-    // The target sees its own velocity, and the three captors after it.
+    assert_eq!(&v[9..11], &[0.0, 0.0]);
+    for (k, j) in [1, 2, 3].into_iter().enumerate() {
+        assert!((v[11 + 2 * k] - (r[j].pos[0] - r[0].pos[0]) as f32).abs() < 1e-6);
+        assert!((v[12 + 2 * k] - (r[j].pos[1] - r[0].pos[1]) as f32).abs() < 1e-6);
+        assert!((v[17 + k] - (r[j].theta - r[0].theta) as f32).abs() < 1e-6);
+    }
+    // The target sees its own velocity, and the three captors' after it.
     let t = &obs[3].vector;
     assert_eq!(t[0], r[3].vel[0] as f32);
-    assert!((t[7] - (r[0].pos[0] - r[3].pos[0]) as f32).abs() < 1e-6);
+    assert_eq!(&t[5..7], &[r[0].vel[0] as f32, r[0].vel[1] as f32]);
+    assert!((t[11] - (r[0].pos[0] - r[3].pos[0]) as f32).abs() < 1e-6);
 }
 
 #[test]

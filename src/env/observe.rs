@@ -11,32 +11,37 @@ pub const PATCH_LEN: usize = PATCH * PATCH;
 // A rotated patch reaches 24 sqrt 2 < 35 cells from the robot's cell.
 const _: () = assert!(crate::map::prepared::PAD >= 35);
 
-/// Writes robot `i`'s vector: own velocity, position, heading; then for every
-/// other robot (captors in order, then the target) its velocity (zeros for the
-/// target), position relative to i, heading minus i's.
+/// Writes robot `i`'s vector in the reference's layout: own velocity,
+/// position, heading; then the velocities of the other robots (captors in
+/// order, then the target; the target's is hidden as zeros), then their
+/// positions relative to i, then their headings minus i's. For N other
+/// robots: 5 + 2N + 2N + N numbers.
 pub fn write_vector(robots: &[Robot], i: usize, target: usize, out: &mut [f32]) {
     let me = &robots[i];
+    let others = robots.len() - 1;
     out[0] = me.vel[0] as f32;
     out[1] = me.vel[1] as f32;
     out[2] = me.pos[0] as f32;
     out[3] = me.pos[1] as f32;
     out[4] = me.theta as f32;
-    let mut k = 5;
+    let (vel, rest) = out[5..5 + 5 * others].split_at_mut(2 * others);
+    let (rel, heading) = rest.split_at_mut(2 * others);
+    let mut k = 0;
     for (j, other) in robots.iter().enumerate() {
         if j == i {
             continue;
         }
-        let (vx, vy) = if j == target {
-            (0.0, 0.0)
+        if j != target {
+            vel[2 * k] = other.vel[0] as f32;
+            vel[2 * k + 1] = other.vel[1] as f32;
         } else {
-            (other.vel[0], other.vel[1])
-        };
-        out[k] = vx as f32;
-        out[k + 1] = vy as f32;
-        out[k + 2] = (other.pos[0] - me.pos[0]) as f32;
-        out[k + 3] = (other.pos[1] - me.pos[1]) as f32;
-        out[k + 4] = (other.theta - me.theta) as f32;
-        k += 5;
+            vel[2 * k] = 0.0;
+            vel[2 * k + 1] = 0.0;
+        }
+        rel[2 * k] = (other.pos[0] - me.pos[0]) as f32;
+        rel[2 * k + 1] = (other.pos[1] - me.pos[1]) as f32;
+        heading[k] = (other.theta - me.theta) as f32;
+        k += 1;
     }
 }
 

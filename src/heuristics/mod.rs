@@ -5,7 +5,7 @@
 use crate::asz::{FastMarching, Source};
 use crate::env::physics::{self, dist};
 use crate::env::{Action, Controller, Side, TrapEnv};
-use crate::map::prepared::{ray_dirs, LONG_RAY_MAX, NUM_RAYS};
+use crate::map::prepared::{ray_dirs, NUM_RAYS};
 use crate::map::PreparedMap;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -58,7 +58,7 @@ fn unit(v: [f64; 2]) -> [f64; 2] {
 /// keep off the walls.
 pub fn target_action(env: &TrapEnv) -> Action {
     let map = env.map();
-    let d = map.grid.extent().min(LONG_RAY_MAX);
+    let d = map.long_ray_max();
     let me = env.target();
     let k = env.num_captors() as f64;
     let mut f = [0.0, 0.0];
@@ -77,7 +77,7 @@ pub fn target_action(env: &TrapEnv) -> Action {
 /// captors, keep off the walls.
 pub fn expert_captor_action(env: &TrapEnv, i: usize) -> Action {
     let map = env.map();
-    let d = map.grid.extent().min(LONG_RAY_MAX);
+    let d = map.long_ray_max();
     let me = &env.robots[i];
     let t = env.target().pos;
     let u = unit([t[0] - me.pos[0], t[1] - me.pos[1]]);

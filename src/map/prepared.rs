@@ -12,8 +12,6 @@ use rayon::prelude::*;
 pub const PAD: usize = 40;
 /// The 12 world ray angles of spec §2 and §7: 0, 30, ..., 330 degrees.
 pub const NUM_RAYS: usize = 12;
-/// Rays of the rule-based robots are searched up to the map's nominal side D.
-pub const LONG_RAY_MAX: f64 = 16.0;
 /// Dilation radius for placement (spec §4).
 pub const PLACEMENT_CLEARANCE: f64 = 0.4;
 /// Half the diagonal of a cell: how far a point can be from its cell centre.
@@ -50,7 +48,8 @@ pub struct PreparedMap {
     /// Per grid cell: distance (m) from its centre to the nearest obstacle cell centre.
     pub clearance: Vec<f32>,
     /// Per grid cell: distance (m) from its centre along each world ray to the
-    /// first obstacle, capped at LONG_RAY_MAX; zero for obstacle cells.
+    /// first obstacle, capped at the map's side D (how far the rule-based
+    /// robots search); zero for obstacle cells.
     wall_rays: Vec<[f32; NUM_RAYS]>,
     /// Bit m set: ray m of that cell stopped at a vertical face.
     wall_faces: Vec<u16>,
@@ -107,7 +106,7 @@ impl PreparedMap {
                     }
                     let p = map.grid.cell_center(r, c);
                     for (m, dir) in dirs.iter().enumerate() {
-                        let (d, face) = map.ray_distance(p, *dir, LONG_RAY_MAX);
+                        let (d, face) = map.ray_distance(p, *dir, map.long_ray_max());
                         rays[c][m] = d as f32;
                         if face == Face::Vertical {
                             faces[c] |= 1 << m;
@@ -126,6 +125,12 @@ impl PreparedMap {
 
     pub fn side(&self) -> usize {
         self.grid.side()
+    }
+
+    /// How far the long wall rays are searched: the map's side D in metres,
+    /// as the reference's rule-based robots do (16 m on a 320-cell grid).
+    pub fn long_ray_max(&self) -> f64 {
+        self.grid.extent()
     }
 
     /// Index into `obstacle` of grid cell (row, col); valid for rows and
@@ -223,7 +228,7 @@ impl PreparedMap {
     }
 
     /// Distance (m) from `p` along world ray m to the first obstacle, up to
-    /// LONG_RAY_MAX, from the table of `p`'s cell corrected for `p`'s offset
+    /// the map's side, from the table of `p`'s cell corrected for `p`'s offset
     /// from the cell centre (exact while the ray hits the same wall line).
     #[inline]
     pub fn wall_ray(&self, p: [f64; 2], m: usize, dir: [f64; 2]) -> f64 {
@@ -234,7 +239,8 @@ impl PreparedMap {
         }
         let i = r as usize * self.side() + c as usize;
         let d = self.wall_rays[i][m] as f64;
-        if d >= LONG_RAY_MAX || d == 0.0 {
+        let max = self.long_ray_max();
+        if d >= max || d == 0.0 {
             return d;
         }
         let centre = self.grid.cell_center(r as usize, c as usize);
@@ -243,7 +249,7 @@ impl PreparedMap {
         } else {
             d - (p[1] - centre[1]) / dir[1]
         };
-        corrected.clamp(0.0, LONG_RAY_MAX)
+        corrected.clamp(0.0, max)
     }
 }
 
@@ -366,7 +372,7 @@ mod tests {
         // The table, corrected for the offset from the cell centre, agrees with exact rays.
         for q in [[-1.013, 2.021], [-0.31, 1.27], [-2.7, 2.9]] {
             for (k, dir) in dirs.iter().enumerate() {
-                let exact = m.ray_distance(q, *dir, LONG_RAY_MAX).0;
+                let exact = m.ray_distance(q, *dir, m.long_ray_max()).0;
                 let table = m.wall_ray(q, k, *dir);
                 assert!(
                     (exact - table).abs() < 1e-6,
