@@ -6,35 +6,14 @@ use t2e::env::physics::{target_is_trapped, Robot};
 use t2e::env::vec_env::episode_seed;
 use t2e::env::*;
 use t2e::heuristics::{Heuristic, RandomActions};
-use t2e::map::{Grid, PreparedMap};
+use t2e::map::PreparedMap;
 
-/// Free rectangle rows r0..r1, cols c0..c1 of a 320-cell grid.
-fn room(r0: usize, r1: usize, c0: usize, c1: usize) -> Grid {
-    Grid::with_free_rects("room", 320, &[(r0..r1, c0..c1)])
-}
-
-fn maps(g: Grid) -> Arc<Vec<Arc<PreparedMap>>> {
-    Arc::new(vec![Arc::new(PreparedMap::new(g))])
-}
+mod common;
+use common::{env_with, maps, robot, room};
 
 /// A 10 m x 10 m room centred at the origin.
 fn big_room() -> Arc<Vec<Arc<PreparedMap>>> {
     maps(room(60, 260, 60, 260))
-}
-
-fn robot(x: f64, y: f64, theta: f64) -> Robot {
-    Robot {
-        pos: [x, y],
-        vel: [0.0, 0.0],
-        theta,
-        collided: false,
-    }
-}
-
-fn env_with(cfg: EnvConfig, m: Arc<Vec<Arc<PreparedMap>>>, robots: Vec<Robot>) -> TrapEnv {
-    let mut env = TrapEnv::new(cfg, m).unwrap();
-    env.set_robots(0, robots);
-    env
 }
 
 fn cfg(k: usize) -> EnvConfig {

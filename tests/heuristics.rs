@@ -1,35 +1,22 @@
 //! The rule-based robots of spec §7 and the controller catalogue.
 
-use std::sync::Arc;
 use t2e::asz::Source;
 use t2e::env::physics::{self, Robot};
 use t2e::env::*;
 use t2e::heuristics::*;
-use t2e::map::{Grid, PreparedMap};
+use t2e::map::Grid;
 
-/// Free rectangle rows r0..r1, cols c0..c1 of a 320-cell grid.
-fn room(r0: usize, r1: usize, c0: usize, c1: usize) -> Grid {
-    Grid::with_free_rects("room", 320, &[(r0..r1, c0..c1)])
-}
+mod common;
+use common::{robot, room};
 
-fn robot(x: f64, y: f64, theta: f64) -> Robot {
-    Robot {
-        pos: [x, y],
-        vel: [0.0, 0.0],
-        theta,
-        collided: false,
-    }
-}
-
-fn env_with(k: usize, g: Grid, robots: Vec<Robot>) -> TrapEnv {
+/// K captors and a target in `g`, episodes of 500 steps.
+fn env_in(k: usize, g: Grid, robots: Vec<Robot>) -> TrapEnv {
     let cfg = EnvConfig {
         num_captors: k,
         episode_length: 500,
         ..EnvConfig::default()
     };
-    let mut env = TrapEnv::new(cfg, Arc::new(vec![Arc::new(PreparedMap::new(g))])).unwrap();
-    env.set_robots(0, robots);
-    env
+    common::env_with(cfg, common::maps(g), robots)
 }
 
 #[test]
@@ -50,7 +37,7 @@ fn forces_become_actions_along_the_larger_axis() {
 fn target_flees_and_captor_chases() {
     // Big room, captor east of the target, both facing east (+x).
     let g = room(60, 260, 60, 260);
-    let env = env_with(
+    let env = env_in(
         1,
         g.clone(),
         vec![robot(1.0, 0.0, 0.0), robot(0.0, 0.0, 0.0)],
@@ -66,7 +53,7 @@ fn target_flees_and_captor_chases() {
         "the target is behind the captor"
     );
     // Facing west, both go forward.
-    let env = env_with(
+    let env = env_in(
         1,
         g.clone(),
         vec![
@@ -78,7 +65,7 @@ fn target_flees_and_captor_chases() {
     assert_eq!(expert_captor_action(&env, 0), Action::Forward);
     // A wall 0.3 m ahead outweighs a far captor behind: the target turns or backs off.
     let g = room(60, 260, 60, 166); // east wall at x = 0.3
-    let env = env_with(1, g, vec![robot(-4.0, 0.0, 0.0), robot(0.0, 0.0, 0.0)]);
+    let env = env_in(1, g, vec![robot(-4.0, 0.0, 0.0), robot(0.0, 0.0, 0.0)]);
     assert_ne!(
         target_action(&env),
         Action::Forward,
@@ -104,7 +91,7 @@ fn expert_captors_ring_a_still_target_in_the_open() {
         })
         .chain([robot(0.0, 0.0, 0.0)])
         .collect();
-    let mut env = env_with(3, g, robots);
+    let mut env = env_in(3, g, robots);
     let mut acts = [Action::Stop; 4];
     let mut h = Heuristic;
     while !env.is_done() {
@@ -124,7 +111,7 @@ fn greedy_captor_picks_the_action_that_shrinks_the_asz_most() {
         robot(1.0, -1.5, 4.0),
         robot(0.0, 0.0, 0.0),
     ];
-    let env = env_with(3, g, robots);
+    let env = env_in(3, g, robots);
     let mut greedy = AszGreedy::default();
     let (captors, target) = env.asz_sources();
     let mut fm = t2e::asz::FastMarching::new();
@@ -190,7 +177,7 @@ fn controllers_are_named_and_checked_per_side() {
 #[test]
 fn random_controller_replays_with_the_seed() {
     let g = room(60, 260, 60, 260);
-    let env = env_with(
+    let env = env_in(
         3,
         g,
         vec![

@@ -323,10 +323,8 @@ fn squared_edt(obstacle: &[u8], stride: usize) -> Vec<f32> {
 mod tests {
     use super::*;
 
-    /// A 320-cell grid with a free rectangle of rows r0..r1, cols c0..c1.
-
     /// Free rectangle rows r0..r1, cols c0..c1 of a 320-cell grid.
-    pub fn room(r0: usize, r1: usize, c0: usize, c1: usize) -> Grid {
+    fn room(r0: usize, r1: usize, c0: usize, c1: usize) -> Grid {
         Grid::with_free_rects("room", 320, &[(r0..r1, c0..c1)])
     }
 

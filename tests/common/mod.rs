@@ -1,0 +1,34 @@
+//! Builders shared by the integration tests: synthetic rooms, robots, worlds.
+#![allow(dead_code)]
+
+use std::sync::Arc;
+use t2e::env::physics::Robot;
+use t2e::env::{EnvConfig, TrapEnv};
+use t2e::map::{Grid, PreparedMap};
+
+/// Free rectangle rows r0..r1, cols c0..c1 of a 320-cell grid.
+pub fn room(r0: usize, r1: usize, c0: usize, c1: usize) -> Grid {
+    Grid::with_free_rects("room", 320, &[(r0..r1, c0..c1)])
+}
+
+/// One prepared map, as an environment takes it.
+pub fn maps(g: Grid) -> Arc<Vec<Arc<PreparedMap>>> {
+    Arc::new(vec![Arc::new(PreparedMap::new(g))])
+}
+
+/// A robot at rest at (x, y) with heading `theta`.
+pub fn robot(x: f64, y: f64, theta: f64) -> Robot {
+    Robot {
+        pos: [x, y],
+        vel: [0.0, 0.0],
+        theta,
+        collided: false,
+    }
+}
+
+/// A world on `m` with robots placed by hand (captors first, target last).
+pub fn env_with(cfg: EnvConfig, m: Arc<Vec<Arc<PreparedMap>>>, robots: Vec<Robot>) -> TrapEnv {
+    let mut env = TrapEnv::new(cfg, m).unwrap();
+    env.set_robots(0, robots);
+    env
+}
