@@ -34,5 +34,7 @@ pub mod cli;
 pub mod env;
 pub mod eval;
 pub mod heuristics;
+pub mod learn;
 pub mod map;
+pub mod nn;
 pub mod render;

@@ -1,6 +1,6 @@
 //! `t2e-league eval`: the paper's protocol over one or more settings.
 
-use crate::env::{CaptureRule, Side};
+use crate::env::{CaptureRule, EnvConfig, Side};
 use crate::eval::{self, EvalSetting, Summary, TABLE_HEADER};
 use crate::heuristics::ControllerSpec;
 use crate::map::{self, PreparedMap};
@@ -137,12 +137,21 @@ fn write_setting(dir: &Path, summary: &Summary, records: &[eval::EpisodeRecord])
 }
 
 pub fn run(args: EvalArgs) -> Result<()> {
-    args.captors
-        .build(Side::Captors)
-        .map_err(|e| anyhow::anyhow!("--captors: {e}"))?;
-    args.target
-        .build(Side::Target)
-        .map_err(|e| anyhow::anyhow!("--target: {e}"))?;
+    if args.captors.is_checkpoint() || args.target.is_checkpoint() {
+        tch::set_num_threads(1);
+    }
+    for k in &args.k {
+        let cfg = EnvConfig {
+            num_captors: *k,
+            ..EnvConfig::default()
+        };
+        args.captors
+            .check(Side::Captors, &cfg)
+            .map_err(|e| anyhow::anyhow!("--captors: {e}"))?;
+        args.target
+            .check(Side::Target, &cfg)
+            .map_err(|e| anyhow::anyhow!("--target: {e}"))?;
+    }
     let sets = load_map_sets(&args.maps)?;
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("cannot create {}", args.out.display()))?;

@@ -61,14 +61,6 @@ pub fn run(args: RenderArgs) -> Result<()> {
             args.speed_ratio
         ));
     }
-    let mut captors = args
-        .captors
-        .build(Side::Captors)
-        .map_err(|e| anyhow!("--captors: {e}"))?;
-    let mut target = args
-        .target
-        .build(Side::Target)
-        .map_err(|e| anyhow!("--target: {e}"))?;
     // All maps of the set, in catalogue order, so the seed picks the same map as in `eval`.
     let maps = crate::map::catalog::load_prepared(&args.maps)?;
     let cfg = EnvConfig {
@@ -80,6 +72,20 @@ pub fn run(args: RenderArgs) -> Result<()> {
         observations: false,
         ..EnvConfig::default()
     };
+    args.captors
+        .check(Side::Captors, &cfg)
+        .map_err(|e| anyhow!("--captors: {e}"))?;
+    args.target
+        .check(Side::Target, &cfg)
+        .map_err(|e| anyhow!("--target: {e}"))?;
+    let mut captors = args
+        .captors
+        .build(Side::Captors)
+        .map_err(|e| anyhow!("--captors: {e}"))?;
+    let mut target = args
+        .target
+        .build(Side::Target)
+        .map_err(|e| anyhow!("--target: {e}"))?;
     let mut env = TrapEnv::new(cfg, maps).map_err(|e| anyhow!("environment settings: {e}"))?;
     let opts = RenderOptions {
         scale: args.scale,

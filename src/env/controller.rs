@@ -5,13 +5,28 @@ use super::action::Action;
 use super::TrapEnv;
 use std::ops::Range;
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
 pub enum Side {
     Captors,
     Target,
 }
 
 impl Side {
+    pub fn name(self) -> &'static str {
+        match self {
+            Side::Captors => "captors",
+            Side::Target => "target",
+        }
+    }
+
+    pub fn other(self) -> Side {
+        match self {
+            Side::Captors => Side::Target,
+            Side::Target => Side::Captors,
+        }
+    }
+
     /// The agent indices of this side in an env with `num_captors` captors
     /// (captors first, the target last).
     pub fn agents(self, num_captors: usize) -> Range<usize> {

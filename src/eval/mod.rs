@@ -184,14 +184,19 @@ pub fn run(
         .env_config()
         .validate()
         .map_err(|e| anyhow::anyhow!("evaluation setting: {e}"))?;
+    let cfg = setting.env_config();
     setting
         .captors
-        .build(Side::Captors)
+        .check(Side::Captors, &cfg)
         .map_err(|e| anyhow::anyhow!("--captors: {e}"))?;
     setting
         .target
-        .build(Side::Target)
+        .check(Side::Target, &cfg)
         .map_err(|e| anyhow::anyhow!("--target: {e}"))?;
+    if setting.captors.is_checkpoint() || setting.target.is_checkpoint() {
+        // Episodes already run in parallel; torch's own threads would fight them.
+        tch::set_num_threads(1);
+    }
     let bar = if progress {
         let b = ProgressBar::new(setting.episodes as u64);
         b.set_style(

@@ -155,11 +155,44 @@ pub fn resolve(spec: &str) -> Result<Vec<MapEntry>> {
 
 /// The maps a user named, loaded and prepared in parallel: what an
 /// environment plays on.
+/// Also `generated:N` (N maps per size class from the project's generator,
+/// seeds 1..=N, made in memory) and `generated:N:CLASS`.
 pub fn load_prepared(spec: &str) -> Result<Arc<Vec<Arc<PreparedMap>>>> {
+    if let Some(rest) = spec.strip_prefix("generated:") {
+        return generated(spec, rest);
+    }
     let entries = resolve(spec)?;
     let maps = entries
         .par_iter()
         .map(|e| Ok(Arc::new(PreparedMap::new(e.load()?))))
         .collect::<Result<Vec<_>>>()?;
+    Ok(Arc::new(maps))
+}
+
+fn generated(spec: &str, rest: &str) -> Result<Arc<Vec<Arc<PreparedMap>>>> {
+    use super::generate::{generate, GeneratorConfig};
+    let (count, classes) = match rest.split_once(':') {
+        Some((n, c)) => (
+            n,
+            vec![c
+                .parse::<SizeClass>()
+                .map_err(|e| anyhow::anyhow!("--maps '{spec}': {e}"))?],
+        ),
+        None => (rest, SizeClass::ALL.to_vec()),
+    };
+    let count: u64 = count
+        .parse()
+        .ok()
+        .filter(|&n| (1..=10_000).contains(&n))
+        .with_context(|| format!("--maps '{spec}': expected generated:N with N in 1..=10000, optionally :small|medium|large"))?;
+    let cfg = GeneratorConfig::default();
+    let jobs: Vec<(u64, SizeClass)> = classes
+        .iter()
+        .flat_map(|&c| (1..=count).map(move |s| (s, c)))
+        .collect();
+    let maps = jobs
+        .par_iter()
+        .map(|&(seed, class)| Arc::new(PreparedMap::new(generate(seed, class, &cfg))))
+        .collect();
     Ok(Arc::new(maps))
 }

@@ -1,0 +1,259 @@
+//! `t2e-league train`: one training run from a TOML config (see configs/).
+
+use crate::learn::train::{Metrics, TrainConfig, Trainer};
+use crate::render::plot::{self, line_plot, Series};
+use anyhow::{bail, Context, Result};
+use clap::Args;
+use indicatif::{ProgressBar, ProgressStyle};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+
+#[derive(Args, Debug)]
+pub struct TrainArgs {
+    /// Training config (TOML; see configs/). With --resume, defaults to the
+    /// run folder's own config.toml.
+    #[arg(long)]
+    pub config: Option<PathBuf>,
+    /// Run folder (default: runs/NAME, NAME from the config).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Continue the run in the run folder from its last checkpoint.
+    #[arg(long)]
+    pub resume: bool,
+    /// Override total_env_steps (e.g. to extend a finished run with --resume).
+    #[arg(long)]
+    pub total_env_steps: Option<u64>,
+    /// Override the device: auto, cpu or cuda.
+    #[arg(long)]
+    pub device: Option<String>,
+    /// Hide the progress bar (logs one line per checkpoint instead).
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+/// Set by Ctrl-C: the loop saves a checkpoint and stops after the current iteration.
+static STOP: AtomicBool = AtomicBool::new(false);
+
+pub fn run(args: TrainArgs) -> Result<()> {
+    let config_path = match (&args.config, &args.out, args.resume) {
+        (Some(p), _, _) => p.clone(),
+        (None, Some(out), true) => out.join("config.toml"),
+        _ => bail!("--config is required (or --resume --out RUN_FOLDER to reuse a run's config)"),
+    };
+    let mut cfg = TrainConfig::load(&config_path)?;
+    if let Some(s) = args.total_env_steps {
+        cfg.total_env_steps = s;
+    }
+    if let Some(d) = &args.device {
+        cfg.device = d.clone();
+        cfg.validate().map_err(|e| anyhow::anyhow!("--device: {e}"))?;
+    }
+    refuse_test_maps(&cfg.maps)?;
+    let run_dir = args.out.clone().unwrap_or_else(|| PathBuf::from("runs").join(&cfg.name));
+    if !args.resume && run_dir.join("state.json").exists() {
+        bail!(
+            "{} already holds a run: add --resume to continue it, or pick another --out or name",
+            run_dir.display()
+        );
+    }
+    std::fs::create_dir_all(&run_dir).with_context(|| format!("cannot create {}", run_dir.display()))?;
+    let maps = crate::map::catalog::load_prepared(&cfg.maps).with_context(|| format!("maps = \"{}\"", cfg.maps))?;
+    let mut trainer = if args.resume {
+        let t = Trainer::resume(cfg.clone(), maps, &run_dir)?;
+        keep_metrics_up_to(&run_dir.join("metrics.csv"), t.iteration)?;
+        eprintln!(
+            "resuming {} at iteration {}, {} env steps",
+            run_dir.display(),
+            t.iteration,
+            t.env_steps
+        );
+        t
+    } else {
+        std::fs::write(run_dir.join("config.toml"), toml::to_string_pretty(&cfg)?)?;
+        let _ = std::fs::remove_file(run_dir.join("metrics.csv"));
+        Trainer::new(cfg.clone(), maps)?
+    };
+    ctrlc::set_handler(|| {
+        if STOP.swap(true, Ordering::SeqCst) {
+            eprintln!("\nsecond Ctrl-C: quitting without a final checkpoint");
+            std::process::exit(130);
+        }
+        eprintln!("\nCtrl-C: finishing this iteration and writing a checkpoint (Ctrl-C again to quit now)");
+    })
+    .context("cannot install the Ctrl-C handler")?;
+
+    let learners: Vec<String> = trainer
+        .learner_sides()
+        .iter()
+        .map(|(s, a)| format!("{} {}", s.name(), a.name()))
+        .collect();
+    eprintln!(
+        "training {} on maps {:?}, {} worlds, device {:?}, run folder {}",
+        learners.join(" + "),
+        cfg.maps,
+        cfg.num_envs,
+        trainer.device,
+        run_dir.display()
+    );
+    let bar = if args.quiet {
+        ProgressBar::hidden()
+    } else {
+        let b = ProgressBar::new(cfg.total_env_steps);
+        b.set_style(
+            ProgressStyle::with_template("[{elapsed_precise}] [{bar:25}] {human_pos}/{human_len} steps {msg}")
+                .unwrap()
+                .progress_chars("=> "),
+        );
+        b.set_position(trainer.env_steps);
+        b
+    };
+    let metrics_path = run_dir.join("metrics.csv");
+    let mut recent: Vec<Metrics> = Vec::new();
+    while trainer.env_steps < cfg.total_env_steps && !STOP.load(Ordering::SeqCst) {
+        let m = trainer.iterate()?;
+        append_metrics(&metrics_path, &m)?;
+        bar.set_position(m.env_steps);
+        recent.push(m);
+        if recent.len() > 5 {
+            recent.remove(0);
+        }
+        bar.set_message(status_line(&recent));
+        if trainer.iteration % cfg.checkpoint_every == 0 {
+            trainer.save(&run_dir)?;
+            write_curves(&run_dir)?;
+            if args.quiet {
+                eprintln!("iteration {}: {}", trainer.iteration, status_line(&recent));
+            }
+        }
+    }
+    let written = trainer.save(&run_dir)?;
+    write_curves(&run_dir)?;
+    bar.finish_and_clear();
+    let why = if STOP.load(Ordering::SeqCst) { "stopped" } else { "done" };
+    println!(
+        "{why} after {} iterations, {} env steps, {:.1} min of training: {}",
+        trainer.iteration,
+        trainer.env_steps,
+        trainer.wall_s / 60.0,
+        status_line(&recent)
+    );
+    for w in written {
+        println!("checkpoint {}", w.display());
+    }
+    println!("curves {}", run_dir.join("curves.png").display());
+    Ok(())
+}
+
+/// The Gibson maps are the benchmark's test set: never train on them.
+fn refuse_test_maps(spec: &str) -> Result<()> {
+    let head = spec.split(':').next().unwrap_or("");
+    let named_test = ["small", "medium", "large", "gibson"].contains(&head);
+    let gibson = crate::map::catalog::gibson_dir().and_then(|d| d.canonicalize().ok());
+    let is_gibson_dir = Path::new(head)
+        .canonicalize()
+        .ok()
+        .is_some_and(|p| gibson.as_ref().is_some_and(|g| p.starts_with(g)));
+    if named_test || is_gibson_dir {
+        bail!("maps = \"{spec}\": the Gibson maps are the test set; train on generated maps (generated:N, shipped or a folder of your own)");
+    }
+    Ok(())
+}
+
+/// Averages over the last few iterations, for the progress bar.
+fn status_line(recent: &[Metrics]) -> String {
+    let mean = |f: &dyn Fn(&Metrics) -> f64| {
+        let v: Vec<f64> = recent.iter().map(f).filter(|x| x.is_finite()).collect();
+        if v.is_empty() {
+            f64::NAN
+        } else {
+            v.iter().sum::<f64>() / v.len() as f64
+        }
+    };
+    format!(
+        "| {:.0} steps/s | capture {:.1}% | ep len {:.0} | return captor {:.1} target {:.1}",
+        mean(&|m| m.steps_per_s),
+        100.0 * mean(&|m| m.capture_rate),
+        mean(&|m| m.episode_len),
+        mean(&|m| m.captor_return),
+        mean(&|m| m.target_return),
+    )
+}
+
+fn append_metrics(path: &Path, m: &Metrics) -> Result<()> {
+    let fresh = !path.exists();
+    let file = std::fs::OpenOptions::new()
+        .create(true)
+        .append(true)
+        .open(path)
+        .with_context(|| format!("cannot write {}", path.display()))?;
+    let mut w = csv::WriterBuilder::new().has_headers(fresh).from_writer(file);
+    w.serialize(m)?;
+    w.flush()?;
+    Ok(())
+}
+
+pub fn read_metrics(path: &Path) -> Result<Vec<Metrics>> {
+    if !path.exists() {
+        return Ok(Vec::new());
+    }
+    let mut r = csv::Reader::from_path(path).with_context(|| format!("cannot read {}", path.display()))?;
+    r.deserialize()
+        .collect::<Result<Vec<Metrics>, _>>()
+        .with_context(|| format!("{}: malformed row", path.display()))
+}
+
+/// After a kill, rows past the last checkpoint describe iterations the
+/// resumed run repeats: drop them.
+fn keep_metrics_up_to(path: &Path, iteration: u64) -> Result<()> {
+    let rows: Vec<Metrics> = read_metrics(path)?
+        .into_iter()
+        .filter(|m| m.iteration <= iteration)
+        .collect();
+    let _ = std::fs::remove_file(path);
+    for m in &rows {
+        append_metrics(path, m)?;
+    }
+    Ok(())
+}
+
+/// Capture rate and returns against environment steps, smoothed over 10 iterations.
+pub fn write_curves(run_dir: &Path) -> Result<()> {
+    let rows = read_metrics(&run_dir.join("metrics.csv"))?;
+    if rows.is_empty() {
+        return Ok(());
+    }
+    let smooth = |f: &dyn Fn(&Metrics) -> f64| -> Vec<(f64, f64)> {
+        let mut out = Vec::new();
+        for i in 0..rows.len() {
+            let w = &rows[i.saturating_sub(9)..=i];
+            let v: Vec<f64> = w.iter().map(f).filter(|x| x.is_finite()).collect();
+            if !v.is_empty() {
+                out.push((rows[i].env_steps as f64 / 1e6, v.iter().sum::<f64>() / v.len() as f64));
+            }
+        }
+        out
+    };
+    let capture = line_plot(
+        &[Series::new("capture rate", smooth(&|m| 100.0 * m.capture_rate), plot::palette(0))],
+        "training episodes ending in capture",
+        "env steps (M)",
+        "%",
+        800,
+        360,
+    );
+    let returns = line_plot(
+        &[
+            Series::new("captor", smooth(&|m| m.captor_return), plot::palette(1)),
+            Series::new("target", smooth(&|m| m.target_return), plot::palette(2)),
+        ],
+        "mean episode return per robot",
+        "env steps (M)",
+        "return",
+        800,
+        360,
+    );
+    let mut img = image::RgbImage::new(800, 720);
+    image::imageops::replace(&mut img, &capture, 0, 0);
+    image::imageops::replace(&mut img, &returns, 0, 360);
+    plot::save_png(&img, run_dir.join("curves.png"))
+}

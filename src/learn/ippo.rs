@@ -1,0 +1,18 @@
+//! IPPO: PPO with decentralised critics. Teammates still share one actor and
+//! one critic, but the critic sees only the robot's own observation, exactly
+//! what its actor sees. Everything else is the PPO of `ppo.rs`.
+
+use super::ppo::CriticView;
+use tch::Tensor;
+
+pub struct Ippo;
+
+impl CriticView for Ippo {
+    fn critic_agents(&self, _team: usize) -> usize {
+        1
+    }
+
+    fn critic_inputs(&self, patches: &Tensor, vectors: &Tensor, _team: usize) -> (Tensor, Tensor) {
+        (patches.shallow_clone(), vectors.shallow_clone())
+    }
+}

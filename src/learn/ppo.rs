@@ -1,0 +1,672 @@
+//! Recurrent PPO, the part MAPPO and IPPO share: hyperparameters, the
+//! rollout buffer, GAE, value normalisation, the clipped objective, the Huber
+//! value loss, Adam, and the update that ties them together, top to bottom.
+//! MAPPO and IPPO differ only in what the critic reads (`mappo.rs`, `ippo.rs`).
+
+use crate::nn::{Actor, Critic, NetConfig};
+use rand::seq::SliceRandom;
+use rand_chacha::ChaCha8Rng;
+use serde::{Deserialize, Serialize};
+use tch::{nn, Device, Kind, Tensor};
+
+/// Every PPO hyperparameter, with the paper's settings (spec §9) as defaults.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct PpoConfig {
+    /// Adam learning rate of actor and critic (paper: 3e-5 to 5e-4).
+    pub lr: f64,
+    /// Adam epsilon.
+    pub adam_eps: f64,
+    /// Passes over each rollout (paper: 4 to 15).
+    pub epochs: usize,
+    /// Minibatches per pass; each holds whole recurrent chunks.
+    pub minibatches: usize,
+    /// Length of the recurrent chunks the GRU is trained on (paper: 10).
+    pub chunk_len: usize,
+    /// PPO ratio clip (paper: 0.2).
+    pub clip: f64,
+    /// Entropy bonus (paper: 0.01).
+    pub entropy_coef: f64,
+    /// Weight of the value loss.
+    pub value_coef: f64,
+    /// Discount (paper: 0.99).
+    pub gamma: f64,
+    /// GAE lambda (paper: 0.95).
+    pub gae_lambda: f64,
+    /// Huber value loss threshold, on normalised returns (paper: 10).
+    pub huber_delta: f64,
+    /// Learn values in normalised units with running return statistics (paper: on).
+    pub value_norm: bool,
+    /// Clip each network's gradient to this global norm (paper: 10).
+    pub max_grad_norm: f64,
+    /// Normalise advantages over each rollout.
+    pub normalize_advantages: bool,
+}
+
+impl Default for PpoConfig {
+    fn default() -> Self {
+        PpoConfig {
+            lr: 5e-4,
+            adam_eps: 1e-5,
+            epochs: 5,
+            minibatches: 1,
+            chunk_len: 10,
+            clip: 0.2,
+            entropy_coef: 0.01,
+            value_coef: 1.0,
+            gamma: 0.99,
+            gae_lambda: 0.95,
+            huber_delta: 10.0,
+            value_norm: true,
+            max_grad_norm: 10.0,
+            normalize_advantages: true,
+        }
+    }
+}
+
+impl PpoConfig {
+    pub fn validate(&self) -> Result<(), String> {
+        let unit = |name: &str, v: f64| {
+            if (0.0..=1.0).contains(&v) {
+                Ok(())
+            } else {
+                Err(format!("{name} = {v}: must be in [0, 1]"))
+            }
+        };
+        unit("gamma", self.gamma)?;
+        unit("gae_lambda", self.gae_lambda)?;
+        unit("clip", self.clip)?;
+        if !(self.lr > 0.0 && self.lr < 1.0) {
+            return Err(format!("lr = {}: must be in (0, 1)", self.lr));
+        }
+        if self.epochs == 0 || self.minibatches == 0 || self.chunk_len == 0 {
+            return Err("epochs, minibatches and chunk_len must be at least 1".into());
+        }
+        if self.huber_delta <= 0.0 || self.max_grad_norm <= 0.0 {
+            return Err("huber_delta and max_grad_norm must be positive".into());
+        }
+        if self.entropy_coef < 0.0 || self.value_coef < 0.0 {
+            return Err("entropy_coef and value_coef must not be negative".into());
+        }
+        Ok(())
+    }
+}
+
+/// Generalised advantage estimation over a rollout of `steps` x `rows`
+/// (time major). `dones[t]` marks an episode that ended with step t, so
+/// nothing is bootstrapped across it; `last_values` are the values of the
+/// states after the last step. Returns (advantages, returns).
+pub fn gae(
+    rewards: &[f32],
+    values: &[f32],
+    dones: &[f32],
+    last_values: &[f32],
+    rows: usize,
+    gamma: f64,
+    lambda: f64,
+) -> (Vec<f32>, Vec<f32>) {
+    let steps = rewards.len() / rows;
+    let mut adv = vec![0f32; rewards.len()];
+    let mut running = vec![0f64; rows];
+    for t in (0..steps).rev() {
+        for r in 0..rows {
+            let i = t * rows + r;
+            let next_value = if t + 1 < steps {
+                values[i + rows]
+            } else {
+                last_values[r]
+            } as f64;
+            let live = 1.0 - dones[i] as f64;
+            let delta = rewards[i] as f64 + gamma * next_value * live - values[i] as f64;
+            running[r] = delta + gamma * lambda * live * running[r];
+            adv[i] = running[r] as f32;
+        }
+    }
+    let returns = adv.iter().zip(values).map(|(a, v)| a + v).collect();
+    (adv, returns)
+}
+
+/// Running statistics of the returns; the critic predicts normalised values
+/// (MAPPO's ValueNorm: exponential averages with a debiasing term).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ValueNorm {
+    pub beta: f64,
+    pub running_mean: f64,
+    pub running_mean_sq: f64,
+    pub debias: f64,
+}
+
+impl Default for ValueNorm {
+    fn default() -> Self {
+        ValueNorm {
+            beta: 0.99999,
+            running_mean: 0.0,
+            running_mean_sq: 0.0,
+            debias: 0.0,
+        }
+    }
+}
+
+impl ValueNorm {
+    pub fn update(&mut self, x: &[f32]) {
+        let n = x.len().max(1) as f64;
+        let mean = x.iter().map(|&v| v as f64).sum::<f64>() / n;
+        let mean_sq = x.iter().map(|&v| (v as f64).powi(2)).sum::<f64>() / n;
+        let b = self.beta;
+        self.running_mean = b * self.running_mean + (1.0 - b) * mean;
+        self.running_mean_sq = b * self.running_mean_sq + (1.0 - b) * mean_sq;
+        self.debias = b * self.debias + (1.0 - b);
+    }
+
+    /// (mean, variance) of the returns seen so far.
+    pub fn stats(&self) -> (f64, f64) {
+        let d = self.debias.max(1e-5);
+        let mean = self.running_mean / d;
+        let var = (self.running_mean_sq / d - mean * mean).max(1e-2);
+        (mean, var)
+    }
+
+    pub fn normalize(&self, x: f32) -> f32 {
+        let (m, v) = self.stats();
+        ((x as f64 - m) / v.sqrt()) as f32
+    }
+
+    pub fn denormalize(&self, x: f32) -> f32 {
+        let (m, v) = self.stats();
+        (x as f64 * v.sqrt() + m) as f32
+    }
+}
+
+/// PPO's clipped surrogate, to minimise: -mean(min(r A, clip(r) A)) with
+/// r = exp(new - old). Also returns the share of clipped ratios.
+pub fn clipped_surrogate(new_logp: &Tensor, old_logp: &Tensor, adv: &Tensor, clip: f64) -> (Tensor, f64) {
+    let ratio = (new_logp - old_logp).exp();
+    let unclipped = &ratio * adv;
+    let clipped = ratio.clamp(1.0 - clip, 1.0 + clip) * adv;
+    let loss = -unclipped.minimum(&clipped).mean(Kind::Float);
+    let frac = (ratio - 1.0)
+        .abs()
+        .gt(clip)
+        .to_kind(Kind::Float)
+        .mean(Kind::Float)
+        .double_value(&[]);
+    (loss, frac)
+}
+
+/// Mean Huber loss: quadratic within `delta` of the target, linear beyond.
+pub fn huber(pred: &Tensor, target: &Tensor, delta: f64) -> Tensor {
+    let err = (target - pred).abs();
+    let quad = err.clamp_max(delta);
+    let lin = &err - &quad;
+    (quad.square() * 0.5 + lin * delta).mean(Kind::Float)
+}
+
+/// Adam over the variables of one var store, by name, with its moments kept
+/// as tensors so a checkpoint can carry them and a resumed run continues
+/// exactly where it stopped.
+pub struct Adam {
+    pub lr: f64,
+    pub eps: f64,
+    pub beta1: f64,
+    pub beta2: f64,
+    pub steps: u64,
+    params: Vec<(String, Tensor)>,
+    m: Vec<Tensor>,
+    v: Vec<Tensor>,
+}
+
+impl Adam {
+    pub fn new(vs: &nn::VarStore, lr: f64, eps: f64) -> Adam {
+        let mut params: Vec<(String, Tensor)> = vs.variables().into_iter().collect();
+        params.sort_by(|a, b| a.0.cmp(&b.0));
+        let m = params.iter().map(|(_, p)| p.zeros_like()).collect();
+        let v = params.iter().map(|(_, p)| p.zeros_like()).collect();
+        Adam {
+            lr,
+            eps,
+            beta1: 0.9,
+            beta2: 0.999,
+            steps: 0,
+            params,
+            m,
+            v,
+        }
+    }
+
+    pub fn zero_grad(&mut self) {
+        for (_, p) in &mut self.params {
+            p.zero_grad();
+        }
+    }
+
+    /// Scales the gradients to a global norm of at most `max_norm`; returns
+    /// the norm before clipping.
+    pub fn clip_grad_norm(&mut self, max_norm: f64) -> f64 {
+        let norm = tch::no_grad(|| {
+            let sq: Vec<Tensor> = self
+                .params
+                .iter()
+                .map(|(_, p)| p.grad())
+                .filter(|g| g.defined())
+                .map(|g| g.square().sum(Kind::Float))
+                .collect();
+            if sq.is_empty() {
+                0.0
+            } else {
+                Tensor::stack(&sq, 0).sum(Kind::Float).sqrt().double_value(&[])
+            }
+        });
+        if norm > max_norm {
+            let scale = max_norm / (norm + 1e-6);
+            tch::no_grad(|| {
+                for (_, p) in &self.params {
+                    let mut g = p.grad();
+                    if g.defined() {
+                        let _ = g.g_mul_scalar_(scale);
+                    }
+                }
+            });
+        }
+        norm
+    }
+
+    pub fn step(&mut self) {
+        self.steps += 1;
+        let t = self.steps as i32;
+        let (b1, b2) = (self.beta1, self.beta2);
+        let step_size = self.lr / (1.0 - b1.powi(t));
+        let bias2 = (1.0 - b2.powi(t)).sqrt();
+        tch::no_grad(|| {
+            for (((_, p), m), v) in self.params.iter_mut().zip(&mut self.m).zip(&mut self.v) {
+                let g = p.grad();
+                if !g.defined() {
+                    continue;
+                }
+                let _ = m.g_mul_scalar_(b1).g_add_(&(&g * (1.0 - b1)));
+                let _ = v.g_mul_scalar_(b2).g_add_(&(g.square() * (1.0 - b2)));
+                let denom = v.sqrt() / bias2 + self.eps;
+                let _ = p.g_sub_(&(&*m / denom * step_size));
+            }
+        });
+    }
+
+    /// Moments as named tensors on the CPU (`m.NAME`, `v.NAME`).
+    pub fn state_tensors(&self) -> Vec<(String, Tensor)> {
+        let mut out = Vec::new();
+        for (((name, _), m), v) in self.params.iter().zip(&self.m).zip(&self.v) {
+            out.push((format!("m.{name}"), m.to_device(Device::Cpu)));
+            out.push((format!("v.{name}"), v.to_device(Device::Cpu)));
+        }
+        out
+    }
+
+    pub fn load_state(&mut self, tensors: &[(String, Tensor)], steps: u64) -> Result<(), String> {
+        for (((name, p), m), v) in self.params.iter().zip(&mut self.m).zip(&mut self.v) {
+            for (prefix, dst) in [("m", &mut *m), ("v", &mut *v)] {
+                let key = format!("{prefix}.{name}");
+                let src = tensors
+                    .iter()
+                    .find(|(n, _)| *n == key)
+                    .ok_or_else(|| format!("no optimizer moment '{key}'"))?;
+                if src.1.size() != p.size() {
+                    return Err(format!("optimizer moment '{key}' has the wrong shape"));
+                }
+                tch::no_grad(|| dst.copy_(&src.1));
+            }
+        }
+        self.steps = steps;
+        Ok(())
+    }
+}
+
+/// What one side's robots saw and did during a rollout, [step][row] with
+/// rows = worlds x robots of the side (a world's robots adjacent).
+pub struct Rollout {
+    pub steps: usize,
+    /// Side of the pooled patches the network reads.
+    pub patch_side: usize,
+    pub rows: usize,
+    pub vector_len: usize,
+    pub hidden: usize,
+    pub chunk_len: usize,
+    pub patches: Vec<u8>,
+    pub vectors: Vec<f32>,
+    pub actions: Vec<i64>,
+    pub logp: Vec<f32>,
+    /// Critic outputs (normalised units when value normalisation is on).
+    pub values: Vec<f32>,
+    pub rewards: Vec<f32>,
+    pub dones: Vec<f32>,
+    /// 0 where a step starts an episode (the recurrent state is reset).
+    pub masks: Vec<f32>,
+    /// Recurrent states at the start of every chunk, [chunk][row][hidden].
+    pub actor_h: Vec<f32>,
+    pub critic_h: Vec<f32>,
+    pub last_values: Vec<f32>,
+}
+
+impl Rollout {
+    pub fn new(
+        steps: usize,
+        rows: usize,
+        vector_len: usize,
+        net: &NetConfig,
+        chunk_len: usize,
+    ) -> Rollout {
+        let n = steps * rows;
+        let chunks = steps / chunk_len;
+        let hidden = net.hidden as usize;
+        Rollout {
+            steps,
+            patch_side: net.input_side(),
+            rows,
+            vector_len,
+            hidden,
+            chunk_len,
+            patches: vec![0; n * net.input_len()],
+            vectors: vec![0.0; n * vector_len],
+            actions: vec![0; n],
+            logp: vec![0.0; n],
+            values: vec![0.0; n],
+            rewards: vec![0.0; n],
+            dones: vec![0.0; n],
+            masks: vec![1.0; n],
+            actor_h: vec![0.0; chunks * rows * hidden],
+            critic_h: vec![0.0; chunks * rows * hidden],
+            last_values: vec![0.0; rows],
+        }
+    }
+}
+
+/// How the critic's inputs are made from the actors' (the one thing MAPPO
+/// and IPPO do differently).
+pub trait CriticView {
+    /// Observations each critic input holds, for a side of `team` robots.
+    fn critic_agents(&self, team: usize) -> usize;
+    /// From patches [rows, 1, 48, 48] and vectors [rows, V] of rows ordered
+    /// (..., world, robot) with `team` robots per world, the critic inputs
+    /// [rows, C, 48, 48] and [rows, C V].
+    fn critic_inputs(&self, patches: &Tensor, vectors: &Tensor, team: usize) -> (Tensor, Tensor);
+}
+
+/// Losses and diagnostics of one update.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct UpdateStats {
+    pub policy_loss: f64,
+    pub value_loss: f64,
+    pub entropy: f64,
+    pub approx_kl: f64,
+    pub clip_frac: f64,
+    pub actor_grad_norm: f64,
+    pub critic_grad_norm: f64,
+}
+
+/// One side's learning state: networks, optimisers, return statistics.
+pub struct PpoLearner {
+    pub cfg: PpoConfig,
+    pub net: NetConfig,
+    pub device: Device,
+    pub actor_vs: nn::VarStore,
+    pub actor: Actor,
+    pub critic_vs: nn::VarStore,
+    pub critic: Critic,
+    pub actor_adam: Adam,
+    pub critic_adam: Adam,
+    pub value_norm: ValueNorm,
+    /// Robots per world on this side.
+    pub team: usize,
+    pub view: Box<dyn CriticView>,
+}
+
+impl PpoLearner {
+    pub fn new(
+        cfg: PpoConfig,
+        net: NetConfig,
+        vector_len: usize,
+        team: usize,
+        view: Box<dyn CriticView>,
+        device: Device,
+    ) -> PpoLearner {
+        let actor_vs = nn::VarStore::new(device);
+        let actor = Actor::new(&actor_vs.root(), &net, vector_len);
+        let critic_vs = nn::VarStore::new(device);
+        let critic = Critic::new(&critic_vs.root(), &net, vector_len, view.critic_agents(team));
+        let actor_adam = Adam::new(&actor_vs, cfg.lr, cfg.adam_eps);
+        let critic_adam = Adam::new(&critic_vs, cfg.lr, cfg.adam_eps);
+        PpoLearner {
+            cfg,
+            net,
+            device,
+            actor_vs,
+            actor,
+            critic_vs,
+            critic,
+            actor_adam,
+            critic_adam,
+            value_norm: ValueNorm::default(),
+            team,
+            view,
+        }
+    }
+
+    /// The PPO update on one rollout.
+    pub fn update(&mut self, ro: &Rollout, rng: &mut ChaCha8Rng) -> UpdateStats {
+        let cfg = self.cfg.clone();
+        let dev = self.device;
+        let (steps, rows, l, hdim) = (ro.steps, ro.rows, ro.chunk_len, ro.hidden as i64);
+        let n = steps * rows;
+
+        // 1. Advantages and returns in real units, then the value targets.
+        let denorm = |v: &[f32]| -> Vec<f32> {
+            if cfg.value_norm {
+                v.iter().map(|&x| self.value_norm.denormalize(x)).collect()
+            } else {
+                v.to_vec()
+            }
+        };
+        let values = denorm(&ro.values);
+        let last_values = denorm(&ro.last_values);
+        let (mut adv, returns) = gae(
+            &ro.rewards,
+            &values,
+            &ro.dones,
+            &last_values,
+            rows,
+            cfg.gamma,
+            cfg.gae_lambda,
+        );
+        if cfg.value_norm {
+            self.value_norm.update(&returns);
+        }
+        let targets: Vec<f32> = if cfg.value_norm {
+            returns.iter().map(|&r| self.value_norm.normalize(r)).collect()
+        } else {
+            returns
+        };
+        if cfg.normalize_advantages {
+            let mean = adv.iter().map(|&a| a as f64).sum::<f64>() / n as f64;
+            let var = adv.iter().map(|&a| (a as f64 - mean).powi(2)).sum::<f64>() / n as f64;
+            let std = var.sqrt() + 1e-5;
+            adv.iter_mut().for_each(|a| *a = ((*a as f64 - mean) / std) as f32);
+        }
+
+        // 2. The rollout as tensors on the device; critic inputs built once.
+        let (patches, vectors) =
+            crate::nn::obs_tensors(&ro.patches, &ro.vectors, n, 1, ro.patch_side, dev);
+        let (c_patches, c_vectors) = self.view.critic_inputs(&patches, &vectors, self.team);
+        let t = |v: &[f32]| Tensor::from_slice(v).to_device(dev);
+        let actions = Tensor::from_slice(&ro.actions).to_device(dev);
+        let old_logp = t(&ro.logp);
+        let adv = t(&adv);
+        let targets = t(&targets);
+        let masks = t(&ro.masks);
+        let actor_h = t(&ro.actor_h).view([-1, hdim]);
+        let critic_h = t(&ro.critic_h).view([-1, hdim]);
+
+        // 3. Epochs over minibatches of whole chunks: sequence s = (chunk c, row r).
+        let chunks = steps / l;
+        let sequences = chunks * rows;
+        let per_batch = sequences.div_ceil(cfg.minibatches);
+        let mut order: Vec<usize> = (0..sequences).collect();
+        let mut stats = UpdateStats::default();
+        let mut batches = 0.0;
+        for _ in 0..cfg.epochs {
+            order.shuffle(rng);
+            for mb in order.chunks(per_batch) {
+                // Time-major rows of the minibatch: [l, mb] flattened.
+                let mut idx = Vec::with_capacity(l * mb.len());
+                for step in 0..l {
+                    for &s in mb {
+                        let (c, r) = (s / rows, s % rows);
+                        idx.push(((c * l + step) * rows + r) as i64);
+                    }
+                }
+                let idx = Tensor::from_slice(&idx).to_device(dev);
+                let seq = Tensor::from_slice(&mb.iter().map(|&s| s as i64).collect::<Vec<_>>()).to_device(dev);
+                let m = masks.index_select(0, &idx).view([l as i64, mb.len() as i64]);
+
+                let logits = self.actor.unroll(
+                    &patches.index_select(0, &idx),
+                    &vectors.index_select(0, &idx),
+                    &actor_h.index_select(0, &seq),
+                    &m,
+                );
+                let logp_all = logits.log_softmax(-1, Kind::Float);
+                let a = actions.index_select(0, &idx);
+                let new_logp = logp_all.gather(1, &a.unsqueeze(1), false).squeeze_dim(1);
+                let entropy = -(logp_all.exp() * &logp_all).sum_dim_intlist(-1, false, Kind::Float).mean(Kind::Float);
+                let old = old_logp.index_select(0, &idx);
+                let (policy_loss, clip_frac) =
+                    clipped_surrogate(&new_logp, &old, &adv.index_select(0, &idx), cfg.clip);
+
+                let v = self.critic.unroll(
+                    &c_patches.index_select(0, &idx),
+                    &c_vectors.index_select(0, &idx),
+                    &critic_h.index_select(0, &seq),
+                    &m,
+                );
+                let value_loss = huber(&v, &targets.index_select(0, &idx), cfg.huber_delta);
+
+                let loss = &policy_loss - cfg.entropy_coef * &entropy + cfg.value_coef * &value_loss;
+                self.actor_adam.zero_grad();
+                self.critic_adam.zero_grad();
+                loss.backward();
+                stats.actor_grad_norm += self.actor_adam.clip_grad_norm(cfg.max_grad_norm);
+                stats.critic_grad_norm += self.critic_adam.clip_grad_norm(cfg.max_grad_norm);
+                self.actor_adam.step();
+                self.critic_adam.step();
+
+                stats.policy_loss += policy_loss.double_value(&[]);
+                stats.value_loss += value_loss.double_value(&[]);
+                stats.entropy += entropy.double_value(&[]);
+                stats.approx_kl += tch::no_grad(|| (&old - &new_logp).mean(Kind::Float).double_value(&[]));
+                stats.clip_frac += clip_frac;
+                batches += 1.0;
+            }
+        }
+        for x in [
+            &mut stats.policy_loss,
+            &mut stats.value_loss,
+            &mut stats.entropy,
+            &mut stats.approx_kl,
+            &mut stats.clip_frac,
+            &mut stats.actor_grad_norm,
+            &mut stats.critic_grad_norm,
+        ] {
+            *x /= batches;
+        }
+        stats
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn gae_matches_hand_computed_values() {
+        // One row, three steps, episode ends after step 1; gamma 0.5, lambda 0.5.
+        let rewards = [1.0, 2.0, 3.0];
+        let values = [0.5, 1.0, 2.0];
+        let dones = [0.0, 1.0, 0.0];
+        let last = [4.0];
+        let (adv, ret) = gae(&rewards, &values, &dones, &last, 1, 0.5, 0.5);
+        // t=2: delta = 3 + 0.5*4 - 2 = 3; A = 3.
+        // t=1: delta = 2 + 0 - 1 = 1 (done: no bootstrap); A = 1.
+        // t=0: delta = 1 + 0.5*1 - 0.5 = 1; A = 1 + 0.25*1 = 1.25.
+        assert_eq!(adv, vec![1.25, 1.0, 3.0]);
+        assert_eq!(ret, vec![1.75, 2.0, 5.0]);
+        // Two interleaved rows stay independent.
+        let (adv2, _) = gae(
+            &[1.0, 0.0, 2.0, 0.0, 3.0, 0.0],
+            &[0.5, 0.0, 1.0, 0.0, 2.0, 0.0],
+            &[0.0, 0.0, 1.0, 0.0, 0.0, 0.0],
+            &[4.0, 0.0],
+            2,
+            0.5,
+            0.5,
+        );
+        assert_eq!([adv2[0], adv2[2], adv2[4]], [1.25, 1.0, 3.0]);
+        assert_eq!([adv2[1], adv2[3], adv2[5]], [0.0, 0.0, 0.0]);
+    }
+
+    #[test]
+    fn value_norm_tracks_mean_and_variance_and_round_trips() {
+        let mut vn = ValueNorm::default();
+        vn.update(&[1.0, 2.0, 3.0]);
+        let (m, v) = vn.stats();
+        // After one batch the debiased averages are the batch's: mean 2, var 2/3.
+        assert!((m - 2.0).abs() < 1e-6, "{m}");
+        assert!((v - 2.0 / 3.0).abs() < 1e-6, "{v}");
+        assert!((vn.normalize(3.0) - (1.0 / (2.0f64 / 3.0).sqrt()) as f32).abs() < 1e-5);
+        assert!((vn.denormalize(vn.normalize(7.5)) - 7.5).abs() < 1e-4);
+        // A second batch weighs in almost equally while beta is near 1.
+        vn.update(&[10.0, 10.0, 10.0]);
+        let (m, _) = vn.stats();
+        assert!((m - 6.0).abs() < 1e-3, "{m}");
+        // Constant returns keep a variance floor instead of dividing by zero.
+        let mut flat = ValueNorm::default();
+        flat.update(&[5.0; 4]);
+        assert!((flat.stats().1 - 1e-2).abs() < 1e-9);
+    }
+
+    #[test]
+    fn clipped_surrogate_matches_hand_computed_values() {
+        let old = Tensor::from_slice(&[0f32, 0.0, 0.0, 0.0]);
+        // Ratios 1.5, 0.5, 1.1, 0.5 against advantages 1, 1, -1, -1.
+        let new = Tensor::from_slice(&[1.5f32.ln(), 0.5f32.ln(), 1.1f32.ln(), 0.5f32.ln()]);
+        let adv = Tensor::from_slice(&[1f32, 1.0, -1.0, -1.0]);
+        let (loss, frac) = clipped_surrogate(&new, &old, &adv, 0.2);
+        // min(r A, clip(r) A): 1.2, 0.5, -1.1, -0.8 -> mean -0.2 ... loss = -mean.
+        let expected = -(1.2 + 0.5 - 1.1 - 0.8) / 4.0;
+        assert!((loss.double_value(&[]) - expected).abs() < 1e-6, "{}", loss.double_value(&[]));
+        assert_eq!(frac, 0.75);
+    }
+
+    #[test]
+    fn huber_is_quadratic_then_linear() {
+        let pred = Tensor::from_slice(&[0f32, 0.0]);
+        let target = Tensor::from_slice(&[1f32, 20.0]);
+        // 0.5 * 1^2 = 0.5; 0.5 * 10^2 + 10 * (20 - 10) = 150.
+        let l = huber(&pred, &target, 10.0).double_value(&[]);
+        assert!((l - (0.5 + 150.0) / 2.0).abs() < 1e-5, "{l}");
+    }
+
+    #[test]
+    fn adam_first_step_moves_each_weight_by_lr_against_its_gradient() {
+        let vs = nn::VarStore::new(Device::Cpu);
+        let w = vs.root().var("w", &[3], nn::Init::Const(1.0));
+        let mut adam = Adam::new(&vs, 0.1, 1e-8);
+        adam.zero_grad();
+        (&w * Tensor::from_slice(&[2f32, -3.0, 0.5])).sum(Kind::Float).backward();
+        let norm = adam.clip_grad_norm(1.0);
+        assert!((norm - (4.0f64 + 9.0 + 0.25).sqrt()).abs() < 1e-5);
+        adam.step();
+        let mut out = [0f32; 3];
+        w.copy_data(&mut out, 3);
+        // Adam's first step is lr * sign(g) whatever the gradient's scale.
+        for (o, e) in out.iter().zip([0.9, 1.1, 0.9]) {
+            assert!((o - e).abs() < 1e-5, "{out:?}");
+        }
+    }
+}

@@ -1,0 +1,692 @@
+//! The training loop behind `t2e-league train`: many worlds stepped in
+//! parallel, each learning side's network run batched over all its robots
+//! of all worlds, then a PPO update per learning side. Either side learns
+//! (MAPPO or IPPO); the other is a controller (heuristic, frozen checkpoint)
+//! or a second learner, which is the paper's fully competitive game: both
+//! always play the other's latest policy.
+//!
+//! A run folder holds `config.toml` (as given), `metrics.csv`, `curves.png`,
+//! `checkpoints/SIDE-STEPS/` and `state.json`, which names the checkpoints
+//! a `--resume` continues from.
+
+use super::ppo::{PpoConfig, PpoLearner, Rollout, UpdateStats};
+use super::Algorithm;
+use crate::env::vec_env::episode_seed;
+use crate::env::{Action, EnvConfig, Side, VecEnv, PATCH_LEN};
+use crate::heuristics::ControllerSpec;
+use crate::map::PreparedMap;
+use crate::nn::checkpoint::{
+    checkpoint_name, code_version, load_into, named_cpu_tensors, read_meta, read_tensors, save_tensors,
+    write_dir_atomically, write_file_atomically, CheckpointMeta, FORMAT,
+};
+use crate::nn::{obs_tensors, pool_patch, NetConfig};
+use anyhow::{anyhow, bail, Context, Result};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::time::Instant;
+use tch::{Device, Kind, Tensor};
+
+/// A training run, as written in `configs/*.toml`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct TrainConfig {
+    /// Run name: the run folder is `runs/NAME` unless `--out` says otherwise.
+    pub name: String,
+    pub seed: u64,
+    /// Stop after this many environment steps (all worlds together; paper: 30 M).
+    pub total_env_steps: u64,
+    /// Worlds stepped in parallel (paper: 16 to 32).
+    pub num_envs: usize,
+    /// Steps per world between updates; a multiple of each learner's chunk_len.
+    pub rollout_steps: usize,
+    /// Write checkpoints every this many iterations (and at the end).
+    pub checkpoint_every: u64,
+    /// "auto" (CUDA when tch sees a GPU), "cpu" or "cuda".
+    pub device: String,
+    /// Training maps: never the Gibson test set. `generated:N` makes N maps
+    /// per size class with the project's generator; also `shipped` or a folder.
+    pub maps: String,
+    pub env: EnvConfig,
+    pub captors: SideConfig,
+    pub target: SideConfig,
+}
+
+/// Who plays one side, and how it learns if it does.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SideConfig {
+    /// "mappo" or "ippo" to learn; otherwise a controller that does not
+    /// learn: heuristic, greedy, random, still or ckpt:PATH.
+    pub play: String,
+    pub ppo: PpoConfig,
+    pub net: NetConfig,
+}
+
+impl Default for SideConfig {
+    fn default() -> Self {
+        SideConfig {
+            play: "heuristic".into(),
+            ppo: PpoConfig::default(),
+            net: NetConfig::default(),
+        }
+    }
+}
+
+impl Default for TrainConfig {
+    fn default() -> Self {
+        TrainConfig {
+            name: "train".into(),
+            seed: 0,
+            total_env_steps: 30_000_000,
+            num_envs: 32,
+            rollout_steps: 100,
+            checkpoint_every: 25,
+            device: "auto".into(),
+            maps: "generated:20".into(),
+            env: EnvConfig::default(),
+            captors: SideConfig {
+                play: "mappo".into(),
+                ..SideConfig::default()
+            },
+            target: SideConfig::default(),
+        }
+    }
+}
+
+/// What plays a side, once the config is read.
+#[derive(Clone, Debug)]
+pub enum Role {
+    Learn(Algorithm),
+    Script(ControllerSpec),
+}
+
+impl SideConfig {
+    pub fn role(&self) -> Result<Role, String> {
+        match self.play.trim() {
+            "mappo" => Ok(Role::Learn(Algorithm::Mappo)),
+            "ippo" => Ok(Role::Learn(Algorithm::Ippo)),
+            other => other
+                .parse::<ControllerSpec>()
+                .map(Role::Script)
+                .map_err(|e| format!("play = \"{other}\": {e}; or mappo / ippo to learn")),
+        }
+    }
+}
+
+impl TrainConfig {
+    /// Reads a TOML config; errors name the file and the field.
+    pub fn load(path: &Path) -> Result<TrainConfig> {
+        let text = std::fs::read_to_string(path).with_context(|| format!("{}: cannot read", path.display()))?;
+        let cfg: TrainConfig = toml::from_str(&text).map_err(|e| anyhow!("{}: {e}", path.display()))?;
+        cfg.validate().map_err(|e| anyhow!("{}: {e}", path.display()))?;
+        Ok(cfg)
+    }
+
+    /// Checks every setting; the error names the field.
+    pub fn validate(&self) -> Result<(), String> {
+        let mut env = self.env.clone();
+        env.observations = true;
+        env.validate().map_err(|e| format!("env.{e}"))?;
+        if self.num_envs == 0 {
+            return Err("num_envs = 0: needs at least one world".into());
+        }
+        if self.rollout_steps == 0 {
+            return Err("rollout_steps = 0: needs at least one step".into());
+        }
+        if self.checkpoint_every == 0 {
+            return Err("checkpoint_every = 0: must be at least 1 iteration".into());
+        }
+        if !["auto", "cpu", "cuda"].contains(&self.device.as_str()) {
+            return Err(format!("device = \"{}\": expected auto, cpu or cuda", self.device));
+        }
+        let mut learners = 0;
+        for (name, side_cfg, side) in [("captors", &self.captors, Side::Captors), ("target", &self.target, Side::Target)] {
+            match side_cfg.role().map_err(|e| format!("{name}.{e}"))? {
+                Role::Learn(_) => {
+                    learners += 1;
+                    side_cfg.ppo.validate().map_err(|e| format!("{name}.ppo.{e}"))?;
+                    side_cfg.net.validate().map_err(|e| format!("{name}.net.{e}"))?;
+                    if self.rollout_steps % side_cfg.ppo.chunk_len != 0 {
+                        return Err(format!(
+                            "rollout_steps = {} is not a multiple of {name}.ppo.chunk_len = {}",
+                            self.rollout_steps, side_cfg.ppo.chunk_len
+                        ));
+                    }
+                }
+                Role::Script(spec) => spec.check(side, &env).map_err(|e| format!("{name}.play: {e}"))?,
+            }
+        }
+        if learners == 0 {
+            return Err("neither captors.play nor target.play is a learner (mappo or ippo): nothing to train".into());
+        }
+        Ok(())
+    }
+
+    /// A stable hash of the settings that shape learning (FNV-1a of the
+    /// canonical JSON); the name, the step budget and the device are left
+    /// out, so a run can be renamed, extended or moved to a GPU and resumed.
+    pub fn hash(&self) -> String {
+        let mut c = self.clone();
+        c.name = String::new();
+        c.total_env_steps = 0;
+        c.device = String::new();
+        let json = serde_json::to_string(&c).expect("config serialises");
+        let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+        for b in json.bytes() {
+            h ^= b as u64;
+            h = h.wrapping_mul(0x0100_0000_01b3);
+        }
+        format!("{h:016x}")
+    }
+
+    pub fn device(&self) -> Device {
+        match self.device.as_str() {
+            "cpu" => Device::Cpu,
+            "cuda" => Device::Cuda(0),
+            _ => Device::cuda_if_available(),
+        }
+    }
+}
+
+/// One learning side during training.
+struct LearnerSide {
+    side: Side,
+    algorithm: Algorithm,
+    learner: PpoLearner,
+    rollout: Rollout,
+    team: usize,
+    rows: usize,
+    actor_h: Tensor,
+    critic_h: Tensor,
+    /// 0 for rows whose world just started an episode.
+    next_mask: Vec<f32>,
+}
+
+/// One row of `metrics.csv`.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+pub struct Metrics {
+    pub iteration: u64,
+    pub env_steps: u64,
+    pub wall_s: f64,
+    /// Environment steps per second of this iteration (rollout + update).
+    pub steps_per_s: f64,
+    pub episodes: usize,
+    /// Share of the episodes that ended this iteration with a capture.
+    pub capture_rate: f64,
+    pub episode_len: f64,
+    /// Mean undiscounted episode return per robot of each side.
+    pub captor_return: f64,
+    pub target_return: f64,
+    /// Seconds of this iteration stepping worlds, running networks for
+    /// actions and values, and updating.
+    pub time_env: f64,
+    pub time_inference: f64,
+    pub time_update: f64,
+    pub captor_policy_loss: Option<f64>,
+    pub captor_value_loss: Option<f64>,
+    pub captor_entropy: Option<f64>,
+    pub captor_approx_kl: Option<f64>,
+    pub captor_clip_frac: Option<f64>,
+    pub target_policy_loss: Option<f64>,
+    pub target_value_loss: Option<f64>,
+    pub target_entropy: Option<f64>,
+    pub target_approx_kl: Option<f64>,
+    pub target_clip_frac: Option<f64>,
+}
+
+/// `state.json`: where a run stands, written after every checkpoint.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct RunState {
+    pub iteration: u64,
+    pub env_steps: u64,
+    pub wall_s: f64,
+    pub config_hash: String,
+    /// Checkpoint folder names (under `checkpoints/`) per learning side.
+    pub checkpoints: Vec<(Side, String)>,
+}
+
+#[derive(Serialize, Deserialize)]
+struct LearnerState {
+    value_norm: super::ppo::ValueNorm,
+    actor_adam_steps: u64,
+    critic_adam_steps: u64,
+}
+
+pub struct Trainer {
+    pub cfg: TrainConfig,
+    pub device: Device,
+    venv: VecEnv,
+    learners: Vec<LearnerSide>,
+    rng: ChaCha8Rng,
+    actions: Vec<Action>,
+    pub iteration: u64,
+    pub env_steps: u64,
+    /// Training time of earlier segments of a resumed run.
+    pub wall_s: f64,
+    config_hash: String,
+}
+
+fn mix_seed(seed: u64, iteration: u64) -> u64 {
+    episode_seed(seed, usize::MAX, iteration)
+}
+
+impl Trainer {
+    /// A fresh run on `maps`, starting at iteration `iteration` (0 unless resuming).
+    pub fn new(cfg: TrainConfig, maps: Arc<Vec<Arc<PreparedMap>>>) -> Result<Trainer> {
+        Trainer::starting_at(cfg, maps, 0)
+    }
+
+    fn starting_at(cfg: TrainConfig, maps: Arc<Vec<Arc<PreparedMap>>>, iteration: u64) -> Result<Trainer> {
+        cfg.validate().map_err(anyhow::Error::msg)?;
+        let device = cfg.device();
+        if cfg.device == "cuda" && !tch::Cuda::is_available() {
+            bail!("device = \"cuda\" but tch sees no CUDA device; use \"auto\" or \"cpu\"");
+        }
+        let mut env_cfg = cfg.env.clone();
+        env_cfg.observations = true;
+        let k = env_cfg.num_captors;
+        // Later segments of a resumed run play fresh episodes.
+        let mut venv = VecEnv::new(env_cfg.clone(), maps, cfg.num_envs, mix_seed(cfg.seed, iteration))
+            .map_err(anyhow::Error::msg)?;
+        tch::manual_seed(mix_seed(cfg.seed ^ 0x5eed, iteration) as i64);
+        let mut learners = Vec::new();
+        for (side, side_cfg) in [(Side::Captors, &cfg.captors), (Side::Target, &cfg.target)] {
+            match side_cfg.role().map_err(anyhow::Error::msg)? {
+                Role::Script(spec) => {
+                    venv.script(side, || spec.build(side).expect("checked by validate"));
+                }
+                Role::Learn(algorithm) => {
+                    let team = side.agents(k).len();
+                    let rows = team * cfg.num_envs;
+                    let learner = PpoLearner::new(
+                        side_cfg.ppo.clone(),
+                        side_cfg.net.clone(),
+                        env_cfg.vector_len(),
+                        team,
+                        algorithm.critic_view(),
+                        device,
+                    );
+                    let h = side_cfg.net.hidden;
+                    learners.push(LearnerSide {
+                        side,
+                        algorithm,
+                        rollout: Rollout::new(
+                            cfg.rollout_steps,
+                            rows,
+                            env_cfg.vector_len(),
+                            &side_cfg.net,
+                            side_cfg.ppo.chunk_len,
+                        ),
+                        learner,
+                        team,
+                        rows,
+                        actor_h: Tensor::zeros([rows as i64, h], (Kind::Float, device)),
+                        critic_h: Tensor::zeros([rows as i64, h], (Kind::Float, device)),
+                        next_mask: vec![0.0; rows],
+                    });
+                }
+            }
+        }
+        venv.reset().map_err(|e| anyhow!("placing robots: {e}"))?;
+        let n = cfg.num_envs * env_cfg.num_agents();
+        Ok(Trainer {
+            rng: ChaCha8Rng::seed_from_u64(mix_seed(cfg.seed ^ 0xac7, iteration)),
+            actions: vec![Action::Stop; n],
+            iteration,
+            env_steps: iteration * (cfg.num_envs * cfg.rollout_steps) as u64,
+            wall_s: 0.0,
+            config_hash: cfg.hash(),
+            device,
+            venv,
+            learners,
+            cfg,
+        })
+    }
+
+    /// Continues the run in `run_dir` from the checkpoints its `state.json` names.
+    pub fn resume(cfg: TrainConfig, maps: Arc<Vec<Arc<PreparedMap>>>, run_dir: &Path) -> Result<Trainer> {
+        let state_path = run_dir.join("state.json");
+        let state: RunState = serde_json::from_str(
+            &std::fs::read_to_string(&state_path)
+                .with_context(|| format!("{}: cannot read (nothing to resume)", state_path.display()))?,
+        )
+        .with_context(|| format!("{}: not a run state", state_path.display()))?;
+        if state.config_hash != cfg.hash() {
+            bail!(
+                "{}: the run was started with a different configuration (hash {} vs {}); start a new run instead",
+                state_path.display(),
+                state.config_hash,
+                cfg.hash()
+            );
+        }
+        let mut t = Trainer::starting_at(cfg, maps, state.iteration)?;
+        t.env_steps = state.env_steps;
+        t.wall_s = state.wall_s;
+        for ls in &mut t.learners {
+            let name = state
+                .checkpoints
+                .iter()
+                .find(|(s, _)| *s == ls.side)
+                .map(|(_, n)| n.clone())
+                .with_context(|| format!("{}: names no {} checkpoint", state_path.display(), ls.side.name()))?;
+            let dir = run_dir.join("checkpoints").join(name);
+            let meta = read_meta(&dir)?;
+            let file = dir.join("actor.safetensors");
+            load_into(&mut ls.learner.actor_vs, &read_tensors(&file)?, &file)?;
+            let file = dir.join("critic.safetensors");
+            load_into(&mut ls.learner.critic_vs, &read_tensors(&file)?, &file)?;
+            let st: LearnerState = serde_json::from_value(meta.learner_state.clone().context("meta.json has no learner_state")?)
+                .with_context(|| format!("{}: learner_state", dir.display()))?;
+            let opt = read_tensors(&dir.join("optimizer.safetensors"))?;
+            let split = |prefix: &str| -> Vec<(String, Tensor)> {
+                opt.iter()
+                    .filter_map(|(n, t)| n.strip_prefix(prefix).map(|n| (n.to_string(), t.to_device(t.device()))))
+                    .collect()
+            };
+            ls.learner
+                .actor_adam
+                .load_state(&split("actor."), st.actor_adam_steps)
+                .map_err(|e| anyhow!("{}: {e}", dir.display()))?;
+            ls.learner
+                .critic_adam
+                .load_state(&split("critic."), st.critic_adam_steps)
+                .map_err(|e| anyhow!("{}: {e}", dir.display()))?;
+            ls.learner.value_norm = st.value_norm;
+        }
+        Ok(t)
+    }
+
+    /// One PPO iteration: a rollout of `rollout_steps` in every world, then
+    /// an update of every learning side.
+    pub fn iterate(&mut self) -> Result<Metrics> {
+        let start = Instant::now();
+        let (mut time_env, mut time_inference) = (0.0, 0.0);
+        let k = self.cfg.env.num_captors;
+        let na = k + 1;
+        let vl = self.venv.cfg.vector_len();
+        let n_envs = self.cfg.num_envs;
+        let (mut episodes, mut captures, mut len_sum, mut captor_ret, mut target_ret) = (0usize, 0usize, 0f64, 0f64, 0f64);
+        for t in 0..self.cfg.rollout_steps {
+            let t0 = Instant::now();
+            for ls in &mut self.learners {
+                let ro = &mut ls.rollout;
+                let rows = ls.rows;
+                let base = t * rows;
+                let pool = ls.learner.net.patch_pool as usize;
+                let pl = ls.learner.net.input_len();
+                // Gather this side's observations, a world's robots adjacent.
+                for e in 0..n_envs {
+                    for (j, agent) in ls.side.agents(k).enumerate() {
+                        let row = e * ls.team + j;
+                        let src = e * na + agent;
+                        ro.vectors[(base + row) * vl..(base + row + 1) * vl]
+                            .copy_from_slice(&self.venv.vectors[src * vl..(src + 1) * vl]);
+                        pool_patch(
+                            &self.venv.patches[src * PATCH_LEN..(src + 1) * PATCH_LEN],
+                            pool,
+                            &mut ro.patches[(base + row) * pl..(base + row + 1) * pl],
+                        );
+                    }
+                }
+                ro.masks[base..base + rows].copy_from_slice(&ls.next_mask);
+                let l = ro.chunk_len;
+                if t % l == 0 {
+                    let c = t / l;
+                    let hsz = rows * ro.hidden;
+                    ls.actor_h
+                        .to_device(Device::Cpu)
+                        .copy_data(&mut ro.actor_h[c * hsz..(c + 1) * hsz], hsz);
+                    ls.critic_h
+                        .to_device(Device::Cpu)
+                        .copy_data(&mut ro.critic_h[c * hsz..(c + 1) * hsz], hsz);
+                }
+                let (p, v) = obs_tensors(
+                    &ro.patches[base * pl..(base + rows) * pl],
+                    &ro.vectors[base * vl..(base + rows) * vl],
+                    rows,
+                    1,
+                    ro.patch_side,
+                    self.device,
+                );
+                let m = Tensor::from_slice(&ls.next_mask).to_device(self.device).unsqueeze(1);
+                let lr = &ls.learner;
+                let (probs, values, ha, hc) = tch::no_grad(|| {
+                    let (logits, ha) = lr.actor.step(&p, &v, &(&ls.actor_h * &m));
+                    let (cp, cv) = lr.view.critic_inputs(&p, &v, ls.team);
+                    let (values, hc) = lr.critic.step(&cp, &cv, &(&ls.critic_h * &m));
+                    (logits.softmax(-1, Kind::Float).to_device(Device::Cpu), values.to_device(Device::Cpu), ha, hc)
+                });
+                ls.actor_h = ha;
+                ls.critic_h = hc;
+                let mut pr = vec![0f32; rows * Action::COUNT];
+                probs.copy_data(&mut pr, rows * Action::COUNT);
+                values.copy_data(&mut ro.values[base..base + rows], rows);
+                for row in 0..rows {
+                    let p = &pr[row * Action::COUNT..(row + 1) * Action::COUNT];
+                    let a = sample(p, &mut self.rng);
+                    ro.actions[base + row] = a as i64;
+                    ro.logp[base + row] = p[a].max(1e-12).ln();
+                    let (e, j) = (row / ls.team, row % ls.team);
+                    self.actions[e * na + ls.side.agents(k).start + j] = Action::from_index(a);
+                }
+            }
+            let t1 = Instant::now();
+            self.venv.step(&self.actions).map_err(|e| anyhow!("placing robots: {e}"))?;
+            for ls in &mut self.learners {
+                let base = t * ls.rows;
+                for row in 0..ls.rows {
+                    let (e, j) = (row / ls.team, row % ls.team);
+                    let done = self.venv.terminated[e] || self.venv.truncated[e];
+                    ls.rollout.rewards[base + row] = self.venv.rewards[e * na + ls.side.agents(k).start + j];
+                    ls.rollout.dones[base + row] = done as u8 as f32;
+                    ls.next_mask[row] = (!done) as u8 as f32;
+                }
+            }
+            for s in &self.venv.finished {
+                episodes += 1;
+                captures += s.captured as usize;
+                len_sum += s.steps as f64;
+                captor_ret += s.returns[..k].iter().sum::<f64>() / k as f64;
+                target_ret += s.returns[k];
+            }
+            time_inference += (t1 - t0).as_secs_f64();
+            time_env += t1.elapsed().as_secs_f64();
+        }
+        // Values of the states after the rollout, for bootstrapping.
+        let t2 = Instant::now();
+        for ls in &mut self.learners {
+            let ro = &mut ls.rollout;
+            let rows = ls.rows;
+            let pool = ls.learner.net.patch_pool as usize;
+            let pl = ls.learner.net.input_len();
+            let mut vecs = vec![0f32; rows * vl];
+            let mut pats = vec![0u8; rows * pl];
+            for e in 0..n_envs {
+                for (j, agent) in ls.side.agents(k).enumerate() {
+                    let (row, src) = (e * ls.team + j, e * na + agent);
+                    vecs[row * vl..(row + 1) * vl].copy_from_slice(&self.venv.vectors[src * vl..(src + 1) * vl]);
+                    pool_patch(
+                        &self.venv.patches[src * PATCH_LEN..(src + 1) * PATCH_LEN],
+                        pool,
+                        &mut pats[row * pl..(row + 1) * pl],
+                    );
+                }
+            }
+            let (p, v) = obs_tensors(&pats, &vecs, rows, 1, ro.patch_side, self.device);
+            let m = Tensor::from_slice(&ls.next_mask).to_device(self.device).unsqueeze(1);
+            let values = tch::no_grad(|| {
+                let (cp, cv) = ls.learner.view.critic_inputs(&p, &v, ls.team);
+                ls.learner.critic.step(&cp, &cv, &(&ls.critic_h * &m)).0.to_device(Device::Cpu)
+            });
+            values.copy_data(&mut ro.last_values, rows);
+        }
+        time_inference += t2.elapsed().as_secs_f64();
+        let t3 = Instant::now();
+        let mut updates: Vec<(Side, UpdateStats)> = Vec::new();
+        for ls in &mut self.learners {
+            updates.push((ls.side, ls.learner.update(&ls.rollout, &mut self.rng)));
+        }
+        let time_update = t3.elapsed().as_secs_f64();
+
+        self.iteration += 1;
+        let steps = (self.cfg.num_envs * self.cfg.rollout_steps) as u64;
+        self.env_steps += steps;
+        let secs = start.elapsed().as_secs_f64();
+        self.wall_s += secs;
+        let per = |x: f64| if episodes > 0 { x / episodes as f64 } else { f64::NAN };
+        let mut m = Metrics {
+            iteration: self.iteration,
+            env_steps: self.env_steps,
+            wall_s: self.wall_s,
+            steps_per_s: steps as f64 / secs,
+            episodes,
+            capture_rate: per(captures as f64),
+            episode_len: per(len_sum),
+            captor_return: per(captor_ret),
+            target_return: per(target_ret),
+            time_env,
+            time_inference,
+            time_update,
+            ..Metrics::default()
+        };
+        for (side, u) in updates {
+            let fields = match side {
+                Side::Captors => [
+                    &mut m.captor_policy_loss,
+                    &mut m.captor_value_loss,
+                    &mut m.captor_entropy,
+                    &mut m.captor_approx_kl,
+                    &mut m.captor_clip_frac,
+                ],
+                Side::Target => [
+                    &mut m.target_policy_loss,
+                    &mut m.target_value_loss,
+                    &mut m.target_entropy,
+                    &mut m.target_approx_kl,
+                    &mut m.target_clip_frac,
+                ],
+            };
+            for (f, v) in fields.into_iter().zip([u.policy_loss, u.value_loss, u.entropy, u.approx_kl, u.clip_frac]) {
+                *f = Some(v);
+            }
+        }
+        Ok(m)
+    }
+
+    /// The sidecar of `side`'s checkpoint as of now.
+    fn meta(&self, ls: &LearnerSide) -> CheckpointMeta {
+        let st = LearnerState {
+            value_norm: ls.learner.value_norm.clone(),
+            actor_adam_steps: ls.learner.actor_adam.steps,
+            critic_adam_steps: ls.learner.critic_adam.steps,
+        };
+        CheckpointMeta {
+            format: FORMAT,
+            side: ls.side,
+            algorithm: ls.algorithm.name().into(),
+            net: ls.learner.net.clone(),
+            num_captors: self.cfg.env.num_captors,
+            critic_agents: ls.learner.view.critic_agents(ls.team),
+            speed_ratio: self.cfg.env.speed_ratio(),
+            env_steps: self.env_steps,
+            iteration: self.iteration,
+            config_hash: self.config_hash.clone(),
+            code_version: code_version(),
+            learner_state: Some(serde_json::to_value(st).expect("serialisable")),
+        }
+    }
+
+    /// Writes a checkpoint of every learning side, then `state.json`.
+    pub fn save(&self, run_dir: &Path) -> Result<Vec<PathBuf>> {
+        let mut written = Vec::new();
+        let mut names = Vec::new();
+        for ls in &self.learners {
+            let name = checkpoint_name(ls.side, self.env_steps);
+            let dir = run_dir.join("checkpoints").join(&name);
+            let meta = self.meta(ls);
+            write_dir_atomically(&dir, |tmp| {
+                save_tensors(&tmp.join("actor.safetensors"), &named_cpu_tensors(&ls.learner.actor_vs))?;
+                save_tensors(&tmp.join("critic.safetensors"), &named_cpu_tensors(&ls.learner.critic_vs))?;
+                let mut opt = Vec::new();
+                for (prefix, adam) in [("actor.", &ls.learner.actor_adam), ("critic.", &ls.learner.critic_adam)] {
+                    opt.extend(adam.state_tensors().into_iter().map(|(n, t)| (format!("{prefix}{n}"), t)));
+                }
+                save_tensors(&tmp.join("optimizer.safetensors"), &opt)?;
+                std::fs::write(tmp.join("meta.json"), serde_json::to_string_pretty(&meta)?)?;
+                Ok(())
+            })?;
+            written.push(dir);
+            names.push((ls.side, name));
+        }
+        let state = RunState {
+            iteration: self.iteration,
+            env_steps: self.env_steps,
+            wall_s: self.wall_s,
+            config_hash: self.config_hash.clone(),
+            checkpoints: names,
+        };
+        write_file_atomically(&run_dir.join("state.json"), serde_json::to_string_pretty(&state)?.as_bytes())?;
+        Ok(written)
+    }
+
+    pub fn learner_sides(&self) -> Vec<(Side, Algorithm)> {
+        self.learners.iter().map(|l| (l.side, l.algorithm)).collect()
+    }
+}
+
+/// Draws an index from a categorical distribution.
+fn sample(p: &[f32], rng: &mut ChaCha8Rng) -> usize {
+    let total: f32 = p.iter().sum();
+    let mut u = rng.gen::<f32>() * total;
+    for (i, &x) in p.iter().enumerate() {
+        if u < x {
+            return i;
+        }
+        u -= x;
+    }
+    p.len() - 1
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn config_errors_name_the_field() {
+        let bad: Result<TrainConfig, _> = toml::from_str("[captors.ppo]\nentropy = 0.1\n");
+        assert!(bad.unwrap_err().to_string().contains("entropy"), "unknown key reported");
+        let mut cfg = TrainConfig::default();
+        cfg.rollout_steps = 15;
+        assert!(cfg.validate().unwrap_err().contains("chunk_len"));
+        let mut cfg = TrainConfig::default();
+        cfg.captors.play = "heuristic".into();
+        assert!(cfg.validate().unwrap_err().contains("nothing to train"));
+        let mut cfg = TrainConfig::default();
+        cfg.target.play = "greedy".into();
+        assert!(cfg.validate().unwrap_err().starts_with("target.play"));
+        let mut cfg = TrainConfig::default();
+        cfg.captors.ppo.gamma = 1.5;
+        assert!(cfg.validate().unwrap_err().starts_with("captors.ppo.gamma"));
+        assert_eq!(TrainConfig::default().hash(), TrainConfig::default().hash());
+        let mut other = TrainConfig::default();
+        other.seed = 1;
+        assert_ne!(other.hash(), TrainConfig::default().hash());
+    }
+
+    #[test]
+    fn sampling_follows_the_probabilities() {
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        let p = [0.1f32, 0.0, 0.6, 0.3, 0.0];
+        let mut counts = [0usize; 5];
+        for _ in 0..20_000 {
+            counts[sample(&p, &mut rng)] += 1;
+        }
+        assert_eq!((counts[1], counts[4]), (0, 0));
+        for (c, q) in counts.iter().zip(p) {
+            assert!((*c as f64 / 20_000.0 - q as f64).abs() < 0.015, "{counts:?}");
+        }
+    }
+}
