@@ -46,18 +46,24 @@ pub fn run(args: TrainArgs) -> Result<()> {
     }
     if let Some(d) = &args.device {
         cfg.device = d.clone();
-        cfg.validate().map_err(|e| anyhow::anyhow!("--device: {e}"))?;
+        cfg.validate()
+            .map_err(|e| anyhow::anyhow!("--device: {e}"))?;
     }
     refuse_test_maps(&cfg.maps)?;
-    let run_dir = args.out.clone().unwrap_or_else(|| PathBuf::from("runs").join(&cfg.name));
+    let run_dir = args
+        .out
+        .clone()
+        .unwrap_or_else(|| PathBuf::from("runs").join(&cfg.name));
     if !args.resume && run_dir.join("state.json").exists() {
         bail!(
             "{} already holds a run: add --resume to continue it, or pick another --out or name",
             run_dir.display()
         );
     }
-    std::fs::create_dir_all(&run_dir).with_context(|| format!("cannot create {}", run_dir.display()))?;
-    let maps = crate::map::catalog::load_prepared(&cfg.maps).with_context(|| format!("maps = \"{}\"", cfg.maps))?;
+    std::fs::create_dir_all(&run_dir)
+        .with_context(|| format!("cannot create {}", run_dir.display()))?;
+    let maps = crate::map::catalog::load_prepared(&cfg.maps)
+        .with_context(|| format!("maps = \"{}\"", cfg.maps))?;
     let mut trainer = if args.resume {
         let t = Trainer::resume(cfg.clone(), maps, &run_dir)?;
         keep_metrics_up_to(&run_dir.join("metrics.csv"), t.iteration)?;
@@ -100,9 +106,11 @@ pub fn run(args: TrainArgs) -> Result<()> {
     } else {
         let b = ProgressBar::new(cfg.total_env_steps);
         b.set_style(
-            ProgressStyle::with_template("[{elapsed_precise}] [{bar:25}] {human_pos}/{human_len} steps {msg}")
-                .unwrap()
-                .progress_chars("=> "),
+            ProgressStyle::with_template(
+                "[{elapsed_precise}] [{bar:25}] {human_pos}/{human_len} steps {msg}",
+            )
+            .unwrap()
+            .progress_chars("=> "),
         );
         b.set_position(trainer.env_steps);
         b
@@ -129,7 +137,11 @@ pub fn run(args: TrainArgs) -> Result<()> {
     let written = trainer.save(&run_dir)?;
     write_curves(&run_dir)?;
     bar.finish_and_clear();
-    let why = if STOP.load(Ordering::SeqCst) { "stopped" } else { "done" };
+    let why = if STOP.load(Ordering::SeqCst) {
+        "stopped"
+    } else {
+        "done"
+    };
     println!(
         "{why} after {} iterations, {} env steps, {:.1} min of training: {}",
         trainer.iteration,
@@ -186,7 +198,9 @@ fn append_metrics(path: &Path, m: &Metrics) -> Result<()> {
         .append(true)
         .open(path)
         .with_context(|| format!("cannot write {}", path.display()))?;
-    let mut w = csv::WriterBuilder::new().has_headers(fresh).from_writer(file);
+    let mut w = csv::WriterBuilder::new()
+        .has_headers(fresh)
+        .from_writer(file);
     w.serialize(m)?;
     w.flush()?;
     Ok(())
@@ -196,7 +210,8 @@ pub fn read_metrics(path: &Path) -> Result<Vec<Metrics>> {
     if !path.exists() {
         return Ok(Vec::new());
     }
-    let mut r = csv::Reader::from_path(path).with_context(|| format!("cannot read {}", path.display()))?;
+    let mut r =
+        csv::Reader::from_path(path).with_context(|| format!("cannot read {}", path.display()))?;
     r.deserialize()
         .collect::<Result<Vec<Metrics>, _>>()
         .with_context(|| format!("{}: malformed row", path.display()))
@@ -228,13 +243,20 @@ pub fn write_curves(run_dir: &Path) -> Result<()> {
             let w = &rows[i.saturating_sub(9)..=i];
             let v: Vec<f64> = w.iter().map(f).filter(|x| x.is_finite()).collect();
             if !v.is_empty() {
-                out.push((rows[i].env_steps as f64 / 1e6, v.iter().sum::<f64>() / v.len() as f64));
+                out.push((
+                    rows[i].env_steps as f64 / 1e6,
+                    v.iter().sum::<f64>() / v.len() as f64,
+                ));
             }
         }
         out
     };
     let capture = line_plot(
-        &[Series::new("capture rate", smooth(&|m| 100.0 * m.capture_rate), plot::palette(0))],
+        &[Series::new(
+            "capture rate",
+            smooth(&|m| 100.0 * m.capture_rate),
+            plot::palette(0),
+        )],
         "training episodes ending in capture",
         "env steps (M)",
         "%",

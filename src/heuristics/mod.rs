@@ -7,13 +7,13 @@ use crate::env::physics::{self, dist};
 use crate::env::{Action, Controller, EnvConfig, Side, TrapEnv};
 use crate::map::prepared::{ray_dirs, NUM_RAYS};
 use crate::map::PreparedMap;
+use crate::nn::{CheckpointController, PolicySnapshot};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use crate::nn::{CheckpointController, PolicySnapshot};
 use std::fmt;
 use std::path::PathBuf;
-use std::sync::{Arc, OnceLock};
 use std::str::FromStr;
+use std::sync::{Arc, OnceLock};
 
 /// Weight of the wall term against the robot term.
 const WALL_WEIGHT: f64 = 0.6;

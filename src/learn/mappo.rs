@@ -17,9 +17,12 @@ impl CriticView for Mappo {
     fn critic_inputs(&self, patches: &Tensor, vectors: &Tensor, team: usize) -> (Tensor, Tensor) {
         let rows = patches.size()[0];
         let index = team_index(rows as usize, team, patches.device());
-        let p = patches
-            .index_select(0, &index)
-            .view([rows, team as i64, patches.size()[2], patches.size()[3]]);
+        let p = patches.index_select(0, &index).view([
+            rows,
+            team as i64,
+            patches.size()[2],
+            patches.size()[3],
+        ]);
         let v = vectors.index_select(0, &index).view([rows, -1]);
         (p, v)
     }
@@ -38,7 +41,9 @@ pub fn team_index(rows: usize, team: usize, device: Device) -> Tensor {
             }
         }
     }
-    Tensor::from_slice(&idx).to_kind(Kind::Int64).to_device(device)
+    Tensor::from_slice(&idx)
+        .to_kind(Kind::Int64)
+        .to_device(device)
 }
 
 #[cfg(test)]

@@ -179,7 +179,12 @@ impl ValueNorm {
 
 /// PPO's clipped surrogate, to minimise: -mean(min(r A, clip(r) A)) with
 /// r = exp(new - old). Also returns the share of clipped ratios.
-pub fn clipped_surrogate(new_logp: &Tensor, old_logp: &Tensor, adv: &Tensor, clip: f64) -> (Tensor, f64) {
+pub fn clipped_surrogate(
+    new_logp: &Tensor,
+    old_logp: &Tensor,
+    adv: &Tensor,
+    clip: f64,
+) -> (Tensor, f64) {
     let ratio = (new_logp - old_logp).exp();
     let unclipped = &ratio * adv;
     let clipped = ratio.clamp(1.0 - clip, 1.0 + clip) * adv;
@@ -253,7 +258,10 @@ impl Adam {
             if sq.is_empty() {
                 0.0
             } else {
-                Tensor::stack(&sq, 0).sum(Kind::Float).sqrt().double_value(&[])
+                Tensor::stack(&sq, 0)
+                    .sum(Kind::Float)
+                    .sqrt()
+                    .double_value(&[])
             }
         });
         if norm > max_norm {
@@ -430,7 +438,12 @@ impl PpoLearner {
         let actor_vs = nn::VarStore::new(device);
         let actor = Actor::new(&actor_vs.root(), &net, vector_len);
         let critic_vs = nn::VarStore::new(device);
-        let critic = Critic::new(&critic_vs.root(), &net, vector_len, view.critic_agents(team));
+        let critic = Critic::new(
+            &critic_vs.root(),
+            &net,
+            vector_len,
+            view.critic_agents(team),
+        );
         let actor_adam = Adam::new(&actor_vs, cfg.lr, cfg.adam_eps);
         let critic_adam = Adam::new(&critic_vs, cfg.lr, cfg.adam_eps);
         PpoLearner {
@@ -479,7 +492,10 @@ impl PpoLearner {
             self.value_norm.update(&returns);
         }
         let targets: Vec<f32> = if cfg.value_norm {
-            returns.iter().map(|&r| self.value_norm.normalize(r)).collect()
+            returns
+                .iter()
+                .map(|&r| self.value_norm.normalize(r))
+                .collect()
         } else {
             returns
         };
@@ -487,7 +503,8 @@ impl PpoLearner {
             let mean = adv.iter().map(|&a| a as f64).sum::<f64>() / n as f64;
             let var = adv.iter().map(|&a| (a as f64 - mean).powi(2)).sum::<f64>() / n as f64;
             let std = var.sqrt() + 1e-5;
-            adv.iter_mut().for_each(|a| *a = ((*a as f64 - mean) / std) as f32);
+            adv.iter_mut()
+                .for_each(|a| *a = ((*a as f64 - mean) / std) as f32);
         }
 
         // 2. The rollout as tensors on the device; critic inputs built once.
@@ -522,8 +539,11 @@ impl PpoLearner {
                     }
                 }
                 let idx = Tensor::from_slice(&idx).to_device(dev);
-                let seq = Tensor::from_slice(&mb.iter().map(|&s| s as i64).collect::<Vec<_>>()).to_device(dev);
-                let m = masks.index_select(0, &idx).view([l as i64, mb.len() as i64]);
+                let seq = Tensor::from_slice(&mb.iter().map(|&s| s as i64).collect::<Vec<_>>())
+                    .to_device(dev);
+                let m = masks
+                    .index_select(0, &idx)
+                    .view([l as i64, mb.len() as i64]);
 
                 let logits = self.actor.unroll(
                     &patches.index_select(0, &idx),
@@ -534,7 +554,9 @@ impl PpoLearner {
                 let logp_all = logits.log_softmax(-1, Kind::Float);
                 let a = actions.index_select(0, &idx);
                 let new_logp = logp_all.gather(1, &a.unsqueeze(1), false).squeeze_dim(1);
-                let entropy = -(logp_all.exp() * &logp_all).sum_dim_intlist(-1, false, Kind::Float).mean(Kind::Float);
+                let entropy = -(logp_all.exp() * &logp_all)
+                    .sum_dim_intlist(-1, false, Kind::Float)
+                    .mean(Kind::Float);
                 let old = old_logp.index_select(0, &idx);
                 let (policy_loss, clip_frac) =
                     clipped_surrogate(&new_logp, &old, &adv.index_select(0, &idx), cfg.clip);
@@ -547,7 +569,8 @@ impl PpoLearner {
                 );
                 let value_loss = huber(&v, &targets.index_select(0, &idx), cfg.huber_delta);
 
-                let loss = &policy_loss - cfg.entropy_coef * &entropy + cfg.value_coef * &value_loss;
+                let loss =
+                    &policy_loss - cfg.entropy_coef * &entropy + cfg.value_coef * &value_loss;
                 self.actor_adam.zero_grad();
                 self.critic_adam.zero_grad();
                 loss.backward();
@@ -559,7 +582,8 @@ impl PpoLearner {
                 stats.policy_loss += policy_loss.double_value(&[]);
                 stats.value_loss += value_loss.double_value(&[]);
                 stats.entropy += entropy.double_value(&[]);
-                stats.approx_kl += tch::no_grad(|| (&old - &new_logp).mean(Kind::Float).double_value(&[]));
+                stats.approx_kl +=
+                    tch::no_grad(|| (&old - &new_logp).mean(Kind::Float).double_value(&[]));
                 stats.clip_frac += clip_frac;
                 batches += 1.0;
             }
@@ -639,7 +663,11 @@ mod tests {
         let (loss, frac) = clipped_surrogate(&new, &old, &adv, 0.2);
         // min(r A, clip(r) A): 1.2, 0.5, -1.1, -0.8 -> mean -0.2 ... loss = -mean.
         let expected = -(1.2 + 0.5 - 1.1 - 0.8) / 4.0;
-        assert!((loss.double_value(&[]) - expected).abs() < 1e-6, "{}", loss.double_value(&[]));
+        assert!(
+            (loss.double_value(&[]) - expected).abs() < 1e-6,
+            "{}",
+            loss.double_value(&[])
+        );
         assert_eq!(frac, 0.75);
     }
 
@@ -658,7 +686,9 @@ mod tests {
         let w = vs.root().var("w", &[3], nn::Init::Const(1.0));
         let mut adam = Adam::new(&vs, 0.1, 1e-8);
         adam.zero_grad();
-        (&w * Tensor::from_slice(&[2f32, -3.0, 0.5])).sum(Kind::Float).backward();
+        (&w * Tensor::from_slice(&[2f32, -3.0, 0.5]))
+            .sum(Kind::Float)
+            .backward();
         let norm = adam.clip_grad_norm(1.0);
         assert!((norm - (4.0f64 + 9.0 + 0.25).sqrt()).abs() < 1e-5);
         adam.step();

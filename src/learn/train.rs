@@ -16,8 +16,8 @@ use crate::env::{Action, EnvConfig, Side, VecEnv, PATCH_LEN};
 use crate::heuristics::ControllerSpec;
 use crate::map::PreparedMap;
 use crate::nn::checkpoint::{
-    checkpoint_name, code_version, load_into, named_cpu_tensors, read_meta, read_tensors, save_tensors,
-    write_dir_atomically, write_file_atomically, CheckpointMeta, FORMAT,
+    checkpoint_name, code_version, load_into, named_cpu_tensors, read_meta, read_tensors,
+    save_tensors, write_dir_atomically, write_file_atomically, CheckpointMeta, FORMAT,
 };
 use crate::nn::{obs_tensors, pool_patch, NetConfig};
 use anyhow::{anyhow, bail, Context, Result};
@@ -119,9 +119,12 @@ impl SideConfig {
 impl TrainConfig {
     /// Reads a TOML config; errors name the file and the field.
     pub fn load(path: &Path) -> Result<TrainConfig> {
-        let text = std::fs::read_to_string(path).with_context(|| format!("{}: cannot read", path.display()))?;
-        let cfg: TrainConfig = toml::from_str(&text).map_err(|e| anyhow!("{}: {e}", path.display()))?;
-        cfg.validate().map_err(|e| anyhow!("{}: {e}", path.display()))?;
+        let text = std::fs::read_to_string(path)
+            .with_context(|| format!("{}: cannot read", path.display()))?;
+        let cfg: TrainConfig =
+            toml::from_str(&text).map_err(|e| anyhow!("{}: {e}", path.display()))?;
+        cfg.validate()
+            .map_err(|e| anyhow!("{}: {e}", path.display()))?;
         Ok(cfg)
     }
 
@@ -140,15 +143,27 @@ impl TrainConfig {
             return Err("checkpoint_every = 0: must be at least 1 iteration".into());
         }
         if !["auto", "cpu", "cuda"].contains(&self.device.as_str()) {
-            return Err(format!("device = \"{}\": expected auto, cpu or cuda", self.device));
+            return Err(format!(
+                "device = \"{}\": expected auto, cpu or cuda",
+                self.device
+            ));
         }
         let mut learners = 0;
-        for (name, side_cfg, side) in [("captors", &self.captors, Side::Captors), ("target", &self.target, Side::Target)] {
+        for (name, side_cfg, side) in [
+            ("captors", &self.captors, Side::Captors),
+            ("target", &self.target, Side::Target),
+        ] {
             match side_cfg.role().map_err(|e| format!("{name}.{e}"))? {
                 Role::Learn(_) => {
                     learners += 1;
-                    side_cfg.ppo.validate().map_err(|e| format!("{name}.ppo.{e}"))?;
-                    side_cfg.net.validate().map_err(|e| format!("{name}.net.{e}"))?;
+                    side_cfg
+                        .ppo
+                        .validate()
+                        .map_err(|e| format!("{name}.ppo.{e}"))?;
+                    side_cfg
+                        .net
+                        .validate()
+                        .map_err(|e| format!("{name}.net.{e}"))?;
                     if self.rollout_steps % side_cfg.ppo.chunk_len != 0 {
                         return Err(format!(
                             "rollout_steps = {} is not a multiple of {name}.ppo.chunk_len = {}",
@@ -156,7 +171,9 @@ impl TrainConfig {
                         ));
                     }
                 }
-                Role::Script(spec) => spec.check(side, &env).map_err(|e| format!("{name}.play: {e}"))?,
+                Role::Script(spec) => spec
+                    .check(side, &env)
+                    .map_err(|e| format!("{name}.play: {e}"))?,
             }
         }
         if learners == 0 {
@@ -279,7 +296,11 @@ impl Trainer {
         Trainer::starting_at(cfg, maps, 0)
     }
 
-    fn starting_at(cfg: TrainConfig, maps: Arc<Vec<Arc<PreparedMap>>>, iteration: u64) -> Result<Trainer> {
+    fn starting_at(
+        cfg: TrainConfig,
+        maps: Arc<Vec<Arc<PreparedMap>>>,
+        iteration: u64,
+    ) -> Result<Trainer> {
         cfg.validate().map_err(anyhow::Error::msg)?;
         let device = cfg.device();
         if cfg.device == "cuda" && !tch::Cuda::is_available() {
@@ -289,8 +310,13 @@ impl Trainer {
         env_cfg.observations = true;
         let k = env_cfg.num_captors;
         // Later segments of a resumed run play fresh episodes.
-        let mut venv = VecEnv::new(env_cfg.clone(), maps, cfg.num_envs, mix_seed(cfg.seed, iteration))
-            .map_err(anyhow::Error::msg)?;
+        let mut venv = VecEnv::new(
+            env_cfg.clone(),
+            maps,
+            cfg.num_envs,
+            mix_seed(cfg.seed, iteration),
+        )
+        .map_err(anyhow::Error::msg)?;
         tch::manual_seed(mix_seed(cfg.seed ^ 0x5eed, iteration) as i64);
         let mut learners = Vec::new();
         for (side, side_cfg) in [(Side::Captors, &cfg.captors), (Side::Target, &cfg.target)] {
@@ -347,13 +373,17 @@ impl Trainer {
     }
 
     /// Continues the run in `run_dir` from the checkpoints its `state.json` names.
-    pub fn resume(cfg: TrainConfig, maps: Arc<Vec<Arc<PreparedMap>>>, run_dir: &Path) -> Result<Trainer> {
+    pub fn resume(
+        cfg: TrainConfig,
+        maps: Arc<Vec<Arc<PreparedMap>>>,
+        run_dir: &Path,
+    ) -> Result<Trainer> {
         let state_path = run_dir.join("state.json");
-        let state: RunState = serde_json::from_str(
-            &std::fs::read_to_string(&state_path)
-                .with_context(|| format!("{}: cannot read (nothing to resume)", state_path.display()))?,
-        )
-        .with_context(|| format!("{}: not a run state", state_path.display()))?;
+        let state: RunState =
+            serde_json::from_str(&std::fs::read_to_string(&state_path).with_context(|| {
+                format!("{}: cannot read (nothing to resume)", state_path.display())
+            })?)
+            .with_context(|| format!("{}: not a run state", state_path.display()))?;
         if state.config_hash != cfg.hash() {
             bail!(
                 "{}: the run was started with a different configuration (hash {} vs {}); start a new run instead",
@@ -371,19 +401,32 @@ impl Trainer {
                 .iter()
                 .find(|(s, _)| *s == ls.side)
                 .map(|(_, n)| n.clone())
-                .with_context(|| format!("{}: names no {} checkpoint", state_path.display(), ls.side.name()))?;
+                .with_context(|| {
+                    format!(
+                        "{}: names no {} checkpoint",
+                        state_path.display(),
+                        ls.side.name()
+                    )
+                })?;
             let dir = run_dir.join("checkpoints").join(name);
             let meta = read_meta(&dir)?;
             let file = dir.join("actor.safetensors");
             load_into(&mut ls.learner.actor_vs, &read_tensors(&file)?, &file)?;
             let file = dir.join("critic.safetensors");
             load_into(&mut ls.learner.critic_vs, &read_tensors(&file)?, &file)?;
-            let st: LearnerState = serde_json::from_value(meta.learner_state.clone().context("meta.json has no learner_state")?)
-                .with_context(|| format!("{}: learner_state", dir.display()))?;
+            let st: LearnerState = serde_json::from_value(
+                meta.learner_state
+                    .clone()
+                    .context("meta.json has no learner_state")?,
+            )
+            .with_context(|| format!("{}: learner_state", dir.display()))?;
             let opt = read_tensors(&dir.join("optimizer.safetensors"))?;
             let split = |prefix: &str| -> Vec<(String, Tensor)> {
                 opt.iter()
-                    .filter_map(|(n, t)| n.strip_prefix(prefix).map(|n| (n.to_string(), t.to_device(t.device()))))
+                    .filter_map(|(n, t)| {
+                        n.strip_prefix(prefix)
+                            .map(|n| (n.to_string(), t.to_device(t.device())))
+                    })
                     .collect()
             };
             ls.learner
@@ -408,7 +451,8 @@ impl Trainer {
         let na = k + 1;
         let vl = self.venv.cfg.vector_len();
         let n_envs = self.cfg.num_envs;
-        let (mut episodes, mut captures, mut len_sum, mut captor_ret, mut target_ret) = (0usize, 0usize, 0f64, 0f64, 0f64);
+        let (mut episodes, mut captures, mut len_sum, mut captor_ret, mut target_ret) =
+            (0usize, 0usize, 0f64, 0f64, 0f64);
         for t in 0..self.cfg.rollout_steps {
             let t0 = Instant::now();
             for ls in &mut self.learners {
@@ -451,13 +495,20 @@ impl Trainer {
                     ro.patch_side,
                     self.device,
                 );
-                let m = Tensor::from_slice(&ls.next_mask).to_device(self.device).unsqueeze(1);
+                let m = Tensor::from_slice(&ls.next_mask)
+                    .to_device(self.device)
+                    .unsqueeze(1);
                 let lr = &ls.learner;
                 let (probs, values, ha, hc) = tch::no_grad(|| {
                     let (logits, ha) = lr.actor.step(&p, &v, &(&ls.actor_h * &m));
                     let (cp, cv) = lr.view.critic_inputs(&p, &v, ls.team);
                     let (values, hc) = lr.critic.step(&cp, &cv, &(&ls.critic_h * &m));
-                    (logits.softmax(-1, Kind::Float).to_device(Device::Cpu), values.to_device(Device::Cpu), ha, hc)
+                    (
+                        logits.softmax(-1, Kind::Float).to_device(Device::Cpu),
+                        values.to_device(Device::Cpu),
+                        ha,
+                        hc,
+                    )
                 });
                 ls.actor_h = ha;
                 ls.critic_h = hc;
@@ -474,13 +525,16 @@ impl Trainer {
                 }
             }
             let t1 = Instant::now();
-            self.venv.step(&self.actions).map_err(|e| anyhow!("placing robots: {e}"))?;
+            self.venv
+                .step(&self.actions)
+                .map_err(|e| anyhow!("placing robots: {e}"))?;
             for ls in &mut self.learners {
                 let base = t * ls.rows;
                 for row in 0..ls.rows {
                     let (e, j) = (row / ls.team, row % ls.team);
                     let done = self.venv.terminated[e] || self.venv.truncated[e];
-                    ls.rollout.rewards[base + row] = self.venv.rewards[e * na + ls.side.agents(k).start + j];
+                    ls.rollout.rewards[base + row] =
+                        self.venv.rewards[e * na + ls.side.agents(k).start + j];
                     ls.rollout.dones[base + row] = done as u8 as f32;
                     ls.next_mask[row] = (!done) as u8 as f32;
                 }
@@ -507,7 +561,8 @@ impl Trainer {
             for e in 0..n_envs {
                 for (j, agent) in ls.side.agents(k).enumerate() {
                     let (row, src) = (e * ls.team + j, e * na + agent);
-                    vecs[row * vl..(row + 1) * vl].copy_from_slice(&self.venv.vectors[src * vl..(src + 1) * vl]);
+                    vecs[row * vl..(row + 1) * vl]
+                        .copy_from_slice(&self.venv.vectors[src * vl..(src + 1) * vl]);
                     pool_patch(
                         &self.venv.patches[src * PATCH_LEN..(src + 1) * PATCH_LEN],
                         pool,
@@ -516,10 +571,16 @@ impl Trainer {
                 }
             }
             let (p, v) = obs_tensors(&pats, &vecs, rows, 1, ro.patch_side, self.device);
-            let m = Tensor::from_slice(&ls.next_mask).to_device(self.device).unsqueeze(1);
+            let m = Tensor::from_slice(&ls.next_mask)
+                .to_device(self.device)
+                .unsqueeze(1);
             let values = tch::no_grad(|| {
                 let (cp, cv) = ls.learner.view.critic_inputs(&p, &v, ls.team);
-                ls.learner.critic.step(&cp, &cv, &(&ls.critic_h * &m)).0.to_device(Device::Cpu)
+                ls.learner
+                    .critic
+                    .step(&cp, &cv, &(&ls.critic_h * &m))
+                    .0
+                    .to_device(Device::Cpu)
             });
             values.copy_data(&mut ro.last_values, rows);
         }
@@ -536,7 +597,13 @@ impl Trainer {
         self.env_steps += steps;
         let secs = start.elapsed().as_secs_f64();
         self.wall_s += secs;
-        let per = |x: f64| if episodes > 0 { x / episodes as f64 } else { f64::NAN };
+        let per = |x: f64| {
+            if episodes > 0 {
+                x / episodes as f64
+            } else {
+                f64::NAN
+            }
+        };
         let mut m = Metrics {
             iteration: self.iteration,
             env_steps: self.env_steps,
@@ -569,7 +636,13 @@ impl Trainer {
                     &mut m.target_clip_frac,
                 ],
             };
-            for (f, v) in fields.into_iter().zip([u.policy_loss, u.value_loss, u.entropy, u.approx_kl, u.clip_frac]) {
+            for (f, v) in fields.into_iter().zip([
+                u.policy_loss,
+                u.value_loss,
+                u.entropy,
+                u.approx_kl,
+                u.clip_frac,
+            ]) {
                 *f = Some(v);
             }
         }
@@ -608,11 +681,24 @@ impl Trainer {
             let dir = run_dir.join("checkpoints").join(&name);
             let meta = self.meta(ls);
             write_dir_atomically(&dir, |tmp| {
-                save_tensors(&tmp.join("actor.safetensors"), &named_cpu_tensors(&ls.learner.actor_vs))?;
-                save_tensors(&tmp.join("critic.safetensors"), &named_cpu_tensors(&ls.learner.critic_vs))?;
+                save_tensors(
+                    &tmp.join("actor.safetensors"),
+                    &named_cpu_tensors(&ls.learner.actor_vs),
+                )?;
+                save_tensors(
+                    &tmp.join("critic.safetensors"),
+                    &named_cpu_tensors(&ls.learner.critic_vs),
+                )?;
                 let mut opt = Vec::new();
-                for (prefix, adam) in [("actor.", &ls.learner.actor_adam), ("critic.", &ls.learner.critic_adam)] {
-                    opt.extend(adam.state_tensors().into_iter().map(|(n, t)| (format!("{prefix}{n}"), t)));
+                for (prefix, adam) in [
+                    ("actor.", &ls.learner.actor_adam),
+                    ("critic.", &ls.learner.critic_adam),
+                ] {
+                    opt.extend(
+                        adam.state_tensors()
+                            .into_iter()
+                            .map(|(n, t)| (format!("{prefix}{n}"), t)),
+                    );
                 }
                 save_tensors(&tmp.join("optimizer.safetensors"), &opt)?;
                 std::fs::write(tmp.join("meta.json"), serde_json::to_string_pretty(&meta)?)?;
@@ -628,12 +714,18 @@ impl Trainer {
             config_hash: self.config_hash.clone(),
             checkpoints: names,
         };
-        write_file_atomically(&run_dir.join("state.json"), serde_json::to_string_pretty(&state)?.as_bytes())?;
+        write_file_atomically(
+            &run_dir.join("state.json"),
+            serde_json::to_string_pretty(&state)?.as_bytes(),
+        )?;
         Ok(written)
     }
 
     pub fn learner_sides(&self) -> Vec<(Side, Algorithm)> {
-        self.learners.iter().map(|l| (l.side, l.algorithm)).collect()
+        self.learners
+            .iter()
+            .map(|l| (l.side, l.algorithm))
+            .collect()
     }
 }
 
@@ -657,7 +749,10 @@ mod tests {
     #[test]
     fn config_errors_name_the_field() {
         let bad: Result<TrainConfig, _> = toml::from_str("[captors.ppo]\nentropy = 0.1\n");
-        assert!(bad.unwrap_err().to_string().contains("entropy"), "unknown key reported");
+        assert!(
+            bad.unwrap_err().to_string().contains("entropy"),
+            "unknown key reported"
+        );
         let mut cfg = TrainConfig::default();
         cfg.rollout_steps = 15;
         assert!(cfg.validate().unwrap_err().contains("chunk_len"));
@@ -686,7 +781,10 @@ mod tests {
         }
         assert_eq!((counts[1], counts[4]), (0, 0));
         for (c, q) in counts.iter().zip(p) {
-            assert!((*c as f64 / 20_000.0 - q as f64).abs() < 0.015, "{counts:?}");
+            assert!(
+                (*c as f64 / 20_000.0 - q as f64).abs() < 0.015,
+                "{counts:?}"
+            );
         }
     }
 }

@@ -93,9 +93,14 @@ pub fn checkpoint_name(side: Side, env_steps: u64) -> String {
 /// then replaces `dir`.
 pub fn write_dir_atomically(dir: &Path, fill: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
     let parent = dir.parent().unwrap_or(Path::new("."));
-    std::fs::create_dir_all(parent).with_context(|| format!("cannot create {}", parent.display()))?;
+    std::fs::create_dir_all(parent)
+        .with_context(|| format!("cannot create {}", parent.display()))?;
     let name = dir.file_name().context("checkpoint path has no name")?;
-    let tmp = parent.join(format!(".{}.tmp-{}", name.to_string_lossy(), std::process::id()));
+    let tmp = parent.join(format!(
+        ".{}.tmp-{}",
+        name.to_string_lossy(),
+        std::process::id()
+    ));
     if tmp.exists() {
         std::fs::remove_dir_all(&tmp)?;
     }
@@ -112,7 +117,8 @@ pub fn write_dir_atomically(dir: &Path, fill: impl FnOnce(&Path) -> Result<()>) 
 pub fn write_file_atomically(path: &Path, bytes: &[u8]) -> Result<()> {
     let tmp = path.with_extension(format!("tmp-{}", std::process::id()));
     std::fs::write(&tmp, bytes).with_context(|| format!("cannot write {}", tmp.display()))?;
-    std::fs::rename(&tmp, path).with_context(|| format!("cannot move {} into place", path.display()))
+    std::fs::rename(&tmp, path)
+        .with_context(|| format!("cannot move {} into place", path.display()))
 }
 
 /// Named tensors of a var store, sorted by name, on the CPU.
@@ -127,7 +133,8 @@ pub fn named_cpu_tensors(vs: &nn::VarStore) -> Vec<(String, Tensor)> {
 }
 
 pub fn save_tensors(path: &Path, tensors: &[(String, Tensor)]) -> Result<()> {
-    Tensor::write_safetensors(tensors, path).with_context(|| format!("cannot write {}", path.display()))
+    Tensor::write_safetensors(tensors, path)
+        .with_context(|| format!("cannot write {}", path.display()))
 }
 
 /// Copies weights read from `file` into `vs`; every variable of the network
@@ -159,14 +166,18 @@ pub fn read_tensors(path: &Path) -> Result<Vec<(String, Tensor)>> {
     if !path.is_file() {
         bail!("{}: missing", path.display());
     }
-    Tensor::read_safetensors(path).with_context(|| format!("{}: not a readable safetensors file", path.display()))
+    let mut t = Tensor::read_safetensors(path)
+        .with_context(|| format!("{}: not a readable safetensors file", path.display()))?;
+    t.sort_by(|a, b| a.0.cmp(&b.0));
+    Ok(t)
 }
 
 pub fn read_meta(dir: &Path) -> Result<CheckpointMeta> {
     let path = dir.join("meta.json");
-    let text = std::fs::read_to_string(&path).with_context(|| format!("{}: cannot read", path.display()))?;
-    let meta: CheckpointMeta =
-        serde_json::from_str(&text).with_context(|| format!("{}: not a checkpoint sidecar", path.display()))?;
+    let text = std::fs::read_to_string(&path)
+        .with_context(|| format!("{}: cannot read", path.display()))?;
+    let meta: CheckpointMeta = serde_json::from_str(&text)
+        .with_context(|| format!("{}: not a checkpoint sidecar", path.display()))?;
     if meta.format != FORMAT {
         bail!(
             "{}: checkpoint format {} (this build reads format {FORMAT})",
@@ -210,7 +221,10 @@ pub fn resolve_checkpoint(path: &Path, side: Side) -> Result<PathBuf> {
         if dir.join("meta.json").is_file() {
             return Ok(dir.to_path_buf());
         }
-        bail!("{}: not inside a checkpoint folder (no meta.json beside it)", path.display());
+        bail!(
+            "{}: not inside a checkpoint folder (no meta.json beside it)",
+            path.display()
+        );
     }
     if path.join("meta.json").is_file() {
         return Ok(path.to_path_buf());
@@ -319,18 +333,28 @@ impl Controller for CheckpointController {
         self.vectors.resize(n * vl, 0.0);
         self.patches.resize(n * pl, 0);
         for (row, i) in agents.enumerate() {
-            env.write_observation(i, &mut self.vectors[row * vl..(row + 1) * vl], &mut self.patch);
+            env.write_observation(
+                i,
+                &mut self.vectors[row * vl..(row + 1) * vl],
+                &mut self.patch,
+            );
             pool_patch(
                 &self.patch,
                 net.patch_pool as usize,
                 &mut self.patches[row * pl..(row + 1) * pl],
             );
         }
-        let h = self
-            .hidden
-            .take()
-            .unwrap_or_else(|| Tensor::zeros([n as i64, self.actor.hidden], (Kind::Float, Device::Cpu)));
-        let (p, v) = obs_tensors(&self.patches, &self.vectors, n, 1, net.input_side(), Device::Cpu);
+        let h = self.hidden.take().unwrap_or_else(|| {
+            Tensor::zeros([n as i64, self.actor.hidden], (Kind::Float, Device::Cpu))
+        });
+        let (p, v) = obs_tensors(
+            &self.patches,
+            &self.vectors,
+            n,
+            1,
+            net.input_side(),
+            Device::Cpu,
+        );
         let (logits, h) = tch::no_grad(|| self.actor.step(&p, &v, &h));
         self.hidden = Some(h);
         let best = logits.argmax(1, false);

@@ -123,7 +123,10 @@ impl Encoder {
             .flatten(1, -1)
             .apply(&self.patch_fc)
             .relu();
-        let v = vectors.apply(&self.vector_norm).apply(&self.vector_fc).relu();
+        let v = vectors
+            .apply(&self.vector_norm)
+            .apply(&self.vector_fc)
+            .relu();
         Tensor::cat(&[x, v], 1).apply(&self.merge_fc).relu()
     }
 }
@@ -193,7 +196,10 @@ impl Actor {
             cfg.hidden,
             Action::COUNT as i64,
             nn::LinearConfig {
-                ws_init: nn::Init::Uniform { lo: -0.01, up: 0.01 },
+                ws_init: nn::Init::Uniform {
+                    lo: -0.01,
+                    up: 0.01,
+                },
                 ..Default::default()
             },
         );
@@ -211,8 +217,16 @@ impl Actor {
     }
 
     /// Logits [len * batch, 5] of a chunk; see `Trunk::unroll`.
-    pub fn unroll(&self, patches: &Tensor, vectors: &Tensor, h0: &Tensor, masks: &Tensor) -> Tensor {
-        self.trunk.unroll(patches, vectors, h0, masks).apply(&self.head)
+    pub fn unroll(
+        &self,
+        patches: &Tensor,
+        vectors: &Tensor,
+        h0: &Tensor,
+        masks: &Tensor,
+    ) -> Tensor {
+        self.trunk
+            .unroll(patches, vectors, h0, masks)
+            .apply(&self.head)
     }
 }
 
@@ -245,7 +259,13 @@ impl Critic {
     }
 
     /// Values [len * batch] of a chunk; see `Trunk::unroll`.
-    pub fn unroll(&self, patches: &Tensor, vectors: &Tensor, h0: &Tensor, masks: &Tensor) -> Tensor {
+    pub fn unroll(
+        &self,
+        patches: &Tensor,
+        vectors: &Tensor,
+        h0: &Tensor,
+        masks: &Tensor,
+    ) -> Tensor {
         self.trunk
             .unroll(patches, vectors, h0, masks)
             .apply(&self.head)
@@ -326,7 +346,10 @@ mod tests {
                 &vectors.index_select(0, &rows),
                 &(&h * &m),
             );
-            let diff = (&l - logits.index_select(0, &rows)).abs().max().double_value(&[]);
+            let diff = (&l - logits.index_select(0, &rows))
+                .abs()
+                .max()
+                .double_value(&[]);
             assert!(diff < 1e-5, "step {t}: {diff}");
             h = h2;
         }

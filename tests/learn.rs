@@ -1,0 +1,232 @@
+//! Learners end to end: a task small enough to learn in seconds, checkpoints
+//! as controllers, sidecar mismatches, and resuming a run.
+
+mod common;
+
+use common::{maps, room};
+use std::path::Path;
+use std::sync::Arc;
+use t2e::env::{EnvConfig, Side, TrapEnv};
+use t2e::eval::{self, EvalSetting};
+use t2e::heuristics::ControllerSpec;
+use t2e::learn::train::{SideConfig, TrainConfig, Trainer};
+use t2e::nn::checkpoint::{named_cpu_tensors, read_meta};
+use t2e::nn::{NetConfig, PolicySnapshot};
+
+/// One captor against a target that stands still, in a 3 m x 3 m room: all
+/// the captor must learn is to turn towards the target and drive to it.
+fn chase_config(seed: u64) -> TrainConfig {
+    TrainConfig {
+        name: "chase".into(),
+        seed,
+        total_env_steps: u64::MAX,
+        num_envs: 16,
+        rollout_steps: 40,
+        checkpoint_every: 1000,
+        device: "cpu".into(),
+        maps: "unused".into(),
+        env: EnvConfig {
+            num_captors: 1,
+            episode_length: 40,
+            ..EnvConfig::default()
+        },
+        captors: SideConfig {
+            play: "mappo".into(),
+            net: NetConfig {
+                hidden: 32,
+                conv_channels: [4, 8],
+                patch_pool: 4,
+            },
+            ppo: t2e::learn::ppo::PpoConfig {
+                lr: 2e-3,
+                epochs: 4,
+                ..Default::default()
+            },
+        },
+        target: SideConfig {
+            play: "still".into(),
+            ..SideConfig::default()
+        },
+    }
+}
+
+fn chase_maps() -> Arc<Vec<Arc<t2e::map::PreparedMap>>> {
+    maps(room(100, 160, 100, 160))
+}
+
+fn mean_return(trainer: &mut Trainer, iterations: usize) -> f64 {
+    let mut sum = 0.0;
+    let mut n = 0;
+    for _ in 0..iterations {
+        let m = trainer.iterate().unwrap();
+        if m.episodes > 0 {
+            sum += m.captor_return * m.episodes as f64;
+            n += m.episodes;
+        }
+    }
+    sum / n as f64
+}
+
+#[test]
+fn a_captor_learns_to_reach_a_still_target() {
+    tch::set_num_threads(1);
+    let mut trainer = Trainer::new(chase_config(1), chase_maps()).unwrap();
+    // Untrained: the distance term averages out, the step cost stays (-0.4 x 40).
+    let before = mean_return(&mut trainer, 3);
+    for _ in 0..150 {
+        trainer.iterate().unwrap();
+    }
+    let after = mean_return(&mut trainer, 5);
+    eprintln!("chase: untrained {before:.1}, trained {after:.1}");
+    // Reaching the target pays 50 per metre closed (starts are 1 m to 3 m
+    // apart) plus 5 per step in contact; a learned captor must earn far more.
+    assert!(before < 20.0, "untrained return {before:.1}");
+    assert!(
+        after > before + 60.0 && after > 80.0,
+        "learned return {after:.1} (untrained {before:.1})"
+    );
+}
+
+#[test]
+fn checkpoints_play_as_controllers_and_resume_exactly() {
+    tch::set_num_threads(1);
+    let dir = tempfile::tempdir().unwrap();
+    let run = dir.path();
+    let cfg = chase_config(2);
+    let mut trainer = Trainer::new(cfg.clone(), chase_maps()).unwrap();
+    trainer.iterate().unwrap();
+    trainer.iterate().unwrap();
+    let written = trainer.save(run).unwrap();
+    assert_eq!(written.len(), 1);
+    let ckpt = &written[0];
+    assert!(ckpt.ends_with("captors-000000001280"), "{}", ckpt.display());
+    let meta = read_meta(ckpt).unwrap();
+    assert_eq!(
+        (meta.side, meta.num_captors, meta.iteration, meta.env_steps),
+        (Side::Captors, 1, 2, 1280)
+    );
+    assert_eq!(meta.algorithm, "mappo");
+    assert_eq!(meta.config_hash, cfg.hash());
+
+    // Resuming restores weights, optimiser and counters.
+    let resumed = Trainer::resume(cfg.clone(), chase_maps(), run).unwrap();
+    assert_eq!((resumed.iteration, resumed.env_steps), (2, 1280));
+    let saved = t2e::nn::checkpoint::read_tensors(&ckpt.join("actor.safetensors")).unwrap();
+    let again = resumed.save(&run.join("again")).unwrap();
+    let reloaded = t2e::nn::checkpoint::read_tensors(&again[0].join("actor.safetensors")).unwrap();
+    assert_eq!(saved.len(), reloaded.len());
+    for ((n1, t1), (n2, t2)) in saved.iter().zip(&reloaded) {
+        assert_eq!(n1, n2);
+        assert!(t1.equal(t2), "{n1} differs after resume");
+    }
+    let opt1 = t2e::nn::checkpoint::read_tensors(&ckpt.join("optimizer.safetensors")).unwrap();
+    let opt2 = t2e::nn::checkpoint::read_tensors(&again[0].join("optimizer.safetensors")).unwrap();
+    assert!(opt1.iter().zip(&opt2).all(|((_, a), (_, b))| a.equal(b)));
+    assert_eq!(
+        read_meta(&again[0]).unwrap().learner_state,
+        meta.learner_state
+    );
+
+    // A different config cannot resume this run.
+    let mut other = cfg.clone();
+    other.captors.ppo.lr = 1e-4;
+    let err = Trainer::resume(other, chase_maps(), run)
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(err.contains("different configuration"), "{err}");
+
+    // As a controller: the run folder resolves to its newest captor checkpoint,
+    // and evaluation is deterministic.
+    let spec: ControllerSpec = format!("ckpt:{}", run.display()).parse().unwrap();
+    let setting = EvalSetting {
+        captors: spec.clone(),
+        target: ControllerSpec::Still,
+        num_captors: 1,
+        episodes: 6,
+        episode_length: 30,
+        soa_every: 0,
+        ..EvalSetting::default()
+    };
+    let (s1, r1) = eval::run(&setting, &chase_maps(), "room", false).unwrap();
+    let (_, r2) = eval::run(&setting, &chase_maps(), "room", false).unwrap();
+    assert_eq!(r1, r2);
+    assert!(s1.captors.starts_with("ckpt:"));
+    // The greedy controller's first actions are the argmax of the network.
+    let snap = PolicySnapshot::load(run, Side::Captors).unwrap();
+    let (vs, _) = snap.build_actor(tch::Device::Cpu).unwrap();
+    let loaded = named_cpu_tensors(&vs);
+    assert!(loaded.iter().zip(&saved).all(|((_, a), (_, b))| a.equal(b)));
+
+    // It refuses to play the target, or with another K.
+    let err = spec.check(Side::Target, &EnvConfig::default()).unwrap_err();
+    assert!(
+        err.contains("captors policy") || err.contains("holds no target"),
+        "{err}"
+    );
+    let cfg3 = EnvConfig {
+        num_captors: 3,
+        ..EnvConfig::default()
+    };
+    let err = spec.check(Side::Captors, &cfg3).unwrap_err();
+    assert!(err.contains("K = 1") && err.contains("K = 3"), "{err}");
+    let _ = TrapEnv::new(cfg3, chase_maps()).unwrap();
+}
+
+fn edit_meta(ckpt: &Path, from: &str, to: &str) {
+    let p = ckpt.join("meta.json");
+    let text = std::fs::read_to_string(&p).unwrap();
+    assert!(text.contains(from), "{text}");
+    std::fs::write(&p, text.replacen(from, to, 1)).unwrap();
+}
+
+#[test]
+fn a_sidecar_that_does_not_match_the_weights_is_a_clear_error() {
+    tch::set_num_threads(1);
+    let dir = tempfile::tempdir().unwrap();
+    let trainer = Trainer::new(chase_config(3), chase_maps()).unwrap();
+    let ckpt = trainer.save(dir.path()).unwrap().remove(0);
+    assert!(PolicySnapshot::load(&ckpt, Side::Captors).is_ok());
+
+    edit_meta(&ckpt, "\"hidden\": 32", "\"hidden\": 64");
+    let err = format!(
+        "{:#}",
+        PolicySnapshot::load(&ckpt, Side::Captors).unwrap_err()
+    );
+    assert!(
+        err.contains("actor.safetensors") && err.contains("shape"),
+        "{err}"
+    );
+    edit_meta(&ckpt, "\"hidden\": 64", "\"hidden\": 32");
+
+    edit_meta(&ckpt, "\"num_captors\": 1", "\"num_captors\": 2");
+    let err = format!(
+        "{:#}",
+        PolicySnapshot::load(&ckpt, Side::Captors).unwrap_err()
+    );
+    assert!(
+        err.contains("vector_fc") || err.contains("vector_norm"),
+        "{err}"
+    );
+    edit_meta(&ckpt, "\"num_captors\": 2", "\"num_captors\": 1");
+
+    std::fs::write(ckpt.join("actor.safetensors"), b"not safetensors").unwrap();
+    let err = format!(
+        "{:#}",
+        PolicySnapshot::load(&ckpt, Side::Captors).unwrap_err()
+    );
+    assert!(err.contains("actor.safetensors"), "{err}");
+
+    std::fs::write(ckpt.join("meta.json"), "{\"format\": 1}").unwrap();
+    let err = format!(
+        "{:#}",
+        PolicySnapshot::load(&ckpt, Side::Captors).unwrap_err()
+    );
+    assert!(err.contains("meta.json"), "{err}");
+
+    let err = format!(
+        "{:#}",
+        PolicySnapshot::load(&dir.path().join("nope"), Side::Captors).unwrap_err()
+    );
+    assert!(err.contains("no such checkpoint"), "{err}");
+}
