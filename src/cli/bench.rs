@@ -22,6 +22,60 @@ pub struct BenchArgs {
     /// Worlds in the batched rows.
     #[arg(long, default_value_t = 64)]
     pub envs: usize,
+    /// Instead of the environment table, time whole PPO iterations (rollout
+    /// + update) of this training config and print where the time goes.
+    #[arg(long)]
+    pub ppo: Option<std::path::PathBuf>,
+    /// PPO iterations to time (after one warm-up iteration).
+    #[arg(long, default_value_t = 5)]
+    pub iterations: usize,
+    /// Device for --ppo: auto, cpu or cuda.
+    #[arg(long)]
+    pub device: Option<String>,
+}
+
+/// Times whole PPO iterations of a training config.
+fn ppo_table(args: &BenchArgs, path: &std::path::Path) -> Result<()> {
+    let mut cfg = crate::learn::train::TrainConfig::load(path)?;
+    if let Some(d) = &args.device {
+        cfg.device = d.clone();
+    }
+    let maps = map::catalog::load_prepared(&cfg.maps)?;
+    let mut trainer = crate::learn::train::Trainer::new(cfg.clone(), maps)?;
+    trainer.iterate()?;
+    let (mut secs, mut env, mut inf, mut upd, mut steps) = (0.0, 0.0, 0.0, 0.0, 0u64);
+    for _ in 0..args.iterations.max(1) {
+        let m = trainer.iterate()?;
+        secs += m.time_env + m.time_inference + m.time_update;
+        env += m.time_env;
+        inf += m.time_inference;
+        upd += m.time_update;
+        steps += (cfg.num_envs * cfg.rollout_steps) as u64;
+    }
+    let learners: Vec<String> = trainer
+        .learner_sides()
+        .iter()
+        .map(|(s, a)| format!("{} {}", s.name(), a.name()))
+        .collect();
+    println!(
+        "| config | learners | device | threads | worlds x steps | env steps/s | s per iteration | env | inference | update |"
+    );
+    println!("|---|---|---|---|---|---|---|---|---|---|");
+    println!(
+        "| {} | {} | {:?} | {} | {} x {} | {:.0} | {:.2} | {:.0}% | {:.0}% | {:.0}% |",
+        path.display(),
+        learners.join(" + "),
+        trainer.device,
+        rayon::current_num_threads(),
+        cfg.num_envs,
+        cfg.rollout_steps,
+        steps as f64 / secs,
+        secs / args.iterations.max(1) as f64,
+        100.0 * env / secs,
+        100.0 * inf / secs,
+        100.0 * upd / secs,
+    );
+    Ok(())
 }
 
 struct Row {
@@ -86,6 +140,9 @@ fn single_core_steps(
 }
 
 pub fn run(args: BenchArgs) -> Result<()> {
+    if let Some(p) = &args.ppo {
+        return ppo_table(&args, p);
+    }
     let gibson = map::catalog::gibson_dir().is_some();
     let env_spec = args.maps.clone().unwrap_or_else(|| {
         if gibson {

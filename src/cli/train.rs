@@ -173,6 +173,9 @@ fn refuse_test_maps(spec: &str) -> Result<()> {
 
 /// Averages over the last few iterations, for the progress bar.
 fn status_line(recent: &[Metrics]) -> String {
+    if recent.is_empty() {
+        return "no new iterations".into();
+    }
     let mean = |f: &dyn Fn(&Metrics) -> f64| {
         let v: Vec<f64> = recent.iter().map(f).filter(|x| x.is_finite()).collect();
         if v.is_empty() {

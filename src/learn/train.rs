@@ -164,7 +164,7 @@ impl TrainConfig {
                         .net
                         .validate()
                         .map_err(|e| format!("{name}.net.{e}"))?;
-                    if self.rollout_steps % side_cfg.ppo.chunk_len != 0 {
+                    if !self.rollout_steps.is_multiple_of(side_cfg.ppo.chunk_len) {
                         return Err(format!(
                             "rollout_steps = {} is not a multiple of {name}.ppo.chunk_len = {}",
                             self.rollout_steps, side_cfg.ppo.chunk_len
@@ -753,8 +753,10 @@ mod tests {
             bad.unwrap_err().to_string().contains("entropy"),
             "unknown key reported"
         );
-        let mut cfg = TrainConfig::default();
-        cfg.rollout_steps = 15;
+        let cfg = TrainConfig {
+            rollout_steps: 15,
+            ..TrainConfig::default()
+        };
         assert!(cfg.validate().unwrap_err().contains("chunk_len"));
         let mut cfg = TrainConfig::default();
         cfg.captors.play = "heuristic".into();
@@ -766,8 +768,10 @@ mod tests {
         cfg.captors.ppo.gamma = 1.5;
         assert!(cfg.validate().unwrap_err().starts_with("captors.ppo.gamma"));
         assert_eq!(TrainConfig::default().hash(), TrainConfig::default().hash());
-        let mut other = TrainConfig::default();
-        other.seed = 1;
+        let other = TrainConfig {
+            seed: 1,
+            ..TrainConfig::default()
+        };
         assert_ne!(other.hash(), TrainConfig::default().hash());
     }
 
