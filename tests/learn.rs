@@ -230,3 +230,49 @@ fn a_sidecar_that_does_not_match_the_weights_is_a_clear_error() {
     );
     assert!(err.contains("no such checkpoint"), "{err}");
 }
+
+#[test]
+fn both_sides_learn_together_and_a_frozen_checkpoint_can_be_the_opponent() {
+    tch::set_num_threads(1);
+    let dir = tempfile::tempdir().unwrap();
+    let mut cfg = chase_config(4);
+    cfg.target = SideConfig {
+        play: "ippo".into(),
+        ..cfg.captors.clone()
+    };
+    let mut trainer = Trainer::new(cfg.clone(), chase_maps()).unwrap();
+    let m = trainer.iterate().unwrap();
+    assert!(m.captor_policy_loss.is_some() && m.target_policy_loss.is_some());
+    assert!(m.captor_entropy.unwrap() > 1.0 && m.target_entropy.unwrap() > 1.0);
+    let written = trainer.save(dir.path()).unwrap();
+    let names: Vec<String> = written
+        .iter()
+        .map(|p| p.file_name().unwrap().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(names, ["captors-000000000640", "target-000000000640"]);
+    let target_meta = read_meta(&written[1]).unwrap();
+    assert_eq!(
+        (target_meta.side, target_meta.algorithm.as_str()),
+        (Side::Target, "ippo")
+    );
+    assert_eq!(target_meta.critic_agents, 1);
+    let resumed = Trainer::resume(cfg, chase_maps(), dir.path()).unwrap();
+    assert_eq!(resumed.learner_sides().len(), 2);
+
+    // The target's checkpoint, frozen, as the opponent of learning captors.
+    let mut against_frozen = chase_config(5);
+    against_frozen.target.play = format!("ckpt:{}", dir.path().display());
+    let mut t = Trainer::new(against_frozen.clone(), chase_maps()).unwrap();
+    let m = t.iterate().unwrap();
+    assert!(m.captor_policy_loss.is_some() && m.target_policy_loss.is_none());
+    // A captor checkpoint cannot play the target.
+    against_frozen.target.play = format!("ckpt:{}", written[0].display());
+    let err = Trainer::new(against_frozen, chase_maps())
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(
+        err.contains("target.play") && err.contains("captors policy"),
+        "{err}"
+    );
+}

@@ -282,3 +282,57 @@ pub fn write_curves(run_dir: &Path) -> Result<()> {
     image::imageops::replace(&mut img, &returns, 0, 360);
     plot::save_png(&img, run_dir.join("curves.png"))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_test_maps_are_refused_for_training() {
+        for spec in ["small", "medium:x", "gibson", "large"] {
+            let err = refuse_test_maps(spec).unwrap_err().to_string();
+            assert!(err.contains("test set"), "{spec}: {err}");
+        }
+        assert!(refuse_test_maps("generated:20").is_ok());
+        assert!(refuse_test_maps("shipped").is_ok());
+        if let Some(g) = crate::map::catalog::gibson_dir() {
+            assert!(refuse_test_maps(&g.display().to_string()).is_err());
+        }
+    }
+
+    #[test]
+    fn a_config_typo_names_the_file_and_the_field() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("typo.toml");
+        std::fs::write(&path, "name = \"x\"\n[captors.ppo]\nentropy_coeff = 0.02\n").unwrap();
+        let err = format!("{:#}", TrainConfig::load(&path).unwrap_err());
+        assert!(
+            err.contains("typo.toml") && err.contains("entropy_coeff"),
+            "{err}"
+        );
+        std::fs::write(&path, "[env]\nnum_captors = 0\n").unwrap();
+        let err = format!("{:#}", TrainConfig::load(&path).unwrap_err());
+        assert!(
+            err.contains("typo.toml") && err.contains("env.num_captors"),
+            "{err}"
+        );
+        std::fs::write(&path, "[target]\nplay = \"mapo\"\n").unwrap();
+        let err = format!("{:#}", TrainConfig::load(&path).unwrap_err());
+        assert!(err.contains("target.play") && err.contains("mapo"), "{err}");
+    }
+
+    #[test]
+    fn every_shipped_config_is_valid() {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("configs");
+        let mut n = 0;
+        for e in std::fs::read_dir(dir).unwrap() {
+            let p = e.unwrap().path();
+            if p.extension().and_then(|x| x.to_str()) == Some("toml") {
+                let cfg = TrainConfig::load(&p).unwrap();
+                refuse_test_maps(&cfg.maps).unwrap();
+                n += 1;
+            }
+        }
+        assert!(n >= 8, "{n} configs");
+    }
+}
