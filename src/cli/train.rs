@@ -234,7 +234,8 @@ fn keep_metrics_up_to(path: &Path, iteration: u64) -> Result<()> {
     Ok(())
 }
 
-/// Capture rate and returns against environment steps, smoothed over 10 iterations.
+/// Capture rate and returns against environment steps, each point the
+/// average over the episodes that ended in the last 20 iterations.
 pub fn write_curves(run_dir: &Path) -> Result<()> {
     let rows = read_metrics(&run_dir.join("metrics.csv"))?;
     if rows.is_empty() {
@@ -243,13 +244,15 @@ pub fn write_curves(run_dir: &Path) -> Result<()> {
     let smooth = |f: &dyn Fn(&Metrics) -> f64| -> Vec<(f64, f64)> {
         let mut out = Vec::new();
         for i in 0..rows.len() {
-            let w = &rows[i.saturating_sub(9)..=i];
-            let v: Vec<f64> = w.iter().map(f).filter(|x| x.is_finite()).collect();
-            if !v.is_empty() {
-                out.push((
-                    rows[i].env_steps as f64 / 1e6,
-                    v.iter().sum::<f64>() / v.len() as f64,
-                ));
+            let (mut sum, mut n) = (0.0, 0usize);
+            for m in &rows[i.saturating_sub(19)..=i] {
+                if m.episodes > 0 && f(m).is_finite() {
+                    sum += f(m) * m.episodes as f64;
+                    n += m.episodes;
+                }
+            }
+            if n > 0 {
+                out.push((rows[i].env_steps as f64 / 1e6, sum / n as f64));
             }
         }
         out
