@@ -450,7 +450,6 @@ impl Trainer {
         let k = self.cfg.env.num_captors;
         let na = k + 1;
         let vl = self.venv.cfg.vector_len();
-        let n_envs = self.cfg.num_envs;
         let (mut episodes, mut captures, mut len_sum, mut captor_ret, mut target_ret) =
             (0usize, 0usize, 0f64, 0f64, 0f64);
         for t in 0..self.cfg.rollout_steps {
@@ -459,22 +458,14 @@ impl Trainer {
                 let ro = &mut ls.rollout;
                 let rows = ls.rows;
                 let base = t * rows;
-                let pool = ls.learner.net.patch_pool as usize;
                 let pl = ls.learner.net.input_len();
-                // Gather this side's observations, a world's robots adjacent.
-                for e in 0..n_envs {
-                    for (j, agent) in ls.side.agents(k).enumerate() {
-                        let row = e * ls.team + j;
-                        let src = e * na + agent;
-                        ro.vectors[(base + row) * vl..(base + row + 1) * vl]
-                            .copy_from_slice(&self.venv.vectors[src * vl..(src + 1) * vl]);
-                        pool_patch(
-                            &self.venv.patches[src * PATCH_LEN..(src + 1) * PATCH_LEN],
-                            pool,
-                            &mut ro.patches[(base + row) * pl..(base + row + 1) * pl],
-                        );
-                    }
-                }
+                gather_side(
+                    &self.venv,
+                    ls.side,
+                    &ls.learner.net,
+                    &mut ro.vectors[base * vl..(base + rows) * vl],
+                    &mut ro.patches[base * pl..(base + rows) * pl],
+                );
                 ro.masks[base..base + rows].copy_from_slice(&ls.next_mask);
                 let l = ro.chunk_len;
                 if t % l == 0 {
@@ -554,22 +545,10 @@ impl Trainer {
         for ls in &mut self.learners {
             let ro = &mut ls.rollout;
             let rows = ls.rows;
-            let pool = ls.learner.net.patch_pool as usize;
             let pl = ls.learner.net.input_len();
             let mut vecs = vec![0f32; rows * vl];
             let mut pats = vec![0u8; rows * pl];
-            for e in 0..n_envs {
-                for (j, agent) in ls.side.agents(k).enumerate() {
-                    let (row, src) = (e * ls.team + j, e * na + agent);
-                    vecs[row * vl..(row + 1) * vl]
-                        .copy_from_slice(&self.venv.vectors[src * vl..(src + 1) * vl]);
-                    pool_patch(
-                        &self.venv.patches[src * PATCH_LEN..(src + 1) * PATCH_LEN],
-                        pool,
-                        &mut pats[row * pl..(row + 1) * pl],
-                    );
-                }
-            }
+            gather_side(&self.venv, ls.side, &ls.learner.net, &mut vecs, &mut pats);
             let (p, v) = obs_tensors(&pats, &vecs, rows, 1, ro.patch_side, self.device);
             let m = Tensor::from_slice(&ls.next_mask)
                 .to_device(self.device)
@@ -726,6 +705,33 @@ impl Trainer {
             .iter()
             .map(|l| (l.side, l.algorithm))
             .collect()
+    }
+}
+
+/// Copies one side's observations out of the vector env, a world's robots
+/// adjacent, pooling each patch for the side's network.
+fn gather_side(
+    venv: &VecEnv,
+    side: Side,
+    net: &NetConfig,
+    vectors: &mut [f32],
+    patches: &mut [u8],
+) {
+    let k = venv.cfg.num_captors;
+    let (na, vl) = (k + 1, venv.cfg.vector_len());
+    let (pool, pl) = (net.patch_pool as usize, net.input_len());
+    let team = side.agents(k).len();
+    for e in 0..venv.num_envs() {
+        for (j, agent) in side.agents(k).enumerate() {
+            let (row, src) = (e * team + j, e * na + agent);
+            vectors[row * vl..(row + 1) * vl]
+                .copy_from_slice(&venv.vectors[src * vl..(src + 1) * vl]);
+            pool_patch(
+                &venv.patches[src * PATCH_LEN..(src + 1) * PATCH_LEN],
+                pool,
+                &mut patches[row * pl..(row + 1) * pl],
+            );
+        }
     }
 }
 
