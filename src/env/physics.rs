@@ -58,7 +58,7 @@ pub fn wall_repulsion(map: &PreparedMap, pos: [f64; 2]) -> [f64; 2] {
     }
     let mut f = [0.0, 0.0];
     for dir in ray_dirs().iter().take(NUM_RAYS) {
-        let (d, _) = map.ray_distance(pos, *dir, REPULSION_RAY_MAX);
+        let d = map.ray_distance(pos, *dir, REPULSION_RAY_MAX);
         if d <= REPULSION_RANGE {
             let w = 1.0 - (d.max(1e-3) / REPULSION_RANGE).ln();
             f[0] -= w * dir[0];

@@ -1,11 +1,11 @@
 //! Per-map precomputation, so that an environment step does no ray marching
 //! over long distances: an obstacle-padded copy of the grid (patch lookups need
 //! no bounds checks), the clearance of every cell (Euclidean distance
-//! transform), the 12 wall-ray distances of every free cell, and the cells
-//! where robots may be placed.
+//! transform), and the cells where robots may be placed. The rule-based
+//! robots' long wall rays (spec §7) are sampled per query; the clearance lets
+//! them skip samples that cannot be in an obstacle.
 
 use super::grid::{Grid, CELL_SIZE};
-use rayon::prelude::*;
 
 /// Obstacle border around the grid in the padded copy; covers the corner of a
 /// rotated 48x48 patch (24 * sqrt 2 < 34 cells) and short rays.
@@ -16,6 +16,8 @@ pub const NUM_RAYS: usize = 12;
 pub const PLACEMENT_CLEARANCE: f64 = 0.4;
 /// Half the diagonal of a cell: how far a point can be from its cell centre.
 const HALF_DIAG: f64 = CELL_SIZE * std::f64::consts::SQRT_2 / 2.0;
+/// Sample spacing of the rule-based robots' wall rays (spec §7).
+pub const WALL_RAY_STEP: f64 = 0.1;
 
 /// Unit vectors of the 12 world rays, with exact zeros on the axes.
 pub fn ray_dirs() -> [[f64; 2]; NUM_RAYS] {
@@ -28,17 +30,6 @@ pub fn ray_dirs() -> [[f64; 2]; NUM_RAYS] {
     dirs
 }
 
-/// Which kind of cell boundary a ray stopped at.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Face {
-    /// A boundary of constant x (a column boundary).
-    Vertical,
-    /// A boundary of constant y (a row boundary).
-    Horizontal,
-    /// The ray started inside an obstacle, or found none before its limit.
-    None,
-}
-
 pub struct PreparedMap {
     pub grid: Grid,
     /// Row stride of `obstacle`.
@@ -47,12 +38,6 @@ pub struct PreparedMap {
     pub obstacle: Vec<u8>,
     /// Per grid cell: distance (m) from its centre to the nearest obstacle cell centre.
     pub clearance: Vec<f32>,
-    /// Per grid cell: distance (m) from its centre along each world ray to the
-    /// first obstacle, capped at the map's side D (how far the rule-based
-    /// robots search); zero for obstacle cells.
-    wall_rays: Vec<[f32; NUM_RAYS]>,
-    /// Bit m set: ray m of that cell stopped at a vertical face.
-    wall_faces: Vec<u16>,
     /// Grid indices of free cells whose centre is more than 0.4 m from any obstacle.
     pub spawn_cells: Vec<u32>,
     /// Unique per prepared map, so reusable buffers know when the map changed.
@@ -84,51 +69,22 @@ impl PreparedMap {
             .filter(|&i| clearance[i] as f64 > PLACEMENT_CLEARANCE + 1e-9)
             .map(|i| i as u32)
             .collect();
-        let mut map = PreparedMap {
+        PreparedMap {
             grid,
             stride,
             obstacle,
             clearance,
-            wall_rays: Vec::new(),
-            wall_faces: Vec::new(),
             spawn_cells,
             id: NEXT_MAP_ID.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
-        };
-        let dirs = ray_dirs();
-        let rows: Vec<(Vec<[f32; NUM_RAYS]>, Vec<u16>)> = (0..side)
-            .into_par_iter()
-            .map(|r| {
-                let mut rays = vec![[0f32; NUM_RAYS]; side];
-                let mut faces = vec![0u16; side];
-                for c in 0..side {
-                    if !map.grid.is_free(r as isize, c as isize) {
-                        continue;
-                    }
-                    let p = map.grid.cell_center(r, c);
-                    for (m, dir) in dirs.iter().enumerate() {
-                        let (d, face) = map.ray_distance(p, *dir, map.long_ray_max());
-                        rays[c][m] = d as f32;
-                        if face == Face::Vertical {
-                            faces[c] |= 1 << m;
-                        }
-                    }
-                }
-                (rays, faces)
-            })
-            .collect();
-        for (rays, faces) in rows {
-            map.wall_rays.extend(rays);
-            map.wall_faces.extend(faces);
         }
-        map
     }
 
     pub fn side(&self) -> usize {
         self.grid.side()
     }
 
-    /// How far the long wall rays are searched: the map's side D in metres,
-    /// as the reference's rule-based robots do (16 m on a 320-cell grid).
+    /// How far the rule-based robots' wall rays search: the map's side D in
+    /// metres (spec §7; 16 m on a 320-cell grid).
     pub fn long_ray_max(&self) -> f64 {
         self.grid.extent()
     }
@@ -187,12 +143,12 @@ impl PreparedMap {
 
     /// Exact distance (m) from `p` along unit world direction `dir` to the
     /// first obstacle cell (grid traversal), capped at `max`.
-    pub fn ray_distance(&self, p: [f64; 2], dir: [f64; 2], max: f64) -> (f64, Face) {
+    pub fn ray_distance(&self, p: [f64; 2], dir: [f64; 2], max: f64) -> f64 {
         let (x, y) = self.grid.to_cell_coords(p);
         let (dx, dy) = (dir[0], -dir[1]);
         let (mut col, mut row) = (x.floor() as isize, y.floor() as isize);
         if self.blocked(row, col) {
-            return (0.0, Face::None);
+            return 0.0;
         }
         let axis = |pos: f64, cell: isize, d: f64| -> (isize, f64, f64) {
             if d > 0.0 {
@@ -207,49 +163,63 @@ impl PreparedMap {
         let (step_r, mut t_r, dt_r) = axis(y, row, dy);
         let max_cells = max / CELL_SIZE;
         loop {
-            let (t, face) = if t_c < t_r {
+            let t = if t_c < t_r {
                 col += step_c;
-                let t = t_c;
                 t_c += dt_c;
-                (t, Face::Vertical)
+                t_c - dt_c
             } else {
                 row += step_r;
-                let t = t_r;
                 t_r += dt_r;
-                (t, Face::Horizontal)
+                t_r - dt_r
             };
             if t >= max_cells {
-                return (max, Face::None);
+                return max;
             }
             if self.blocked(row, col) {
-                return (t * CELL_SIZE, face);
+                return t * CELL_SIZE;
             }
         }
     }
 
-    /// Distance (m) from `p` along world ray m to the first obstacle, up to
-    /// the map's side, from the table of `p`'s cell corrected for `p`'s offset
-    /// from the cell centre (exact while the ray hits the same wall line).
-    #[inline]
-    pub fn wall_ray(&self, p: [f64; 2], m: usize, dir: [f64; 2]) -> f64 {
-        let (r, c) = self.grid.cell_of(p);
-        let side = self.side() as isize;
-        if r < 0 || c < 0 || r >= side || c >= side {
-            return 0.0;
+    /// The rule-based robots' wall distance d_m of spec §7: sample `p + s dir`
+    /// at s = 0.1, 0.2, ... m up to `max`; the first sample inside an obstacle
+    /// cell (or outside the grid) gives d_m = s, and d_m = `max` if none is.
+    /// Being sampled, it depends on `p` itself, not only on its cell, and can
+    /// step over an obstacle corner thinner than the step: that is the
+    /// definition the reference's robots follow, so it is kept exactly. The
+    /// clearance only skips samples that provably lie in free cells: a point
+    /// in cell X is at least clearance(X) - 2 half-diagonals from any point of
+    /// an obstacle cell.
+    pub fn stepped_wall_distance(&self, p: [f64; 2], dir: [f64; 2], max: f64) -> f64 {
+        let samples = (max / WALL_RAY_STEP + 1e-9).floor() as usize;
+        let mut k = 1;
+        while k <= samples {
+            let s = k as f64 * WALL_RAY_STEP;
+            let q = [p[0] + s * dir[0], p[1] + s * dir[1]];
+            let (row, col) = self.grid.cell_of(q);
+            if self.blocked(row, col) {
+                return s;
+            }
+            let safe = self.clearance[row as usize * self.side() + col as usize] as f64
+                - 2.0 * HALF_DIAG
+                - 1e-6;
+            k += ((safe / WALL_RAY_STEP).floor() as usize).max(1);
         }
-        let i = r as usize * self.side() + c as usize;
-        let d = self.wall_rays[i][m] as f64;
-        let max = self.long_ray_max();
-        if d >= max || d == 0.0 {
-            return d;
+        max
+    }
+
+    /// `stepped_wall_distance` testing every sample (the definition itself,
+    /// for tests and for checking the skipping).
+    pub fn stepped_wall_distance_naive(&self, p: [f64; 2], dir: [f64; 2], max: f64) -> f64 {
+        let samples = (max / WALL_RAY_STEP + 1e-9).floor() as usize;
+        for k in 1..=samples {
+            let s = k as f64 * WALL_RAY_STEP;
+            let (row, col) = self.grid.cell_of([p[0] + s * dir[0], p[1] + s * dir[1]]);
+            if self.blocked(row, col) {
+                return s;
+            }
         }
-        let centre = self.grid.cell_center(r as usize, c as usize);
-        let corrected = if self.wall_faces[i] & (1 << m) != 0 {
-            d - (p[0] - centre[0]) / dir[0]
-        } else {
-            d - (p[1] - centre[1]) / dir[1]
-        };
-        corrected.clamp(0.0, max)
+        max
     }
 }
 
@@ -360,23 +330,55 @@ mod tests {
         let m = PreparedMap::new(room(100, 140, 100, 160));
         let dirs = ray_dirs();
         let p = [-1.0, 2.0];
-        let (d, face) = m.ray_distance(p, dirs[0], 16.0);
-        assert!((d - 1.0).abs() < 1e-9 && face == Face::Vertical);
-        let (d, face) = m.ray_distance(p, dirs[3], 16.0); // straight up to y = 3
-        assert!((d - 1.0).abs() < 1e-9 && face == Face::Horizontal);
-        let (d, _) = m.ray_distance(p, dirs[1], 16.0); // 30 deg: x hits 0 at 1/cos30 = 1.1547, y at 3 after 2
+        let d = m.ray_distance(p, dirs[0], 16.0);
+        assert!((d - 1.0).abs() < 1e-9);
+        let d = m.ray_distance(p, dirs[3], 16.0); // straight up to y = 3
+        assert!((d - 1.0).abs() < 1e-9);
+        let d = m.ray_distance(p, dirs[1], 16.0); // 30 deg: x hits 0 at 1/cos30 = 1.1547, y at 3 after 2
         assert!((d - 1.0 / 30f64.to_radians().cos()).abs() < 1e-9);
-        assert_eq!(m.ray_distance(p, dirs[0], 0.4), (0.4, Face::None));
-        // The table, corrected for the offset from the cell centre, agrees with exact rays.
-        for q in [[-1.013, 2.021], [-0.31, 1.27], [-2.7, 2.9]] {
-            for (k, dir) in dirs.iter().enumerate() {
-                let exact = m.ray_distance(q, *dir, m.long_ray_max()).0;
-                let table = m.wall_ray(q, k, *dir);
-                assert!(
-                    (exact - table).abs() < 1e-6,
-                    "{q:?} ray {k}: {exact} vs {table}"
-                );
+        assert_eq!(m.ray_distance(p, dirs[0], 0.4), 0.4);
+    }
+
+    #[test]
+    fn stepped_rays_take_the_first_sample_inside_an_obstacle() {
+        // The room spans x in [-3, 0], y in [1, 3].
+        let m = PreparedMap::new(room(100, 140, 100, 160));
+        let dirs = ray_dirs();
+        // East from x = -1.03: samples at -0.93, ..., -0.03 are free, 0.07 is not.
+        let d = m.stepped_wall_distance([-1.03, 2.0], dirs[0], 16.0);
+        assert!((d - 1.1).abs() < 1e-12, "{d}");
+        // The exact distance is 1.03; the stepped one rounds up to the next sample.
+        assert!((m.ray_distance([-1.03, 2.0], dirs[0], 16.0) - 1.03).abs() < 1e-9);
+        // Moving the robot 0.02 m inside its cell changes the answer: 1.01 -> 1.1, 0.99 -> 1.0.
+        let d = m.stepped_wall_distance([-0.99, 2.0], dirs[0], 16.0);
+        assert!((d - 1.0).abs() < 1e-12, "{d}");
+        // Nothing within the limit: D.
+        assert_eq!(m.stepped_wall_distance([-1.03, 2.0], dirs[0], 0.5), 0.5);
+    }
+
+    #[test]
+    fn skipping_samples_never_changes_a_stepped_ray() {
+        use rand::{Rng, SeedableRng};
+        let mut g = room(40, 280, 40, 280);
+        // Obstacles of every size, down to single cells a ray can step over.
+        for (r, c) in [(100, 100), (150, 151), (200, 90), (61, 230)] {
+            g.set_free(r, c, false);
+        }
+        for r in 120..180 {
+            for c in 200..204 {
+                g.set_free(r, c, false);
             }
+        }
+        let m = PreparedMap::new(g);
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+        for _ in 0..4000 {
+            let p = [rng.gen_range(-6.0..6.0), rng.gen_range(-6.0..6.0)];
+            let dir = ray_dirs()[rng.gen_range(0..NUM_RAYS)];
+            assert_eq!(
+                m.stepped_wall_distance(p, dir, 16.0).to_bits(),
+                m.stepped_wall_distance_naive(p, dir, 16.0).to_bits(),
+                "{p:?} {dir:?}"
+            );
         }
     }
 
