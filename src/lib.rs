@@ -38,3 +38,4 @@ pub mod learn;
 pub mod map;
 pub mod nn;
 pub mod render;
+pub mod util;

@@ -127,3 +127,26 @@ fn shipped_maps_match_their_manifest_and_are_connected() {
         );
     }
 }
+
+#[test]
+fn the_test_set_is_recognised_by_content() {
+    let Some(maps) = load_gibson() else { return };
+    let mut listed = String::new();
+    for (name, (grid, _)) in &maps {
+        listed.push_str(&format!("    (\"{name}\", \"{}\"),\n", grid.content_hash()));
+    }
+    for (name, (grid, _)) in &maps {
+        assert_eq!(
+            t2e::map::testset::gibson_name(grid),
+            Some(name.as_str()),
+            "{name} is not recognised as a test map; the table should read:\n{listed}"
+        );
+    }
+    // A generated map is not a test map.
+    let generated = t2e::map::generate::generate(
+        1,
+        SizeClass::Medium,
+        &t2e::map::generate::GeneratorConfig::default(),
+    );
+    assert_eq!(t2e::map::testset::gibson_name(&generated), None);
+}

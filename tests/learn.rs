@@ -186,7 +186,7 @@ fn a_sidecar_that_does_not_match_the_weights_is_a_clear_error() {
     let dir = tempfile::tempdir().unwrap();
     let trainer = Trainer::new(chase_config(3), chase_maps()).unwrap();
     let ckpt = trainer.save(dir.path()).unwrap().remove(0);
-    assert!(PolicySnapshot::load(&ckpt, Side::Captors).is_ok());
+    if let Err(e) = PolicySnapshot::load(&ckpt, Side::Captors) { panic!("{e:#}"); }
 
     edit_meta(&ckpt, "\"hidden\": 32", "\"hidden\": 64");
     let err = format!(

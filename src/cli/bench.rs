@@ -140,6 +140,18 @@ fn single_core_steps(
 }
 
 pub fn run(args: BenchArgs) -> Result<()> {
+    if !(args.seconds.is_finite() && args.seconds >= 0.05 && args.seconds <= 3600.0) {
+        anyhow::bail!(
+            "--seconds {}: must be a time in [0.05, 3600] seconds per row",
+            args.seconds
+        );
+    }
+    if args.envs == 0 || args.envs > 4096 {
+        anyhow::bail!("--envs {}: must be in 1..=4096", args.envs);
+    }
+    if args.iterations == 0 {
+        anyhow::bail!("--iterations 0: needs at least one timed iteration");
+    }
     if let Some(p) = &args.ppo {
         return ppo_table(&args, p);
     }

@@ -1,7 +1,7 @@
 //! `t2e-league eval`: the paper's protocol over one or more settings.
 
 use crate::env::{CaptureRule, EnvConfig, Side};
-use crate::eval::{self, EvalSetting, Summary, TABLE_HEADER};
+use crate::eval::{self, ratio_label, EvalSetting, SettingIdentity, Summary, TABLE_HEADER};
 use crate::heuristics::ControllerSpec;
 use crate::map::{self, PreparedMap};
 use crate::render::plot::{self, Series};
@@ -66,31 +66,43 @@ fn load_map_sets(specs: &[String]) -> Result<BTreeMap<String, Arc<Vec<Arc<Prepar
     Ok(sets)
 }
 
-fn setting_dir(out: &Path, s: &EvalSetting, maps: &str) -> PathBuf {
-    let maps = maps.replace(['/', ':', '.'], "_");
+/// The folder of one setting: readable parts (sanitised, so no name can
+/// leave `out`) and the identity's hash, so two settings that differ in
+/// anything that changes their numbers never share a folder.
+fn setting_dir(out: &Path, s: &EvalSetting, maps: &str, identity: &SettingIdentity) -> PathBuf {
+    let part = |text: &str| crate::util::safe_component(text, 40);
     out.join(format!(
-        "{}-vs-{}_k{}_r{:.1}_{}",
-        s.captors,
-        s.target,
+        "{}-vs-{}_k{}_r{}_{}_{}",
+        part(&s.captors.to_string()),
+        part(&s.target.to_string()),
         s.num_captors,
-        s.speed_ratio,
-        maps.trim_matches('_')
+        part(&ratio_label(s.speed_ratio).replace('.', "p")),
+        part(maps),
+        identity.short_hash()
     ))
 }
 
-/// The summary a previous run left for this setting, if it matches.
-fn finished_setting(dir: &Path, setting: &EvalSetting) -> Option<Summary> {
+/// The summary a previous run left for this setting, if every part of its
+/// identity (`setting.json`) matches.
+fn finished_setting(dir: &Path, identity: &SettingIdentity) -> Option<Summary> {
+    let written: SettingIdentity =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("setting.json")).ok()?).ok()?;
+    if &written != identity {
+        return None;
+    }
     let text = std::fs::read_to_string(dir.join("summary.json")).ok()?;
-    let s: Summary = serde_json::from_str(&text).ok()?;
-    let same = s.episodes == setting.episodes
-        && s.episode_length == setting.episode_length
-        && s.seed == setting.seed
-        && s.mean_soa_m2.is_some() == (setting.soa_every > 0);
-    same.then_some(s)
+    serde_json::from_str(&text).ok()
 }
 
-fn write_setting(dir: &Path, summary: &Summary, records: &[eval::EpisodeRecord]) -> Result<()> {
+fn write_setting(
+    dir: &Path,
+    identity: &SettingIdentity,
+    summary: &Summary,
+    records: &[eval::EpisodeRecord],
+) -> Result<()> {
     std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    // The identity goes last: a folder without it is never taken as finished.
+    let _ = std::fs::remove_file(dir.join("setting.json"));
     let mut w = csv::Writer::from_path(dir.join("episodes.csv"))?;
     w.write_record([
         "episode",
@@ -133,12 +145,42 @@ fn write_setting(dir: &Path, summary: &Summary, records: &[eval::EpisodeRecord])
         }
         w.flush()?;
     }
+    crate::nn::checkpoint::write_file_atomically(
+        &dir.join("setting.json"),
+        serde_json::to_string_pretty(identity)?.as_bytes(),
+    )?;
+    Ok(())
+}
+
+/// Refuses a list that names the same value twice.
+fn no_repeats<T: PartialEq + std::fmt::Display>(option: &str, values: &[T]) -> Result<()> {
+    for (i, v) in values.iter().enumerate() {
+        if values[..i].contains(v) {
+            anyhow::bail!("{option} lists {v} twice");
+        }
+    }
     Ok(())
 }
 
 pub fn run(args: EvalArgs) -> Result<()> {
     if args.captors.is_checkpoint() || args.target.is_checkpoint() {
         tch::set_num_threads(1);
+    }
+    no_repeats("--k", &args.k)?;
+    no_repeats("--speed-ratio", &args.speed_ratio)?;
+    no_repeats("--maps", &args.maps)?;
+    for &k in &args.k {
+        for &ratio in &args.speed_ratio {
+            EvalSetting {
+                num_captors: k,
+                speed_ratio: ratio,
+                episodes: args.episodes,
+                episode_length: args.episode_length,
+                ..EvalSetting::default()
+            }
+            .validate()
+            .map_err(anyhow::Error::msg)?;
+        }
     }
     for k in &args.k {
         let cfg = EnvConfig {
@@ -172,13 +214,15 @@ pub fn run(args: EvalArgs) -> Result<()> {
                     capture_rule: args.capture_rule,
                     soa_every: args.soa_every,
                 };
-                let dir = setting_dir(&args.out, &setting, spec);
-                let summary = match finished_setting(&dir, &setting).filter(|_| args.resume) {
+                let identity = SettingIdentity::of(&setting, spec, &sets[spec])
+                    .map_err(anyhow::Error::msg)?;
+                let dir = setting_dir(&args.out, &setting, spec, &identity);
+                let summary = match finished_setting(&dir, &identity).filter(|_| args.resume) {
                     Some(done) => done,
                     None => {
                         let (summary, records) =
                             eval::run(&setting, &sets[spec], spec, !args.quiet)?;
-                        write_setting(&dir, &summary, &records)?;
+                        write_setting(&dir, &identity, &summary, &records)?;
                         summary
                     }
                 };
@@ -189,7 +233,7 @@ pub fn run(args: EvalArgs) -> Result<()> {
                         .iter()
                         .map(|&(t, m, _)| (t as f64, m))
                         .collect();
-                    let label = format!("{}:1 x{:.1} {}", k, ratio, spec);
+                    let label = format!("{}:1 x{} {}", k, ratio_label(ratio), spec);
                     let series = Series {
                         label: label.clone(),
                         points,
@@ -240,9 +284,15 @@ pub fn run(args: EvalArgs) -> Result<()> {
 mod tests {
     use super::*;
 
+    fn identity(setting: &EvalSetting) -> SettingIdentity {
+        let grid = crate::map::Grid::with_free_rects("m", 320, &[(100..200, 100..200)]);
+        let maps = vec![Arc::new(PreparedMap::new(grid))];
+        SettingIdentity::of(setting, "m", &maps).unwrap()
+    }
+
     #[test]
-    fn resume_reuses_only_a_matching_finished_setting() {
-        let dir = tempfile::tempdir().unwrap();
+    fn resume_reuses_only_a_setting_identical_in_every_number() {
+        let out = tempfile::tempdir().unwrap();
         let setting = EvalSetting {
             episodes: 3,
             episode_length: 20,
@@ -260,21 +310,47 @@ mod tests {
         };
         let records = vec![record(true), record(false), record(false)];
         let summary = eval::summarise(&setting, "m", &records);
-        assert!(
-            finished_setting(dir.path(), &setting).is_none(),
-            "nothing written yet"
-        );
-        write_setting(dir.path(), &summary, &records).unwrap();
-        assert_eq!(finished_setting(dir.path(), &setting), Some(summary));
-        let longer = EvalSetting {
-            episodes: 500,
+        let id = identity(&setting);
+        let dir = setting_dir(out.path(), &setting, "m", &id);
+        assert!(finished_setting(&dir, &id).is_none(), "nothing written yet");
+        write_setting(&dir, &id, &summary, &records).unwrap();
+        assert_eq!(finished_setting(&dir, &id), Some(summary));
+        // Each of these changes the numbers: none may reuse the result or share its folder.
+        let variants = [
+            EvalSetting { episodes: 500, ..setting.clone() },
+            EvalSetting { soa_every: 1, ..setting.clone() },
+            EvalSetting { speed_ratio: 1.04, ..setting.clone() },
+            EvalSetting { capture_rule: CaptureRule::Strict, ..setting.clone() },
+            EvalSetting { seed: 1, ..setting.clone() },
+            EvalSetting { episode_length: 21, ..setting.clone() },
+            EvalSetting { target: ControllerSpec::Random, ..setting.clone() },
+        ];
+        let mut dirs = vec![dir.clone()];
+        for v in &variants {
+            let vid = identity(v);
+            assert!(finished_setting(&dir, &vid).is_none(), "{v:?} reused");
+            let vdir = setting_dir(out.path(), v, "m", &vid);
+            assert!(!dirs.contains(&vdir), "{v:?} shares {}", vdir.display());
+            dirs.push(vdir);
+        }
+        // Other maps under the same name: another identity.
+        let grid = crate::map::Grid::with_free_rects("m", 320, &[(100..200, 100..201)]);
+        let other = SettingIdentity::of(&setting, "m", &[Arc::new(PreparedMap::new(grid))]).unwrap();
+        assert!(finished_setting(&dir, &other).is_none());
+        // A folder name never leaves --out, whatever the controller's path says.
+        let sneaky = EvalSetting {
+            captors: "ckpt:../../../etc".parse().unwrap(),
             ..setting.clone()
         };
-        assert!(finished_setting(dir.path(), &longer).is_none());
-        let with_soa = EvalSetting {
-            soa_every: 1,
-            ..setting
-        };
-        assert!(finished_setting(dir.path(), &with_soa).is_none());
+        let d = setting_dir(out.path(), &sneaky, "../x", &id);
+        assert_eq!(d.parent().unwrap(), out.path());
+        assert!(d.file_name().unwrap().to_str().unwrap().starts_with("ckpt_etc-vs-heuristic_k3_r1p0_x_"));
+    }
+
+    #[test]
+    fn ratios_keep_every_digit_in_labels() {
+        assert_eq!(ratio_label(1.0), "1.0");
+        assert_eq!(ratio_label(1.04), "1.04");
+        assert_eq!(ratio_label(1.2), "1.2");
     }
 }

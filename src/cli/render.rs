@@ -55,9 +55,16 @@ pub struct RenderArgs {
 }
 
 pub fn run(args: RenderArgs) -> Result<()> {
-    if !(args.speed_ratio.is_finite() && args.speed_ratio > 0.0) {
+    let ext = args.out.extension().and_then(|e| e.to_str()).unwrap_or("");
+    if !ext.eq_ignore_ascii_case("gif") {
         return Err(anyhow!(
-            "--speed-ratio {}: must be a positive number",
+            "--out {}: render writes an animated GIF, so the file must end in .gif",
+            args.out.display()
+        ));
+    }
+    if !(args.speed_ratio.is_finite() && args.speed_ratio > 0.0 && args.speed_ratio <= 10.0) {
+        return Err(anyhow!(
+            "--speed-ratio {}: must be a number in (0, 10]",
             args.speed_ratio
         ));
     }

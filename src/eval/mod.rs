@@ -46,6 +46,25 @@ impl Default for EvalSetting {
 }
 
 impl EvalSetting {
+    /// Checks the numbers a user gave; the error names the option.
+    pub fn validate(&self) -> Result<(), String> {
+        if self.episodes == 0 {
+            return Err("--episodes 0: needs at least one episode (an SR of 0 episodes is no result)".into());
+        }
+        if self.episodes > 10_000_000 {
+            return Err(format!("--episodes {}: at most 10,000,000", self.episodes));
+        }
+        if !(self.speed_ratio.is_finite() && self.speed_ratio > 0.0 && self.speed_ratio <= 10.0) {
+            return Err(format!(
+                "--speed-ratio {}: must be a number in (0, 10]",
+                self.speed_ratio
+            ));
+        }
+        self.env_config()
+            .validate()
+            .map_err(|e| format!("evaluation setting: {e}"))
+    }
+
     pub fn env_config(&self) -> EnvConfig {
         EnvConfig {
             num_captors: self.num_captors,
@@ -56,6 +75,86 @@ impl EvalSetting {
             observations: false,
             ..EnvConfig::default()
         }
+    }
+}
+
+/// Everything that changes a setting's numbers: two settings with the same
+/// identity give the same table row, and two with different identities never
+/// share an output folder or a resumed result.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SettingIdentity {
+    pub captors: String,
+    /// SHA-256 of the captor checkpoint's actor weights (None for heuristics).
+    pub captors_sha256: Option<String>,
+    pub target: String,
+    pub target_sha256: Option<String>,
+    pub num_captors: usize,
+    /// Exact v_e / v_p.
+    pub speed_ratio: f64,
+    pub capture_rule: CaptureRule,
+    pub episode_length: u32,
+    pub episodes: usize,
+    pub seed: u64,
+    pub soa_every: u32,
+    /// The map set as named, and (name, content hash) of every map in it.
+    pub maps: String,
+    pub map_hashes: Vec<(String, String)>,
+    /// The code that played the episodes (crate version + git commit).
+    pub code_version: String,
+}
+
+impl SettingIdentity {
+    pub fn of(
+        setting: &EvalSetting,
+        maps_label: &str,
+        maps: &[Arc<PreparedMap>],
+    ) -> Result<SettingIdentity, String> {
+        let weights = |spec: &ControllerSpec, side: Side| -> Result<Option<String>, String> {
+            match spec {
+                ControllerSpec::Checkpoint(c) => {
+                    let snap = c.snapshot(side)?;
+                    Ok(snap.meta.files.get("actor.safetensors").cloned())
+                }
+                _ => Ok(None),
+            }
+        };
+        Ok(SettingIdentity {
+            captors: setting.captors.to_string(),
+            captors_sha256: weights(&setting.captors, Side::Captors)?,
+            target: setting.target.to_string(),
+            target_sha256: weights(&setting.target, Side::Target)?,
+            num_captors: setting.num_captors,
+            speed_ratio: setting.speed_ratio,
+            capture_rule: setting.capture_rule,
+            episode_length: setting.episode_length,
+            episodes: setting.episodes,
+            seed: setting.seed,
+            soa_every: setting.soa_every,
+            maps: maps_label.to_string(),
+            map_hashes: maps
+                .iter()
+                .map(|m| (m.grid.name.clone(), m.grid.content_hash()))
+                .collect(),
+            code_version: crate::nn::checkpoint::code_version(),
+        })
+    }
+
+    /// First 12 hex digits of the SHA-256 of the identity's JSON.
+    pub fn short_hash(&self) -> String {
+        let json = serde_json::to_string(self).expect("identity serialises");
+        crate::util::sha256_hex(json.as_bytes())[..12].to_string()
+    }
+}
+
+/// A speed ratio as written in tables and folder names: every digit it
+/// needs, at least one decimal (1.0, 1.2, 1.04).
+pub fn ratio_label(ratio: f64) -> String {
+    let s = format!("{ratio}");
+    if s.contains(['.', 'e', 'E']) || !ratio.is_finite() {
+        s
+    } else {
+        format!("{s}.0")
     }
 }
 
@@ -85,6 +184,8 @@ pub struct Summary {
     pub episodes: usize,
     pub episode_length: u32,
     pub seed: u64,
+    pub capture_rule: CaptureRule,
+    pub soa_every: u32,
     /// Mean episode length (steps), failures counted as the full length.
     pub time: f64,
     /// Capture rate (%).
@@ -180,10 +281,7 @@ pub fn run(
     maps_label: &str,
     progress: bool,
 ) -> anyhow::Result<(Summary, Vec<EpisodeRecord>)> {
-    setting
-        .env_config()
-        .validate()
-        .map_err(|e| anyhow::anyhow!("evaluation setting: {e}"))?;
+    setting.validate().map_err(anyhow::Error::msg)?;
     let cfg = setting.env_config();
     setting
         .captors
@@ -255,6 +353,8 @@ pub fn summarise(setting: &EvalSetting, maps_label: &str, records: &[EpisodeReco
         episodes: records.len(),
         episode_length: setting.episode_length,
         seed: setting.seed,
+        capture_rule: setting.capture_rule,
+        soa_every: setting.soa_every,
         time: records.iter().map(|r| r.steps as f64).sum::<f64>() / n,
         sr: 100.0 * captures as f64 / n,
         sr_low: 100.0 * lo,
@@ -271,12 +371,16 @@ pub const TABLE_HEADER: &str = "| captors | target | K:1 | v_p:v_e | maps | epis
 impl Summary {
     pub fn table_row(&self) -> String {
         format!(
-            "| {} | {} | {}:1 | 1.0:{:.1} | {} | {} | {:.1} | {:.1} [{:.1}, {:.1}] | {:.2} | {} |",
+            "| {} | {} | {}:1 | 1.0:{} | {}{} | {} | {:.1} | {:.1} [{:.1}, {:.1}] | {:.2} | {} |",
             self.captors,
             self.target,
             self.num_captors,
-            self.speed_ratio,
+            ratio_label(self.speed_ratio),
             self.maps,
+            match self.capture_rule {
+                CaptureRule::Fast => "",
+                CaptureRule::Strict => " (strict capture)",
+            },
             self.episodes,
             self.time,
             self.sr,

@@ -4,6 +4,7 @@
 
 pub mod ippo;
 pub mod mappo;
+pub mod persist;
 pub mod ppo;
 pub mod train;
 

@@ -41,6 +41,10 @@ pub struct PpoConfig {
     pub max_grad_norm: f64,
     /// Normalise advantages over each rollout.
     pub normalize_advantages: bool,
+    /// An update whose loss or gradient norm is not finite is undone (last
+    /// good weights, moments and return statistics restored); training stops
+    /// with an error after this many in a row.
+    pub max_bad_updates: u32,
 }
 
 impl Default for PpoConfig {
@@ -60,33 +64,43 @@ impl Default for PpoConfig {
             value_norm: true,
             max_grad_norm: 10.0,
             normalize_advantages: true,
+            max_bad_updates: 3,
         }
     }
 }
 
 impl PpoConfig {
     pub fn validate(&self) -> Result<(), String> {
-        let unit = |name: &str, v: f64| {
-            if (0.0..=1.0).contains(&v) {
+        // Written so that NaN fails every check: a comparison with NaN is false.
+        let within = |name: &str, v: f64, lo: f64, hi: f64, open_lo: bool| {
+            let above = if open_lo { v > lo } else { v >= lo };
+            if above && v <= hi && v.is_finite() {
                 Ok(())
             } else {
-                Err(format!("{name} = {v}: must be in [0, 1]"))
+                let bracket = if open_lo { "(" } else { "[" };
+                Err(format!("{name} = {v}: must be in {bracket}{lo}, {hi}]"))
             }
         };
-        unit("gamma", self.gamma)?;
-        unit("gae_lambda", self.gae_lambda)?;
-        unit("clip", self.clip)?;
-        if !(self.lr > 0.0 && self.lr < 1.0) {
-            return Err(format!("lr = {}: must be in (0, 1)", self.lr));
+        within("gamma", self.gamma, 0.0, 1.0, false)?;
+        within("gae_lambda", self.gae_lambda, 0.0, 1.0, false)?;
+        within("clip", self.clip, 0.0, 1.0, true)?;
+        within("lr", self.lr, 0.0, 0.1, true)?;
+        within("adam_eps", self.adam_eps, 0.0, 1.0, true)?;
+        within("entropy_coef", self.entropy_coef, 0.0, 10.0, false)?;
+        within("value_coef", self.value_coef, 0.0, 100.0, false)?;
+        within("huber_delta", self.huber_delta, 0.0, 1e6, true)?;
+        within("max_grad_norm", self.max_grad_norm, 0.0, 1e6, true)?;
+        for (name, v) in [
+            ("epochs", self.epochs),
+            ("minibatches", self.minibatches),
+            ("chunk_len", self.chunk_len),
+        ] {
+            if !(1..=10_000).contains(&v) {
+                return Err(format!("{name} = {v}: must be in 1..=10000"));
+            }
         }
-        if self.epochs == 0 || self.minibatches == 0 || self.chunk_len == 0 {
-            return Err("epochs, minibatches and chunk_len must be at least 1".into());
-        }
-        if self.huber_delta <= 0.0 || self.max_grad_norm <= 0.0 {
-            return Err("huber_delta and max_grad_norm must be positive".into());
-        }
-        if self.entropy_coef < 0.0 || self.value_coef < 0.0 {
-            return Err("entropy_coef and value_coef must not be negative".into());
+        if self.max_bad_updates == 0 {
+            return Err("max_bad_updates = 0: must be at least 1".into());
         }
         Ok(())
     }
@@ -462,8 +476,59 @@ impl PpoLearner {
         }
     }
 
-    /// The PPO update on one rollout.
-    pub fn update(&mut self, ro: &Rollout, rng: &mut ChaCha8Rng) -> UpdateStats {
+    /// Copies of everything an update changes, to undo a bad one.
+    fn snapshot(&self) -> LearnerSnapshot {
+        let copy = |vs: &nn::VarStore| -> Vec<Tensor> {
+            let mut v: Vec<(String, Tensor)> = vs.variables().into_iter().collect();
+            v.sort_by(|a, b| a.0.cmp(&b.0));
+            v.into_iter().map(|(_, t)| t.detach().copy()).collect()
+        };
+        LearnerSnapshot {
+            actor: copy(&self.actor_vs),
+            critic: copy(&self.critic_vs),
+            actor_adam: self.actor_adam.state_tensors(),
+            critic_adam: self.critic_adam.state_tensors(),
+            adam_steps: (self.actor_adam.steps, self.critic_adam.steps),
+            value_norm: self.value_norm.clone(),
+        }
+    }
+
+    fn restore(&mut self, snap: LearnerSnapshot) {
+        let paste = |vs: &nn::VarStore, saved: &[Tensor]| {
+            let mut v: Vec<(String, Tensor)> = vs.variables().into_iter().collect();
+            v.sort_by(|a, b| a.0.cmp(&b.0));
+            tch::no_grad(|| {
+                for ((_, mut var), t) in v.into_iter().zip(saved) {
+                    var.copy_(t);
+                }
+            });
+        };
+        paste(&self.actor_vs, &snap.actor);
+        paste(&self.critic_vs, &snap.critic);
+        self.actor_adam
+            .load_state(&snap.actor_adam, snap.adam_steps.0)
+            .expect("own moments fit");
+        self.critic_adam
+            .load_state(&snap.critic_adam, snap.adam_steps.1)
+            .expect("own moments fit");
+        self.value_norm = snap.value_norm;
+    }
+
+    /// The PPO update on one rollout. A non-finite loss or gradient norm
+    /// undoes the whole update (weights, moments and return statistics as
+    /// they were before it) and says what went wrong.
+    pub fn update(&mut self, ro: &Rollout, rng: &mut ChaCha8Rng) -> Result<UpdateStats, BadUpdate> {
+        let before = self.snapshot();
+        match self.update_unguarded(ro, rng) {
+            Ok(stats) => Ok(stats),
+            Err(bad) => {
+                self.restore(before);
+                Err(bad)
+            }
+        }
+    }
+
+    fn update_unguarded(&mut self, ro: &Rollout, rng: &mut ChaCha8Rng) -> Result<UpdateStats, BadUpdate> {
         let cfg = self.cfg.clone();
         let dev = self.device;
         let (steps, rows, l, hdim) = (ro.steps, ro.rows, ro.chunk_len, ro.hidden as i64);
@@ -571,11 +636,27 @@ impl PpoLearner {
 
                 let loss =
                     &policy_loss - cfg.entropy_coef * &entropy + cfg.value_coef * &value_loss;
+                let loss_value = loss.double_value(&[]);
+                if !loss_value.is_finite() {
+                    return Err(BadUpdate(format!(
+                        "loss = {loss_value} (policy {}, value {}, entropy {})",
+                        policy_loss.double_value(&[]),
+                        value_loss.double_value(&[]),
+                        entropy.double_value(&[])
+                    )));
+                }
                 self.actor_adam.zero_grad();
                 self.critic_adam.zero_grad();
                 loss.backward();
-                stats.actor_grad_norm += self.actor_adam.clip_grad_norm(cfg.max_grad_norm);
-                stats.critic_grad_norm += self.critic_adam.clip_grad_norm(cfg.max_grad_norm);
+                let actor_norm = self.actor_adam.clip_grad_norm(cfg.max_grad_norm);
+                let critic_norm = self.critic_adam.clip_grad_norm(cfg.max_grad_norm);
+                if !(actor_norm.is_finite() && critic_norm.is_finite()) {
+                    return Err(BadUpdate(format!(
+                        "gradient norm not finite (actor {actor_norm}, critic {critic_norm})"
+                    )));
+                }
+                stats.actor_grad_norm += actor_norm;
+                stats.critic_grad_norm += critic_norm;
                 self.actor_adam.step();
                 self.critic_adam.step();
 
@@ -599,9 +680,24 @@ impl PpoLearner {
         ] {
             *x /= batches;
         }
-        stats
+        Ok(stats)
     }
 }
+
+/// Everything an update changes, copied before it.
+struct LearnerSnapshot {
+    actor: Vec<Tensor>,
+    critic: Vec<Tensor>,
+    actor_adam: Vec<(String, Tensor)>,
+    critic_adam: Vec<(String, Tensor)>,
+    adam_steps: (u64, u64),
+    value_norm: ValueNorm,
+}
+
+/// An update that was undone because a loss or gradient norm was not finite.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("non-finite update, undone: {0}")]
+pub struct BadUpdate(pub String);
 
 #[cfg(test)]
 mod tests {

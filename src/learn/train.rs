@@ -15,10 +15,8 @@ use crate::env::vec_env::episode_seed;
 use crate::env::{Action, EnvConfig, Side, VecEnv, PATCH_LEN};
 use crate::heuristics::ControllerSpec;
 use crate::map::PreparedMap;
-use crate::nn::checkpoint::{
-    checkpoint_name, code_version, load_into, named_cpu_tensors, read_meta, read_tensors,
-    save_tensors, write_dir_atomically, write_file_atomically, CheckpointMeta, FORMAT,
-};
+use super::persist::{self, RunState};
+use crate::nn::checkpoint::{checkpoint_name, clean_stale_temporaries, code_version, CheckpointMeta, FORMAT};
 use crate::nn::{obs_tensors, pool_patch, NetConfig};
 use anyhow::{anyhow, bail, Context, Result};
 use rand::{Rng, SeedableRng};
@@ -133,11 +131,19 @@ impl TrainConfig {
         let mut env = self.env.clone();
         env.observations = true;
         env.validate().map_err(|e| format!("env.{e}"))?;
+        validate_name(&self.name)?;
         if self.num_envs == 0 {
             return Err("num_envs = 0: needs at least one world".into());
         }
         if self.rollout_steps == 0 {
             return Err("rollout_steps = 0: needs at least one step".into());
+        }
+        let per_iteration = (self.num_envs * self.rollout_steps) as u64;
+        if self.total_env_steps < per_iteration {
+            return Err(format!(
+                "total_env_steps = {}: less than one iteration ({} worlds x {} steps = {per_iteration}); nothing would be trained",
+                self.total_env_steps, self.num_envs, self.rollout_steps
+            ));
         }
         if self.checkpoint_every == 0 {
             return Err("checkpoint_every = 0: must be at least 1 iteration".into());
@@ -208,6 +214,24 @@ impl TrainConfig {
     }
 }
 
+/// A run name becomes the folder `runs/NAME`: it must stay one plain
+/// component inside `runs/`.
+fn validate_name(name: &str) -> Result<(), String> {
+    let plain = !name.is_empty()
+        && name.len() <= 100
+        && !name.starts_with('.')
+        && name
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || matches!(c, '-' | '_' | '.' | '+'));
+    if plain {
+        Ok(())
+    } else {
+        Err(format!(
+            "name = {name:?}: must be 1 to 100 letters, digits, '-', '_', '+' or '.', not starting with '.' (it names the folder runs/NAME)"
+        ))
+    }
+}
+
 /// One learning side during training.
 struct LearnerSide {
     side: Side,
@@ -220,6 +244,8 @@ struct LearnerSide {
     critic_h: Tensor,
     /// 0 for rows whose world just started an episode.
     next_mask: Vec<f32>,
+    /// Updates undone in a row because they were not finite.
+    bad_updates: u32,
 }
 
 /// One row of `metrics.csv`.
@@ -254,24 +280,6 @@ pub struct Metrics {
     pub target_clip_frac: Option<f64>,
 }
 
-/// `state.json`: where a run stands, written after every checkpoint.
-#[derive(Clone, Debug, Serialize, Deserialize)]
-pub struct RunState {
-    pub iteration: u64,
-    pub env_steps: u64,
-    pub wall_s: f64,
-    pub config_hash: String,
-    /// Checkpoint folder names (under `checkpoints/`) per learning side.
-    pub checkpoints: Vec<(Side, String)>,
-}
-
-#[derive(Serialize, Deserialize)]
-struct LearnerState {
-    value_norm: super::ppo::ValueNorm,
-    actor_adam_steps: u64,
-    critic_adam_steps: u64,
-}
-
 pub struct Trainer {
     pub cfg: TrainConfig,
     pub device: Device,
@@ -302,6 +310,15 @@ impl Trainer {
         iteration: u64,
     ) -> Result<Trainer> {
         cfg.validate().map_err(anyhow::Error::msg)?;
+        for m in maps.iter() {
+            if let Some(name) = crate::map::testset::gibson_name(&m.grid) {
+                bail!(
+                    "maps = \"{}\": map '{}' is the Gibson test map {name} (recognised by its content): the Gibson maps are the test set; train on generated maps (generated:N, shipped or a folder of your own)",
+                    cfg.maps,
+                    m.grid.name
+                );
+            }
+        }
         let device = cfg.device();
         if cfg.device == "cuda" && !tch::Cuda::is_available() {
             bail!("device = \"cuda\" but tch sees no CUDA device; use \"auto\" or \"cpu\"");
@@ -352,6 +369,7 @@ impl Trainer {
                         actor_h: Tensor::zeros([rows as i64, h], (Kind::Float, device)),
                         critic_h: Tensor::zeros([rows as i64, h], (Kind::Float, device)),
                         next_mask: vec![0.0; rows],
+                        bad_updates: 0,
                     });
                 }
             }
@@ -379,11 +397,7 @@ impl Trainer {
         run_dir: &Path,
     ) -> Result<Trainer> {
         let state_path = run_dir.join("state.json");
-        let state: RunState =
-            serde_json::from_str(&std::fs::read_to_string(&state_path).with_context(|| {
-                format!("{}: cannot read (nothing to resume)", state_path.display())
-            })?)
-            .with_context(|| format!("{}: not a run state", state_path.display()))?;
+        let state = RunState::read(run_dir)?;
         if state.config_hash != cfg.hash() {
             bail!(
                 "{}: the run was started with a different configuration (hash {} vs {}); start a new run instead",
@@ -391,6 +405,11 @@ impl Trainer {
                 state.config_hash,
                 cfg.hash()
             );
+        }
+        for dir in [run_dir.to_path_buf(), run_dir.join("checkpoints")] {
+            for p in clean_stale_temporaries(&dir)? {
+                tracing::info!("removed {} (left by a killed run)", p.display());
+            }
         }
         let mut t = Trainer::starting_at(cfg, maps, state.iteration)?;
         t.env_steps = state.env_steps;
@@ -408,36 +427,15 @@ impl Trainer {
                         ls.side.name()
                     )
                 })?;
-            let dir = run_dir.join("checkpoints").join(name);
-            let meta = read_meta(&dir)?;
-            let file = dir.join("actor.safetensors");
-            load_into(&mut ls.learner.actor_vs, &read_tensors(&file)?, &file)?;
-            let file = dir.join("critic.safetensors");
-            load_into(&mut ls.learner.critic_vs, &read_tensors(&file)?, &file)?;
-            let st: LearnerState = serde_json::from_value(
-                meta.learner_state
-                    .clone()
-                    .context("meta.json has no learner_state")?,
-            )
-            .with_context(|| format!("{}: learner_state", dir.display()))?;
-            let opt = read_tensors(&dir.join("optimizer.safetensors"))?;
-            let split = |prefix: &str| -> Vec<(String, Tensor)> {
-                opt.iter()
-                    .filter_map(|(n, t)| {
-                        n.strip_prefix(prefix)
-                            .map(|n| (n.to_string(), t.to_device(t.device())))
-                    })
-                    .collect()
-            };
-            ls.learner
-                .actor_adam
-                .load_state(&split("actor."), st.actor_adam_steps)
-                .map_err(|e| anyhow!("{}: {e}", dir.display()))?;
-            ls.learner
-                .critic_adam
-                .load_state(&split("critic."), st.critic_adam_steps)
-                .map_err(|e| anyhow!("{}: {e}", dir.display()))?;
-            ls.learner.value_norm = st.value_norm;
+            let dir = run_dir.join("checkpoints").join(&name);
+            if !dir.is_dir() {
+                bail!(
+                    "{}: names the checkpoint {}, which is missing",
+                    state_path.display(),
+                    dir.display()
+                );
+            }
+            persist::load_learner(&dir, &mut ls.learner)?;
         }
         Ok(t)
     }
@@ -567,7 +565,30 @@ impl Trainer {
         let t3 = Instant::now();
         let mut updates: Vec<(Side, UpdateStats)> = Vec::new();
         for ls in &mut self.learners {
-            updates.push((ls.side, ls.learner.update(&ls.rollout, &mut self.rng)));
+            match ls.learner.update(&ls.rollout, &mut self.rng) {
+                Ok(stats) => {
+                    ls.bad_updates = 0;
+                    updates.push((ls.side, stats));
+                }
+                Err(bad) => {
+                    ls.bad_updates += 1;
+                    let limit = ls.learner.cfg.max_bad_updates;
+                    tracing::warn!(
+                        "{} update at iteration {}: {bad} ({} in a row, limit {limit})",
+                        ls.side.name(),
+                        self.iteration + 1,
+                        ls.bad_updates
+                    );
+                    if ls.bad_updates >= limit {
+                        bail!(
+                            "{} learner: {} updates in a row had a non-finite loss or gradient (last: {}); stopping with the last good weights (max_bad_updates = {limit})",
+                            ls.side.name(),
+                            ls.bad_updates,
+                            bad.0
+                        );
+                    }
+                }
+            }
         }
         let time_update = t3.elapsed().as_secs_f64();
 
@@ -630,11 +651,6 @@ impl Trainer {
 
     /// The sidecar of `side`'s checkpoint as of now.
     fn meta(&self, ls: &LearnerSide) -> CheckpointMeta {
-        let st = LearnerState {
-            value_norm: ls.learner.value_norm.clone(),
-            actor_adam_steps: ls.learner.actor_adam.steps,
-            critic_adam_steps: ls.learner.critic_adam.steps,
-        };
         CheckpointMeta {
             format: FORMAT,
             side: ls.side,
@@ -647,7 +663,8 @@ impl Trainer {
             iteration: self.iteration,
             config_hash: self.config_hash.clone(),
             code_version: code_version(),
-            learner_state: Some(serde_json::to_value(st).expect("serialisable")),
+            learner_state: Some(persist::learner_state(&ls.learner)),
+            files: Default::default(),
         }
     }
 
@@ -658,45 +675,18 @@ impl Trainer {
         for ls in &self.learners {
             let name = checkpoint_name(ls.side, self.env_steps);
             let dir = run_dir.join("checkpoints").join(&name);
-            let meta = self.meta(ls);
-            write_dir_atomically(&dir, |tmp| {
-                save_tensors(
-                    &tmp.join("actor.safetensors"),
-                    &named_cpu_tensors(&ls.learner.actor_vs),
-                )?;
-                save_tensors(
-                    &tmp.join("critic.safetensors"),
-                    &named_cpu_tensors(&ls.learner.critic_vs),
-                )?;
-                let mut opt = Vec::new();
-                for (prefix, adam) in [
-                    ("actor.", &ls.learner.actor_adam),
-                    ("critic.", &ls.learner.critic_adam),
-                ] {
-                    opt.extend(
-                        adam.state_tensors()
-                            .into_iter()
-                            .map(|(n, t)| (format!("{prefix}{n}"), t)),
-                    );
-                }
-                save_tensors(&tmp.join("optimizer.safetensors"), &opt)?;
-                std::fs::write(tmp.join("meta.json"), serde_json::to_string_pretty(&meta)?)?;
-                Ok(())
-            })?;
+            persist::save_learner(&dir, &ls.learner, self.meta(ls))?;
             written.push(dir);
             names.push((ls.side, name));
         }
-        let state = RunState {
+        RunState {
             iteration: self.iteration,
             env_steps: self.env_steps,
             wall_s: self.wall_s,
             config_hash: self.config_hash.clone(),
             checkpoints: names,
-        };
-        write_file_atomically(
-            &run_dir.join("state.json"),
-            serde_json::to_string_pretty(&state)?.as_bytes(),
-        )?;
+        }
+        .write(run_dir)?;
         Ok(written)
     }
 

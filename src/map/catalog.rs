@@ -51,7 +51,10 @@ pub fn shipped_dir() -> PathBuf {
 fn read_class_list(path: &Path) -> Result<BTreeMap<String, SizeClass>> {
     let mut reader =
         csv::Reader::from_path(path).with_context(|| format!("{}: cannot read", path.display()))?;
-    let headers = reader.headers()?.clone();
+    let headers = reader
+        .headers()
+        .with_context(|| format!("{}: cannot read its header (a CSV file in UTF-8 is expected)", path.display()))?
+        .clone();
     let col = |name: &str| headers.iter().position(|h| h.trim() == name);
     let (Some(map_col), Some(split_col)) = (col("map"), col("split")) else {
         bail!(
@@ -62,7 +65,9 @@ fn read_class_list(path: &Path) -> Result<BTreeMap<String, SizeClass>> {
     };
     let mut out = BTreeMap::new();
     for (i, rec) in reader.records().enumerate() {
-        let rec = rec.with_context(|| format!("{}: row {}", path.display(), i + 2))?;
+        let rec = rec.with_context(|| {
+            format!("{}: row {} (a CSV file in UTF-8 is expected)", path.display(), i + 2)
+        })?;
         let class: SizeClass = rec[split_col].parse().map_err(|e: String| {
             anyhow::anyhow!("{}: row {}, field 'split': {e}", path.display(), i + 2)
         })?;
@@ -74,7 +79,7 @@ fn read_class_list(path: &Path) -> Result<BTreeMap<String, SizeClass>> {
 /// All PNG maps of a folder, sorted by name, with their listed classes.
 pub fn list_dir(dir: &Path) -> Result<Vec<MapEntry>> {
     if !dir.is_dir() {
-        bail!("map folder {} does not exist", dir.display());
+        bail!("map folder {}: not found", dir.display());
     }
     let mut classes = BTreeMap::new();
     for list in ["splits.csv", "manifest.csv"] {
@@ -126,6 +131,9 @@ pub fn resolve(spec: &str) -> Result<Vec<MapEntry>> {
         (shipped_dir(), class)
     } else {
         let p = PathBuf::from(&source);
+        if source.to_ascii_lowercase().ends_with(".png") && !p.is_file() {
+            bail!("--maps '{spec}': map file {}: not found", p.display());
+        }
         if p.is_file() {
             let name = p
                 .file_stem()
@@ -139,7 +147,13 @@ pub fn resolve(spec: &str) -> Result<Vec<MapEntry>> {
             }]);
         }
         if !p.is_dir() {
-            bail!("--maps '{spec}': not a size class (small, medium, large), 'gibson', 'shipped', a folder or a .png file");
+            if class.is_some() {
+                bail!("--maps '{spec}': folder {}: not found", p.display());
+            }
+            if let Some((_, bad)) = spec.rsplit_once(':') {
+                bail!("--maps '{spec}': '{bad}' is not a size class (small, medium, large), and no folder '{spec}' was found");
+            }
+            bail!("--maps '{spec}': not found: not a size class (small, medium, large), 'gibson', 'shipped', an existing folder or .png file");
         }
         (p, class)
     };

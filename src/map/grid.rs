@@ -146,6 +146,19 @@ impl Grid {
         &self.free
     }
 
+    /// SHA-256 of the grid's content (side, then one byte per cell, 1 =
+    /// free), hex: the same map however its file is named, placed or
+    /// re-encoded. The test-map guard (`map::testset`) and eval's setting
+    /// identity read it.
+    pub fn content_hash(&self) -> String {
+        use sha2::{Digest, Sha256};
+        let mut h = Sha256::new();
+        h.update((self.side as u64).to_le_bytes());
+        let cells: Vec<u8> = self.free.iter().map(|&f| f as u8).collect();
+        h.update(&cells);
+        crate::util::hex(&h.finalize())
+    }
+
     pub fn free_cells(&self) -> usize {
         self.free.iter().filter(|&&f| f).count()
     }

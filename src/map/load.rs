@@ -22,12 +22,34 @@ impl MapError {
     }
 }
 
+/// The largest map side accepted, in pixels (40 m at 0.01 m per pixel; the
+/// Gibson maps are at most 1800). Checked from the PNG header before
+/// decoding, so a huge image is refused at once instead of filling memory.
+pub const MAX_SIDE_PX: u32 = 4000;
+
 /// Loads a traversability PNG into a working grid named after the file stem.
 pub fn load_png(path: &Path) -> Result<Grid, MapError> {
+    if !path.exists() {
+        return Err(MapError::new(path, "not found"));
+    }
     let bytes =
         std::fs::read(path).map_err(|e| MapError::new(path, format!("cannot read: {e}")))?;
     if !bytes.starts_with(b"\x89PNG\r\n\x1a\n") {
         return Err(MapError::new(path, "not a PNG file (bad signature)"));
+    }
+    // IHDR is the first chunk: width and height, big-endian, at bytes 16..24.
+    if bytes.len() >= 24 && &bytes[12..16] == b"IHDR" {
+        let w = u32::from_be_bytes(bytes[16..20].try_into().unwrap());
+        let h = u32::from_be_bytes(bytes[20..24].try_into().unwrap());
+        if w > MAX_SIDE_PX || h > MAX_SIDE_PX {
+            return Err(MapError::new(
+                path,
+                format!(
+                    "{w}x{h} pixels: larger than the {MAX_SIDE_PX}x{MAX_SIDE_PX} maps accepted ({} m at 0.01 m per pixel)",
+                    MAX_SIDE_PX / 100
+                ),
+            ));
+        }
     }
     let img = image::load_from_memory_with_format(&bytes, image::ImageFormat::Png)
         .map_err(|e| MapError::new(path, format!("broken PNG: {e}")))?;
@@ -109,7 +131,7 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let missing = dir.path().join("nope.png");
         let e = load_png(&missing).unwrap_err().to_string();
-        assert!(e.contains("nope.png") && e.contains("cannot read"), "{e}");
+        assert!(e.contains("nope.png") && e.contains("not found"), "{e}");
 
         let text = write(dir.path(), "text.png", b"hello, not a png");
         let e = load_png(&text).unwrap_err().to_string();

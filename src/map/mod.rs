@@ -4,6 +4,7 @@ pub mod generate;
 pub mod grid;
 pub mod load;
 pub mod prepared;
+pub mod testset;
 
 pub use catalog::{resolve, MapEntry};
 pub use grid::{Grid, SizeClass, CELL_AREA, CELL_SIZE};

@@ -1,26 +1,40 @@
 //! Checkpoints: a folder per snapshot with the weights in safetensors files
 //! and `meta.json`, the sidecar that says what network and setting the
-//! weights belong to. Folders are written under a temporary name and renamed
-//! into place, so a killed run never leaves half a checkpoint.
+//! weights belong to, with the SHA-256 of every weight file.
 //!
 //! ```text
 //! runs/NAME/checkpoints/captors-000001024000/
-//!     meta.json            side, algorithm, net sizes, K, speed ratio, steps, hashes
+//!     meta.json            side, algorithm, net sizes, K, speed ratio, steps, file hashes
 //!     actor.safetensors    the policy (all a controller needs)
 //!     critic.safetensors   the value function   (to resume training)
 //!     optimizer.safetensors Adam moments        (to resume training)
 //! ```
+//!
+//! Invariants:
+//! - A folder is written under a temporary name, synced, then moved into
+//!   place; a complete checkpoint is never removed before its replacement is
+//!   in place (the two are swapped atomically), and an identical one is not
+//!   rewritten. Temporaries a killed process left behind are removed by
+//!   `clean_stale_temporaries`.
+//! - Loading verifies each weight file against its hash in `meta.json` and
+//!   refuses non-finite weights: a flipped byte or a NaN never plays.
 
 use super::{obs_tensors, pool_patch, Actor, NetConfig};
 use crate::env::{Action, Controller, EnvConfig, Side, TrapEnv, PATCH_LEN};
+use crate::util::sha256_file;
 use anyhow::{bail, Context, Result};
 use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use tch::{nn, Device, Kind, Tensor};
 
 /// Version of the checkpoint layout; bumped when it changes incompatibly.
-pub const FORMAT: u32 = 1;
+/// 2: `meta.json` carries the SHA-256 of every weight file.
+pub const FORMAT: u32 = 2;
+
+/// The learners whose checkpoints this build can load.
+pub const KNOWN_ALGORITHMS: [&str; 2] = ["mappo", "ippo"];
 
 /// The sidecar of a checkpoint.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -47,6 +61,8 @@ pub struct CheckpointMeta {
     /// Learner state that is not a tensor: value normaliser and Adam step.
     #[serde(default)]
     pub learner_state: Option<serde_json::Value>,
+    /// SHA-256 (hex) of every file of the folder but this one, by file name.
+    pub files: BTreeMap<String, String>,
 }
 
 impl CheckpointMeta {
@@ -89,36 +105,176 @@ pub fn checkpoint_name(side: Side, env_steps: u64) -> String {
     format!("{}-{env_steps:012}", side.name())
 }
 
-/// Writes a folder atomically: `fill` writes into a temporary sibling, which
-/// then replaces `dir`.
-pub fn write_dir_atomically(dir: &Path, fill: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
+/// What `write_dir_atomically` did.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Written {
+    /// The folder did not exist.
+    Created,
+    /// A folder with other content was swapped out for the new one.
+    Replaced,
+    /// The folder already held exactly this content; nothing was touched.
+    Unchanged,
+}
+
+fn sync_path(path: &Path) -> Result<()> {
+    std::fs::File::open(path)
+        .and_then(|f| f.sync_all())
+        .with_context(|| format!("cannot sync {}", path.display()))
+}
+
+/// Do two folders hold the same files with the same bytes?
+fn same_files(a: &Path, b: &Path) -> bool {
+    let list = |d: &Path| -> Option<BTreeMap<String, PathBuf>> {
+        std::fs::read_dir(d)
+            .ok()?
+            .map(|e| e.ok().map(|e| (e.file_name().to_string_lossy().into_owned(), e.path())))
+            .collect()
+    };
+    let (Some(fa), Some(fb)) = (list(a), list(b)) else {
+        return false;
+    };
+    fa.len() == fb.len()
+        && fa.iter().all(|(name, pa)| {
+            fb.get(name).is_some_and(|pb| match (std::fs::read(pa), std::fs::read(pb)) {
+                (Ok(x), Ok(y)) => x == y,
+                _ => false,
+            })
+        })
+}
+
+/// Swaps two paths in one step (Linux `renameat2(RENAME_EXCHANGE)`).
+#[cfg(target_os = "linux")]
+fn exchange(a: &Path, b: &Path) -> std::io::Result<()> {
+    use std::ffi::CString;
+    use std::os::unix::ffi::OsStrExt;
+    let ca = CString::new(a.as_os_str().as_bytes())?;
+    let cb = CString::new(b.as_os_str().as_bytes())?;
+    // SAFETY: both paths are valid NUL-terminated strings for the call's duration.
+    let rc = unsafe {
+        libc::syscall(
+            libc::SYS_renameat2,
+            libc::AT_FDCWD,
+            ca.as_ptr(),
+            libc::AT_FDCWD,
+            cb.as_ptr(),
+            libc::RENAME_EXCHANGE,
+        )
+    };
+    if rc == 0 {
+        Ok(())
+    } else {
+        Err(std::io::Error::last_os_error())
+    }
+}
+
+#[cfg(not(target_os = "linux"))]
+fn exchange(_a: &Path, _b: &Path) -> std::io::Result<()> {
+    Err(std::io::Error::from(std::io::ErrorKind::Unsupported))
+}
+
+/// Writes a folder atomically: `fill` writes into a temporary sibling, whose
+/// files are synced before it takes `dir`'s place. An existing `dir` with the
+/// same content is left alone; one with other content is swapped with the
+/// new folder in one step, so at every moment `dir` is one complete version.
+/// (Where the swap is unsupported, the old folder is first renamed to
+/// `.NAME.old-PID`, which `clean_stale_temporaries` puts back if the process
+/// dies before the new one is in place.)
+pub fn write_dir_atomically(dir: &Path, fill: impl FnOnce(&Path) -> Result<()>) -> Result<Written> {
     let parent = dir.parent().unwrap_or(Path::new("."));
     std::fs::create_dir_all(parent)
         .with_context(|| format!("cannot create {}", parent.display()))?;
-    let name = dir.file_name().context("checkpoint path has no name")?;
-    let tmp = parent.join(format!(
-        ".{}.tmp-{}",
-        name.to_string_lossy(),
-        std::process::id()
-    ));
+    let name = dir.file_name().context("checkpoint path has no name")?.to_string_lossy();
+    let tmp = parent.join(format!(".{name}.tmp-{}", std::process::id()));
     if tmp.exists() {
         std::fs::remove_dir_all(&tmp)?;
     }
     std::fs::create_dir_all(&tmp).with_context(|| format!("cannot create {}", tmp.display()))?;
     fill(&tmp)?;
-    if dir.exists() {
-        std::fs::remove_dir_all(dir)
-            .with_context(|| format!("cannot replace {}", dir.display()))?;
+    for e in std::fs::read_dir(&tmp)? {
+        sync_path(&e?.path())?;
     }
-    std::fs::rename(&tmp, dir).with_context(|| format!("cannot move {} into place", dir.display()))
+    sync_path(&tmp)?;
+    let outcome = if !dir.exists() {
+        std::fs::rename(&tmp, dir)
+            .with_context(|| format!("cannot move {} into place", dir.display()))?;
+        Written::Created
+    } else if same_files(&tmp, dir) {
+        std::fs::remove_dir_all(&tmp)?;
+        return Ok(Written::Unchanged);
+    } else {
+        match exchange(&tmp, dir) {
+            Ok(()) => {}
+            Err(_) => {
+                let aside = parent.join(format!(".{name}.old-{}", std::process::id()));
+                std::fs::rename(dir, &aside)
+                    .with_context(|| format!("cannot move {} aside", dir.display()))?;
+                std::fs::rename(&tmp, dir)
+                    .with_context(|| format!("cannot move {} into place", dir.display()))?;
+                std::fs::rename(&aside, &tmp)?;
+            }
+        }
+        // `tmp` now holds the old version.
+        std::fs::remove_dir_all(&tmp)
+            .with_context(|| format!("cannot remove {}", tmp.display()))?;
+        Written::Replaced
+    };
+    sync_path(parent)?;
+    Ok(outcome)
 }
 
-/// Writes a file atomically (temporary sibling, then rename).
+/// Writes a file atomically (temporary sibling, synced, then renamed).
 pub fn write_file_atomically(path: &Path, bytes: &[u8]) -> Result<()> {
-    let tmp = path.with_extension(format!("tmp-{}", std::process::id()));
-    std::fs::write(&tmp, bytes).with_context(|| format!("cannot write {}", tmp.display()))?;
+    use std::io::Write;
+    let name = path.file_name().context("file path has no name")?.to_string_lossy();
+    let tmp = path.with_file_name(format!(".{name}.tmp-{}", std::process::id()));
+    let mut f =
+        std::fs::File::create(&tmp).with_context(|| format!("cannot write {}", tmp.display()))?;
+    f.write_all(bytes)
+        .and_then(|_| f.sync_all())
+        .with_context(|| format!("cannot write {}", tmp.display()))?;
     std::fs::rename(&tmp, path)
-        .with_context(|| format!("cannot move {} into place", path.display()))
+        .with_context(|| format!("cannot move {} into place", path.display()))?;
+    if let Some(parent) = path.parent().filter(|p| !p.as_os_str().is_empty()) {
+        sync_path(parent)?;
+    }
+    Ok(())
+}
+
+fn pid_alive(pid: u32) -> bool {
+    pid == std::process::id() || Path::new(&format!("/proc/{pid}")).exists()
+}
+
+/// Removes what killed processes left in `dir`: `.NAME.tmp-PID` files and
+/// folders of processes no longer alive, and puts back a `.NAME.old-PID`
+/// folder whose replacement never arrived. Returns what it removed or
+/// restored. Call it when a run starts, before writing anything.
+pub fn clean_stale_temporaries(dir: &Path) -> Result<Vec<PathBuf>> {
+    let mut touched = Vec::new();
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return Ok(touched);
+    };
+    for e in entries {
+        let path = e?.path();
+        let file = path.file_name().unwrap_or_default().to_string_lossy().into_owned();
+        let Some(rest) = file.strip_prefix('.') else { continue };
+        for (marker, restore) in [(".tmp-", false), (".old-", true)] {
+            let Some((name, pid)) = rest.rsplit_once(marker) else { continue };
+            let Ok(pid) = pid.parse::<u32>() else { continue };
+            if pid != std::process::id() && pid_alive(pid) {
+                continue;
+            }
+            let target = dir.join(name);
+            if restore && !target.exists() {
+                std::fs::rename(&path, &target)?;
+            } else if path.is_dir() {
+                std::fs::remove_dir_all(&path)?;
+            } else {
+                std::fs::remove_file(&path)?;
+            }
+            touched.push(path.clone());
+        }
+    }
+    Ok(touched)
 }
 
 /// Named tensors of a var store, sorted by name, on the CPU.
@@ -172,18 +328,104 @@ pub fn read_tensors(path: &Path) -> Result<Vec<(String, Tensor)>> {
     Ok(t)
 }
 
+/// Checks a checkpoint file against the SHA-256 its `meta.json` recorded.
+pub fn verify_file(dir: &Path, meta: &CheckpointMeta, file: &str) -> Result<()> {
+    let path = dir.join(file);
+    let Some(want) = meta.files.get(file) else {
+        bail!("{}: meta.json records no hash for {file}", dir.display());
+    };
+    if !path.is_file() {
+        bail!("{}: missing", path.display());
+    }
+    let got = sha256_file(&path).with_context(|| format!("{}: cannot read", path.display()))?;
+    if &got != want {
+        bail!(
+            "{}: sha256 {got} differs from the {want} recorded in meta.json: the file is corrupt or was changed after it was written",
+            path.display()
+        );
+    }
+    Ok(())
+}
+
+/// Errors unless every value of every tensor is finite.
+pub fn check_finite(tensors: &[(String, Tensor)], file: &Path) -> Result<()> {
+    for (name, t) in tensors {
+        let all_finite = tch::no_grad(|| t.isfinite().all().int64_value(&[]) == 1);
+        if !all_finite {
+            bail!("{}: tensor '{name}' holds NaN or infinite values", file.display());
+        }
+    }
+    Ok(())
+}
+
+/// Reads one weight file of a checkpoint: hash verified, values finite.
+pub fn read_checked(dir: &Path, meta: &CheckpointMeta, file: &str) -> Result<Vec<(String, Tensor)>> {
+    verify_file(dir, meta, file)?;
+    let path = dir.join(file);
+    let tensors = read_tensors(&path)?;
+    check_finite(&tensors, &path)?;
+    Ok(tensors)
+}
+
+/// Writes a checkpoint folder: the weight files, their hashes into `meta`,
+/// then `meta.json`, all atomically (see `write_dir_atomically`).
+pub fn write_checkpoint(
+    dir: &Path,
+    mut meta: CheckpointMeta,
+    files: &[(&str, Vec<(String, Tensor)>)],
+) -> Result<Written> {
+    write_dir_atomically(dir, |tmp| {
+        meta.files.clear();
+        for (file, tensors) in files {
+            check_finite(tensors, &dir.join(file))
+                .context("refusing to write a checkpoint with non-finite weights")?;
+            let path = tmp.join(file);
+            save_tensors(&path, tensors)?;
+            meta.files.insert(file.to_string(), sha256_file(&path)?);
+        }
+        std::fs::write(tmp.join("meta.json"), serde_json::to_string_pretty(&meta)?)?;
+        Ok(())
+    })
+}
+
 pub fn read_meta(dir: &Path) -> Result<CheckpointMeta> {
     let path = dir.join("meta.json");
+    if !path.is_file() {
+        bail!(
+            "{}: missing: {} is not a checkpoint folder (a checkpoint holds meta.json beside its .safetensors files)",
+            path.display(),
+            dir.display()
+        );
+    }
     let text = std::fs::read_to_string(&path)
         .with_context(|| format!("{}: cannot read", path.display()))?;
+    #[derive(Deserialize)]
+    struct Format {
+        format: u32,
+    }
+    if let Ok(Format { format }) = serde_json::from_str::<Format>(&text) {
+        if format != FORMAT {
+            bail!(
+                "{}: checkpoint format {format}; this build reads format {FORMAT} (format 2 added the weight files' hashes)",
+                path.display()
+            );
+        }
+    }
     let meta: CheckpointMeta = serde_json::from_str(&text)
         .with_context(|| format!("{}: not a checkpoint sidecar", path.display()))?;
-    if meta.format != FORMAT {
+    if !KNOWN_ALGORITHMS.contains(&meta.algorithm.as_str()) {
         bail!(
-            "{}: checkpoint format {} (this build reads format {FORMAT})",
+            "{}: algorithm \"{}\" is not one this build can load ({})",
             path.display(),
-            meta.format
+            meta.algorithm,
+            KNOWN_ALGORITHMS.join(", ")
         );
+    }
+    if !(meta.speed_ratio.is_finite() && meta.speed_ratio > 0.0) {
+        bail!("{}: speed_ratio = {}: not a speed ratio", path.display(), meta.speed_ratio);
+    }
+    if meta.num_captors == 0 || meta.num_captors > 32 {
+        bail!("{}: num_captors = {}: must be between 1 and 32", path.display(), meta.num_captors);
     }
     meta.net
         .validate()
@@ -213,6 +455,37 @@ pub fn latest_checkpoint(run_or_checkpoints: &Path, side: Side) -> Option<PathBu
     found.pop()
 }
 
+/// The checkpoint of `side` that a run folder's `state.json` names, if the
+/// folder has a `state.json` naming one; an error if that checkpoint is gone
+/// (never an older one in its place: that would play the wrong weights).
+fn checkpoint_named_by_state(run: &Path, side: Side) -> Result<Option<PathBuf>> {
+    let state = run.join("state.json");
+    if !state.is_file() {
+        return Ok(None);
+    }
+    #[derive(Deserialize)]
+    struct Named {
+        checkpoints: Vec<(Side, String)>,
+    }
+    let text = std::fs::read_to_string(&state)
+        .with_context(|| format!("{}: cannot read", state.display()))?;
+    let named: Named = serde_json::from_str(&text)
+        .with_context(|| format!("{}: not a run state", state.display()))?;
+    let Some((_, name)) = named.checkpoints.iter().find(|(s, _)| *s == side) else {
+        return Ok(None);
+    };
+    let dir = run.join("checkpoints").join(name);
+    if !dir.join("meta.json").is_file() {
+        bail!(
+            "{}: names the {} checkpoint {}, which is missing or incomplete; refusing to fall back to an older one",
+            state.display(),
+            side.name(),
+            dir.display()
+        );
+    }
+    Ok(Some(dir))
+}
+
 /// Resolves what a user wrote after `ckpt:`: a checkpoint folder, a file in
 /// one, or a run folder (its newest checkpoint of `side`).
 pub fn resolve_checkpoint(path: &Path, side: Side) -> Result<PathBuf> {
@@ -229,10 +502,23 @@ pub fn resolve_checkpoint(path: &Path, side: Side) -> Result<PathBuf> {
     if path.join("meta.json").is_file() {
         return Ok(path.to_path_buf());
     }
+    if let Some(named) = checkpoint_named_by_state(path, side)? {
+        return Ok(named);
+    }
+    let looks_like_a_checkpoint = path
+        .file_name()
+        .and_then(|n| n.to_str())
+        .is_some_and(|n| n.starts_with(&format!("{}-", side.name())));
+    if path.is_dir() && looks_like_a_checkpoint {
+        bail!(
+            "{}: has no meta.json: not a complete checkpoint folder",
+            path.display()
+        );
+    }
     if path.is_dir() {
         return latest_checkpoint(path, side).with_context(|| {
             format!(
-                "{}: holds no {} checkpoint (folders named {}-<steps> with a meta.json)",
+                "{}: no meta.json, and no {} checkpoint inside (folders named {}-<steps> with a meta.json)",
                 path.display(),
                 side.name(),
                 side.name()
@@ -256,8 +542,7 @@ impl PolicySnapshot {
     pub fn load(path: &Path, side: Side) -> Result<PolicySnapshot> {
         let dir = resolve_checkpoint(path, side)?;
         let meta = read_meta(&dir)?;
-        let file = dir.join("actor.safetensors");
-        let tensors = read_tensors(&file)?;
+        let tensors = read_checked(&dir, &meta, "actor.safetensors")?;
         let weights = tensors
             .into_iter()
             .map(|(n, t)| {

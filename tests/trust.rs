@@ -1,0 +1,459 @@
+//! Trustworthy results: each test here pins a way the tool once gave a
+//! silently wrong number or lost data (eval settings mixed up on resume, a
+//! checkpoint deleted before its replacement, NaN training "successfully",
+//! weights loaded without a check, degenerate options giving results, test
+//! maps trained on, paths leaving their folder, unclear errors).
+
+mod common;
+
+use common::{maps, room};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use t2e::cli::bench::BenchArgs;
+use t2e::cli::eval::EvalArgs;
+use t2e::env::{CaptureRule, EnvConfig, Side};
+use t2e::eval::Summary;
+use t2e::learn::ppo::{PpoConfig, PpoLearner, Rollout};
+use t2e::learn::train::{SideConfig, TrainConfig, Trainer};
+use t2e::nn::checkpoint::{clean_stale_temporaries, read_meta, write_dir_atomically, Written};
+use t2e::nn::{NetConfig, PolicySnapshot};
+
+fn eval_args(out: &Path) -> EvalArgs {
+    EvalArgs {
+        captors: "heuristic".parse().unwrap(),
+        target: "heuristic".parse().unwrap(),
+        maps: vec!["shipped".into()],
+        k: vec![3],
+        speed_ratio: vec![1.0],
+        episodes: 12,
+        episode_length: 150,
+        seed: 0,
+        capture_rule: CaptureRule::Fast,
+        soa_every: 0,
+        out: out.to_path_buf(),
+        quiet: true,
+        resume: false,
+    }
+}
+
+fn summaries(out: &Path) -> Vec<Summary> {
+    serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap()
+}
+
+/// Folders of settings under an eval output folder.
+fn setting_dirs(out: &Path) -> Vec<PathBuf> {
+    let mut v: Vec<PathBuf> = std::fs::read_dir(out)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.is_dir())
+        .collect();
+    v.sort();
+    v
+}
+
+#[test]
+fn eval_never_mixes_up_settings() {
+    let out = tempfile::tempdir().unwrap();
+    let base = eval_args(out.path());
+    t2e::cli::eval::run(eval_args(out.path())).unwrap();
+    let fast = summaries(out.path())[0].clone();
+
+    // Another exact speed ratio, resumed: a new result, not the 1.0 one.
+    let mut args = eval_args(out.path());
+    args.speed_ratio = vec![1.04];
+    args.resume = true;
+    t2e::cli::eval::run(args).unwrap();
+    let r104 = summaries(out.path())[0].clone();
+    assert_eq!(r104.speed_ratio, 1.04);
+    assert!(r104.table_row().contains("1.0:1.04"), "{}", r104.table_row());
+    assert_eq!(setting_dirs(out.path()).len(), 2, "1.04 got a folder of its own");
+
+    // The strict rule, resumed: its own result.
+    let mut args = eval_args(out.path());
+    args.capture_rule = CaptureRule::Strict;
+    args.resume = true;
+    t2e::cli::eval::run(args).unwrap();
+    let strict = summaries(out.path())[0].clone();
+    assert_eq!(strict.capture_rule, CaptureRule::Strict);
+    assert_eq!(setting_dirs(out.path()).len(), 3);
+    assert_ne!(
+        (strict.sr, strict.time),
+        (fast.sr, fast.time),
+        "the strict rule must be played, not read back from the fast one"
+    );
+
+    // The same setting resumed is reused as it was.
+    let mut args = eval_args(out.path());
+    args.resume = true;
+    t2e::cli::eval::run(args).unwrap();
+    assert_eq!(summaries(out.path())[0], fast);
+
+    // Two ratios in one grid: two rows, two folders, each with its own ratio.
+    let grid = tempfile::tempdir().unwrap();
+    let mut args = eval_args(grid.path());
+    args.speed_ratio = vec![1.0, 1.04];
+    t2e::cli::eval::run(args).unwrap();
+    let rows = summaries(grid.path());
+    assert_eq!(
+        rows.iter().map(|s| s.speed_ratio).collect::<Vec<_>>(),
+        [1.0, 1.04]
+    );
+    assert_eq!(setting_dirs(grid.path()).len(), 2);
+    let table = std::fs::read_to_string(grid.path().join("table.md")).unwrap();
+    assert!(table.contains("1.0:1.0 |") && table.contains("1.0:1.04 |"), "{table}");
+    drop(base);
+}
+
+#[test]
+fn degenerate_options_are_refused() {
+    let out = tempfile::tempdir().unwrap();
+    let mut args = eval_args(out.path());
+    args.episodes = 0;
+    let err = t2e::cli::eval::run(args).unwrap_err().to_string();
+    assert!(err.contains("--episodes 0"), "{err}");
+    assert!(!out.path().join("table.md").exists(), "no table for no episodes");
+    let mut args = eval_args(out.path());
+    args.speed_ratio = vec![f64::NAN];
+    assert!(t2e::cli::eval::run(args).is_err());
+    let mut args = eval_args(out.path());
+    args.speed_ratio = vec![1.0, 1.0];
+    assert!(t2e::cli::eval::run(args).unwrap_err().to_string().contains("twice"));
+
+    for seconds in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+        let args = BenchArgs {
+            maps: Some("shipped".into()),
+            seconds,
+            envs: 4,
+            ppo: None,
+            iterations: 1,
+            device: None,
+        };
+        let err = t2e::cli::bench::run(args).unwrap_err().to_string();
+        assert!(err.contains("--seconds"), "{seconds}: {err}");
+    }
+
+    let cfg = TrainConfig {
+        total_env_steps: 0,
+        ..TrainConfig::default()
+    };
+    assert!(cfg.validate().unwrap_err().contains("total_env_steps = 0"));
+}
+
+#[test]
+fn nan_in_a_config_is_an_error_naming_the_field() {
+    let dir = tempfile::tempdir().unwrap();
+    for (field, text) in [
+        ("captors.ppo.entropy_coef", "[captors]\nplay = \"mappo\"\n[captors.ppo]\nentropy_coef = nan\n"),
+        ("captors.ppo.huber_delta", "[captors]\nplay = \"mappo\"\n[captors.ppo]\nhuber_delta = nan\n"),
+        ("captors.ppo.lr", "[captors]\nplay = \"mappo\"\n[captors.ppo]\nlr = inf\n"),
+        ("captors.ppo.max_grad_norm", "[captors]\nplay = \"mappo\"\n[captors.ppo]\nmax_grad_norm = -1.0\n"),
+        ("captors.ppo.adam_eps", "[captors]\nplay = \"mappo\"\n[captors.ppo]\nadam_eps = nan\n"),
+        ("env.target_speed", "[env]\ntarget_speed = nan\n"),
+    ] {
+        let path = dir.path().join("c.toml");
+        std::fs::write(&path, text).unwrap();
+        let err = format!("{:#}", TrainConfig::load(&path).unwrap_err());
+        assert!(err.contains("c.toml") && err.contains(field), "{field}: {err}");
+    }
+}
+
+/// A small learner and a rollout of random but finite data.
+fn learner_and_rollout() -> (PpoLearner, Rollout) {
+    use rand::{Rng, SeedableRng};
+    tch::manual_seed(0);
+    let net = NetConfig {
+        hidden: 16,
+        conv_channels: [2, 4],
+        patch_pool: 4,
+    };
+    let cfg = PpoConfig {
+        epochs: 2,
+        ..PpoConfig::default()
+    };
+    let (steps, rows, vl) = (10, 4, 10);
+    let learner = PpoLearner::new(
+        cfg,
+        net.clone(),
+        vl,
+        1,
+        t2e::learn::Algorithm::Mappo.critic_view(),
+        tch::Device::Cpu,
+    );
+    let mut ro = Rollout::new(steps, rows, vl, &net, 10);
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(1);
+    for x in ro.vectors.iter_mut() {
+        *x = rng.gen_range(-1.0..1.0);
+    }
+    for x in ro.patches.iter_mut() {
+        *x = rng.gen_range(0..2);
+    }
+    for x in ro.rewards.iter_mut() {
+        *x = rng.gen_range(-1.0..1.0);
+    }
+    for (a, l) in ro.actions.iter_mut().zip(ro.logp.iter_mut()) {
+        *a = rng.gen_range(0..5);
+        *l = (0.2f32).ln();
+    }
+    (learner, ro)
+}
+
+fn weights(l: &PpoLearner) -> Vec<Vec<f32>> {
+    t2e::nn::checkpoint::named_cpu_tensors(&l.actor_vs)
+        .into_iter()
+        .chain(t2e::nn::checkpoint::named_cpu_tensors(&l.critic_vs))
+        .map(|(_, t)| {
+            let t = t.flatten(0, -1);
+            let mut v = vec![0f32; t.numel()];
+            t.copy_data(&mut v, t.numel());
+            v
+        })
+        .collect()
+}
+
+#[test]
+fn a_non_finite_update_is_undone() {
+    use rand::SeedableRng;
+    let (mut learner, mut ro) = learner_and_rollout();
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(2);
+    let before = weights(&learner);
+    let norm_before = learner.value_norm.clone();
+    let steps_before = learner.actor_adam.steps;
+    ro.rewards[7] = f32::NAN; // the injected fault
+    let err = learner.update(&ro, &mut rng).unwrap_err();
+    assert!(err.to_string().contains("non-finite"), "{err}");
+    assert_eq!(weights(&learner), before, "weights restored");
+    assert_eq!(learner.value_norm, norm_before, "return statistics restored");
+    assert_eq!(learner.actor_adam.steps, steps_before, "Adam restored");
+    // Clean data again: the update goes through and changes the weights.
+    ro.rewards[7] = 0.5;
+    learner.update(&ro, &mut rng).unwrap();
+    assert_ne!(weights(&learner), before);
+    assert!(weights(&learner).iter().flatten().all(|x| x.is_finite()));
+}
+
+fn tiny_config() -> TrainConfig {
+    TrainConfig {
+        name: "trust".into(),
+        seed: 3,
+        total_env_steps: u64::MAX,
+        num_envs: 4,
+        rollout_steps: 20,
+        checkpoint_every: 1000,
+        device: "cpu".into(),
+        maps: "unused".into(),
+        env: EnvConfig {
+            num_captors: 1,
+            episode_length: 30,
+            ..EnvConfig::default()
+        },
+        captors: SideConfig {
+            play: "mappo".into(),
+            net: NetConfig {
+                hidden: 16,
+                conv_channels: [2, 4],
+                patch_pool: 4,
+            },
+            ppo: PpoConfig::default(),
+        },
+        target: SideConfig {
+            play: "still".into(),
+            ..SideConfig::default()
+        },
+    }
+}
+
+fn tiny_maps() -> Arc<Vec<Arc<t2e::map::PreparedMap>>> {
+    maps(room(100, 160, 100, 160))
+}
+
+#[test]
+fn checkpoints_are_never_lost_and_never_silently_replaced() {
+    tch::set_num_threads(1);
+    let run = tempfile::tempdir().unwrap();
+    let mut t = Trainer::new(tiny_config(), tiny_maps()).unwrap();
+    t.iterate().unwrap();
+    let first = t.save(run.path()).unwrap().remove(0);
+    // Re-saving the same state (the end of a finished run, or its resume)
+    // leaves the complete checkpoint alone.
+    let inode = |p: &Path| std::os::unix::fs::MetadataExt::ino(&std::fs::metadata(p).unwrap());
+    let before = inode(&first.join("actor.safetensors"));
+    t.save(run.path()).unwrap();
+    assert_eq!(inode(&first.join("actor.safetensors")), before, "identical checkpoint rewritten");
+
+    // Replacing a folder with other content swaps it in one step.
+    let dir = run.path().join("swap");
+    std::fs::create_dir(&dir).unwrap();
+    std::fs::write(dir.join("a"), "old").unwrap();
+    let w = write_dir_atomically(&dir, |tmp| Ok(std::fs::write(tmp.join("a"), "new")?)).unwrap();
+    assert_eq!(w, Written::Replaced);
+    assert_eq!(std::fs::read_to_string(dir.join("a")).unwrap(), "new");
+    let w = write_dir_atomically(&dir, |tmp| Ok(std::fs::write(tmp.join("a"), "new")?)).unwrap();
+    assert_eq!(w, Written::Unchanged);
+
+    // What a killed process leaves behind is cleaned up; a folder moved
+    // aside whose replacement never came is put back.
+    let ckpts = run.path().join("checkpoints");
+    let dead = 999_999_999u32;
+    std::fs::create_dir(ckpts.join(format!(".captors-000000000160.tmp-{dead}"))).unwrap();
+    std::fs::write(run.path().join(format!(".state.json.tmp-{dead}")), "{").unwrap();
+    let name = first.file_name().unwrap().to_string_lossy().into_owned();
+    let aside = ckpts.join(format!(".{name}.old-{dead}"));
+    std::fs::rename(&first, &aside).unwrap();
+    let mut touched = clean_stale_temporaries(&ckpts).unwrap();
+    touched.extend(clean_stale_temporaries(run.path()).unwrap());
+    assert_eq!(touched.len(), 3, "{touched:?}");
+    assert!(first.join("meta.json").is_file(), "moved-aside checkpoint restored");
+    let left: Vec<_> = std::fs::read_dir(&ckpts)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(left, [name.clone()]);
+
+    // ckpt:RUN plays the checkpoint state.json names, and fails rather than
+    // falling back to an older one when that one is gone.
+    t.iterate().unwrap();
+    let second = t.save(run.path()).unwrap().remove(0);
+    let snap = PolicySnapshot::load(run.path(), Side::Captors).unwrap();
+    assert_eq!(snap.dir, second);
+    std::fs::remove_dir_all(&second).unwrap();
+    let err = format!("{:#}", PolicySnapshot::load(run.path(), Side::Captors).unwrap_err());
+    assert!(err.contains("state.json") && err.contains("missing"), "{err}");
+    let err = format!("{:#}", Trainer::resume(tiny_config(), tiny_maps(), run.path()).err().unwrap());
+    assert!(err.contains("missing"), "{err}");
+}
+
+/// Rewrites `meta.json` of a checkpoint through `edit`.
+fn edit_meta(dir: &Path, edit: impl FnOnce(&mut serde_json::Value)) {
+    let path = dir.join("meta.json");
+    let mut v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    edit(&mut v);
+    std::fs::write(&path, serde_json::to_string_pretty(&v).unwrap()).unwrap();
+}
+
+#[test]
+fn weights_are_integrity_checked() {
+    tch::set_num_threads(1);
+    let run = tempfile::tempdir().unwrap();
+    let mut t = Trainer::new(tiny_config(), tiny_maps()).unwrap();
+    t.iterate().unwrap();
+    let ckpt = t.save(run.path()).unwrap().remove(0);
+    let meta = read_meta(&ckpt).unwrap();
+    assert_eq!(meta.files.len(), 3, "{:?}", meta.files);
+    PolicySnapshot::load(&ckpt, Side::Captors).unwrap();
+
+    // One flipped byte in the middle of the weights.
+    let copy = |name: &str| {
+        let d = run.path().join(name);
+        std::fs::create_dir_all(&d).unwrap();
+        for e in std::fs::read_dir(&ckpt).unwrap() {
+            let p = e.unwrap().path();
+            std::fs::copy(&p, d.join(p.file_name().unwrap())).unwrap();
+        }
+        d
+    };
+    let flipped = copy("flipped");
+    let file = flipped.join("actor.safetensors");
+    let mut bytes = std::fs::read(&file).unwrap();
+    let mid = bytes.len() - 40;
+    bytes[mid] ^= 0x10;
+    std::fs::write(&file, &bytes).unwrap();
+    let err = format!("{:#}", PolicySnapshot::load(&flipped, Side::Captors).unwrap_err());
+    assert!(err.contains("sha256") && err.contains("actor.safetensors"), "{err}");
+
+    // A NaN written into a weight, with the hash updated to match: still refused.
+    let poisoned = copy("poisoned");
+    let file = poisoned.join("actor.safetensors");
+    let tensors = tch::Tensor::read_safetensors(&file).unwrap();
+    let _ = tensors[0].1.view(-1).get(0).fill_(f64::NAN);
+    tch::Tensor::write_safetensors(&tensors, &file).unwrap();
+    let hash = t2e::util::sha256_file(&file).unwrap();
+    edit_meta(&poisoned, |v| v["files"]["actor.safetensors"] = hash.into());
+    let err = format!("{:#}", PolicySnapshot::load(&poisoned, Side::Captors).unwrap_err());
+    assert!(err.contains("NaN or infinite"), "{err}");
+
+    // An algorithm this build does not know.
+    let unknown = copy("unknown");
+    edit_meta(&unknown, |v| v["algorithm"] = "dqn".into());
+    let err = format!("{:#}", PolicySnapshot::load(&unknown, Side::Captors).unwrap_err());
+    assert!(err.contains("dqn"), "{err}");
+
+    // A resumed run checks the critic and optimizer files too.
+    let critic = ckpt.join("critic.safetensors");
+    let mut bytes = std::fs::read(&critic).unwrap();
+    let mid = bytes.len() - 8;
+    bytes[mid] ^= 1;
+    std::fs::write(&critic, &bytes).unwrap();
+    let err = format!("{:#}", Trainer::resume(tiny_config(), tiny_maps(), run.path()).err().unwrap());
+    assert!(err.contains("sha256") && err.contains("critic.safetensors"), "{err}");
+
+    // A folder without meta.json says so.
+    let bare = run.path().join("bare");
+    std::fs::create_dir(&bare).unwrap();
+    std::fs::copy(ckpt.join("actor.safetensors"), bare.join("actor.safetensors")).unwrap();
+    let err = format!("{:#}", PolicySnapshot::load(&bare, Side::Captors).unwrap_err());
+    assert!(err.contains("meta.json"), "{err}");
+}
+
+#[test]
+fn test_maps_are_recognised_by_content_wherever_they_sit() {
+    let Some(gibson) = t2e::map::catalog::gibson_dir() else {
+        assert!(std::env::var_os("CI").is_none(), "Gibson maps missing in CI");
+        return;
+    };
+    let copy = tempfile::tempdir().unwrap();
+    let src = gibson.join("Kettle_floor_trav_0_v3.png");
+    let renamed = copy.path().join("my-own-map.png");
+    std::fs::copy(&src, &renamed).unwrap();
+    let maps = t2e::map::catalog::load_prepared(&renamed.display().to_string()).unwrap();
+    let err = Trainer::new(tiny_config(), maps).err().unwrap().to_string();
+    assert!(err.contains("Kettle_floor_trav_0_v3") && err.contains("test set"), "{err}");
+}
+
+#[test]
+fn inputs_that_once_misbehaved_give_clear_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    // A PNG header claiming 20000 x 20000 pixels is refused before decoding.
+    let mut png = b"\x89PNG\r\n\x1a\n\0\0\0\x0dIHDR".to_vec();
+    png.extend(20000u32.to_be_bytes());
+    png.extend(20000u32.to_be_bytes());
+    png.extend([8, 0, 0, 0, 0, 0, 0, 0, 0]);
+    let huge = dir.path().join("huge.png");
+    std::fs::write(&huge, &png).unwrap();
+    let err = t2e::map::load_png(&huge).unwrap_err().to_string();
+    assert!(err.contains("huge.png") && err.contains("20000x20000"), "{err}");
+
+    // Missing files and folders say "not found".
+    for spec in ["nowhere.png", "no-such-folder:small"] {
+        let err = format!("{:#}", t2e::map::resolve(spec).unwrap_err());
+        assert!(err.contains("not found"), "{spec}: {err}");
+    }
+    let err = format!("{:#}", t2e::map::resolve("maps:huge").unwrap_err());
+    assert!(err.contains("'huge' is not a size class"), "{err}");
+
+    // A class list that is not UTF-8 is named.
+    let bad = dir.path().join("bad");
+    std::fs::create_dir(&bad).unwrap();
+    std::fs::copy(
+        t2e::map::catalog::shipped_dir().join("gen-small-1.png"),
+        bad.join("a.png"),
+    )
+    .unwrap();
+    std::fs::write(bad.join("manifest.csv"), b"map,split\na,sm\xffall\n").unwrap();
+    let err = format!("{:#}", t2e::map::resolve(&bad.display().to_string()).unwrap_err());
+    assert!(err.contains("manifest.csv") && err.contains("UTF-8"), "{err}");
+
+    // A run name cannot leave runs/.
+    let cfg = TrainConfig {
+        name: "../elsewhere".into(),
+        ..TrainConfig::default()
+    };
+    assert!(cfg.validate().unwrap_err().starts_with("name = "));
+
+    // render writes GIF data, so the file must be a .gif.
+    use clap::Parser;
+    let cli = t2e::cli::Cli::parse_from(["t2e-league", "render", "--out", "ep.png"]);
+    let t2e::cli::Command::Render(args) = cli.command else { unreachable!() };
+    let err = t2e::cli::render::run(args).unwrap_err().to_string();
+    assert!(err.contains(".gif"), "{err}");
+}
