@@ -439,6 +439,15 @@ fn vec_env_matches_single_envs_and_auto_resets() {
             );
             if s.truncations[0] || s.terminations[0] {
                 assert!(venv.terminated[e] || venv.truncated[e]);
+                // The state the episode ended in stays readable after the auto-reset.
+                for (i, o) in s.observations.iter().enumerate() {
+                    let r = e * 4 + i;
+                    assert_eq!(&venv.final_vectors[r * 20..(r + 1) * 20], &o.vector[..]);
+                    assert_eq!(
+                        &venv.final_patches[r * PATCH_LEN..(r + 1) * PATCH_LEN],
+                        &o.patch[..]
+                    );
+                }
                 finished += 1;
                 env.reset(episode_seed(99, e, 1)).unwrap();
             }

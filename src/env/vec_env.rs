@@ -55,6 +55,13 @@ pub struct VecEnv {
     /// [env]: the last step ended the episode by capture / by the step limit.
     pub terminated: Vec<bool>,
     pub truncated: Vec<bool>,
+    /// [env][agent][5 + 5 K] and [env][agent][48 x 48]: for worlds whose
+    /// episode ended in the last step, the observations of the state it ended
+    /// in (the main buffers already hold the next episode's first one), so a
+    /// learner can value the state a truncated episode reached. Stale for
+    /// other worlds.
+    pub final_vectors: Vec<f32>,
+    pub final_patches: Vec<u8>,
     /// Episodes that ended in the last step.
     pub finished: Vec<EpisodeStats>,
 }
@@ -85,6 +92,12 @@ impl VecEnv {
             base_seed,
             vectors: vec![0.0; n * cfg.vector_len()],
             patches: if cfg.observations {
+                vec![0; n * PATCH_LEN]
+            } else {
+                Vec::new()
+            },
+            final_vectors: vec![0.0; n * cfg.vector_len()],
+            final_patches: if cfg.observations {
                 vec![0; n * PATCH_LEN]
             } else {
                 Vec::new()
@@ -162,11 +175,21 @@ impl VecEnv {
         } else {
             (0..self.slots.len()).map(|_| &mut [][..]).collect()
         };
+        let mut final_patches: Vec<&mut [u8]> = if obs {
+            self.final_patches.chunks_mut(patch_chunk).collect()
+        } else {
+            (0..self.slots.len()).map(|_| &mut [][..]).collect()
+        };
         let results: Vec<Result<Option<EpisodeStats>, PlacementError>> = self
             .slots
             .par_iter_mut()
             .zip(self.vectors.par_chunks_mut(na * vl))
             .zip(patches.par_iter_mut())
+            .zip(
+                self.final_vectors
+                    .par_chunks_mut(na * vl)
+                    .zip(final_patches.par_iter_mut()),
+            )
             .zip(self.rewards.par_chunks_mut(na))
             .zip(actions.par_chunks(na))
             .zip(
@@ -175,7 +198,7 @@ impl VecEnv {
                     .zip(self.truncated.par_iter_mut()),
             )
             .enumerate()
-            .map(|(e, (((((slot, vec), patch), rew), act), (term, trunc)))| {
+            .map(|(e, ((((((slot, vec), patch), (final_vec, final_patch)), rew), act), (term, trunc)))| {
                 let mut acts = [Action::Stop; 33];
                 acts[..na].copy_from_slice(act);
                 let k = slot.env.num_captors();
@@ -200,6 +223,7 @@ impl VecEnv {
                         returns: slot.returns.clone(),
                         captor_path_len: env.path_len[..k].iter().sum::<f64>() / k as f64,
                     });
+                    slot.write_obs(final_vec, final_patch, vl, obs);
                     slot.episode += 1;
                     slot.begin(episode_seed(base, e, slot.episode))?;
                 }

@@ -108,12 +108,19 @@ impl PpoConfig {
 
 /// Generalised advantage estimation over a rollout of `steps` x `rows`
 /// (time major). `dones[t]` marks an episode that ended with step t, so
-/// nothing is bootstrapped across it; `last_values` are the values of the
-/// states after the last step. Returns (advantages, returns).
+/// nothing flows across it into the next episode. An episode that ended by
+/// capture is worth nothing afterwards; one cut off by the step limit
+/// (`truncated[t]` = 1, with `dones[t]` = 1) is not over for the robots, so
+/// its last step bootstraps from the value of the state it reached,
+/// `final_values[t]` (ignored elsewhere). `last_values` are the values of the
+/// states after the rollout's last step. Returns (advantages, returns).
+#[allow(clippy::too_many_arguments)]
 pub fn gae(
     rewards: &[f32],
     values: &[f32],
     dones: &[f32],
+    truncated: &[f32],
+    final_values: &[f32],
     last_values: &[f32],
     rows: usize,
     gamma: f64,
@@ -131,7 +138,8 @@ pub fn gae(
                 last_values[r]
             } as f64;
             let live = 1.0 - dones[i] as f64;
-            let delta = rewards[i] as f64 + gamma * next_value * live - values[i] as f64;
+            let after = next_value * live + final_values[i] as f64 * truncated[i] as f64;
+            let delta = rewards[i] as f64 + gamma * after - values[i] as f64;
             running[r] = delta + gamma * lambda * live * running[r];
             adv[i] = running[r] as f32;
         }
@@ -359,6 +367,11 @@ pub struct Rollout {
     pub values: Vec<f32>,
     pub rewards: Vec<f32>,
     pub dones: Vec<f32>,
+    /// 1 where the step limit (not a capture) ended the episode.
+    pub truncated: Vec<f32>,
+    /// Critic output for the state a truncated episode reached (same units
+    /// as `values`), where `truncated` is 1.
+    pub final_values: Vec<f32>,
     /// 0 where a step starts an episode (the recurrent state is reset).
     pub masks: Vec<f32>,
     /// Recurrent states at the start of every chunk, [chunk][row][hidden].
@@ -392,6 +405,8 @@ impl Rollout {
             values: vec![0.0; n],
             rewards: vec![0.0; n],
             dones: vec![0.0; n],
+            truncated: vec![0.0; n],
+            final_values: vec![0.0; n],
             masks: vec![1.0; n],
             actor_h: vec![0.0; chunks * rows * hidden],
             critic_h: vec![0.0; chunks * rows * hidden],
@@ -544,10 +559,13 @@ impl PpoLearner {
         };
         let values = denorm(&ro.values);
         let last_values = denorm(&ro.last_values);
+        let final_values = denorm(&ro.final_values);
         let (mut adv, returns) = gae(
             &ro.rewards,
             &values,
             &ro.dones,
+            &ro.truncated,
+            &final_values,
             &last_values,
             rows,
             cfg.gamma,
@@ -710,7 +728,8 @@ mod tests {
         let values = [0.5, 1.0, 2.0];
         let dones = [0.0, 1.0, 0.0];
         let last = [4.0];
-        let (adv, ret) = gae(&rewards, &values, &dones, &last, 1, 0.5, 0.5);
+        let zeros = [0.0; 3];
+        let (adv, ret) = gae(&rewards, &values, &dones, &zeros, &zeros, &last, 1, 0.5, 0.5);
         // t=2: delta = 3 + 0.5*4 - 2 = 3; A = 3.
         // t=1: delta = 2 + 0 - 1 = 1 (done: no bootstrap); A = 1.
         // t=0: delta = 1 + 0.5*1 - 0.5 = 1; A = 1 + 0.25*1 = 1.25.
@@ -721,6 +740,8 @@ mod tests {
             &[1.0, 0.0, 2.0, 0.0, 3.0, 0.0],
             &[0.5, 0.0, 1.0, 0.0, 2.0, 0.0],
             &[0.0, 0.0, 1.0, 0.0, 0.0, 0.0],
+            &[0.0; 6],
+            &[0.0; 6],
             &[4.0, 0.0],
             2,
             0.5,
@@ -728,6 +749,28 @@ mod tests {
         );
         assert_eq!([adv2[0], adv2[2], adv2[4]], [1.25, 1.0, 3.0]);
         assert_eq!([adv2[1], adv2[3], adv2[5]], [0.0, 0.0, 0.0]);
+    }
+
+    #[test]
+    fn truncation_bootstraps_from_the_state_reached_and_capture_does_not() {
+        // The same three steps; the episode that ends after step 1 is now
+        // cut off by the step limit, in a state whose value is 6.
+        let rewards = [1.0, 2.0, 3.0];
+        let values = [0.5, 1.0, 2.0];
+        let dones = [0.0, 1.0, 0.0];
+        let truncated = [0.0, 1.0, 0.0];
+        // Stale numbers where `truncated` is 0 must not count.
+        let final_values = [100.0, 6.0, 100.0];
+        let (adv, ret) = gae(&rewards, &values, &dones, &truncated, &final_values, &[4.0], 1, 0.5, 0.5);
+        // t=2: delta = 3 + 0.5*4 - 2 = 3; A = 3 (the next episode, as before).
+        // t=1: delta = 2 + 0.5*6 - 1 = 4; A = 4 (bootstrapped, and the
+        //      advantage of t=2 still does not flow back across the boundary).
+        // t=0: delta = 1 + 0.5*1 - 0.5 = 1; A = 1 + 0.25*4 = 2.
+        assert_eq!(adv, vec![2.0, 4.0, 3.0]);
+        assert_eq!(ret, vec![2.5, 5.0, 5.0]);
+        // Ended by capture instead: no bootstrap (A = 1 at t=1, as in the test above).
+        let (adv, _) = gae(&rewards, &values, &dones, &[0.0; 3], &final_values, &[4.0], 1, 0.5, 0.5);
+        assert_eq!(adv, vec![1.25, 1.0, 3.0]);
     }
 
     #[test]

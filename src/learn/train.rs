@@ -517,6 +517,9 @@ impl Trainer {
             self.venv
                 .step(&self.actions)
                 .map_err(|e| anyhow!("placing robots: {e}"))?;
+            let truncated_worlds: Vec<usize> = (0..self.cfg.num_envs)
+                .filter(|&e| self.venv.truncated[e])
+                .collect();
             for ls in &mut self.learners {
                 let base = t * ls.rows;
                 for row in 0..ls.rows {
@@ -525,7 +528,11 @@ impl Trainer {
                     ls.rollout.rewards[base + row] =
                         self.venv.rewards[e * na + ls.side.agents(k).start + j];
                     ls.rollout.dones[base + row] = done as u8 as f32;
+                    ls.rollout.truncated[base + row] = self.venv.truncated[e] as u8 as f32;
                     ls.next_mask[row] = (!done) as u8 as f32;
+                }
+                if !truncated_worlds.is_empty() {
+                    value_truncated_states(&self.venv, ls, &truncated_worlds, base, self.device);
                 }
             }
             for s in &self.venv.finished {
@@ -707,21 +714,83 @@ fn gather_side(
     vectors: &mut [f32],
     patches: &mut [u8],
 ) {
+    let worlds: Vec<usize> = (0..venv.num_envs()).collect();
+    gather_worlds(venv, &venv.vectors, &venv.patches, &worlds, side, net, vectors, patches);
+}
+
+/// `gather_side` for some worlds only, from `src_vectors` / `src_patches`
+/// laid out as the vector env's buffers ([world][agent][...]).
+#[allow(clippy::too_many_arguments)]
+fn gather_worlds(
+    venv: &VecEnv,
+    src_vectors: &[f32],
+    src_patches: &[u8],
+    worlds: &[usize],
+    side: Side,
+    net: &NetConfig,
+    vectors: &mut [f32],
+    patches: &mut [u8],
+) {
     let k = venv.cfg.num_captors;
     let (na, vl) = (k + 1, venv.cfg.vector_len());
     let (pool, pl) = (net.patch_pool as usize, net.input_len());
     let team = side.agents(k).len();
-    for e in 0..venv.num_envs() {
+    for (w, &e) in worlds.iter().enumerate() {
         for (j, agent) in side.agents(k).enumerate() {
-            let (row, src) = (e * team + j, e * na + agent);
+            let (row, src) = (w * team + j, e * na + agent);
             vectors[row * vl..(row + 1) * vl]
-                .copy_from_slice(&venv.vectors[src * vl..(src + 1) * vl]);
+                .copy_from_slice(&src_vectors[src * vl..(src + 1) * vl]);
             pool_patch(
-                &venv.patches[src * PATCH_LEN..(src + 1) * PATCH_LEN],
+                &src_patches[src * PATCH_LEN..(src + 1) * PATCH_LEN],
                 pool,
                 &mut patches[row * pl..(row + 1) * pl],
             );
         }
+    }
+}
+
+/// The critic's values of the states that episodes cut off by the step
+/// limit reached (the vector env's final observations), continuing each
+/// row's recurrent state, into the rollout's `final_values` at step offset
+/// `base`: truncation is not the end of the game, so GAE bootstraps there.
+fn value_truncated_states(
+    venv: &VecEnv,
+    ls: &mut LearnerSide,
+    worlds: &[usize],
+    base: usize,
+    device: Device,
+) {
+    let net = &ls.learner.net;
+    let (vl, pl, team) = (venv.cfg.vector_len(), net.input_len(), ls.team);
+    let n = worlds.len() * team;
+    let mut vectors = vec![0f32; n * vl];
+    let mut patches = vec![0u8; n * pl];
+    gather_worlds(
+        venv,
+        &venv.final_vectors,
+        &venv.final_patches,
+        worlds,
+        ls.side,
+        net,
+        &mut vectors,
+        &mut patches,
+    );
+    let rows: Vec<i64> = worlds
+        .iter()
+        .flat_map(|&e| (0..team).map(move |j| (e * team + j) as i64))
+        .collect();
+    let (p, v) = obs_tensors(&patches, &vectors, n, 1, ls.rollout.patch_side, device);
+    let values = tch::no_grad(|| {
+        let h = ls
+            .critic_h
+            .index_select(0, &Tensor::from_slice(&rows).to_device(device));
+        let (cp, cv) = ls.learner.view.critic_inputs(&p, &v, team);
+        ls.learner.critic.step(&cp, &cv, &h).0.to_device(Device::Cpu)
+    });
+    let mut out = vec![0f32; n];
+    values.copy_data(&mut out, n);
+    for (row, value) in rows.iter().zip(out) {
+        ls.rollout.final_values[base + *row as usize] = value;
     }
 }
 
