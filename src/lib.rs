@@ -31,6 +31,7 @@
 //! ```
 pub mod asz;
 pub mod cli;
+pub mod controllers;
 pub mod env;
 pub mod eval;
 pub mod heuristics;

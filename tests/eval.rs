@@ -2,7 +2,7 @@
 
 use std::sync::Arc;
 use t2e::eval::{self, EvalSetting};
-use t2e::heuristics::ControllerSpec;
+use t2e::controllers::ControllerSpec;
 use t2e::map::{self, PreparedMap};
 
 fn shipped_small() -> Arc<Vec<Arc<PreparedMap>>> {

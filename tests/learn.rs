@@ -8,7 +8,7 @@ use std::path::Path;
 use std::sync::Arc;
 use t2e::env::{EnvConfig, Side, TrapEnv};
 use t2e::eval::{self, EvalSetting};
-use t2e::heuristics::ControllerSpec;
+use t2e::controllers::ControllerSpec;
 use t2e::learn::train::{SideConfig, TrainConfig, Trainer};
 use t2e::nn::checkpoint::{named_cpu_tensors, read_meta};
 use t2e::nn::{NetConfig, PolicySnapshot};

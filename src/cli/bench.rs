@@ -3,7 +3,8 @@
 
 use crate::asz::FastMarching;
 use crate::env::{Action, Controller, EnvConfig, Side, TrapEnv, VecEnv, PATCH_LEN};
-use crate::heuristics::{target_action, ControllerSpec, Heuristic};
+use crate::controllers::ControllerSpec;
+use crate::heuristics::{target_action, Heuristic};
 use crate::map::{self, PreparedMap};
 use anyhow::Result;
 use rand::{Rng, SeedableRng};

@@ -2,7 +2,7 @@
 
 use crate::env::{CaptureRule, EnvConfig, Side};
 use crate::eval::{self, ratio_label, EvalSetting, SettingIdentity, Summary, TABLE_HEADER};
-use crate::heuristics::ControllerSpec;
+use crate::controllers::ControllerSpec;
 use crate::map::{self, PreparedMap};
 use crate::render::plot::{self, Series};
 use anyhow::{Context, Result};

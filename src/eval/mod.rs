@@ -5,7 +5,7 @@
 use crate::asz::{cells_to_m2, FastMarching};
 use crate::env::vec_env::episode_seed;
 use crate::env::{Action, CaptureRule, EnvConfig, Side, TrapEnv};
-use crate::heuristics::ControllerSpec;
+use crate::controllers::ControllerSpec;
 use crate::map::PreparedMap;
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;

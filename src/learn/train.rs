@@ -13,7 +13,7 @@ use super::ppo::{PpoConfig, PpoLearner, Rollout, UpdateStats};
 use super::Algorithm;
 use crate::env::vec_env::episode_seed;
 use crate::env::{Action, EnvConfig, Side, VecEnv, PATCH_LEN};
-use crate::heuristics::ControllerSpec;
+use crate::controllers::ControllerSpec;
 use crate::map::PreparedMap;
 use super::persist::{self, RunState};
 use crate::nn::checkpoint::{checkpoint_name, clean_stale_temporaries, code_version, CheckpointMeta, FORMAT};

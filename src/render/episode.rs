@@ -565,7 +565,7 @@ pub fn render_episode(
 mod tests {
     use super::*;
     use crate::env::{EnvConfig, Robot};
-    use crate::heuristics::ControllerSpec;
+    use crate::controllers::ControllerSpec;
     use image::codecs::gif::GifDecoder;
     use image::AnimationDecoder;
     use std::sync::Arc;

@@ -1,0 +1,124 @@
+//! The controller catalogue: every controller a user can name on the command
+//! line or in a config (`heuristic`, `greedy`, `random`, `still`,
+//! `ckpt:PATH`), parsed and built behind the one `env::Controller` trait. It
+//! sits above `heuristics` and `nn` because it names controllers of both.
+
+use crate::env::{Controller, EnvConfig, Side};
+use crate::heuristics::{AszGreedy, Heuristic, RandomActions, Still};
+use crate::nn::{CheckpointController, PolicySnapshot};
+use std::fmt;
+use std::path::PathBuf;
+use std::str::FromStr;
+use std::sync::{Arc, OnceLock};
+
+/// A controller as named on the command line.
+#[derive(Clone, Debug, PartialEq)]
+pub enum ControllerSpec {
+    Heuristic,
+    Greedy,
+    Random,
+    Still,
+    /// `ckpt:PATH`: a trained policy (see `nn::checkpoint`).
+    Checkpoint(CheckpointSpec),
+}
+
+/// A checkpoint named by the user, read from disk the first time a
+/// controller is built and shared by all controllers built after.
+#[derive(Clone, Debug)]
+pub struct CheckpointSpec {
+    pub path: PathBuf,
+    loaded: Arc<OnceLock<Result<Arc<PolicySnapshot>, String>>>,
+}
+
+impl PartialEq for CheckpointSpec {
+    fn eq(&self, other: &Self) -> bool {
+        self.path == other.path
+    }
+}
+
+impl CheckpointSpec {
+    pub fn new(path: impl Into<PathBuf>) -> CheckpointSpec {
+        CheckpointSpec {
+            path: path.into(),
+            loaded: Arc::new(OnceLock::new()),
+        }
+    }
+
+    /// The policy for `side`; the first call reads it from disk.
+    pub fn snapshot(&self, side: Side) -> Result<Arc<PolicySnapshot>, String> {
+        self.loaded
+            .get_or_init(|| {
+                PolicySnapshot::load(&self.path, side)
+                    .map(Arc::new)
+                    .map_err(|e| format!("{e:#}"))
+            })
+            .clone()
+    }
+}
+
+impl FromStr for ControllerSpec {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s.trim() {
+            "heuristic" | "rule" | "expert" => Ok(ControllerSpec::Heuristic),
+            "greedy" | "asz-greedy" => Ok(ControllerSpec::Greedy),
+            "random" => Ok(ControllerSpec::Random),
+            "still" => Ok(ControllerSpec::Still),
+            other if other.starts_with("ckpt:") => {
+                let path = &other["ckpt:".len()..];
+                if path.is_empty() {
+                    return Err("'ckpt:' needs a path: ckpt:runs/NAME (newest checkpoint) or ckpt:runs/NAME/checkpoints/SIDE-STEPS".into());
+                }
+                Ok(ControllerSpec::Checkpoint(CheckpointSpec::new(path)))
+            }
+            other => Err(format!("unknown controller '{other}' (expected heuristic, greedy, random, still or ckpt:PATH)")),
+        }
+    }
+}
+
+impl fmt::Display for ControllerSpec {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            ControllerSpec::Heuristic => f.write_str("heuristic"),
+            ControllerSpec::Greedy => f.write_str("greedy"),
+            ControllerSpec::Random => f.write_str("random"),
+            ControllerSpec::Still => f.write_str("still"),
+            ControllerSpec::Checkpoint(c) => write!(f, "ckpt:{}", c.path.display()),
+        }
+    }
+}
+
+impl ControllerSpec {
+    /// A fresh controller for `side`; the error says why the pair does not fit.
+    pub fn build(&self, side: Side) -> Result<Box<dyn Controller>, String> {
+        Ok(match self {
+            ControllerSpec::Heuristic => Box::new(Heuristic),
+            ControllerSpec::Greedy if side == Side::Target => {
+                return Err("'greedy' (ASZ-greedy) is a captor controller; the target can be heuristic, random, still or a checkpoint".into())
+            }
+            ControllerSpec::Greedy => Box::new(AszGreedy::default()),
+            ControllerSpec::Random => Box::new(RandomActions::new()),
+            ControllerSpec::Still => Box::new(Still),
+            ControllerSpec::Checkpoint(c) => Box::new(
+                CheckpointController::new(c.snapshot(side)?).map_err(|e| format!("{e:#}"))?,
+            ),
+        })
+    }
+
+    /// Checks that this controller can play `side` in environments set up as
+    /// `cfg` (a checkpoint's K and side), building one to be sure.
+    pub fn check(&self, side: Side, cfg: &EnvConfig) -> Result<(), String> {
+        self.build(side)?;
+        if let ControllerSpec::Checkpoint(c) = self {
+            let snap = c.snapshot(side)?;
+            snap.meta
+                .check_fits(side, cfg)
+                .map_err(|e| format!("{}: {e}", snap.dir.display()))?;
+        }
+        Ok(())
+    }
+
+    pub fn is_checkpoint(&self) -> bool {
+        matches!(self, ControllerSpec::Checkpoint(_))
+    }
+}
