@@ -36,6 +36,7 @@ pub mod env;
 pub mod eval;
 pub mod heuristics;
 pub mod learn;
+pub mod league;
 pub mod map;
 pub mod nn;
 pub mod render;

@@ -1,0 +1,174 @@
+//! The curriculum over the target's speed: stages of speed ratio (1.0, 1.2,
+//! 1.4 by default). The league moves to the next stage when the main captors
+//! win at least `promote_at` of their last `window` matches at the current
+//! stage against the pool's targets; a share of episodes keeps replaying
+//! earlier stages so nothing is forgotten.
+
+use serde::{Deserialize, Serialize};
+use std::collections::VecDeque;
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct CurriculumConfig {
+    /// Speed ratios v_e / v_p, in order.
+    pub stages: Vec<f64>,
+    /// Captor win rate over the window that moves the league on.
+    pub promote_at: f64,
+    /// Matches of the main captors at the current stage that count.
+    pub window: usize,
+    /// Share of episodes played at an earlier stage (uniformly among them).
+    pub replay_share: f64,
+}
+
+impl Default for CurriculumConfig {
+    fn default() -> Self {
+        CurriculumConfig {
+            stages: vec![1.0, 1.2, 1.4],
+            promote_at: 0.6,
+            window: 400,
+            replay_share: 0.2,
+        }
+    }
+}
+
+impl CurriculumConfig {
+    pub fn validate(&self) -> Result<(), String> {
+        if self.stages.is_empty() {
+            return Err("stages = []: needs at least one speed ratio".into());
+        }
+        for (i, &s) in self.stages.iter().enumerate() {
+            if !(s.is_finite() && s > 0.0 && s <= 10.0) {
+                return Err(format!("stages[{i}] = {s}: must be a speed ratio in (0, 10]"));
+            }
+            if i > 0 && s <= self.stages[i - 1] {
+                return Err(format!("stages[{i}] = {s}: stages must increase"));
+            }
+        }
+        if !(self.promote_at.is_finite() && self.promote_at > 0.0 && self.promote_at <= 1.0) {
+            return Err(format!("promote_at = {}: must be in (0, 1]", self.promote_at));
+        }
+        if self.window == 0 {
+            return Err("window = 0: must be at least 1 match".into());
+        }
+        if !(self.replay_share.is_finite() && (0.0..1.0).contains(&self.replay_share)) {
+            return Err(format!("replay_share = {}: must be in [0, 1)", self.replay_share));
+        }
+        Ok(())
+    }
+}
+
+/// Where the curriculum stands: the stage and the window of main-captor
+/// results at it.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Curriculum {
+    pub stage: usize,
+    pub recent: VecDeque<bool>,
+}
+
+impl Curriculum {
+    pub fn new() -> Curriculum {
+        Curriculum {
+            stage: 0,
+            recent: VecDeque::new(),
+        }
+    }
+
+    /// The current stage's speed ratio.
+    pub fn speed(&self, cfg: &CurriculumConfig) -> f64 {
+        cfg.stages[self.stage.min(cfg.stages.len() - 1)]
+    }
+
+    /// Records one match of the main captors; returns the new stage when it
+    /// moves on. Matches at other speeds (replays) do not count.
+    pub fn record(&mut self, cfg: &CurriculumConfig, speed: f64, captors_won: bool) -> Option<usize> {
+        if speed != self.speed(cfg) {
+            return None;
+        }
+        self.recent.push_back(captors_won);
+        while self.recent.len() > cfg.window {
+            self.recent.pop_front();
+        }
+        let wins = self.recent.iter().filter(|&&w| w).count();
+        let full = self.recent.len() == cfg.window;
+        if full && wins as f64 >= cfg.promote_at * cfg.window as f64 && self.stage + 1 < cfg.stages.len() {
+            self.stage += 1;
+            self.recent.clear();
+            return Some(self.stage);
+        }
+        None
+    }
+
+    /// The speed of one episode, from a uniform draw `u` in [0, 1): an
+    /// earlier stage with probability `replay_share` (once there is one).
+    pub fn sample_speed(&self, cfg: &CurriculumConfig, u: f64) -> f64 {
+        let stage = self.stage.min(cfg.stages.len() - 1);
+        if stage > 0 && u < cfg.replay_share {
+            let earlier = ((u / cfg.replay_share) * stage as f64) as usize;
+            return cfg.stages[earlier.min(stage - 1)];
+        }
+        cfg.stages[stage]
+    }
+}
+
+impl Default for Curriculum {
+    fn default() -> Self {
+        Curriculum::new()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn moves_on_at_the_win_rate_over_a_full_window_and_replays_earlier_stages() {
+        let cfg = CurriculumConfig {
+            window: 4,
+            promote_at: 0.75,
+            replay_share: 0.2,
+            ..Default::default()
+        };
+        let mut c = Curriculum::new();
+        assert_eq!(c.speed(&cfg), 1.0);
+        // Three wins are not a full window.
+        for _ in 0..3 {
+            assert_eq!(c.record(&cfg, 1.0, true), None);
+        }
+        // A replay at another speed does not count.
+        assert_eq!(c.record(&cfg, 1.2, true), None);
+        // The fourth match fills the window: 3 of 4 = 0.75 moves on.
+        assert_eq!(c.record(&cfg, 1.0, false), Some(1));
+        // Below the rate it does not: 2 of 4, then the window slides.
+        let mut slow = Curriculum::new();
+        for r in [true, false, true, false, false] {
+            assert_eq!(slow.record(&cfg, 1.0, r), None);
+        }
+        assert_eq!(slow.recent.len(), 4, "the window keeps the last 4");
+        assert_eq!(c.stage, 1);
+        assert_eq!(c.speed(&cfg), 1.2);
+        assert!(c.recent.is_empty(), "a new stage starts a new window");
+        // Stage 1: u < 0.2 replays stage 0, else plays 1.2.
+        assert_eq!(c.sample_speed(&cfg, 0.1), 1.0);
+        assert_eq!(c.sample_speed(&cfg, 0.5), 1.2);
+        // The last stage stays.
+        c.stage = 2;
+        assert_eq!(c.record(&cfg, 1.4, true), None);
+        for _ in 0..10 {
+            c.record(&cfg, 1.4, true);
+        }
+        assert_eq!(c.stage, 2);
+        // Stage 2 replays 1.0 and 1.2 evenly within the replay share.
+        assert_eq!(c.sample_speed(&cfg, 0.05), 1.0);
+        assert_eq!(c.sample_speed(&cfg, 0.15), 1.2);
+    }
+
+    #[test]
+    fn bad_settings_name_the_field() {
+        let bad = CurriculumConfig { stages: vec![1.0, 1.0], ..Default::default() };
+        assert!(bad.validate().unwrap_err().starts_with("stages[1]"));
+        let bad = CurriculumConfig { promote_at: f64::NAN, ..Default::default() };
+        assert!(bad.validate().unwrap_err().starts_with("promote_at"));
+        let bad = CurriculumConfig { replay_share: 1.0, ..Default::default() };
+        assert!(bad.validate().unwrap_err().starts_with("replay_share"));
+    }
+}

@@ -1,0 +1,220 @@
+//! Matchmaking, after AlphaStar's league: each world of a learner samples
+//! its opponent when its episode starts. Opponents come from the other
+//! side's pool (frozen snapshots and the permanent heuristic members) by
+//! prioritised fictitious self-play (PFSP), or, for a configured share of
+//! episodes, the other side's current main learner. Pure functions: the
+//! caller supplies the head-to-head record and a seed.
+
+use crate::env::vec_env::episode_seed;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use serde::{Deserialize, Serialize};
+
+/// How PFSP turns P[learner wins] = x into a sampling weight.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Weighting {
+    /// f_hard(x) = (1 - x)^p: mostly the opponents the learner loses to.
+    Hard,
+    /// f_var(x) = x (1 - x): the opponents at the learner's level.
+    Var,
+    /// Every member alike (fictitious self-play).
+    Uniform,
+}
+
+/// Every knob of matchmaking, with the league's defaults.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct MatchmakingConfig {
+    pub weighting: Weighting,
+    /// Exponent p of f_hard (AlphaStar: 2).
+    pub p: f64,
+    /// Share of episodes against the other side's current main learner.
+    pub main_share: f64,
+    /// Share of the PFSP probability spread evenly over all members, so no
+    /// member starves (a member never drawn never gets a win rate).
+    pub floor: f64,
+}
+
+impl Default for MatchmakingConfig {
+    fn default() -> Self {
+        MatchmakingConfig {
+            weighting: Weighting::Hard,
+            p: 2.0,
+            main_share: 0.35,
+            floor: 0.05,
+        }
+    }
+}
+
+impl MatchmakingConfig {
+    pub fn validate(&self) -> Result<(), String> {
+        if !(self.p.is_finite() && self.p > 0.0 && self.p <= 16.0) {
+            return Err(format!("p = {}: must be in (0, 16]", self.p));
+        }
+        for (name, v) in [("main_share", self.main_share), ("floor", self.floor)] {
+            if !(v.is_finite() && (0.0..=1.0).contains(&v)) {
+                return Err(format!("{name} = {v}: must be in [0, 1]"));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// A pool member as the learner sees it: its (decayed) wins and games.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Candidate {
+    pub player: i64,
+    /// The learner's wins against this member (may be decayed, fractional).
+    pub wins: f64,
+    pub games: f64,
+}
+
+impl Candidate {
+    /// P[learner beats this member]; 0.5 before any game.
+    pub fn win_rate(&self) -> f64 {
+        if self.games > 0.0 {
+            (self.wins / self.games).clamp(0.0, 1.0)
+        } else {
+            0.5
+        }
+    }
+}
+
+/// The PFSP sampling probabilities of `pool`: f(win rate), normalised,
+/// mixed with `floor` of uniform. All-zero weights (the learner beats every
+/// member, say) fall back to uniform. Empty pool: empty vector.
+pub fn pfsp_probabilities(pool: &[Candidate], cfg: &MatchmakingConfig) -> Vec<f64> {
+    let n = pool.len();
+    if n == 0 {
+        return Vec::new();
+    }
+    let f = |x: f64| match cfg.weighting {
+        Weighting::Hard => (1.0 - x).powf(cfg.p),
+        Weighting::Var => x * (1.0 - x),
+        Weighting::Uniform => 1.0,
+    };
+    let weights: Vec<f64> = pool.iter().map(|c| f(c.win_rate())).collect();
+    let total: f64 = weights.iter().sum();
+    let uniform = 1.0 / n as f64;
+    weights
+        .iter()
+        .map(|w| {
+            let pfsp = if total > 0.0 && total.is_finite() { w / total } else { uniform };
+            (1.0 - cfg.floor) * pfsp + cfg.floor * uniform
+        })
+        .collect()
+}
+
+/// Who a world plays next.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Opponent {
+    /// The other side's current main learner (its latest snapshot).
+    Main,
+    /// A pool member, by player id.
+    Member(i64),
+}
+
+/// The seed of one opponent draw: from (league seed, learner, world,
+/// episode) only, so a league replays whatever the scheduling.
+pub fn draw_seed(league_seed: u64, learner: i64, world: usize, episode: u64) -> u64 {
+    episode_seed(league_seed ^ (learner as u64).rotate_left(17), world, episode) ^ 0x4c45_4147_5545
+}
+
+/// Draws an opponent for one episode. `main` is None when the other side
+/// has no main learner snapshot yet; an empty pool plays the main learner.
+pub fn choose_opponent(
+    pool: &[Candidate],
+    main: Option<i64>,
+    cfg: &MatchmakingConfig,
+    seed: u64,
+) -> Option<Opponent> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let u: f64 = rng.gen();
+    if main.is_some() && (pool.is_empty() || u < cfg.main_share) {
+        return Some(Opponent::Main);
+    }
+    let probs = pfsp_probabilities(pool, cfg);
+    if probs.is_empty() {
+        return None;
+    }
+    let mut x: f64 = rng.gen::<f64>() * probs.iter().sum::<f64>();
+    for (c, p) in pool.iter().zip(&probs) {
+        if x < *p {
+            return Some(Opponent::Member(c.player));
+        }
+        x -= p;
+    }
+    Some(Opponent::Member(pool[pool.len() - 1].player))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn cand(player: i64, wins: f64, games: f64) -> Candidate {
+        Candidate { player, wins, games }
+    }
+
+    #[test]
+    fn pfsp_weights_match_hand_computed_values() {
+        let pool = [cand(1, 1.0, 4.0), cand(2, 3.0, 4.0), cand(3, 0.0, 0.0)];
+        // Win rates 0.25, 0.75, 0.5 (no games yet).
+        let hard = MatchmakingConfig { floor: 0.0, ..Default::default() };
+        // (1-x)^2: 0.5625, 0.0625, 0.25; total 0.875.
+        let p = pfsp_probabilities(&pool, &hard);
+        for (got, want) in p.iter().zip([0.5625 / 0.875, 0.0625 / 0.875, 0.25 / 0.875]) {
+            assert!((got - want).abs() < 1e-12, "{p:?}");
+        }
+        let var = MatchmakingConfig { weighting: Weighting::Var, floor: 0.0, ..Default::default() };
+        // x(1-x): 0.1875, 0.1875, 0.25; total 0.625.
+        let p = pfsp_probabilities(&pool, &var);
+        for (got, want) in p.iter().zip([0.3, 0.3, 0.4]) {
+            assert!((got - want).abs() < 1e-12, "{p:?}");
+        }
+        // The floor: 10% spread evenly.
+        let floored = MatchmakingConfig { floor: 0.1, ..Default::default() };
+        let p = pfsp_probabilities(&pool, &floored);
+        assert!((p[1] - (0.9 * 0.0625 / 0.875 + 0.1 / 3.0)).abs() < 1e-12);
+        assert!((p.iter().sum::<f64>() - 1.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn degenerate_pools_still_give_a_distribution() {
+        // The learner beats everyone: f_hard is 0 everywhere -> uniform.
+        let beaten = [cand(1, 5.0, 5.0), cand(2, 9.0, 9.0)];
+        let cfg = MatchmakingConfig { floor: 0.0, ..Default::default() };
+        assert_eq!(pfsp_probabilities(&beaten, &cfg), vec![0.5, 0.5]);
+        // Var is 0 at both ends too.
+        let var = MatchmakingConfig { weighting: Weighting::Var, floor: 0.0, ..Default::default() };
+        assert_eq!(pfsp_probabilities(&[cand(1, 0.0, 3.0), cand(2, 3.0, 3.0)], &var), vec![0.5, 0.5]);
+        assert!(pfsp_probabilities(&[], &cfg).is_empty());
+        assert_eq!(choose_opponent(&[], None, &cfg, 1), None);
+        assert_eq!(choose_opponent(&[], Some(7), &cfg, 1), Some(Opponent::Main));
+    }
+
+    #[test]
+    fn draws_follow_the_probabilities_and_replay_from_their_seed() {
+        let pool = [cand(1, 1.0, 4.0), cand(2, 3.0, 4.0), cand(3, 0.0, 0.0)];
+        let cfg = MatchmakingConfig::default();
+        let p = pfsp_probabilities(&pool, &cfg);
+        let mut counts = [0usize; 4];
+        let n = 40_000;
+        for episode in 0..n {
+            let seed = draw_seed(9, 2, 3, episode);
+            let o = choose_opponent(&pool, Some(99), &cfg, seed).unwrap();
+            assert_eq!(choose_opponent(&pool, Some(99), &cfg, seed), Some(o), "replays");
+            counts[match o {
+                Opponent::Main => 0,
+                Opponent::Member(id) => id as usize,
+            }] += 1;
+        }
+        let share = |c: usize| c as f64 / n as f64;
+        assert!((share(counts[0]) - cfg.main_share).abs() < 0.01, "{counts:?}");
+        for i in 0..3 {
+            let want = (1.0 - cfg.main_share) * p[i];
+            assert!((share(counts[i + 1]) - want).abs() < 0.01, "{counts:?} vs {p:?}");
+        }
+        assert_ne!(draw_seed(9, 2, 3, 0), draw_seed(9, 3, 3, 0), "learners draw apart");
+    }
+}

@@ -1,0 +1,668 @@
+//! The league's store: one SQLite database (`league.db` in the league
+//! directory) through sqlx. sqlx is async; its runtime lives here, inside
+//! `Store`, so the rest of the league stays synchronous.
+//!
+//! Invariants:
+//! - WAL, a busy timeout and short transactions: several processes (the
+//!   manager, the learners, `status`) read and write it at once.
+//! - The schema comes from `league/migrations/*.sql` (`sqlx::migrate!`); an
+//!   older database is migrated, one written by a newer schema is refused.
+//! - Queries use only portable SQL (`$N` parameters, `ON CONFLICT DO
+//!   NOTHING`, no database-specific functions; times are written by the
+//!   program), so a PostgreSQL store can follow for multi-machine leagues.
+//! - A match is recorded once: its key names the episode (learner, world,
+//!   episode), and recording it again is a no-op. The rating update of a
+//!   match is written in the same transaction as the match.
+
+use super::ratings::{self, Rating};
+use crate::env::Side;
+use sqlx::sqlite::{SqliteConnectOptions, SqliteJournalMode, SqlitePool, SqlitePoolOptions};
+use sqlx::Row;
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::str::FromStr;
+use std::time::Duration;
+
+static MIGRATOR: sqlx::migrate::Migrator = sqlx::migrate!("league/migrations");
+
+#[derive(Debug, thiserror::Error)]
+pub enum StoreError {
+    #[error("{path}: written by a newer t2e-league (schema migration {version} is unknown to this build); use a newer build to open it")]
+    NewerSchema { path: PathBuf, version: i64 },
+    #[error("{path}: {source}")]
+    Database {
+        path: PathBuf,
+        #[source]
+        source: sqlx::Error,
+    },
+    #[error("{path}: migrating the schema failed: {source}")]
+    Migrate {
+        path: PathBuf,
+        #[source]
+        source: sqlx::migrate::MigrateError,
+    },
+    #[error("{0}")]
+    Invalid(String),
+}
+
+/// What kind of member a player is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Kind {
+    /// A main learner (its row holds its latest checkpoint).
+    Learner,
+    /// A frozen checkpoint of a learner, in the pool.
+    Snapshot,
+    /// A rule-based controller, a permanent pool member.
+    Heuristic,
+    /// A main exploiter.
+    Exploiter,
+}
+
+impl Kind {
+    pub fn name(self) -> &'static str {
+        match self {
+            Kind::Learner => "learner",
+            Kind::Snapshot => "snapshot",
+            Kind::Heuristic => "heuristic",
+            Kind::Exploiter => "exploiter",
+        }
+    }
+
+    fn parse(s: &str) -> Kind {
+        match s {
+            "learner" => Kind::Learner,
+            "snapshot" => Kind::Snapshot,
+            "exploiter" => Kind::Exploiter,
+            _ => Kind::Heuristic,
+        }
+    }
+}
+
+fn side_name(side: Side) -> &'static str {
+    match side {
+        Side::Captors => "captors",
+        Side::Target => "target",
+    }
+}
+
+/// A player as written.
+#[derive(Clone, Debug, PartialEq)]
+pub struct NewPlayer {
+    pub name: String,
+    pub side: Side,
+    pub kind: Kind,
+    pub parent: Option<i64>,
+    pub env_steps: u64,
+    pub curriculum_stage: usize,
+    /// Checkpoint folder relative to the league directory, and the SHA-256
+    /// of its `meta.json`.
+    pub checkpoint: Option<(String, String)>,
+}
+
+/// A player as read back.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Player {
+    pub id: i64,
+    pub name: String,
+    pub side: Side,
+    pub kind: Kind,
+    pub parent: Option<i64>,
+    pub created_at_ms: i64,
+    pub env_steps: u64,
+    pub curriculum_stage: usize,
+    pub checkpoint: Option<(String, String)>,
+    /// Why it no longer plays (missing or corrupt files), if it does not.
+    pub quarantined: Option<String>,
+}
+
+/// One finished episode between a captor team and a target.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MatchRecord {
+    /// Names the episode: the same key is recorded once.
+    pub key: String,
+    pub captor_player: i64,
+    pub target_player: i64,
+    pub map: String,
+    pub num_captors: usize,
+    pub speed_ratio: f64,
+    pub seed: u64,
+    pub captured: bool,
+    pub steps: u32,
+    pub final_asz_m2: Option<f64>,
+    pub recorded_by: String,
+}
+
+/// Wins and games of the captor team `captor` against the target `target`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PairResult {
+    pub captor: i64,
+    pub target: i64,
+    pub captor_wins: u64,
+    pub games: u64,
+}
+
+pub fn now_ms() -> i64 {
+    std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map(|d| d.as_millis() as i64)
+        .unwrap_or(0)
+}
+
+pub struct Store {
+    rt: tokio::runtime::Runtime,
+    pool: SqlitePool,
+    path: PathBuf,
+}
+
+impl Store {
+    /// Opens (creating if needed) the store of a league directory and brings
+    /// its schema up to date.
+    pub fn open(league_dir: &Path) -> Result<Store, StoreError> {
+        std::fs::create_dir_all(league_dir).map_err(|e| {
+            StoreError::Invalid(format!("cannot create {}: {e}", league_dir.display()))
+        })?;
+        let path = league_dir.join("league.db");
+        let rt = tokio::runtime::Builder::new_current_thread()
+            .enable_time()
+            .build()
+            .map_err(|e| StoreError::Invalid(format!("cannot start the store's runtime: {e}")))?;
+        let db = |source| StoreError::Database {
+            path: path.clone(),
+            source,
+        };
+        let options = SqliteConnectOptions::from_str(&format!("sqlite://{}", path.display()))
+            .map_err(db)?
+            .create_if_missing(true)
+            .journal_mode(SqliteJournalMode::Wal)
+            .busy_timeout(Duration::from_secs(30))
+            .foreign_keys(true);
+        let pool = rt
+            .block_on(
+                SqlitePoolOptions::new()
+                    .max_connections(1)
+                    .connect_with(options),
+            )
+            .map_err(db)?;
+        match rt.block_on(MIGRATOR.run(&pool)) {
+            Ok(()) => {}
+            Err(sqlx::migrate::MigrateError::VersionMissing(version)) => {
+                return Err(StoreError::NewerSchema { path, version })
+            }
+            Err(source) => return Err(StoreError::Migrate { path, source }),
+        }
+        Ok(Store { rt, pool, path })
+    }
+
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    fn db(&self, source: sqlx::Error) -> StoreError {
+        StoreError::Database {
+            path: self.path.clone(),
+            source,
+        }
+    }
+
+    /// Stores the league's config the first time; returns the one stored
+    /// (the first), so a resumed league can tell whether it changed.
+    pub fn config_once(&self, toml: &str) -> Result<String, StoreError> {
+        self.rt.block_on(async {
+            sqlx::query(
+                "INSERT INTO league_config (id, config_toml, created_at_ms) VALUES (1, $1, $2) ON CONFLICT (id) DO NOTHING",
+            )
+            .bind(toml)
+            .bind(now_ms())
+            .execute(&self.pool)
+            .await?;
+            let row = sqlx::query("SELECT config_toml FROM league_config WHERE id = 1")
+                .fetch_one(&self.pool)
+                .await?;
+            Ok::<_, sqlx::Error>(row.get::<String, _>(0))
+        })
+        .map_err(|e| self.db(e))
+    }
+
+    /// Adds a player; a player of the same name already there is returned
+    /// as it is (adding is idempotent, so a killed writer cannot duplicate).
+    pub fn add_player(&self, p: &NewPlayer) -> Result<i64, StoreError> {
+        let (path, sha) = match &p.checkpoint {
+            Some((a, b)) => (Some(a.clone()), Some(b.clone())),
+            None => (None, None),
+        };
+        self.rt
+            .block_on(async {
+                sqlx::query(
+                    "INSERT INTO players (name, side, kind, parent, created_at_ms, env_steps, curriculum_stage, checkpoint_path, checkpoint_sha256) \
+                     VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9) ON CONFLICT (name) DO NOTHING",
+                )
+                .bind(&p.name)
+                .bind(side_name(p.side))
+                .bind(p.kind.name())
+                .bind(p.parent)
+                .bind(now_ms())
+                .bind(p.env_steps as i64)
+                .bind(p.curriculum_stage as i64)
+                .bind(path)
+                .bind(sha)
+                .execute(&self.pool)
+                .await?;
+                let row = sqlx::query("SELECT id FROM players WHERE name = $1")
+                    .bind(&p.name)
+                    .fetch_one(&self.pool)
+                    .await?;
+                Ok::<_, sqlx::Error>(row.get::<i64, _>(0))
+            })
+            .map_err(|e| self.db(e))
+    }
+
+    /// Points a learner's row at its newest checkpoint.
+    pub fn update_learner(
+        &self,
+        id: i64,
+        env_steps: u64,
+        checkpoint: (&str, &str),
+    ) -> Result<(), StoreError> {
+        self.rt
+            .block_on(
+                sqlx::query(
+                    "UPDATE players SET env_steps = $1, checkpoint_path = $2, checkpoint_sha256 = $3 WHERE id = $4",
+                )
+                .bind(env_steps as i64)
+                .bind(checkpoint.0)
+                .bind(checkpoint.1)
+                .bind(id)
+                .execute(&self.pool),
+            )
+            .map(|_| ())
+            .map_err(|e| self.db(e))
+    }
+
+    /// Takes a member out of play, saying why.
+    pub fn quarantine(&self, id: i64, why: &str) -> Result<(), StoreError> {
+        self.rt
+            .block_on(
+                sqlx::query("UPDATE players SET quarantined = $1 WHERE id = $2")
+                    .bind(why)
+                    .bind(id)
+                    .execute(&self.pool),
+            )
+            .map(|_| ())
+            .map_err(|e| self.db(e))
+    }
+
+    pub fn players(&self) -> Result<Vec<Player>, StoreError> {
+        let rows = self
+            .rt
+            .block_on(
+                sqlx::query(
+                    "SELECT id, name, side, kind, parent, created_at_ms, env_steps, curriculum_stage, checkpoint_path, checkpoint_sha256, quarantined \
+                     FROM players ORDER BY id",
+                )
+                .fetch_all(&self.pool),
+            )
+            .map_err(|e| self.db(e))?;
+        Ok(rows
+            .iter()
+            .map(|r| {
+                let path: Option<String> = r.get(8);
+                let sha: Option<String> = r.get(9);
+                Player {
+                    id: r.get(0),
+                    name: r.get(1),
+                    side: if r.get::<String, _>(2) == "captors" {
+                        Side::Captors
+                    } else {
+                        Side::Target
+                    },
+                    kind: Kind::parse(&r.get::<String, _>(3)),
+                    parent: r.get(4),
+                    created_at_ms: r.get(5),
+                    env_steps: r.get::<i64, _>(6) as u64,
+                    curriculum_stage: r.get::<i64, _>(7) as usize,
+                    checkpoint: path.zip(sha),
+                    quarantined: r.get(10),
+                }
+            })
+            .collect())
+    }
+
+    /// Records a match and updates both players' live ratings, in one
+    /// transaction. Returns false (and changes nothing) when a match with
+    /// the same key is already recorded.
+    pub fn record_match(&self, m: &MatchRecord) -> Result<bool, StoreError> {
+        if !m.speed_ratio.is_finite() || m.final_asz_m2.is_some_and(|a| !a.is_finite()) {
+            return Err(StoreError::Invalid(format!(
+                "match {}: non-finite speed ratio or |ASZ|",
+                m.key
+            )));
+        }
+        self.rt
+            .block_on(async {
+                let mut tx = self.pool.begin().await?;
+                let inserted = sqlx::query(
+                    "INSERT INTO matches (match_key, captor_player, target_player, map, num_captors, speed_ratio, seed, captured, steps, final_asz_m2, recorded_by, recorded_at_ms) \
+                     VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10, $11, $12) ON CONFLICT (match_key) DO NOTHING",
+                )
+                .bind(&m.key)
+                .bind(m.captor_player)
+                .bind(m.target_player)
+                .bind(&m.map)
+                .bind(m.num_captors as i64)
+                .bind(m.speed_ratio)
+                .bind(m.seed as i64)
+                .bind(m.captured as i64)
+                .bind(m.steps as i64)
+                .bind(m.final_asz_m2)
+                .bind(&m.recorded_by)
+                .bind(now_ms())
+                .execute(&mut *tx)
+                .await?
+                .rows_affected()
+                    == 1;
+                if !inserted {
+                    tx.rollback().await?;
+                    return Ok(false);
+                }
+                let match_id: i64 = sqlx::query("SELECT id FROM matches WHERE match_key = $1")
+                    .bind(&m.key)
+                    .fetch_one(&mut *tx)
+                    .await?
+                    .get(0);
+                let mut current = [Rating::default(); 2];
+                for (slot, player) in current.iter_mut().zip([m.captor_player, m.target_player]) {
+                    if let Some(row) = sqlx::query(
+                        "SELECT mu, sigma FROM ratings WHERE player = $1 ORDER BY id DESC LIMIT 1",
+                    )
+                    .bind(player)
+                    .fetch_optional(&mut *tx)
+                    .await?
+                    {
+                        *slot = Rating {
+                            mu: row.get(0),
+                            sigma: row.get(1),
+                        };
+                    }
+                }
+                let (c, t) = ratings::update(current[0], current[1], m.captured);
+                for (player, r) in [(m.captor_player, c), (m.target_player, t)] {
+                    sqlx::query(
+                        "INSERT INTO ratings (player, match_id, mu, sigma, at_ms) VALUES ($1, $2, $3, $4, $5)",
+                    )
+                    .bind(player)
+                    .bind(match_id)
+                    .bind(r.mu)
+                    .bind(r.sigma)
+                    .bind(now_ms())
+                    .execute(&mut *tx)
+                    .await?;
+                }
+                tx.commit().await?;
+                Ok::<_, sqlx::Error>(true)
+            })
+            .map_err(|e| self.db(e))
+    }
+
+    pub fn match_count(&self) -> Result<u64, StoreError> {
+        self.rt
+            .block_on(sqlx::query("SELECT COUNT(*) FROM matches").fetch_one(&self.pool))
+            .map(|r| r.get::<i64, _>(0) as u64)
+            .map_err(|e| self.db(e))
+    }
+
+    /// The payoff table: captor wins and games per captor-target pair.
+    pub fn payoff(&self) -> Result<Vec<PairResult>, StoreError> {
+        let rows = self
+            .rt
+            .block_on(
+                sqlx::query(
+                    "SELECT captor_player, target_player, SUM(captured), COUNT(*) FROM matches \
+                     GROUP BY captor_player, target_player ORDER BY captor_player, target_player",
+                )
+                .fetch_all(&self.pool),
+            )
+            .map_err(|e| self.db(e))?;
+        Ok(rows
+            .iter()
+            .map(|r| PairResult {
+                captor: r.get(0),
+                target: r.get(1),
+                captor_wins: r.get::<i64, _>(2) as u64,
+                games: r.get::<i64, _>(3) as u64,
+            })
+            .collect())
+    }
+
+    /// Each player's latest live rating (players without matches are absent).
+    pub fn ratings(&self) -> Result<HashMap<i64, Rating>, StoreError> {
+        let rows = self
+            .rt
+            .block_on(
+                sqlx::query(
+                    "SELECT r.player, r.mu, r.sigma FROM ratings r \
+                     WHERE r.id = (SELECT MAX(q.id) FROM ratings q WHERE q.player = r.player)",
+                )
+                .fetch_all(&self.pool),
+            )
+            .map_err(|e| self.db(e))?;
+        Ok(rows
+            .iter()
+            .map(|r| {
+                (
+                    r.get::<i64, _>(0),
+                    Rating {
+                        mu: r.get(1),
+                        sigma: r.get(2),
+                    },
+                )
+            })
+            .collect())
+    }
+
+    /// Appends a curriculum stage change.
+    pub fn push_curriculum(&self, stage: usize, speed_ratio: f64, reason: &str) -> Result<(), StoreError> {
+        self.rt
+            .block_on(
+                sqlx::query(
+                    "INSERT INTO curriculum (stage, speed_ratio, reason, at_ms) VALUES ($1, $2, $3, $4)",
+                )
+                .bind(stage as i64)
+                .bind(speed_ratio)
+                .bind(reason)
+                .bind(now_ms())
+                .execute(&self.pool),
+            )
+            .map(|_| ())
+            .map_err(|e| self.db(e))
+    }
+
+    /// (stage, speed ratio, reason, at ms), oldest first.
+    pub fn curriculum_history(&self) -> Result<Vec<(usize, f64, String, i64)>, StoreError> {
+        let rows = self
+            .rt
+            .block_on(
+                sqlx::query("SELECT stage, speed_ratio, reason, at_ms FROM curriculum ORDER BY id")
+                    .fetch_all(&self.pool),
+            )
+            .map_err(|e| self.db(e))?;
+        Ok(rows
+            .iter()
+            .map(|r| (r.get::<i64, _>(0) as usize, r.get(1), r.get(2), r.get(3)))
+            .collect())
+    }
+
+    /// A learner's latest state and throughput.
+    pub fn heartbeat(
+        &self,
+        learner: &str,
+        state: &str,
+        env_steps: u64,
+        steps_per_s: f64,
+    ) -> Result<(), StoreError> {
+        self.rt
+            .block_on(
+                sqlx::query(
+                    "INSERT INTO heartbeats (learner, pid, state, env_steps, steps_per_s, at_ms) VALUES ($1, $2, $3, $4, $5, $6) \
+                     ON CONFLICT (learner) DO UPDATE SET pid = excluded.pid, state = excluded.state, env_steps = excluded.env_steps, \
+                     steps_per_s = excluded.steps_per_s, at_ms = excluded.at_ms",
+                )
+                .bind(learner)
+                .bind(std::process::id() as i64)
+                .bind(state)
+                .bind(env_steps as i64)
+                .bind(if steps_per_s.is_finite() { steps_per_s } else { 0.0 })
+                .bind(now_ms())
+                .execute(&self.pool),
+            )
+            .map(|_| ())
+            .map_err(|e| self.db(e))
+    }
+
+    /// (learner, pid, state, env steps, steps/s, at ms).
+    pub fn heartbeats(&self) -> Result<Vec<(String, i64, String, u64, f64, i64)>, StoreError> {
+        let rows = self
+            .rt
+            .block_on(
+                sqlx::query(
+                    "SELECT learner, pid, state, env_steps, steps_per_s, at_ms FROM heartbeats ORDER BY learner",
+                )
+                .fetch_all(&self.pool),
+            )
+            .map_err(|e| self.db(e))?;
+        Ok(rows
+            .iter()
+            .map(|r| {
+                (
+                    r.get(0),
+                    r.get(1),
+                    r.get(2),
+                    r.get::<i64, _>(3) as u64,
+                    r.get(4),
+                    r.get(5),
+                )
+            })
+            .collect())
+    }
+
+    pub fn record_crash(&self, learner: &str, exit_status: &str, message: &str) -> Result<(), StoreError> {
+        self.rt
+            .block_on(
+                sqlx::query(
+                    "INSERT INTO crashes (learner, exit_status, message, at_ms) VALUES ($1, $2, $3, $4)",
+                )
+                .bind(learner)
+                .bind(exit_status)
+                .bind(message)
+                .bind(now_ms())
+                .execute(&self.pool),
+            )
+            .map(|_| ())
+            .map_err(|e| self.db(e))
+    }
+
+    /// (learner, exit status, message, at ms), oldest first.
+    pub fn crashes(&self) -> Result<Vec<(String, String, String, i64)>, StoreError> {
+        let rows = self
+            .rt
+            .block_on(
+                sqlx::query("SELECT learner, exit_status, message, at_ms FROM crashes ORDER BY id")
+                    .fetch_all(&self.pool),
+            )
+            .map_err(|e| self.db(e))?;
+        Ok(rows
+            .iter()
+            .map(|r| (r.get(0), r.get(1), r.get(2), r.get(3)))
+            .collect())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn player(name: &str, side: Side, kind: Kind) -> NewPlayer {
+        NewPlayer {
+            name: name.into(),
+            side,
+            kind,
+            parent: None,
+            env_steps: 0,
+            curriculum_stage: 0,
+            checkpoint: None,
+        }
+    }
+
+    fn game(key: &str, c: i64, t: i64, captured: bool) -> MatchRecord {
+        MatchRecord {
+            key: key.into(),
+            captor_player: c,
+            target_player: t,
+            map: "m".into(),
+            num_captors: 3,
+            speed_ratio: 1.0,
+            seed: 7,
+            captured,
+            steps: 120,
+            final_asz_m2: Some(0.2),
+            recorded_by: "test".into(),
+        }
+    }
+
+    #[test]
+    fn matches_count_once_and_move_ratings() {
+        let dir = tempfile::tempdir().unwrap();
+        let store = Store::open(dir.path()).unwrap();
+        let c = store.add_player(&player("captors-main", Side::Captors, Kind::Learner)).unwrap();
+        let t = store.add_player(&player("rule-based", Side::Target, Kind::Heuristic)).unwrap();
+        assert_eq!(
+            store.add_player(&player("captors-main", Side::Captors, Kind::Learner)).unwrap(),
+            c,
+            "adding twice is a no-op"
+        );
+        assert!(store.record_match(&game("a/0/0", c, t, true)).unwrap());
+        assert!(!store.record_match(&game("a/0/0", c, t, true)).unwrap(), "same key: no-op");
+        assert!(store.record_match(&game("a/0/1", c, t, false)).unwrap());
+        assert!(store.record_match(&game("a/1/0", c, t, true)).unwrap());
+        assert_eq!(store.match_count().unwrap(), 3);
+        assert_eq!(
+            store.payoff().unwrap(),
+            vec![PairResult { captor: c, target: t, captor_wins: 2, games: 3 }]
+        );
+        let r = store.ratings().unwrap();
+        assert!(r[&c].mu > r[&t].mu, "{r:?}");
+        // Reopening keeps everything (and migrates nothing twice).
+        drop(store);
+        let store = Store::open(dir.path()).unwrap();
+        assert_eq!(store.players().unwrap().len(), 2);
+        assert_eq!(store.config_once("a = 1").unwrap(), "a = 1");
+        assert_eq!(store.config_once("a = 2").unwrap(), "a = 1", "the first config stays");
+        store.push_curriculum(1, 1.2, "captors won 61% at 1.0").unwrap();
+        assert_eq!(store.curriculum_history().unwrap()[0].1, 1.2);
+        store.heartbeat("captors-main", "training", 640, 512.0).unwrap();
+        store.heartbeat("captors-main", "training", 1280, 530.0).unwrap();
+        assert_eq!(store.heartbeats().unwrap().len(), 1);
+        store.record_crash("target-main", "signal 9", "killed").unwrap();
+        assert_eq!(store.crashes().unwrap().len(), 1);
+        store.quarantine(t, "files missing").unwrap();
+        assert_eq!(store.players().unwrap()[1].quarantined.as_deref(), Some("files missing"));
+    }
+
+    #[test]
+    fn a_newer_schema_is_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let store = Store::open(dir.path()).unwrap();
+        store
+            .rt
+            .block_on(
+                sqlx::query(
+                    "INSERT INTO _sqlx_migrations (version, description, installed_on, success, checksum, execution_time) \
+                     VALUES (9999, 'from the future', CURRENT_TIMESTAMP, TRUE, x'00', 0)",
+                )
+                .execute(&store.pool),
+            )
+            .unwrap();
+        drop(store);
+        let err = Store::open(dir.path()).err().unwrap().to_string();
+        assert!(err.contains("newer") && err.contains("9999"), "{err}");
+    }
+}
