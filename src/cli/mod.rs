@@ -3,6 +3,7 @@ use clap::{Parser, Subcommand};
 
 pub mod bench;
 pub mod eval;
+pub mod league;
 pub mod maps;
 pub mod render;
 pub mod train;
@@ -30,6 +31,16 @@ pub enum Command {
     Train(train::TrainArgs),
     /// Measure environment, ASZ and observation speed and print a table.
     Bench(bench::BenchArgs),
+    /// Run a league (or resume the one in --dir): captor and target learners
+    /// against pools of each other's snapshots.
+    Run(league::RunArgs),
+    /// A league's players, ratings, payoff matrix, curriculum and learners.
+    Status(league::StatusArgs),
+    /// Write one league player as a self-contained checkpoint folder.
+    Export(league::ExportArgs),
+    /// One learner of a league (spawned by `run`).
+    #[command(hide = true)]
+    LeagueLearner(league::LearnerArgs),
 }
 
 /// Keeps freed memory in the heap instead of returning it to the OS: PPO
@@ -48,7 +59,10 @@ pub fn main() -> anyhow::Result<()> {
     keep_freed_memory();
     tracing_subscriber::fmt()
         .with_env_filter(
-            tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| "warn".into()),
+            // sqlx warns of every statement that waited on another process's
+            // write; the league's processes share one store by design.
+            tracing_subscriber::EnvFilter::try_from_default_env()
+                .unwrap_or_else(|_| "warn,sqlx=error".into()),
         )
         .with_writer(std::io::stderr)
         .init();
@@ -59,5 +73,9 @@ pub fn main() -> anyhow::Result<()> {
         Command::Render(a) => render::run(a),
         Command::Bench(a) => bench::run(a),
         Command::Train(a) => train::run(a),
+        Command::Run(a) => league::run(a),
+        Command::Status(a) => league::status(a),
+        Command::Export(a) => league::export(a),
+        Command::LeagueLearner(a) => league::learner(a),
     }
 }

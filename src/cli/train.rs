@@ -330,6 +330,14 @@ mod tests {
         let mut n = 0;
         for e in std::fs::read_dir(dir).unwrap() {
             let p = e.unwrap().path();
+            let league = p
+                .file_name()
+                .and_then(|n| n.to_str())
+                .is_some_and(|n| n.starts_with("league-"));
+            if league {
+                crate::league::config::LeagueConfig::load(&p).unwrap();
+                continue;
+            }
             if p.extension().and_then(|x| x.to_str()) == Some("toml") {
                 let cfg = TrainConfig::load(&p).unwrap();
                 refuse_test_maps(&cfg.maps).unwrap();

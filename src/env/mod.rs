@@ -177,6 +177,24 @@ impl TrapEnv {
         &self.robots[..self.cfg.num_captors]
     }
 
+    /// Changes the robots' top speeds from the next step on (the league's
+    /// curriculum sets the target's speed per episode).
+    pub fn set_speeds(&mut self, captor_speed: f64, target_speed: f64) -> Result<(), String> {
+        let cfg = EnvConfig {
+            captor_speed,
+            target_speed,
+            ..self.cfg.clone()
+        };
+        cfg.validate()?;
+        let k = cfg.num_captors;
+        for s in &mut self.specs[..k] {
+            *s = cfg.captor_spec();
+        }
+        self.specs[k] = cfg.target_spec();
+        self.cfg = cfg;
+        Ok(())
+    }
+
     pub fn spec(&self, agent: usize) -> RobotSpec {
         self.specs[agent]
     }

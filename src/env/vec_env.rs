@@ -119,6 +119,29 @@ impl VecEnv {
         }
     }
 
+    /// Sets who plays `side` in world `world` from now on: a controller
+    /// (reset for the world's current episode), or None to take that side's
+    /// actions from `step`'s argument. The league gives each world its own
+    /// opponent this way.
+    pub fn script_world(&mut self, world: usize, side: Side, controller: Option<Box<dyn Controller>>) {
+        let slot = &mut self.slots[world];
+        slot.scripted.retain(|(sd, _)| *sd != side);
+        if let Some(mut c) = controller {
+            c.reset(&slot.env, slot.env.seed);
+            slot.scripted.push((side, c));
+        }
+    }
+
+    /// Sets world `world`'s top speeds (see `TrapEnv::set_speeds`).
+    pub fn set_world_speeds(&mut self, world: usize, captor_speed: f64, target_speed: f64) -> Result<(), String> {
+        self.slots[world].env.set_speeds(captor_speed, target_speed)
+    }
+
+    /// Index of the episode world `world` is playing (0 for its first).
+    pub fn episode_index(&self, world: usize) -> u64 {
+        self.slots[world].episode
+    }
+
     pub fn num_envs(&self) -> usize {
         self.slots.len()
     }

@@ -2,13 +2,24 @@
 //! other's checkpoints (AlphaStar's league, adapted), with ratings on one
 //! scale and a curriculum over the target's speed.
 //!
+//! - `config`: the league's TOML.
+//! - `dir`: the league directory's layout.
 //! - `store`: the SQLite store (players, matches, ratings, curriculum,
 //!   heartbeats, crashes, config), sqlx kept inside it.
 //! - `matchmaking`: PFSP opponent draws, pure and seeded.
 //! - `ratings`: live Weng-Lin ratings and a batch Bradley-Terry fit.
 //! - `curriculum`: the speed-ratio stages and when to move on.
+//! - `learner`: one main learner's process: opponents per world, batched
+//!   network opponents, matches, snapshots.
+//! - `manager`: `t2e-league run`: spawns and supervises the learners.
+//! - `status`: what `status` and `export` read from a league.
 
+pub mod config;
 pub mod curriculum;
+pub mod dir;
+pub mod learner;
+pub mod manager;
 pub mod matchmaking;
 pub mod ratings;
+pub mod status;
 pub mod store;

@@ -459,6 +459,19 @@ impl Store {
             .collect())
     }
 
+    /// A player's live ratings, oldest first: (match id, mu, sigma, at ms).
+    pub fn rating_history(&self, player: i64) -> Result<Vec<(Option<i64>, f64, f64, i64)>, StoreError> {
+        let rows = self
+            .rt
+            .block_on(
+                sqlx::query("SELECT match_id, mu, sigma, at_ms FROM ratings WHERE player = $1 ORDER BY id")
+                    .bind(player)
+                    .fetch_all(&self.pool),
+            )
+            .map_err(|e| self.db(e))?;
+        Ok(rows.iter().map(|r| (r.get(0), r.get(1), r.get(2), r.get(3))).collect())
+    }
+
     /// Appends a curriculum stage change.
     pub fn push_curriculum(&self, stage: usize, speed_ratio: f64, reason: &str) -> Result<(), StoreError> {
         self.rt

@@ -2,6 +2,7 @@
 //! (IPPO) critic, and the training loop that plays either side, or both,
 //! against heuristics, frozen checkpoints or each other.
 
+pub mod acting;
 pub mod ippo;
 pub mod mappo;
 pub mod persist;

@@ -12,12 +12,13 @@
 use super::ppo::{PpoConfig, PpoLearner, Rollout, UpdateStats};
 use super::Algorithm;
 use crate::env::vec_env::episode_seed;
-use crate::env::{Action, EnvConfig, Side, VecEnv, PATCH_LEN};
+use crate::env::{Action, EnvConfig, Side, VecEnv};
 use crate::controllers::ControllerSpec;
 use crate::map::PreparedMap;
 use super::persist::{self, RunState};
 use crate::nn::checkpoint::{checkpoint_name, clean_stale_temporaries, code_version, CheckpointMeta, FORMAT};
-use crate::nn::{obs_tensors, pool_patch, NetConfig};
+use super::acting::{gather_side, gather_worlds};
+use crate::nn::{obs_tensors, NetConfig};
 use anyhow::{anyhow, bail, Context, Result};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -211,6 +212,29 @@ impl TrainConfig {
             "cuda" => Device::Cuda(0),
             _ => Device::cuda_if_available(),
         }
+    }
+}
+
+/// What a caller adds to a rollout: actions for robots that neither a
+/// learner of the trainer nor a controller inside the vector env plays (the
+/// league's network opponents, batched per opponent), and a look at every
+/// step (finished episodes, opponents for the worlds that restarted).
+pub trait RolloutHooks {
+    /// Before each step: write the actions of the robots the hooks play.
+    fn before_step(&mut self, venv: &mut VecEnv, actions: &mut [Action]) -> Result<()>;
+    /// After each step (`venv.finished` lists the episodes that ended).
+    fn after_step(&mut self, venv: &mut VecEnv) -> Result<()>;
+}
+
+/// No hooks: every robot is a learner's or a scripted controller's.
+pub struct NoHooks;
+
+impl RolloutHooks for NoHooks {
+    fn before_step(&mut self, _venv: &mut VecEnv, _actions: &mut [Action]) -> Result<()> {
+        Ok(())
+    }
+    fn after_step(&mut self, _venv: &mut VecEnv) -> Result<()> {
+        Ok(())
     }
 }
 
@@ -443,6 +467,17 @@ impl Trainer {
     /// One PPO iteration: a rollout of `rollout_steps` in every world, then
     /// an update of every learning side.
     pub fn iterate(&mut self) -> Result<Metrics> {
+        self.iterate_with(&mut NoHooks)
+    }
+
+    /// The vector env, for callers that give worlds their own opponents.
+    pub fn venv_mut(&mut self) -> &mut VecEnv {
+        &mut self.venv
+    }
+
+    /// `iterate`, with `hooks` acting for robots no learner here controls
+    /// and seeing every step's outcome (the league's opponents).
+    pub fn iterate_with(&mut self, hooks: &mut dyn RolloutHooks) -> Result<Metrics> {
         let start = Instant::now();
         let (mut time_env, mut time_inference) = (0.0, 0.0);
         let k = self.cfg.env.num_captors;
@@ -513,10 +548,12 @@ impl Trainer {
                     self.actions[e * na + ls.side.agents(k).start + j] = Action::from_index(a);
                 }
             }
+            hooks.before_step(&mut self.venv, &mut self.actions)?;
             let t1 = Instant::now();
             self.venv
                 .step(&self.actions)
                 .map_err(|e| anyhow!("placing robots: {e}"))?;
+            hooks.after_step(&mut self.venv)?;
             let truncated_worlds: Vec<usize> = (0..self.cfg.num_envs)
                 .filter(|&e| self.venv.truncated[e])
                 .collect();
@@ -697,55 +734,23 @@ impl Trainer {
         Ok(written)
     }
 
+    /// Writes `side`'s learner as the checkpoint folder `dir` (the league's
+    /// snapshots), atomically.
+    pub fn save_side(&self, side: Side, dir: &Path) -> Result<()> {
+        let ls = self
+            .learners
+            .iter()
+            .find(|l| l.side == side)
+            .with_context(|| format!("no {} learner in this run", side.name()))?;
+        persist::save_learner(dir, &ls.learner, self.meta(ls))?;
+        Ok(())
+    }
+
     pub fn learner_sides(&self) -> Vec<(Side, Algorithm)> {
         self.learners
             .iter()
             .map(|l| (l.side, l.algorithm))
             .collect()
-    }
-}
-
-/// Copies one side's observations out of the vector env, a world's robots
-/// adjacent, pooling each patch for the side's network.
-fn gather_side(
-    venv: &VecEnv,
-    side: Side,
-    net: &NetConfig,
-    vectors: &mut [f32],
-    patches: &mut [u8],
-) {
-    let worlds: Vec<usize> = (0..venv.num_envs()).collect();
-    gather_worlds(venv, &venv.vectors, &venv.patches, &worlds, side, net, vectors, patches);
-}
-
-/// `gather_side` for some worlds only, from `src_vectors` / `src_patches`
-/// laid out as the vector env's buffers ([world][agent][...]).
-#[allow(clippy::too_many_arguments)]
-fn gather_worlds(
-    venv: &VecEnv,
-    src_vectors: &[f32],
-    src_patches: &[u8],
-    worlds: &[usize],
-    side: Side,
-    net: &NetConfig,
-    vectors: &mut [f32],
-    patches: &mut [u8],
-) {
-    let k = venv.cfg.num_captors;
-    let (na, vl) = (k + 1, venv.cfg.vector_len());
-    let (pool, pl) = (net.patch_pool as usize, net.input_len());
-    let team = side.agents(k).len();
-    for (w, &e) in worlds.iter().enumerate() {
-        for (j, agent) in side.agents(k).enumerate() {
-            let (row, src) = (w * team + j, e * na + agent);
-            vectors[row * vl..(row + 1) * vl]
-                .copy_from_slice(&src_vectors[src * vl..(src + 1) * vl]);
-            pool_patch(
-                &src_patches[src * PATCH_LEN..(src + 1) * PATCH_LEN],
-                pool,
-                &mut patches[row * pl..(row + 1) * pl],
-            );
-        }
     }
 }
 

@@ -1,0 +1,242 @@
+//! A league's configuration (`configs/league-*.toml`): the two main
+//! learners, matchmaking, snapshots, the curriculum and the budget. Every
+//! field has a documented default; typos and impossible values are errors
+//! that name the file and the field.
+
+use super::curriculum::CurriculumConfig;
+use super::matchmaking::MatchmakingConfig;
+use crate::env::{EnvConfig, Side};
+use crate::learn::ppo::PpoConfig;
+use crate::learn::train::{SideConfig, TrainConfig};
+use crate::nn::NetConfig;
+use anyhow::{anyhow, Context, Result};
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct LeagueConfig {
+    /// The league's name: its directory is `runs/league/NAME` by default.
+    pub name: String,
+    /// Seeds every learner's episodes and every opponent draw.
+    pub seed: u64,
+    /// Each learner stops after this many environment steps of its own.
+    pub env_steps_per_learner: u64,
+    /// Training maps (never the Gibson test set): `generated:N`, `shipped`, a folder.
+    pub maps: String,
+    /// K, the number of captors.
+    pub num_captors: usize,
+    /// Steps before a training episode is cut off (the paper trains at 200).
+    pub episode_length: u32,
+    /// Threads of each learner process, for libtorch's intra-op pool and
+    /// rayon alike; 0 = the machine's cores divided among the learners.
+    pub threads_per_learner: usize,
+    /// Worlds per learner, steps per world between updates, and how many
+    /// iterations between a learner's own checkpoints (its resume point).
+    pub num_envs: usize,
+    pub rollout_steps: usize,
+    pub checkpoint_every: u64,
+    /// Snapshots play greedily (most likely action) instead of sampling.
+    pub greedy_opponents: bool,
+    /// Opponent networks kept loaded per learner.
+    pub opponent_cache: usize,
+    pub captors: LearnerConfig,
+    pub target: LearnerConfig,
+    pub matchmaking: MatchmakingConfig,
+    pub snapshots: SnapshotConfig,
+    pub curriculum: CurriculumConfig,
+}
+
+/// One main learner.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct LearnerConfig {
+    /// "mappo" or "ippo".
+    pub algorithm: String,
+    pub ppo: PpoConfig,
+    pub net: NetConfig,
+}
+
+impl Default for LearnerConfig {
+    fn default() -> Self {
+        LearnerConfig {
+            algorithm: "mappo".into(),
+            ppo: PpoConfig {
+                minibatches: 4,
+                ..PpoConfig::default()
+            },
+            net: NetConfig::default(),
+        }
+    }
+}
+
+/// When a learner adds a frozen copy of itself to the pool.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SnapshotConfig {
+    /// Env steps between checks.
+    pub every_env_steps: u64,
+    /// Snapshot when the learner won at least this share of its matches
+    /// since the last snapshot...
+    pub win_rate: f64,
+    /// ...or when this many env steps passed since the last one anyway.
+    pub timeout_env_steps: u64,
+}
+
+impl Default for SnapshotConfig {
+    fn default() -> Self {
+        SnapshotConfig {
+            every_env_steps: 50_000,
+            win_rate: 0.55,
+            timeout_env_steps: 200_000,
+        }
+    }
+}
+
+impl Default for LeagueConfig {
+    fn default() -> Self {
+        LeagueConfig {
+            name: "league".into(),
+            seed: 0,
+            env_steps_per_learner: 2_000_000,
+            maps: "generated:20".into(),
+            num_captors: 3,
+            episode_length: 200,
+            threads_per_learner: 0,
+            num_envs: 32,
+            rollout_steps: 100,
+            checkpoint_every: 5,
+            greedy_opponents: false,
+            opponent_cache: 8,
+            captors: LearnerConfig::default(),
+            target: LearnerConfig::default(),
+            matchmaking: MatchmakingConfig::default(),
+            snapshots: SnapshotConfig::default(),
+            curriculum: CurriculumConfig::default(),
+        }
+    }
+}
+
+impl LeagueConfig {
+    pub fn load(path: &Path) -> Result<LeagueConfig> {
+        let text = std::fs::read_to_string(path)
+            .with_context(|| format!("{}: cannot read", path.display()))?;
+        Self::parse(&text).map_err(|e| anyhow!("{}: {e}", path.display()))
+    }
+
+    pub fn parse(text: &str) -> Result<LeagueConfig, String> {
+        let cfg: LeagueConfig = toml::from_str(text).map_err(|e| e.to_string())?;
+        cfg.validate()?;
+        Ok(cfg)
+    }
+
+    pub fn learner(&self, side: Side) -> &LearnerConfig {
+        match side {
+            Side::Captors => &self.captors,
+            Side::Target => &self.target,
+        }
+    }
+
+    /// The training config of one main learner: its side learns; the other
+    /// side is played per world by opponents the league draws (a still
+    /// placeholder until the first draw).
+    pub fn train_config(&self, side: Side) -> TrainConfig {
+        let learner = self.learner(side);
+        let learn = SideConfig {
+            play: learner.algorithm.clone(),
+            ppo: learner.ppo.clone(),
+            net: learner.net.clone(),
+        };
+        let other = SideConfig {
+            play: "still".into(),
+            ..SideConfig::default()
+        };
+        let (captors, target) = match side {
+            Side::Captors => (learn, other),
+            Side::Target => (other, learn),
+        };
+        TrainConfig {
+            name: format!("{}-main", side.name()),
+            seed: self.seed ^ match side {
+                Side::Captors => 0xC0,
+                Side::Target => 0x7A,
+            },
+            total_env_steps: self.env_steps_per_learner,
+            num_envs: self.num_envs,
+            rollout_steps: self.rollout_steps,
+            checkpoint_every: self.checkpoint_every,
+            device: "cpu".into(),
+            maps: self.maps.clone(),
+            env: EnvConfig {
+                num_captors: self.num_captors,
+                target_speed: self.curriculum.stages.first().copied().unwrap_or(1.0),
+                episode_length: self.episode_length,
+                ..EnvConfig::default()
+            },
+            captors,
+            target,
+        }
+    }
+
+    pub fn validate(&self) -> Result<(), String> {
+        self.matchmaking
+            .validate()
+            .map_err(|e| format!("matchmaking.{e}"))?;
+        self.curriculum
+            .validate()
+            .map_err(|e| format!("curriculum.{e}"))?;
+        if !(self.snapshots.win_rate.is_finite() && (0.0..=1.0).contains(&self.snapshots.win_rate)) {
+            return Err(format!(
+                "snapshots.win_rate = {}: must be in [0, 1]",
+                self.snapshots.win_rate
+            ));
+        }
+        if self.snapshots.every_env_steps == 0 || self.snapshots.timeout_env_steps == 0 {
+            return Err("snapshots.every_env_steps and snapshots.timeout_env_steps must be at least 1".into());
+        }
+        let per_iteration = (self.num_envs * self.rollout_steps) as u64;
+        if self.env_steps_per_learner < per_iteration.max(1) {
+            return Err(format!(
+                "env_steps_per_learner = {}: less than one iteration ({} worlds x {} steps)",
+                self.env_steps_per_learner, self.num_envs, self.rollout_steps
+            ));
+        }
+        if self.opponent_cache == 0 {
+            return Err("opponent_cache = 0: must hold at least one network".into());
+        }
+        if self.threads_per_learner > 256 {
+            return Err(format!("threads_per_learner = {}: at most 256", self.threads_per_learner));
+        }
+        for side in [Side::Captors, Side::Target] {
+            let algo = &self.learner(side).algorithm;
+            if !["mappo", "ippo"].contains(&algo.as_str()) {
+                return Err(format!(
+                    "{}.algorithm = \"{algo}\": expected mappo or ippo",
+                    side.name()
+                ));
+            }
+            self.train_config(side).validate()?;
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn configs_validate_and_typos_name_the_field() {
+        LeagueConfig::default().validate().unwrap();
+        let err = LeagueConfig::parse("[matchmaking]\nweighting = \"hard\"\npp = 2\n").unwrap_err();
+        assert!(err.contains("pp"), "{err}");
+        let err = LeagueConfig::parse("[curriculum]\nstages = [1.2, 1.0]\n").unwrap_err();
+        assert!(err.starts_with("curriculum.stages[1]"), "{err}");
+        let err = LeagueConfig::parse("[target.ppo]\nentropy_coef = nan\n").unwrap_err();
+        assert!(err.contains("target.ppo.entropy_coef"), "{err}");
+        let err = LeagueConfig::parse("env_steps_per_learner = 0\n").unwrap_err();
+        assert!(err.starts_with("env_steps_per_learner = 0"), "{err}");
+        let shipped = Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/league-default.toml");
+        LeagueConfig::load(&shipped).unwrap();
+    }
+}

@@ -1,0 +1,553 @@
+//! One main learner of the league, as its own process (`t2e-league
+//! league-learner`, spawned by the manager). It trains like `train` does,
+//! except that every world draws its opponent when its episode starts:
+//! a snapshot of the other side by PFSP, the other side's latest snapshot
+//! (its main learner), or a heuristic member. Heuristic opponents play
+//! inside the vector env; network opponents are batched, one forward pass
+//! per distinct opponent over the rows of the worlds that play it. Every
+//! finished episode is recorded in the store (once), and the learner adds
+//! frozen copies of itself to the pool.
+
+use super::config::LeagueConfig;
+use super::curriculum::Curriculum;
+use super::dir::LeagueDir;
+use super::matchmaking::{choose_opponent, draw_seed, Candidate, Opponent};
+use super::store::{Kind, MatchRecord, NewPlayer, Player, Store};
+use crate::controllers::ControllerSpec;
+use crate::env::{Action, Side, VecEnv};
+use crate::learn::acting::gather_worlds;
+use crate::learn::train::{RolloutHooks, Trainer};
+use crate::nn::{obs_tensors, Actor, PolicySnapshot};
+use anyhow::{bail, Context, Result};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use std::collections::HashMap;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::time::Instant;
+use tch::{nn, Device, Kind as TKind, Tensor};
+
+/// The player name of a side's main learner.
+pub fn learner_name(side: Side) -> String {
+    format!("{}-main", side.name())
+}
+
+/// The player name of a side's permanent heuristic member.
+pub fn heuristic_name(side: Side) -> String {
+    match side {
+        Side::Captors => "expert-captors".into(),
+        Side::Target => "rule-based-target".into(),
+    }
+}
+
+/// A loaded opponent network.
+struct Loaded {
+    snapshot: Arc<PolicySnapshot>,
+    _vs: nn::VarStore,
+    actor: Actor,
+    last_used: u64,
+}
+
+/// Who plays the other side in one world, this episode.
+#[derive(Clone, Debug)]
+struct WorldOpponent {
+    player: i64,
+    /// Some(player) when a network plays (batched here), None for a
+    /// heuristic scripted inside the vector env.
+    network: Option<i64>,
+    /// Recurrent state of the network's robots in this world.
+    hidden: Vec<f32>,
+    speed: f64,
+}
+
+pub struct LeagueHooks<'a> {
+    store: &'a Store,
+    dir: &'a LeagueDir,
+    cfg: &'a LeagueConfig,
+    side: Side,
+    learner_id: i64,
+    learner_name: String,
+    /// The other side's playable members, and this learner's record against each.
+    members: Vec<Player>,
+    candidates: Vec<Candidate>,
+    main: Option<i64>,
+    worlds: Vec<WorldOpponent>,
+    cache: HashMap<i64, Loaded>,
+    tick: u64,
+    rng: ChaCha8Rng,
+    pub curriculum: Curriculum,
+    pub wins: u64,
+    pub games: u64,
+    pub matches_recorded: u64,
+}
+
+impl<'a> LeagueHooks<'a> {
+    pub fn new(
+        store: &'a Store,
+        dir: &'a LeagueDir,
+        cfg: &'a LeagueConfig,
+        side: Side,
+        learner_id: i64,
+    ) -> Result<LeagueHooks<'a>> {
+        let mut hooks = LeagueHooks {
+            store,
+            dir,
+            cfg,
+            side,
+            learner_id,
+            learner_name: learner_name(side),
+            members: Vec::new(),
+            candidates: Vec::new(),
+            main: None,
+            worlds: Vec::new(),
+            cache: HashMap::new(),
+            tick: 0,
+            rng: ChaCha8Rng::seed_from_u64(cfg.seed ^ learner_id as u64 ^ 0x0990),
+            curriculum: Curriculum::new(),
+            wins: 0,
+            games: 0,
+            matches_recorded: 0,
+        };
+        hooks.refresh()?;
+        Ok(hooks)
+    }
+
+    fn other(&self) -> Side {
+        match self.side {
+            Side::Captors => Side::Target,
+            Side::Target => Side::Captors,
+        }
+    }
+
+    /// Re-reads the pool, this learner's record and the curriculum stage.
+    pub fn refresh(&mut self) -> Result<()> {
+        let other = self.other();
+        let players = self.store.players()?;
+        self.members = players
+            .iter()
+            .filter(|p| p.side == other && p.quarantined.is_none())
+            .filter(|p| matches!(p.kind, Kind::Snapshot | Kind::Heuristic))
+            .cloned()
+            .collect();
+        let payoff = self.store.payoff()?;
+        self.candidates = self
+            .members
+            .iter()
+            .map(|m| {
+                let (mut wins, mut games) = (0.0, 0.0);
+                for r in &payoff {
+                    let mine = match self.side {
+                        Side::Captors => r.captor == self.learner_id && r.target == m.id,
+                        Side::Target => r.target == self.learner_id && r.captor == m.id,
+                    };
+                    if mine {
+                        games += r.games as f64;
+                        wins += match self.side {
+                            Side::Captors => r.captor_wins as f64,
+                            Side::Target => (r.games - r.captor_wins) as f64,
+                        };
+                    }
+                }
+                Candidate { player: m.id, wins, games }
+            })
+            .collect();
+        let other_main = players
+            .iter()
+            .find(|p| p.name == learner_name(other))
+            .map(|p| p.id);
+        self.main = self
+            .members
+            .iter()
+            .filter(|m| m.kind == Kind::Snapshot && m.parent.is_some() && m.parent == other_main)
+            .max_by_key(|m| m.env_steps)
+            .map(|m| m.id);
+        if let Some((stage, _, _, _)) = self.store.curriculum_history()?.last() {
+            if *stage != self.curriculum.stage {
+                self.curriculum.stage = *stage;
+                self.curriculum.recent.clear();
+            }
+        }
+        Ok(())
+    }
+
+    /// Draws opponents for every world (a fresh start or a resumed run).
+    pub fn assign_all(&mut self, venv: &mut VecEnv) -> Result<()> {
+        self.worlds.clear();
+        for e in 0..venv.num_envs() {
+            let w = self.draw(venv, e)?;
+            self.worlds.push(w);
+        }
+        Ok(())
+    }
+
+    /// Draws world `e`'s opponent and speed for its current episode and sets
+    /// the world up for them.
+    fn draw(&mut self, venv: &mut VecEnv, e: usize) -> Result<WorldOpponent> {
+        let other = self.other();
+        let seed = draw_seed(self.cfg.seed, self.learner_id, e, venv.env(e).seed);
+        let pick = choose_opponent(&self.candidates, self.main, &self.cfg.matchmaking, seed);
+        let player = match pick {
+            Some(Opponent::Main) => self.main.expect("main drawn only when there is one"),
+            Some(Opponent::Member(id)) => id,
+            None => bail!("the {} pool is empty: the heuristic member is missing", other.name()),
+        };
+        let member = self
+            .members
+            .iter()
+            .find(|m| m.id == player)
+            .cloned()
+            .context("drawn member not in the pool")?;
+        let u: f64 = ChaCha8Rng::seed_from_u64(seed ^ 0x5BEED).gen();
+        let speed = self.curriculum.sample_speed(&self.cfg.curriculum, u);
+        venv.set_world_speeds(e, 1.0, speed).map_err(anyhow::Error::msg)?;
+        let network = match member.kind {
+            Kind::Heuristic => {
+                venv.script_world(e, other, Some(ControllerSpec::Heuristic.build(other).map_err(anyhow::Error::msg)?));
+                None
+            }
+            _ => match self.load(&member) {
+                Ok(hidden) => {
+                    venv.script_world(e, other, None);
+                    Some((member.id, hidden))
+                }
+                Err(err) => {
+                    // A member whose files are gone or corrupt leaves the pool; the league goes on.
+                    tracing::warn!("quarantining {}: {err:#}", member.name);
+                    eprintln!("quarantining {}: {err:#}", member.name);
+                    self.store.quarantine(member.id, &format!("{err:#}"))?;
+                    self.refresh()?;
+                    return self.draw(venv, e);
+                }
+            },
+        };
+        let team = other.agents(self.cfg.num_captors).len();
+        Ok(WorldOpponent {
+            player,
+            hidden: vec![0.0; network.map(|(_, h)| h).unwrap_or(0) * team],
+            network: network.map(|(id, _)| id),
+            speed,
+        })
+    }
+
+    /// Loads (or finds in the cache) a member's network; returns its hidden size.
+    fn load(&mut self, member: &Player) -> Result<usize> {
+        self.tick += 1;
+        if let Some(l) = self.cache.get_mut(&member.id) {
+            l.last_used = self.tick;
+            return Ok(l.actor.hidden as usize);
+        }
+        let (rel, meta_sha) = member
+            .checkpoint
+            .clone()
+            .with_context(|| format!("{} has no checkpoint", member.name))?;
+        let dir = self.dir.root.join(&rel);
+        let got = crate::util::sha256_file(&dir.join("meta.json"))
+            .with_context(|| format!("{}: meta.json missing", dir.display()))?;
+        if got != meta_sha {
+            bail!("{}: meta.json does not match the sha256 the store recorded", dir.display());
+        }
+        let snapshot = Arc::new(PolicySnapshot::load(&dir, self.other())?);
+        let (vs, actor) = snapshot.build_actor(Device::Cpu)?;
+        if self.cache.len() >= self.cfg.opponent_cache {
+            let in_use: Vec<i64> = self.worlds.iter().filter_map(|w| w.network).collect();
+            if let Some(evict) = self
+                .cache
+                .iter()
+                .filter(|(id, _)| !in_use.contains(id))
+                .min_by_key(|(_, l)| l.last_used)
+                .map(|(id, _)| *id)
+            {
+                self.cache.remove(&evict);
+            }
+        }
+        let hidden = actor.hidden as usize;
+        self.cache.insert(
+            member.id,
+            Loaded {
+                snapshot,
+                _vs: vs,
+                actor,
+                last_used: self.tick,
+            },
+        );
+        Ok(hidden)
+    }
+}
+
+impl RolloutHooks for LeagueHooks<'_> {
+    fn before_step(&mut self, venv: &mut VecEnv, actions: &mut [Action]) -> Result<()> {
+        let other = self.other();
+        let k = self.cfg.num_captors;
+        let na = k + 1;
+        let team = other.agents(k).len();
+        let mut groups: HashMap<i64, Vec<usize>> = HashMap::new();
+        for (e, w) in self.worlds.iter().enumerate() {
+            if let Some(id) = w.network {
+                groups.entry(id).or_default().push(e);
+            }
+        }
+        let mut ids: Vec<i64> = groups.keys().copied().collect();
+        ids.sort();
+        for id in ids {
+            let worlds = &groups[&id];
+            let loaded = self.cache.get(&id).context("opponent network not loaded")?;
+            let net = &loaded.snapshot.meta.net;
+            let h = loaded.actor.hidden as usize;
+            let rows = worlds.len() * team;
+            let (vl, pl) = (venv.cfg.vector_len(), net.input_len());
+            let mut vectors = vec![0f32; rows * vl];
+            let mut patches = vec![0u8; rows * pl];
+            gather_worlds(venv, &venv.vectors, &venv.patches, worlds, other, net, &mut vectors, &mut patches);
+            let mut hidden = Vec::with_capacity(rows * h);
+            for &e in worlds {
+                hidden.extend_from_slice(&self.worlds[e].hidden);
+            }
+            let (p, v) = obs_tensors(&patches, &vectors, rows, 1, net.input_side(), Device::Cpu);
+            let h_in = Tensor::from_slice(&hidden).view([rows as i64, h as i64]);
+            let (logits, h_out) = tch::no_grad(|| loaded.actor.step(&p, &v, &h_in));
+            let mut chosen = vec![0i64; rows];
+            if self.cfg.greedy_opponents {
+                logits.argmax(1, false).copy_data(&mut chosen, rows);
+            } else {
+                let probs = logits.softmax(-1, TKind::Float);
+                let mut pr = vec![0f32; rows * Action::COUNT];
+                probs.copy_data(&mut pr, rows * Action::COUNT);
+                for (r, c) in chosen.iter_mut().enumerate() {
+                    let p = &pr[r * Action::COUNT..(r + 1) * Action::COUNT];
+                    let mut u = self.rng.gen::<f32>() * p.iter().sum::<f32>();
+                    *c = (Action::COUNT - 1) as i64;
+                    for (i, &x) in p.iter().enumerate() {
+                        if u < x {
+                            *c = i as i64;
+                            break;
+                        }
+                        u -= x;
+                    }
+                }
+            }
+            let mut h_new = vec![0f32; rows * h];
+            h_out.copy_data(&mut h_new, rows * h);
+            for (w, &e) in worlds.iter().enumerate() {
+                self.worlds[e]
+                    .hidden
+                    .copy_from_slice(&h_new[w * team * h..(w + 1) * team * h]);
+                for (j, agent) in other.agents(k).enumerate() {
+                    actions[e * na + agent] = Action::from_index(chosen[w * team + j] as usize);
+                }
+            }
+        }
+        Ok(())
+    }
+
+    fn after_step(&mut self, venv: &mut VecEnv) -> Result<()> {
+        let finished = venv.finished.clone();
+        for s in &finished {
+            let w = self.worlds[s.env].clone();
+            let (captor_player, target_player) = match self.side {
+                Side::Captors => (self.learner_id, w.player),
+                Side::Target => (w.player, self.learner_id),
+            };
+            let recorded = self.store.record_match(&MatchRecord {
+                key: format!("{}/{:016x}", self.learner_name, s.seed),
+                captor_player,
+                target_player,
+                map: s.map.clone(),
+                num_captors: self.cfg.num_captors,
+                speed_ratio: w.speed,
+                seed: s.seed,
+                captured: s.captured,
+                steps: s.steps,
+                final_asz_m2: None,
+                recorded_by: self.learner_name.clone(),
+            })?;
+            self.matches_recorded += recorded as u64;
+            let won = match self.side {
+                Side::Captors => s.captured,
+                Side::Target => !s.captured,
+            };
+            self.games += 1;
+            self.wins += won as u64;
+            if self.side == Side::Captors {
+                if let Some(stage) = self.curriculum.record(&self.cfg.curriculum, w.speed, s.captured) {
+                    let speed = self.curriculum.speed(&self.cfg.curriculum);
+                    self.store.push_curriculum(
+                        stage,
+                        speed,
+                        &format!(
+                            "main captors won at least {:.0}% of their last {} matches at the previous stage",
+                            100.0 * self.cfg.curriculum.promote_at,
+                            self.cfg.curriculum.window
+                        ),
+                    )?;
+                    eprintln!("curriculum: stage {stage}, speed ratio {speed}");
+                }
+            }
+            let next = self.draw(venv, s.env)?;
+            self.worlds[s.env] = next;
+        }
+        Ok(())
+    }
+}
+
+/// Runs one main learner until its budget is spent or `stop` is set;
+/// checkpoints its own state and adds snapshots of itself to the pool.
+pub fn run_learner(dir: &LeagueDir, side: Side, stop: &AtomicBool) -> Result<()> {
+    let cfg = dir.config()?;
+    let threads = dir.threads_per_learner(&cfg);
+    tch::set_num_threads(threads as i32);
+    let _ = rayon::ThreadPoolBuilder::new().num_threads(threads).build_global();
+    let store = Store::open(&dir.root)?;
+    let name = learner_name(side);
+    let learner_id = store.add_player(&NewPlayer {
+        name: name.clone(),
+        side,
+        kind: Kind::Learner,
+        parent: None,
+        env_steps: 0,
+        curriculum_stage: 0,
+        checkpoint: None,
+    })?;
+    let maps = crate::map::catalog::load_prepared(&cfg.maps)
+        .with_context(|| format!("maps = \"{}\"", cfg.maps))?;
+    let tcfg = cfg.train_config(side);
+    let run_dir = dir.learner_dir(side);
+    let mut trainer = if run_dir.join("state.json").is_file() {
+        let t = Trainer::resume(tcfg.clone(), maps, &run_dir)?;
+        eprintln!("{name}: resuming at {} env steps", t.env_steps);
+        t
+    } else {
+        std::fs::create_dir_all(&run_dir)?;
+        Trainer::new(tcfg.clone(), maps)?
+    };
+    let mut hooks = LeagueHooks::new(&store, dir, &cfg, side, learner_id)?;
+    hooks.assign_all(trainer.venv_mut())?;
+    let mut last_snapshot = store
+        .players()?
+        .iter()
+        .filter(|p| p.parent == Some(learner_id))
+        .map(|p| p.env_steps)
+        .max()
+        .unwrap_or(0);
+    let (mut wins_at_snapshot, mut games_at_snapshot) = (0u64, 0u64);
+    store.heartbeat(&name, "training", trainer.env_steps, 0.0)?;
+    while trainer.env_steps < cfg.env_steps_per_learner && !stop.load(Ordering::SeqCst) {
+        let started = Instant::now();
+        let m = trainer.iterate_with(&mut hooks)?;
+        if trainer.iteration % cfg.checkpoint_every == 0 {
+            save_learner(&trainer, &store, dir, side, learner_id)?;
+        }
+        let since = trainer.env_steps - last_snapshot;
+        let (w, g) = (hooks.wins - wins_at_snapshot, hooks.games - games_at_snapshot);
+        let winning = g > 0 && w as f64 / g as f64 >= cfg.snapshots.win_rate;
+        if (since >= cfg.snapshots.every_env_steps && winning) || since >= cfg.snapshots.timeout_env_steps {
+            add_snapshot(&trainer, &store, dir, side, learner_id, hooks.curriculum.stage)?;
+            last_snapshot = trainer.env_steps;
+            wins_at_snapshot = hooks.wins;
+            games_at_snapshot = hooks.games;
+        }
+        hooks.refresh()?;
+        let steps = (cfg.num_envs * cfg.rollout_steps) as f64;
+        store.heartbeat(&name, "training", trainer.env_steps, steps / started.elapsed().as_secs_f64())?;
+        let _ = m;
+    }
+    save_learner(&trainer, &store, dir, side, learner_id)?;
+    let state = if trainer.env_steps >= cfg.env_steps_per_learner {
+        "done"
+    } else {
+        "stopped"
+    };
+    store.heartbeat(&name, state, trainer.env_steps, 0.0)?;
+    eprintln!(
+        "{name}: {state} at {} env steps, {} matches recorded",
+        trainer.env_steps, hooks.matches_recorded
+    );
+    Ok(())
+}
+
+/// The learner's own resume point, and its row pointed at it.
+fn save_learner(trainer: &Trainer, store: &Store, dir: &LeagueDir, side: Side, id: i64) -> Result<()> {
+    let run_dir = dir.learner_dir(side);
+    let written = trainer.save(&run_dir)?;
+    if let Some(ckpt) = written.first() {
+        let sha = crate::util::sha256_file(&ckpt.join("meta.json"))?;
+        let rel = dir.relative(ckpt);
+        store.update_learner(id, trainer.env_steps, (&rel, &sha))?;
+    }
+    Ok(())
+}
+
+/// A frozen copy of the learner joins the pool: files written (synced,
+/// renamed into place) before the row that names them.
+fn add_snapshot(
+    trainer: &Trainer,
+    store: &Store,
+    dir: &LeagueDir,
+    side: Side,
+    learner_id: i64,
+    stage: usize,
+) -> Result<()> {
+    let name = format!("{}-snap-{:012}", side.name(), trainer.env_steps);
+    let folder = dir.players_dir().join(&name);
+    trainer.save_side(side, &folder)?;
+    let sha = crate::util::sha256_file(&folder.join("meta.json"))?;
+    store.add_player(&NewPlayer {
+        name: name.clone(),
+        side,
+        kind: Kind::Snapshot,
+        parent: Some(learner_id),
+        env_steps: trainer.env_steps,
+        curriculum_stage: stage,
+        checkpoint: Some((dir.relative(&folder), sha)),
+    })?;
+    eprintln!("{}: snapshot {name} joins the pool", learner_name(side));
+    Ok(())
+}
+
+/// Checks a league directory's pool against its files at start: snapshot
+/// folders without a row are removed (a writer died between the files and
+/// the row), rows whose files are missing or corrupt are quarantined.
+/// Returns (removed folders, quarantined players).
+pub fn reconcile(dir: &LeagueDir, store: &Store) -> Result<(Vec<String>, Vec<String>)> {
+    let players = store.players()?;
+    let mut removed = Vec::new();
+    let mut quarantined = Vec::new();
+    let players_dir = dir.players_dir();
+    crate::nn::checkpoint::clean_stale_temporaries(&players_dir)?;
+    if let Ok(entries) = std::fs::read_dir(&players_dir) {
+        for e in entries {
+            let path = e?.path();
+            let rel = dir.relative(&path);
+            if !players.iter().any(|p| p.checkpoint.as_ref().is_some_and(|(r, _)| *r == rel)) {
+                std::fs::remove_dir_all(&path)
+                    .with_context(|| format!("cannot remove {}", path.display()))?;
+                removed.push(rel);
+            }
+        }
+    }
+    for p in players.iter().filter(|p| p.kind == Kind::Snapshot && p.quarantined.is_none()) {
+        let Some((rel, sha)) = &p.checkpoint else { continue };
+        let meta = dir.root.join(rel).join("meta.json");
+        let ok = crate::util::sha256_file(&meta).is_ok_and(|got| &got == sha)
+            && PolicySnapshot::load(&dir.root.join(rel), p.side).is_ok();
+        if !ok {
+            store.quarantine(p.id, "checkpoint files missing or corrupt at league start")?;
+            quarantined.push(p.name.clone());
+        }
+    }
+    Ok((removed, quarantined))
+}
+
+pub fn ensure_heuristic_members(store: &Store) -> Result<()> {
+    for side in [Side::Captors, Side::Target] {
+        store.add_player(&NewPlayer {
+            name: heuristic_name(side),
+            side,
+            kind: Kind::Heuristic,
+            parent: None,
+            env_steps: 0,
+            curriculum_stage: 0,
+            checkpoint: None,
+        })?;
+    }
+    Ok(())
+}

@@ -1,0 +1,384 @@
+//! What `t2e-league status` and `export` read from a league, safe while it
+//! runs (the store is read in short queries under WAL).
+//!
+//! `status --json` prints `StatusReport` as JSON. Its shape is stable:
+//! fields are only ever added, never renamed or removed.
+//! ```text
+//! { "league": str, "dir": str, "matches": int,
+//!   "players": [{ "id", "name", "side": "captors"|"target",
+//!                 "kind": "learner"|"snapshot"|"heuristic"|"exploiter",
+//!                 "parent": int|null, "env_steps", "curriculum_stage",
+//!                 "rating": float, "rating_sigma": float,   // live Weng-Lin
+//!                 "bt_elo": float,                          // Bradley-Terry fit
+//!                 "games", "wins", "win_rate": float|null,
+//!                 "quarantined": str|null }],
+//!   "curriculum": { "stage", "speed_ratio",
+//!                   "history": [{ "stage", "speed_ratio", "reason", "at_ms" }] },
+//!   "learners": [{ "name", "pid", "state", "env_steps", "steps_per_s",
+//!                  "heartbeat_age_s" }],
+//!   "payoff": [{ "captor", "target", "captor_wins", "games" }],
+//!   "crashes": [{ "learner", "exit_status", "message", "at_ms" }] }
+//! ```
+
+use super::config::LeagueConfig;
+use super::dir::LeagueDir;
+use super::ratings::{bradley_terry, PairRecord};
+use super::store::{now_ms, Store};
+use crate::env::Side;
+use anyhow::{bail, Context, Result};
+use serde::Serialize;
+use std::fmt::Write as _;
+use std::path::Path;
+
+#[derive(Clone, Debug, Serialize)]
+pub struct PlayerRow {
+    pub id: i64,
+    pub name: String,
+    pub side: String,
+    pub kind: String,
+    pub parent: Option<i64>,
+    pub env_steps: u64,
+    pub curriculum_stage: usize,
+    pub rating: f64,
+    pub rating_sigma: f64,
+    pub bt_elo: f64,
+    pub games: u64,
+    pub wins: u64,
+    pub win_rate: Option<f64>,
+    pub quarantined: Option<String>,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct StageRow {
+    pub stage: usize,
+    pub speed_ratio: f64,
+    pub reason: String,
+    pub at_ms: i64,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct Curriculum {
+    pub stage: usize,
+    pub speed_ratio: f64,
+    pub history: Vec<StageRow>,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct LearnerRow {
+    pub name: String,
+    pub pid: i64,
+    pub state: String,
+    pub env_steps: u64,
+    pub steps_per_s: f64,
+    pub heartbeat_age_s: f64,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct PayoffRow {
+    pub captor: i64,
+    pub target: i64,
+    pub captor_wins: u64,
+    pub games: u64,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct CrashRow {
+    pub learner: String,
+    pub exit_status: String,
+    pub message: String,
+    pub at_ms: i64,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct StatusReport {
+    pub league: String,
+    pub dir: String,
+    pub matches: u64,
+    pub players: Vec<PlayerRow>,
+    pub curriculum: Curriculum,
+    pub learners: Vec<LearnerRow>,
+    pub payoff: Vec<PayoffRow>,
+    pub crashes: Vec<CrashRow>,
+}
+
+/// Opens a league directory for reading; refuses one that holds no league.
+pub fn open(dir: &LeagueDir) -> Result<(LeagueConfig, Store)> {
+    if !dir.root.join("league.db").is_file() {
+        bail!(
+            "{}: holds no league (no league.db); start one with `t2e-league run --config configs/league-default.toml --dir {}`",
+            dir.root.display(),
+            dir.root.display()
+        );
+    }
+    Ok((dir.config()?, Store::open(&dir.root)?))
+}
+
+pub fn report(dir: &LeagueDir) -> Result<StatusReport> {
+    let (cfg, store) = open(dir)?;
+    let players = store.players()?;
+    let ratings = store.ratings()?;
+    let payoff = store.payoff()?;
+    let index = |id: i64| players.iter().position(|p| p.id == id);
+    let pairs: Vec<PairRecord> = payoff
+        .iter()
+        .filter_map(|r| {
+            Some(PairRecord {
+                a: index(r.captor)?,
+                b: index(r.target)?,
+                wins: r.captor_wins as f64,
+                games: r.games as f64,
+            })
+        })
+        .collect();
+    let bt = bradley_terry(players.len(), &pairs);
+    let rows = players
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            let (mut games, mut wins) = (0u64, 0u64);
+            for r in &payoff {
+                if r.captor == p.id {
+                    games += r.games;
+                    wins += r.captor_wins;
+                } else if r.target == p.id {
+                    games += r.games;
+                    wins += r.games - r.captor_wins;
+                }
+            }
+            let rating = ratings.get(&p.id).copied().unwrap_or_default();
+            PlayerRow {
+                id: p.id,
+                name: p.name.clone(),
+                side: p.side.name().to_string(),
+                kind: p.kind.name().to_string(),
+                parent: p.parent,
+                env_steps: p.env_steps,
+                curriculum_stage: p.curriculum_stage,
+                rating: rating.mu,
+                rating_sigma: rating.sigma,
+                bt_elo: bt[i],
+                games,
+                wins,
+                win_rate: (games > 0).then(|| wins as f64 / games as f64),
+                quarantined: p.quarantined.clone(),
+            }
+        })
+        .collect();
+    let history: Vec<StageRow> = store
+        .curriculum_history()?
+        .into_iter()
+        .map(|(stage, speed_ratio, reason, at_ms)| StageRow {
+            stage,
+            speed_ratio,
+            reason,
+            at_ms,
+        })
+        .collect();
+    let stage = history.last().map(|h| h.stage).unwrap_or(0);
+    let now = now_ms();
+    Ok(StatusReport {
+        league: cfg.name.clone(),
+        dir: dir.root.display().to_string(),
+        matches: store.match_count()?,
+        players: rows,
+        curriculum: Curriculum {
+            stage,
+            speed_ratio: cfg.curriculum.stages[stage.min(cfg.curriculum.stages.len() - 1)],
+            history,
+        },
+        learners: store
+            .heartbeats()?
+            .into_iter()
+            .map(|(name, pid, state, env_steps, steps_per_s, at)| LearnerRow {
+                name,
+                pid,
+                state,
+                env_steps,
+                steps_per_s,
+                heartbeat_age_s: (now - at) as f64 / 1000.0,
+            })
+            .collect(),
+        payoff: payoff
+            .iter()
+            .map(|r| PayoffRow {
+                captor: r.captor,
+                target: r.target,
+                captor_wins: r.captor_wins,
+                games: r.games,
+            })
+            .collect(),
+        crashes: store
+            .crashes()?
+            .into_iter()
+            .map(|(learner, exit_status, message, at_ms)| CrashRow {
+                learner,
+                exit_status,
+                message,
+                at_ms,
+            })
+            .collect(),
+    })
+}
+
+/// The report as text: players, learners, curriculum, payoff matrix, crashes.
+pub fn render(r: &StatusReport) -> String {
+    let mut s = String::new();
+    let _ = writeln!(s, "league {} ({}), {} matches\n", r.league, r.dir, r.matches);
+    let _ = writeln!(
+        s,
+        "{:>3}  {:<26} {:<8} {:<9} {:>6} {:>11} {:>15} {:>8} {:>6} {:>7}",
+        "id", "player", "side", "kind", "parent", "env steps", "rating", "BT Elo", "games", "win %"
+    );
+    let mut players = r.players.clone();
+    players.sort_by(|a, b| b.bt_elo.total_cmp(&a.bt_elo));
+    for p in &players {
+        let _ = writeln!(
+            s,
+            "{:>3}  {:<26} {:<8} {:<9} {:>6} {:>11} {:>8.2} ± {:<4.2} {:>8.0} {:>6} {:>7}{}",
+            p.id,
+            p.name,
+            p.side,
+            p.kind,
+            p.parent.map(|x| x.to_string()).unwrap_or_else(|| "-".into()),
+            p.env_steps,
+            p.rating,
+            p.rating_sigma,
+            p.bt_elo,
+            p.games,
+            p.win_rate
+                .map(|w| format!("{:.1}", 100.0 * w))
+                .unwrap_or_else(|| "-".into()),
+            p.quarantined
+                .as_ref()
+                .map(|q| format!("  QUARANTINED: {q}"))
+                .unwrap_or_default()
+        );
+    }
+    let _ = writeln!(s, "\nlearners:");
+    for l in &r.learners {
+        let _ = writeln!(
+            s,
+            "  {:<14} {:<9} {:>11} env steps {:>7.0} steps/s  last heartbeat {:.0} s ago (pid {})",
+            l.name, l.state, l.env_steps, l.steps_per_s, l.heartbeat_age_s, l.pid
+        );
+    }
+    let _ = writeln!(
+        s,
+        "\ncurriculum: stage {} (speed ratio 1.0:{})",
+        r.curriculum.stage,
+        crate::eval::ratio_label(r.curriculum.speed_ratio)
+    );
+    for h in &r.curriculum.history {
+        let _ = writeln!(s, "  -> stage {} (1.0:{}): {}", h.stage, h.speed_ratio, h.reason);
+    }
+    let name = |id: i64| {
+        r.players
+            .iter()
+            .find(|p| p.id == id)
+            .map(|p| p.name.clone())
+            .unwrap_or_else(|| id.to_string())
+    };
+    let captors: Vec<i64> = r.players.iter().filter(|p| p.side == "captors").map(|p| p.id).collect();
+    let targets: Vec<i64> = r.players.iter().filter(|p| p.side == "target").map(|p| p.id).collect();
+    let _ = writeln!(s, "\npayoff (captor win % / games; rows captors, columns targets):");
+    let _ = write!(s, "{:<26}", "");
+    for t in &targets {
+        let _ = write!(s, " {:>14}", format!("#{t}"));
+    }
+    let _ = writeln!(s);
+    for c in &captors {
+        let _ = write!(s, "{:<26}", name(*c));
+        for t in &targets {
+            let cell = r
+                .payoff
+                .iter()
+                .find(|p| p.captor == *c && p.target == *t)
+                .map(|p| format!("{:.0}% / {}", 100.0 * p.captor_wins as f64 / p.games as f64, p.games))
+                .unwrap_or_else(|| "-".into());
+            let _ = write!(s, " {cell:>14}");
+        }
+        let _ = writeln!(s);
+    }
+    for t in &targets {
+        let _ = writeln!(s, "  #{t} = {}", name(*t));
+    }
+    if !r.crashes.is_empty() {
+        let _ = writeln!(s, "\ncrashes:");
+        for c in &r.crashes {
+            let _ = writeln!(s, "  {} ({}): {}", c.learner, c.exit_status, c.message.lines().last().unwrap_or(""));
+        }
+    }
+    s
+}
+
+/// Writes one player as a self-contained folder: its checkpoint files, the
+/// league's config, its rating history and a SHA-256 manifest; `eval
+/// --captors ckpt:OUT` (or `--target`) plays it on another machine.
+pub fn export(dir: &LeagueDir, player: &str, out: &Path) -> Result<()> {
+    let (_, store) = open(dir)?;
+    let players = store.players()?;
+    let p = players
+        .iter()
+        .find(|p| p.name == player || p.id.to_string() == player)
+        .with_context(|| {
+            format!(
+                "no player '{player}' in {} (players: {})",
+                dir.root.display(),
+                players.iter().map(|p| p.name.as_str()).collect::<Vec<_>>().join(", ")
+            )
+        })?;
+    let Some((rel, meta_sha)) = &p.checkpoint else {
+        bail!("{} is a heuristic member: it has no weights to export", p.name);
+    };
+    let src = dir.root.join(rel);
+    let got = crate::util::sha256_file(&src.join("meta.json"))
+        .with_context(|| format!("{}: meta.json missing", src.display()))?;
+    if &got != meta_sha {
+        bail!("{}: meta.json does not match the store's sha256: refusing to export a corrupt checkpoint", src.display());
+    }
+    // Loading verifies every weight file against meta.json and refuses NaN.
+    crate::nn::PolicySnapshot::load(&src, p.side)?;
+    if out.exists() {
+        bail!("{}: already exists; pick a new --out", out.display());
+    }
+    crate::nn::checkpoint::write_dir_atomically(out, |tmp| {
+        let mut manifest = String::new();
+        for e in std::fs::read_dir(&src)? {
+            let path = e?.path();
+            if path.is_file() {
+                let name = path.file_name().unwrap().to_owned();
+                std::fs::copy(&path, tmp.join(&name))?;
+            }
+        }
+        std::fs::copy(dir.config_path(), tmp.join("league-config.toml"))?;
+        let mut csv = String::from("match_id,mu,sigma,at_ms\n");
+        for (m, mu, sigma, at) in store.rating_history(p.id)? {
+            let _ = writeln!(csv, "{},{mu},{sigma},{at}", m.map(|x| x.to_string()).unwrap_or_default());
+        }
+        std::fs::write(tmp.join("ratings.csv"), csv)?;
+        let info = serde_json::json!({
+            "player": p.name, "id": p.id, "side": p.side.name(), "kind": p.kind.name(),
+            "parent": p.parent, "env_steps": p.env_steps, "league": dir.root.display().to_string(),
+        });
+        std::fs::write(tmp.join("player.json"), serde_json::to_string_pretty(&info)?)?;
+        let mut names: Vec<_> = std::fs::read_dir(tmp)?
+            .map(|e| e.map(|e| e.file_name().to_string_lossy().into_owned()))
+            .collect::<std::io::Result<_>>()?;
+        names.sort();
+        for n in names {
+            let _ = writeln!(manifest, "{}  {n}", crate::util::sha256_file(&tmp.join(&n))?);
+        }
+        std::fs::write(tmp.join("SHA256SUMS"), manifest)?;
+        Ok(())
+    })?;
+    Ok(())
+}
+
+/// The best player of a side by the Bradley-Terry fit, among those with weights.
+pub fn best_player(r: &StatusReport, side: Side) -> Option<String> {
+    r.players
+        .iter()
+        .filter(|p| p.side == side.name() && p.kind != "heuristic" && p.quarantined.is_none() && p.games > 0)
+        .max_by(|a, b| a.bt_elo.total_cmp(&b.bt_elo))
+        .map(|p| p.name.clone())
+}

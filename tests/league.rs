@@ -1,0 +1,215 @@
+//! The league end to end, as processes: `t2e-league run` with a tiny config,
+//! killed with SIGKILL at random moments (the manager or a learner), run
+//! again, until both learners reach their budget. After every kill and at
+//! the end, the store and the directory must hold: no match counted twice,
+//! none lost from what was recorded, no duplicate member, no orphan file,
+//! and learners that continue from their last checkpoints.
+
+use std::collections::BTreeSet;
+use std::path::Path;
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+use t2e::env::Side;
+use t2e::league::dir::LeagueDir;
+use t2e::league::store::{Kind, Store};
+use t2e::learn::persist::RunState;
+
+const CONFIG: &str = r#"
+name = "kill-test"
+seed = 5
+env_steps_per_learner = 9_600
+maps = "shipped"
+num_captors = 2
+episode_length = 40
+threads_per_learner = 1
+num_envs = 8
+rollout_steps = 20
+checkpoint_every = 2
+opponent_cache = 2
+[captors.net]
+hidden = 16
+conv_channels = [2, 4]
+patch_pool = 4
+[target.net]
+hidden = 16
+conv_channels = [2, 4]
+patch_pool = 4
+[snapshots]
+every_env_steps = 640
+win_rate = 0.5
+timeout_env_steps = 1_280
+[curriculum]
+window = 20
+promote_at = 0.3
+"#;
+
+fn bin() -> &'static str {
+    env!("CARGO_BIN_EXE_t2e-league")
+}
+
+fn start(dir: &Path, config: &Path) -> Child {
+    Command::new(bin())
+        .args(["run", "--config"])
+        .arg(config)
+        .arg("--dir")
+        .arg(dir)
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap()
+}
+
+fn sigkill(pid: i64) {
+    // SAFETY: signalling a process this test started (or its child).
+    unsafe {
+        libc::kill(pid as i32, libc::SIGKILL);
+    }
+}
+
+/// Checks the invariants; returns (matches, per-learner env steps of their
+/// resume points).
+fn check(dir: &LeagueDir) -> (u64, Vec<u64>) {
+    let store = Store::open(&dir.root).unwrap();
+    let players = store.players().unwrap();
+    // No duplicate member: one row per name (the schema) and per snapshot.
+    let mut seen = BTreeSet::new();
+    for p in &players {
+        assert!(
+            seen.insert((p.side.name(), p.kind.name(), p.parent, p.env_steps, p.name.clone())),
+            "duplicate {p:?}"
+        );
+    }
+    let snapshots: Vec<_> = players.iter().filter(|p| p.kind == Kind::Snapshot).collect();
+    let mut steps = BTreeSet::new();
+    for s in &snapshots {
+        assert!(steps.insert((s.side.name(), s.env_steps)), "two snapshots of one state: {s:?}");
+    }
+    // No orphan file: every snapshot folder has a row, every row its files.
+    let rels: BTreeSet<String> = players
+        .iter()
+        .filter_map(|p| p.checkpoint.as_ref().map(|c| c.0.clone()))
+        .collect();
+    if let Ok(entries) = std::fs::read_dir(dir.players_dir()) {
+        for e in entries {
+            let path = e.unwrap().path();
+            let name = path.file_name().unwrap().to_string_lossy().into_owned();
+            if name.starts_with('.') {
+                continue; // a temporary a killed writer left: removed at the next start
+            }
+            assert!(rels.contains(&dir.relative(&path)), "orphan {}", path.display());
+        }
+    }
+    for s in &snapshots {
+        if s.quarantined.is_none() {
+            let (rel, sha) = s.checkpoint.as_ref().unwrap();
+            let meta = dir.root.join(rel).join("meta.json");
+            assert_eq!(&t2e::util::sha256_file(&meta).unwrap(), sha, "{rel}");
+            t2e::nn::PolicySnapshot::load(&dir.root.join(rel), s.side).unwrap();
+        }
+    }
+    // Matches reference known players; keys are unique (schema) and name their recorder.
+    let ids: BTreeSet<i64> = players.iter().map(|p| p.id).collect();
+    for r in store.payoff().unwrap() {
+        assert!(ids.contains(&r.captor) && ids.contains(&r.target));
+    }
+    let resume: Vec<u64> = [Side::Captors, Side::Target]
+        .iter()
+        .map(|&side| RunState::read(&dir.learner_dir(side)).map(|s| s.env_steps).unwrap_or(0))
+        .collect();
+    (store.match_count().unwrap(), resume)
+}
+
+/// The learner processes the manager `manager` spawned (from /proc).
+fn learner_pids(manager: u32) -> Vec<i64> {
+    let mut pids = Vec::new();
+    for e in std::fs::read_dir("/proc").unwrap().flatten() {
+        let Ok(pid) = e.file_name().to_string_lossy().parse::<i64>() else { continue };
+        let Ok(stat) = std::fs::read_to_string(e.path().join("stat")) else { continue };
+        // Fields after the command name (which may hold spaces): state, ppid, ...
+        let Some(rest) = stat.rsplit_once(')').map(|(_, r)| r) else { continue };
+        let ppid: u32 = rest.split_whitespace().nth(1).and_then(|x| x.parse().ok()).unwrap_or(0);
+        if ppid == manager {
+            pids.push(pid);
+        }
+    }
+    pids
+}
+
+#[test]
+fn killed_at_random_moments_the_league_loses_and_duplicates_nothing() {
+    let tmp = tempfile::tempdir().unwrap();
+    let config = tmp.path().join("league.toml");
+    std::fs::write(&config, CONFIG).unwrap();
+    let dir = LeagueDir::new(tmp.path().join("league"));
+    let mut rng_state = 0x9e37_79b9u64;
+    let mut next = |n: u64| {
+        rng_state ^= rng_state << 13;
+        rng_state ^= rng_state >> 7;
+        rng_state ^= rng_state << 17;
+        rng_state % n
+    };
+    let (mut matches, mut resume) = (0u64, vec![0u64, 0]);
+    let started = Instant::now();
+    for round in 0..5 {
+        let mut manager = start(&dir.root, &config);
+        std::thread::sleep(Duration::from_millis(2500 + 500 * next(6)));
+        let victim = if next(2) == 0 { "manager" } else { "learner" };
+        match victim {
+            "manager" => sigkill(manager.id() as i64),
+            _ => {
+                let pids = learner_pids(manager.id());
+                if !pids.is_empty() {
+                    sigkill(pids[next(pids.len() as u64) as usize]);
+                }
+                std::thread::sleep(Duration::from_millis(300 + 100 * next(5)));
+                sigkill(manager.id() as i64);
+            }
+        }
+        let _ = manager.wait();
+        // Children die with the manager (PR_SET_PDEATHSIG); give them a moment.
+        std::thread::sleep(Duration::from_millis(500));
+        let (m, r) = check(&dir);
+        assert!(m >= matches, "round {round}: matches went from {matches} to {m}");
+        for (side, (before, now)) in resume.iter().zip(&r).enumerate() {
+            assert!(now >= before, "round {round}, learner {side}: resume point went back from {before} to {now}");
+        }
+        eprintln!("round {round}: killed the {victim}; {m} matches, resume points {r:?}");
+        (matches, resume) = (m, r);
+    }
+    // A crashed learner is restarted: kill one and let the manager notice.
+    let mut manager = start(&dir.root, &config);
+    let deadline = Instant::now() + Duration::from_secs(240);
+    let mut killed_once = false;
+    loop {
+        if let Some(status) = manager.try_wait().unwrap() {
+            assert!(status.success(), "the last run should finish: {status:?}");
+            break;
+        }
+        if !killed_once && started.elapsed() > Duration::from_secs(1) {
+            std::thread::sleep(Duration::from_millis(1500));
+            if let Some(pid) = learner_pids(manager.id()).first() {
+                sigkill(*pid);
+                killed_once = true;
+            }
+        }
+        assert!(Instant::now() < deadline, "the league did not finish in time");
+        std::thread::sleep(Duration::from_millis(200));
+    }
+    let (m, r) = check(&dir);
+    assert!(m >= matches);
+    assert_eq!(r, vec![9_600, 9_600], "both learners reach their budget");
+    let store = Store::open(&dir.root).unwrap();
+    let beats = store.heartbeats().unwrap();
+    assert!(beats.iter().all(|b| b.2 == "done"), "{beats:?}");
+    if killed_once {
+        assert!(!store.crashes().unwrap().is_empty(), "the killed learner is recorded as a crash");
+    }
+    // A second manager on a live league is refused.
+    let _held = t2e::league::manager::try_lock(&dir.root.join("league.lock"))
+        .unwrap()
+        .unwrap();
+    let out = Command::new(bin()).args(["run", "--dir"]).arg(&dir.root).output().unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("already running"), "{err}");
+}
