@@ -41,6 +41,9 @@ timeout_env_steps = 1_280
 [curriculum]
 window = 20
 promote_at = 0.3
+[evaluator]
+episodes = 3
+cpu_share = 0.5
 "#;
 
 fn bin() -> &'static str {

@@ -120,6 +120,23 @@ pub fn export(args: ExportArgs) -> Result<()> {
     Ok(())
 }
 
+#[derive(clap::Args, Debug)]
+pub struct EvaluatorArgs {
+    #[arg(long)]
+    pub dir: PathBuf,
+}
+
+pub fn evaluator(args: EvaluatorArgs) -> Result<()> {
+    let dir = LeagueDir::new(&args.dir);
+    let lock_path = dir.root.join("learners").join("evaluator.lock");
+    std::fs::create_dir_all(lock_path.parent().unwrap())?;
+    let Some(_lock) = manager::try_lock(&lock_path)? else {
+        bail!("{}: another evaluator is running this league", lock_path.display());
+    };
+    on_ctrl_c()?;
+    crate::league::evaluator::run_evaluator(&dir, &STOP)
+}
+
 pub fn learner(args: LearnerArgs) -> Result<()> {
     let side = match args.side.as_str() {
         "captors" => Side::Captors,

@@ -41,6 +41,9 @@ pub enum Command {
     /// One learner of a league (spawned by `run`).
     #[command(hide = true)]
     LeagueLearner(league::LearnerArgs),
+    /// A league's evaluator (spawned by `run`).
+    #[command(hide = true)]
+    LeagueEvaluator(league::EvaluatorArgs),
 }
 
 /// Keeps freed memory in the heap instead of returning it to the OS: PPO
@@ -77,5 +80,6 @@ pub fn main() -> anyhow::Result<()> {
         Command::Status(a) => league::status(a),
         Command::Export(a) => league::export(a),
         Command::LeagueLearner(a) => league::learner(a),
+        Command::LeagueEvaluator(a) => league::evaluator(a),
     }
 }

@@ -4,6 +4,7 @@
 //! that name the file and the field.
 
 use super::curriculum::CurriculumConfig;
+use super::evaluator::EvaluatorConfig;
 use super::matchmaking::MatchmakingConfig;
 use crate::env::{EnvConfig, Side};
 use crate::learn::ppo::PpoConfig;
@@ -45,6 +46,7 @@ pub struct LeagueConfig {
     pub matchmaking: MatchmakingConfig,
     pub snapshots: SnapshotConfig,
     pub curriculum: CurriculumConfig,
+    pub evaluator: EvaluatorConfig,
 }
 
 /// One main learner.
@@ -113,6 +115,7 @@ impl Default for LeagueConfig {
             matchmaking: MatchmakingConfig::default(),
             snapshots: SnapshotConfig::default(),
             curriculum: CurriculumConfig::default(),
+            evaluator: EvaluatorConfig::default(),
         }
     }
 }
@@ -185,6 +188,9 @@ impl LeagueConfig {
         self.curriculum
             .validate()
             .map_err(|e| format!("curriculum.{e}"))?;
+        self.evaluator
+            .validate()
+            .map_err(|e| format!("evaluator.{e}"))?;
         if !(self.snapshots.win_rate.is_finite() && (0.0..=1.0).contains(&self.snapshots.win_rate)) {
             return Err(format!(
                 "snapshots.win_rate = {}: must be in [0, 1]",

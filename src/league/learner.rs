@@ -430,6 +430,7 @@ pub fn run_learner(dir: &LeagueDir, side: Side, stop: &AtomicBool) -> Result<()>
         .unwrap_or(0);
     let (mut wins_at_snapshot, mut games_at_snapshot) = (0u64, 0u64);
     store.heartbeat(&name, "training", trainer.env_steps, 0.0)?;
+    let (segment_start, steps_at_start) = (Instant::now(), trainer.env_steps);
     while trainer.env_steps < cfg.env_steps_per_learner && !stop.load(Ordering::SeqCst) {
         let started = Instant::now();
         let m = trainer.iterate_with(&mut hooks)?;
@@ -456,10 +457,12 @@ pub fn run_learner(dir: &LeagueDir, side: Side, stop: &AtomicBool) -> Result<()>
     } else {
         "stopped"
     };
-    store.heartbeat(&name, state, trainer.env_steps, 0.0)?;
+    let secs = segment_start.elapsed().as_secs_f64();
+    let rate = (trainer.env_steps - steps_at_start) as f64 / secs.max(1e-9);
+    store.heartbeat(&name, state, trainer.env_steps, rate)?;
     eprintln!(
-        "{name}: {state} at {} env steps, {} matches recorded",
-        trainer.env_steps, hooks.matches_recorded
+        "{name}: {state} at {} env steps, {} matches recorded; this run {:.1} s, {rate:.0} env steps/s",
+        trainer.env_steps, hooks.matches_recorded, secs
     );
     Ok(())
 }

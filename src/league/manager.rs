@@ -78,8 +78,28 @@ pub fn parse_duration(text: &str) -> Result<Duration, String> {
     Ok(Duration::from_secs_f64(secs))
 }
 
+/// A child process the manager supervises.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Role {
+    Learner(Side),
+    Evaluator,
+}
+
+impl Role {
+    fn name(self) -> String {
+        match self {
+            Role::Learner(side) => learner_name(side),
+            Role::Evaluator => "evaluator".into(),
+        }
+    }
+
+    fn log_path(self, dir: &LeagueDir) -> std::path::PathBuf {
+        dir.root.join("logs").join(format!("{}.log", self.name()))
+    }
+}
+
 struct Supervised {
-    side: Side,
+    role: Role,
     child: Option<Child>,
     /// Why it is not running: finished (done or stopped) or waiting to restart.
     finished: bool,
@@ -88,19 +108,20 @@ struct Supervised {
     started: Instant,
 }
 
-fn spawn(dir: &LeagueDir, side: Side) -> Result<Child> {
+fn spawn(dir: &LeagueDir, role: Role) -> Result<Child> {
     let exe = std::env::current_exe().context("cannot find this program to spawn learners")?;
     std::fs::create_dir_all(dir.root.join("logs"))?;
     let log = std::fs::OpenOptions::new()
         .create(true)
         .append(true)
-        .open(dir.log_path(side))?;
+        .open(role.log_path(dir))?;
     let mut cmd = Command::new(exe);
-    cmd.arg("league-learner")
-        .arg("--dir")
+    match role {
+        Role::Learner(side) => cmd.arg("league-learner").arg("--side").arg(side.name()),
+        Role::Evaluator => cmd.arg("league-evaluator"),
+    };
+    cmd.arg("--dir")
         .arg(&dir.root)
-        .arg("--side")
-        .arg(side.name())
         .stdin(Stdio::null())
         .stdout(log.try_clone()?)
         .stderr(log);
@@ -116,7 +137,7 @@ fn spawn(dir: &LeagueDir, side: Side) -> Result<Child> {
         }
     }
     cmd.spawn()
-        .with_context(|| format!("cannot start the {} learner", side.name()))
+        .with_context(|| format!("cannot start the {}", role.name()))
 }
 
 /// The last lines of a learner's log, for the crash record.
@@ -189,6 +210,10 @@ pub fn run(dir: &LeagueDir, config: Option<&Path>, run_for: Option<Duration>, st
         }
     }
 
+    let mut roles = vec![Role::Learner(Side::Captors), Role::Learner(Side::Target)];
+    if cfg.evaluator.enabled {
+        roles.push(Role::Evaluator);
+    }
     let multi = MultiProgress::new();
     let bars: Vec<ProgressBar> = [Side::Captors, Side::Target]
         .iter()
@@ -203,10 +228,10 @@ pub fn run(dir: &LeagueDir, config: Option<&Path>, run_for: Option<Duration>, st
             b
         })
         .collect();
-    let mut learners: Vec<Supervised> = [Side::Captors, Side::Target]
+    let mut learners: Vec<Supervised> = roles
         .into_iter()
-        .map(|side| Supervised {
-            side,
+        .map(|role| Supervised {
+            role,
             child: None,
             finished: false,
             restart_at: Some(Instant::now()),
@@ -246,8 +271,8 @@ pub fn run(dir: &LeagueDir, config: Option<&Path>, run_for: Option<Duration>, st
                                 format!("signal {}", status.signal().unwrap_or(0))
                             }
                         };
-                        let tail = log_tail(&dir.log_path(l.side));
-                        store.record_crash(&learner_name(l.side), &why, &tail)?;
+                        let tail = log_tail(&l.role.log_path(dir));
+                        store.record_crash(&l.role.name(), &why, &tail)?;
                         if l.started.elapsed() > Duration::from_secs(120) {
                             l.failures = 0;
                         }
@@ -256,9 +281,9 @@ pub fn run(dir: &LeagueDir, config: Option<&Path>, run_for: Option<Duration>, st
                         multi
                             .println(format!(
                                 "{} crashed ({why}); restarting from its last checkpoint in {} s (log: {})",
-                                learner_name(l.side),
+                                l.role.name(),
                                 wait.as_secs(),
-                                dir.log_path(l.side).display()
+                                l.role.log_path(dir).display()
                             ))
                             .ok();
                         l.restart_at = Some(Instant::now() + wait);
@@ -268,7 +293,7 @@ pub fn run(dir: &LeagueDir, config: Option<&Path>, run_for: Option<Duration>, st
             if l.child.is_none() && !l.finished && !stopping {
                 if let Some(at) = l.restart_at {
                     if Instant::now() >= at {
-                        l.child = Some(spawn(dir, l.side)?);
+                        l.child = Some(spawn(dir, l.role)?);
                         l.started = Instant::now();
                         l.restart_at = None;
                     }
@@ -283,7 +308,7 @@ pub fn run(dir: &LeagueDir, config: Option<&Path>, run_for: Option<Duration>, st
             let beats = store.heartbeats()?;
             let matches = store.match_count()?;
             for (bar, l) in bars.iter().zip(&learners) {
-                if let Some(b) = beats.iter().find(|b| b.0 == learner_name(l.side)) {
+                if let Some(b) = beats.iter().find(|b| b.0 == l.role.name()) {
                     bar.set_position(b.3);
                     bar.set_message(format!("| {:.0} steps/s | {} | {matches} matches", b.4, b.2));
                 }

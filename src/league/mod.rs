@@ -11,12 +11,15 @@
 //! - `curriculum`: the speed-ratio stages and when to move on.
 //! - `learner`: one main learner's process: opponents per world, batched
 //!   network opponents, matches, snapshots.
-//! - `manager`: `t2e-league run`: spawns and supervises the learners.
+//! - `evaluator`: its own process: every snapshot plays a fixed panel.
+//! - `manager`: `t2e-league run`: spawns and supervises the learners and
+//!   the evaluator.
 //! - `status`: what `status` and `export` read from a league.
 
 pub mod config;
 pub mod curriculum;
 pub mod dir;
+pub mod evaluator;
 pub mod learner;
 pub mod manager;
 pub mod matchmaking;

@@ -15,7 +15,8 @@
 //!   "curriculum": { "stage", "speed_ratio",
 //!                   "history": [{ "stage", "speed_ratio", "reason", "at_ms" }] },
 //!   "learners": [{ "name", "pid", "state", "env_steps", "steps_per_s",
-//!                  "heartbeat_age_s" }],
+//!                  "heartbeat_age_s" }],   // the evaluator's env_steps
+//!                                          // counts its panel episodes
 //!   "payoff": [{ "captor", "target", "captor_wins", "games" }],
 //!   "crashes": [{ "learner", "exit_status", "message", "at_ms" }] }
 //! ```
@@ -256,6 +257,14 @@ pub fn render(r: &StatusReport) -> String {
     }
     let _ = writeln!(s, "\nlearners:");
     for l in &r.learners {
+        if l.name == "evaluator" {
+            let _ = writeln!(
+                s,
+                "  {:<14} {:<9} {:>11} panel episodes                last heartbeat {:.0} s ago (pid {})",
+                l.name, l.state, l.env_steps, l.heartbeat_age_s, l.pid
+            );
+            continue;
+        }
         let _ = writeln!(
             s,
             "  {:<14} {:<9} {:>11} env steps {:>7.0} steps/s  last heartbeat {:.0} s ago (pid {})",

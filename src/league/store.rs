@@ -403,6 +403,17 @@ impl Store {
             .map_err(|e| self.db(e))
     }
 
+    pub fn has_match(&self, key: &str) -> Result<bool, StoreError> {
+        self.rt
+            .block_on(
+                sqlx::query("SELECT COUNT(*) FROM matches WHERE match_key = $1")
+                    .bind(key)
+                    .fetch_one(&self.pool),
+            )
+            .map(|r| r.get::<i64, _>(0) > 0)
+            .map_err(|e| self.db(e))
+    }
+
     pub fn match_count(&self) -> Result<u64, StoreError> {
         self.rt
             .block_on(sqlx::query("SELECT COUNT(*) FROM matches").fetch_one(&self.pool))
