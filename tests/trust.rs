@@ -457,3 +457,76 @@ fn inputs_that_once_misbehaved_give_clear_errors() {
     let err = t2e::cli::render::run(args).unwrap_err().to_string();
     assert!(err.contains(".gif"), "{err}");
 }
+
+#[test]
+fn defects_an_adversarial_pass_found_are_fixed() {
+    // A huge or overflowing number of worlds is refused, not allocated.
+    for (envs, steps) in [(100_000_000usize, 10usize), (1_844_674_407_370_955_162, 10)] {
+        let cfg = TrainConfig {
+            num_envs: envs,
+            rollout_steps: steps,
+            total_env_steps: 80,
+            ..tiny_config()
+        };
+        assert!(cfg.validate().unwrap_err().starts_with("num_envs"), "{envs}");
+    }
+    let cfg = TrainConfig {
+        num_envs: 4096,
+        rollout_steps: 100_000,
+        ..tiny_config()
+    };
+    assert!(cfg.validate().unwrap_err().contains("does not fit"));
+
+    // A 1x1 map says it is smaller than a cell.
+    let dir = tempfile::tempdir().unwrap();
+    let one = dir.path().join("one.png");
+    image::GrayImage::from_pixel(1, 1, image::Luma([255])).save(&one).unwrap();
+    let err = t2e::map::load_png(&one).unwrap_err().to_string();
+    assert!(err.contains("smaller than one 0.05 m cell"), "{err}");
+
+    // eval names the file it cannot write.
+    let out = dir.path().join("out");
+    std::fs::create_dir_all(out.join("table.md")).unwrap();
+    let err = format!("{:#}", t2e::cli::eval::run(eval_args(&out)).unwrap_err());
+    assert!(err.contains("table.md"), "{err}");
+
+    // eval --resume does not trust a summary whose episodes.csv lost rows.
+    let out = dir.path().join("again");
+    t2e::cli::eval::run(eval_args(&out)).unwrap();
+    let setting = setting_dirs(&out).remove(0);
+    let csv = setting.join("episodes.csv");
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let cut: Vec<&str> = text.lines().take(4).collect();
+    std::fs::write(&csv, cut.join("\n") + "\n").unwrap();
+    let mut args = eval_args(&out);
+    args.resume = true;
+    t2e::cli::eval::run(args).unwrap();
+    let rows = std::fs::read_to_string(&csv).unwrap().lines().count();
+    assert_eq!(rows, 13, "the setting was played again: header + 12 episodes");
+
+    // maps generate records each map as it goes, and caps --count.
+    let gen = dir.path().join("gen");
+    t2e::cli::maps::generate_maps(t2e::map::SizeClass::Small, 1, 2, &gen).unwrap();
+    let manifest = std::fs::read_to_string(gen.join("manifest.csv")).unwrap();
+    assert_eq!(manifest.lines().count(), 3, "{manifest}");
+    assert!(t2e::cli::maps::generate_maps(t2e::map::SizeClass::Small, 1, 1_000_000_000, &gen)
+        .unwrap_err()
+        .to_string()
+        .contains("--count"));
+
+    // A state.json edited to disagree with its checkpoint is refused.
+    tch::set_num_threads(1);
+    let run = dir.path().join("run");
+    let mut t = Trainer::new(tiny_config(), tiny_maps()).unwrap();
+    t.iterate().unwrap();
+    t.iterate().unwrap();
+    t.save(&run).unwrap();
+    let state_path = run.join("state.json");
+    let mut state: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&state_path).unwrap()).unwrap();
+    state["iteration"] = 1.into();
+    state["env_steps"] = 80.into();
+    std::fs::write(&state_path, state.to_string()).unwrap();
+    let err = format!("{:#}", Trainer::resume(tiny_config(), tiny_maps(), &run).err().unwrap());
+    assert!(err.contains("changed by hand"), "{err}");
+}

@@ -7,7 +7,6 @@ use crate::map::{self, PreparedMap};
 use crate::render::plot::{self, Series};
 use anyhow::{Context, Result};
 use std::collections::BTreeMap;
-use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -91,7 +90,14 @@ fn finished_setting(dir: &Path, identity: &SettingIdentity) -> Option<Summary> {
         return None;
     }
     let text = std::fs::read_to_string(dir.join("summary.json")).ok()?;
-    serde_json::from_str(&text).ok()
+    let summary: Summary = serde_json::from_str(&text).ok()?;
+    // The per-episode file must hold every episode the summary counts.
+    let rows = csv::Reader::from_path(dir.join("episodes.csv"))
+        .ok()?
+        .records()
+        .filter(|r| r.is_ok())
+        .count();
+    (rows == summary.episodes).then_some(summary)
 }
 
 fn write_setting(
@@ -103,7 +109,9 @@ fn write_setting(
     std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
     // The identity goes last: a folder without it is never taken as finished.
     let _ = std::fs::remove_file(dir.join("setting.json"));
-    let mut w = csv::Writer::from_path(dir.join("episodes.csv"))?;
+    let episodes = dir.join("episodes.csv");
+    let mut w = csv::Writer::from_path(&episodes)
+        .with_context(|| format!("cannot write {}", episodes.display()))?;
     w.write_record([
         "episode",
         "seed",
@@ -133,10 +141,8 @@ fn write_setting(
         ])?;
     }
     w.flush()?;
-    std::fs::write(
-        dir.join("summary.json"),
-        serde_json::to_string_pretty(summary)?,
-    )?;
+    std::fs::write(dir.join("summary.json"), serde_json::to_string_pretty(summary)?)
+        .with_context(|| format!("cannot write {}", dir.join("summary.json").display()))?;
     if !summary.soa_curve.is_empty() {
         let mut w = csv::Writer::from_path(dir.join("soa.csv"))?;
         w.write_record(["step", "mean_asz_m2", "episodes_running"])?;
@@ -260,15 +266,18 @@ pub fn run(args: EvalArgs) -> Result<()> {
             }
         }
     }
-    let mut table = std::fs::File::create(args.out.join("table.md"))?;
-    writeln!(table, "{TABLE_HEADER}")?;
+    let mut table = format!("{TABLE_HEADER}\n");
     for s in &summaries {
-        writeln!(table, "{}", s.table_row())?;
+        table.push_str(&s.table_row());
+        table.push('\n');
     }
-    std::fs::write(
-        args.out.join("summary.json"),
-        serde_json::to_string_pretty(&summaries)?,
-    )?;
+    for (name, bytes) in [
+        ("table.md", table.into_bytes()),
+        ("summary.json", serde_json::to_string_pretty(&summaries)?.into_bytes()),
+    ] {
+        crate::nn::checkpoint::write_file_atomically(&args.out.join(name), &bytes)
+            .with_context(|| format!("cannot write {}", args.out.join(name).display()))?;
+    }
     if curves.len() > 1 {
         let title = format!("mean |ASZ| over time: {} vs {}", args.captors, args.target);
         plot::save_png(

@@ -234,25 +234,29 @@ pub fn update_manifest(path: &Path, new: &[ManifestRow]) -> Result<()> {
     for row in new {
         by_name.insert(row.map.clone(), row.clone());
     }
-    let mut writer =
-        csv::Writer::from_path(path).with_context(|| format!("cannot write {}", path.display()))?;
+    // Written whole and renamed into place: a killed run leaves the old
+    // manifest or the new one, never half of one.
+    let mut writer = csv::Writer::from_writer(Vec::new());
     writer.write_record(["map", "split", "area_m2", "seed"])?;
     for row in by_name.values() {
         let area = row.area_m2.map_or(String::new(), |a| format!("{a:.2}"));
         let seed = row.seed.map_or(String::new(), |s| s.to_string());
         writer.write_record([row.map.as_str(), row.split.name(), &area, &seed])?;
     }
-    writer
-        .flush()
-        .with_context(|| format!("cannot write {}", path.display()))?;
-    Ok(())
+    let bytes = writer
+        .into_inner()
+        .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+    crate::nn::checkpoint::write_file_atomically(path, &bytes)
 }
+
+/// Most maps one `maps generate` writes (about 20 KB each).
+pub const MAX_GENERATE: u64 = 1000;
 
 /// Generates `count` maps of `class` from seeds `seed..`, writes them to
 /// `out` and merges them into `out/manifest.csv`.
 pub fn generate_maps(class: SizeClass, seed: u64, count: u64, out: &Path) -> Result<()> {
-    if count == 0 {
-        bail!("--count must be at least 1");
+    if count == 0 || count > MAX_GENERATE {
+        bail!("--count {count}: must be between 1 and {MAX_GENERATE}");
     }
     let last = seed.checked_add(count - 1).with_context(|| {
         format!("--seed {seed} with --count {count} runs past the largest seed")
@@ -279,9 +283,10 @@ pub fn generate_maps(class: SizeClass, seed: u64, count: u64, out: &Path) -> Res
             area_m2: Some(grid.area_m2()),
             seed: Some(s),
         });
+        // Recorded as soon as it is written: an interrupted run loses no map.
+        update_manifest(&out.join("manifest.csv"), &rows[rows.len() - 1..])?;
     }
     let manifest = out.join("manifest.csv");
-    update_manifest(&manifest, &rows)?;
     println!("{} map(s) recorded in {}", rows.len(), manifest.display());
     Ok(())
 }

@@ -184,13 +184,21 @@ fn status_line(recent: &[Metrics]) -> String {
             v.iter().sum::<f64>() / v.len() as f64
         }
     };
+    // No episode finished yet: say so instead of printing NaN.
+    let shown = |x: f64, digits: usize| {
+        if x.is_finite() {
+            format!("{x:.digits$}")
+        } else {
+            "-".into()
+        }
+    };
     format!(
-        "| {:.0} steps/s | capture {:.1}% | ep len {:.0} | return captor {:.1} target {:.1}",
-        mean(&|m| m.steps_per_s),
-        100.0 * mean(&|m| m.capture_rate),
-        mean(&|m| m.episode_len),
-        mean(&|m| m.captor_return),
-        mean(&|m| m.target_return),
+        "| {} steps/s | capture {}% | ep len {} | return captor {} target {}",
+        shown(mean(&|m| m.steps_per_s), 0),
+        shown(100.0 * mean(&|m| m.capture_rate), 1),
+        shown(mean(&|m| m.episode_len), 0),
+        shown(mean(&|m| m.captor_return), 1),
+        shown(mean(&|m| m.target_return), 1),
     )
 }
 

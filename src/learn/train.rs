@@ -133,11 +133,17 @@ impl TrainConfig {
         env.observations = true;
         env.validate().map_err(|e| format!("env.{e}"))?;
         validate_name(&self.name)?;
-        if self.num_envs == 0 {
-            return Err("num_envs = 0: needs at least one world".into());
+        if !(1..=4096).contains(&self.num_envs) {
+            return Err(format!("num_envs = {}: must be in 1..=4096 (the paper uses 16 to 32)", self.num_envs));
         }
-        if self.rollout_steps == 0 {
-            return Err("rollout_steps = 0: needs at least one step".into());
+        if !(1..=100_000).contains(&self.rollout_steps) {
+            return Err(format!("rollout_steps = {}: must be in 1..=100000", self.rollout_steps));
+        }
+        if self.num_envs * self.rollout_steps > 4_000_000 {
+            return Err(format!(
+                "num_envs x rollout_steps = {}: a rollout of more than 4,000,000 steps does not fit in memory",
+                self.num_envs * self.rollout_steps
+            ));
         }
         let per_iteration = (self.num_envs * self.rollout_steps) as u64;
         if self.total_env_steps < per_iteration {
@@ -459,7 +465,18 @@ impl Trainer {
                     dir.display()
                 );
             }
-            persist::load_learner(&dir, &mut ls.learner)?;
+            let meta = persist::load_learner(&dir, &mut ls.learner)?;
+            if (meta.env_steps, meta.iteration) != (state.env_steps, state.iteration) {
+                bail!(
+                    "{}: says {} env steps at iteration {}, but the checkpoint it names ({}) holds {} at iteration {}; the run folder was changed by hand",
+                    state_path.display(),
+                    state.env_steps,
+                    state.iteration,
+                    dir.display(),
+                    meta.env_steps,
+                    meta.iteration
+                );
+            }
         }
         Ok(t)
     }

@@ -70,6 +70,11 @@ pub fn grid_from_pixels(name: &str, img: &GrayImage) -> Result<Grid, String> {
     if w == 0 {
         return Err("empty image".into());
     }
+    if w <= PIXELS_PER_CELL / 2 {
+        return Err(format!(
+            "{w}x{h} pixels: smaller than one 0.05 m cell ({PIXELS_PER_CELL} pixels at 0.01 m per pixel)"
+        ));
+    }
     let side_px = w.max(MIN_SIDE_PX);
     let side = side_px.div_ceil(PIXELS_PER_CELL) as usize;
     let mut free = vec![false; side * side];
