@@ -20,7 +20,7 @@ $bin maps list --maps shipped
 $bin eval --maps shipped --k 3 --speed-ratio 1.0 --episodes 200 --episode-length 500 --seed 0 --out $out/heuristics
 $bin render --maps shipped --seed 3 --every 2 --out $out/episode.gif
 $bin run --config configs/league-default.toml --dir $out/league
-$bin status --dir $out/league | tee $out/status.txt
+$bin status --dir $out/league --plot $out/league.png | tee $out/status.txt
 $bin status --dir $out/league --json > $out/status.json
 best() {
   python3 -c "import json,sys; r=json.load(open('$out/status.json')); p=[x for x in r['players'] if x['side']=='$1' and x['kind']!='heuristic' and x['games']>0 and not x['quarantined']]; print(max(p, key=lambda x: x['bt_elo'])['name'])"

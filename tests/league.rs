@@ -207,6 +207,46 @@ fn killed_at_random_moments_the_league_loses_and_duplicates_nothing() {
     if killed_once {
         assert!(!store.crashes().unwrap().is_empty(), "the killed learner is recorded as a crash");
     }
+    // status: every player, ratings for those who played, a payoff row per pair.
+    let report = t2e::league::status::report(&dir).unwrap();
+    assert_eq!(report.matches, m);
+    assert!(report.players.iter().any(|p| p.name == "rule-based-target"));
+    let games: u64 = report.payoff.iter().map(|p| p.games).sum();
+    assert_eq!(games, m, "the payoff table holds every match once");
+    for p in report.players.iter().filter(|p| p.games > 0) {
+        assert!(p.rating.is_finite() && p.rating_sigma > 0.0 && p.bt_elo.is_finite(), "{p:?}");
+    }
+    let json: serde_json::Value = serde_json::to_value(&report).unwrap();
+    for key in ["league", "matches", "players", "curriculum", "learners", "payoff", "crashes"] {
+        assert!(json.get(key).is_some(), "status --json lacks {key}");
+    }
+    let text = t2e::league::status::render(&report);
+    assert!(text.contains("payoff") && text.contains("captors-main"), "{text}");
+    let png = tmp.path().join("status.png");
+    t2e::league::status::plot(&dir, &report, &png).unwrap();
+    assert!(image::open(&png).unwrap().width() >= 900);
+
+    // export: a self-contained folder that plays as ckpt:FOLDER, with a
+    // manifest that matches its files.
+    let best = t2e::league::status::best_player(&report, Side::Target).unwrap();
+    let out = tmp.path().join("exported");
+    t2e::league::status::export(&dir, &best, &out).unwrap();
+    let sums = std::fs::read_to_string(out.join("SHA256SUMS")).unwrap();
+    for line in sums.lines() {
+        let (sha, name) = line.split_once("  ").unwrap();
+        assert_eq!(t2e::util::sha256_file(&out.join(name)).unwrap(), sha, "{name}");
+    }
+    for f in ["actor.safetensors", "meta.json", "league-config.toml", "ratings.csv", "player.json"] {
+        assert!(sums.contains(f), "{f} missing from the export");
+    }
+    let spec: t2e::controllers::ControllerSpec = format!("ckpt:{}", out.display()).parse().unwrap();
+    let cfg = t2e::env::EnvConfig { num_captors: 2, ..Default::default() };
+    spec.check(Side::Target, &cfg).unwrap();
+    assert!(t2e::league::status::export(&dir, "no-such-player", &tmp.path().join("x"))
+        .unwrap_err()
+        .to_string()
+        .contains("no player"));
+
     // A second manager on a live league is refused.
     let _held = t2e::league::manager::try_lock(&dir.root.join("league.lock"))
         .unwrap()

@@ -34,6 +34,9 @@ pub struct StatusArgs {
     /// Redraw every this many seconds until Ctrl-C.
     #[arg(long, value_name = "SECONDS")]
     pub watch: Option<f64>,
+    /// Also draw ratings over time and the payoff matrix as a heat map (PNG).
+    #[arg(long, value_name = "FILE.png")]
+    pub plot: Option<PathBuf>,
 }
 
 #[derive(clap::Args, Debug)]
@@ -94,6 +97,9 @@ pub fn status(args: StatusArgs) -> Result<()> {
     }
     loop {
         let r = status::report(&dir)?;
+        if let Some(p) = &args.plot {
+            status::plot(&dir, &r, p)?;
+        }
         if args.json {
             println!("{}", serde_json::to_string_pretty(&r)?);
         } else {

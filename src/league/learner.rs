@@ -79,6 +79,10 @@ pub struct LeagueHooks<'a> {
     pub wins: u64,
     pub games: u64,
     pub matches_recorded: u64,
+    /// Time in opponent networks (gather, forward, sampling) and the robot
+    /// rows they acted for: the cost per row of batched opponent inference.
+    pub opponent_seconds: f64,
+    pub opponent_rows: u64,
 }
 
 impl<'a> LeagueHooks<'a> {
@@ -107,6 +111,8 @@ impl<'a> LeagueHooks<'a> {
             wins: 0,
             games: 0,
             matches_recorded: 0,
+            opponent_seconds: 0.0,
+            opponent_rows: 0,
         };
         hooks.refresh()?;
         Ok(hooks)
@@ -288,6 +294,7 @@ impl RolloutHooks for LeagueHooks<'_> {
         }
         let mut ids: Vec<i64> = groups.keys().copied().collect();
         ids.sort();
+        let started = Instant::now();
         for id in ids {
             let worlds = &groups[&id];
             let loaded = self.cache.get(&id).context("opponent network not loaded")?;
@@ -335,7 +342,9 @@ impl RolloutHooks for LeagueHooks<'_> {
                     actions[e * na + agent] = Action::from_index(chosen[w * team + j] as usize);
                 }
             }
+            self.opponent_rows += rows as u64;
         }
+        self.opponent_seconds += started.elapsed().as_secs_f64();
         Ok(())
     }
 
@@ -431,9 +440,11 @@ pub fn run_learner(dir: &LeagueDir, side: Side, stop: &AtomicBool) -> Result<()>
     let (mut wins_at_snapshot, mut games_at_snapshot) = (0u64, 0u64);
     store.heartbeat(&name, "training", trainer.env_steps, 0.0)?;
     let (segment_start, steps_at_start) = (Instant::now(), trainer.env_steps);
+    let mut own_inference = 0.0;
     while trainer.env_steps < cfg.env_steps_per_learner && !stop.load(Ordering::SeqCst) {
         let started = Instant::now();
         let m = trainer.iterate_with(&mut hooks)?;
+        own_inference += m.time_inference;
         if trainer.iteration % cfg.checkpoint_every == 0 {
             save_learner(&trainer, &store, dir, side, learner_id)?;
         }
@@ -449,7 +460,6 @@ pub fn run_learner(dir: &LeagueDir, side: Side, stop: &AtomicBool) -> Result<()>
         hooks.refresh()?;
         let steps = (cfg.num_envs * cfg.rollout_steps) as f64;
         store.heartbeat(&name, "training", trainer.env_steps, steps / started.elapsed().as_secs_f64())?;
-        let _ = m;
     }
     save_learner(&trainer, &store, dir, side, learner_id)?;
     let state = if trainer.env_steps >= cfg.env_steps_per_learner {
@@ -464,6 +474,16 @@ pub fn run_learner(dir: &LeagueDir, side: Side, stop: &AtomicBool) -> Result<()>
         "{name}: {state} at {} env steps, {} matches recorded; this run {:.1} s, {rate:.0} env steps/s",
         trainer.env_steps, hooks.matches_recorded, secs
     );
+    let team = side.agents(cfg.num_captors).len() as f64;
+    let own_rows = (trainer.env_steps - steps_at_start) as f64 * team;
+    if own_rows > 0.0 && hooks.opponent_rows > 0 {
+        eprintln!(
+            "{name}: inference per robot row: own networks (actor + critic, sampling) {:.2} us, opponent networks (actor, batched per opponent) {:.2} us over {} rows",
+            1e6 * own_inference / own_rows,
+            1e6 * hooks.opponent_seconds / hooks.opponent_rows as f64,
+            hooks.opponent_rows
+        );
+    }
     Ok(())
 }
 

@@ -391,3 +391,66 @@ pub fn best_player(r: &StatusReport, side: Side) -> Option<String> {
         .max_by(|a, b| a.bt_elo.total_cmp(&b.bt_elo))
         .map(|p| p.name.clone())
 }
+
+/// `status --plot`: live ratings over the league's matches (one line per
+/// player, the heuristics and the main learners labelled) above the payoff
+/// matrix as a heat map (captor win rate, rows captors, columns targets).
+pub fn plot(dir: &LeagueDir, r: &StatusReport, path: &Path) -> Result<()> {
+    use crate::render::plot::{line_plot, palette, save_png, Series};
+    use crate::render::text::{draw_rect, draw_text, draw_text_centered, fill_rect};
+    use image::{Rgb, RgbImage};
+    let (_, store) = open(dir)?;
+    let mut series = Vec::new();
+    for (i, p) in r.players.iter().enumerate() {
+        let points: Vec<(f64, f64)> = store
+            .rating_history(p.id)?
+            .iter()
+            .filter_map(|(m, mu, _, _)| m.map(|m| (m as f64, *mu)))
+            .collect();
+        if points.is_empty() {
+            continue;
+        }
+        let label = if p.kind == "snapshot" { String::new() } else { p.name.clone() };
+        series.push(Series::new(label, points, palette(i)));
+    }
+    let ratings = line_plot(&series, &format!("live ratings, league {}", r.league), "match", "Weng-Lin rating", 900, 420);
+    let captors: Vec<&PlayerRow> = r.players.iter().filter(|p| p.side == "captors").collect();
+    let targets: Vec<&PlayerRow> = r.players.iter().filter(|p| p.side == "target").collect();
+    let cell = 38i64;
+    let (left, top) = (230i64, 70i64);
+    let height = (top + cell * captors.len() as i64 + 40).max(200) as u32;
+    let width = 900u32.max((left + cell * targets.len() as i64 + 20) as u32);
+    let mut heat = RgbImage::from_pixel(width, height, Rgb([255, 255, 255]));
+    draw_text_centered(&mut heat, width as i32 / 2, 8, "payoff: captor win rate (rows captors, columns targets; blank = no games)", Rgb([0, 0, 0]), 1);
+    for (j, t) in targets.iter().enumerate() {
+        let x = left + cell * j as i64;
+        draw_text_centered(&mut heat, (x + cell / 2) as i32, (top - 30) as i32, &format!("#{}", t.id), Rgb([0, 0, 0]), 1);
+    }
+    for (i, c) in captors.iter().enumerate() {
+        let y = top + cell * i as i64;
+        let name: String = c.name.chars().take(27).collect();
+        draw_text(&mut heat, 8, (y + cell / 2 - 4) as i32, &name, Rgb([0, 0, 0]), 1);
+        for (j, t) in targets.iter().enumerate() {
+            let x = left + cell * j as i64;
+            if let Some(p) = r.payoff.iter().find(|p| p.captor == c.id && p.target == t.id) {
+                let w = p.captor_wins as f64 / p.games.max(1) as f64;
+                // Blue (targets win) to red (captors win).
+                let color = Rgb([(255.0 * w) as u8, 60, (255.0 * (1.0 - w)) as u8]);
+                fill_rect(&mut heat, x, y, cell, cell, color);
+                draw_text_centered(&mut heat, (x + cell / 2) as i32, (y + cell / 2 - 4) as i32, &format!("{:.0}", 100.0 * w), Rgb([255, 255, 255]), 1);
+            }
+            draw_rect(&mut heat, x, y, cell, cell, Rgb([200, 200, 200]));
+        }
+    }
+    let legend: Vec<String> = targets.iter().map(|t| format!("#{} {}", t.id, t.name)).collect();
+    for (k, line) in legend.iter().enumerate() {
+        let (x, y) = (left + cell * targets.len() as i64 + 20, top + 12 * k as i64);
+        if x + 200 < width as i64 {
+            draw_text(&mut heat, x as i32, y as i32, line, Rgb([60, 60, 60]), 1);
+        }
+    }
+    let mut img = RgbImage::from_pixel(ratings.width().max(heat.width()), ratings.height() + heat.height(), Rgb([255, 255, 255]));
+    image::imageops::replace(&mut img, &ratings, 0, 0);
+    image::imageops::replace(&mut img, &heat, 0, ratings.height() as i64);
+    save_png(&img, path)
+}

@@ -565,8 +565,10 @@ impl Trainer {
                     self.actions[e * na + ls.side.agents(k).start + j] = Action::from_index(a);
                 }
             }
-            hooks.before_step(&mut self.venv, &mut self.actions)?;
             let t1 = Instant::now();
+            // Opponents acting count as environment time, like the scripted
+            // controllers that act inside the vector env.
+            hooks.before_step(&mut self.venv, &mut self.actions)?;
             self.venv
                 .step(&self.actions)
                 .map_err(|e| anyhow!("placing robots: {e}"))?;
