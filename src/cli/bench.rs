@@ -33,6 +33,11 @@ pub struct BenchArgs {
     /// Device for --ppo: auto, cpu or cuda.
     #[arg(long)]
     pub device: Option<String>,
+    /// Instead of the environment table, time a league learner's opponent
+    /// inference (one pass per opponent, and stacked) against its own, per
+    /// robot row, over --envs worlds.
+    #[arg(long)]
+    pub opponents: bool,
 }
 
 /// Times whole PPO iterations of a training config.
@@ -155,6 +160,9 @@ pub fn run(args: BenchArgs) -> Result<()> {
     }
     if let Some(p) = &args.ppo {
         return ppo_table(&args, p);
+    }
+    if args.opponents {
+        return super::bench_opponents::run(args.seconds, args.envs);
     }
     let gibson = map::catalog::gibson_dir().is_some();
     let env_spec = args.maps.clone().unwrap_or_else(|| {

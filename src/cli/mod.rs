@@ -2,6 +2,7 @@
 use clap::{Parser, Subcommand};
 
 pub mod bench;
+mod bench_opponents;
 pub mod eval;
 pub mod league;
 pub mod maps;

@@ -11,21 +11,22 @@
 use super::config::LeagueConfig;
 use super::curriculum::Curriculum;
 use super::dir::LeagueDir;
-use super::matchmaking::{choose_opponent, draw_seed, Candidate, Opponent};
+use super::matchmaking::{choose_opponent, draw_seed, pick_slot, slot_seed, Candidate, Opponent};
 use super::store::{Kind, MatchRecord, NewPlayer, Player, Store};
 use crate::controllers::ControllerSpec;
 use crate::env::{Action, Side, VecEnv};
 use crate::learn::acting::gather_worlds;
 use crate::learn::train::{RolloutHooks, Trainer};
-use crate::nn::{obs_tensors, Actor, PolicySnapshot};
+use crate::nn::stacked::{PreparedActor, StackedActors};
+use crate::nn::PolicySnapshot;
 use anyhow::{bail, Context, Result};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use std::collections::HashMap;
+use std::collections::{BTreeMap, HashMap};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::Instant;
-use tch::{nn, Device, Kind as TKind, Tensor};
+use tch::{Device, Kind as TKind, Tensor};
 
 /// The player name of a side's main learner.
 pub fn learner_name(side: Side) -> String {
@@ -43,9 +44,15 @@ pub fn heuristic_name(side: Side) -> String {
 /// A loaded opponent network.
 struct Loaded {
     snapshot: Arc<PolicySnapshot>,
-    _vs: nn::VarStore,
-    actor: Actor,
+    /// The weights laid out for stacking with the other opponents in play.
+    prepared: PreparedActor,
     last_used: u64,
+}
+
+/// Opponents in play that share one architecture, stacked for one pass.
+struct Stack {
+    ids: Vec<i64>,
+    actors: StackedActors,
 }
 
 /// Who plays the other side in one world, this episode.
@@ -73,6 +80,13 @@ pub struct LeagueHooks<'a> {
     main: Option<i64>,
     worlds: Vec<WorldOpponent>,
     cache: HashMap<i64, Loaded>,
+    /// Rebuilt only when the set of network opponents in play changes.
+    stacks: Vec<Stack>,
+    /// This window's opponent slots (`MatchmakingConfig::slots`), the window
+    /// they were drawn for, and vector-env steps so far (windows count them).
+    slots: Vec<Opponent>,
+    slots_window: Option<u64>,
+    pub vector_steps: u64,
     tick: u64,
     rng: ChaCha8Rng,
     pub curriculum: Curriculum,
@@ -105,6 +119,10 @@ impl<'a> LeagueHooks<'a> {
             main: None,
             worlds: Vec::new(),
             cache: HashMap::new(),
+            stacks: Vec::new(),
+            slots: Vec::new(),
+            slots_window: None,
+            vector_steps: 0,
             tick: 0,
             rng: ChaCha8Rng::seed_from_u64(cfg.seed ^ learner_id as u64 ^ 0x0990),
             curriculum: Curriculum::new(),
@@ -191,18 +209,35 @@ impl<'a> LeagueHooks<'a> {
     fn draw(&mut self, venv: &mut VecEnv, e: usize) -> Result<WorldOpponent> {
         let other = self.other();
         let seed = draw_seed(self.cfg.seed, self.learner_id, e, venv.env(e).seed);
-        let pick = choose_opponent(&self.candidates, self.main, &self.cfg.matchmaking, seed);
+        let mm = &self.cfg.matchmaking;
+        let pick = if mm.slots == 0 {
+            choose_opponent(&self.candidates, self.main, mm, seed)
+        } else {
+            let window = self.vector_steps / self.cfg.episode_length as u64;
+            if self.slots_window != Some(window) {
+                self.slots = (0..mm.slots)
+                    .filter_map(|s| {
+                        let seed = slot_seed(self.cfg.seed, self.learner_id, s, window);
+                        choose_opponent(&self.candidates, self.main, mm, seed)
+                    })
+                    .collect();
+                self.slots_window = Some(window);
+            }
+            self.slots.get(pick_slot(self.slots.len(), seed)).copied()
+        };
         let player = match pick {
             Some(Opponent::Main) => self.main.expect("main drawn only when there is one"),
             Some(Opponent::Member(id)) => id,
             None => bail!("the {} pool is empty: the heuristic member is missing", other.name()),
         };
-        let member = self
-            .members
-            .iter()
-            .find(|m| m.id == player)
-            .cloned()
-            .context("drawn member not in the pool")?;
+        let Some(member) = self.members.iter().find(|m| m.id == player).cloned() else {
+            if self.slots_window.is_some() {
+                // A slot's member left the pool (quarantined): draw the slots again.
+                self.slots_window = None;
+                return self.draw(venv, e);
+            }
+            bail!("drawn member {player} is not in the pool");
+        };
         let u: f64 = ChaCha8Rng::seed_from_u64(seed ^ 0x5BEED).gen();
         let speed = self.curriculum.sample_speed(&self.cfg.curriculum, u);
         venv.set_world_speeds(e, 1.0, speed).map_err(anyhow::Error::msg)?;
@@ -222,6 +257,7 @@ impl<'a> LeagueHooks<'a> {
                     eprintln!("quarantining {}: {err:#}", member.name);
                     self.store.quarantine(member.id, &format!("{err:#}"))?;
                     self.refresh()?;
+                    self.slots_window = None;
                     return self.draw(venv, e);
                 }
             },
@@ -235,12 +271,36 @@ impl<'a> LeagueHooks<'a> {
         })
     }
 
+    /// Keeps one stack per architecture over exactly the network opponents in
+    /// play (`ids`, sorted), restacking only the ones whose members changed.
+    fn restack(&mut self, ids: Vec<i64>) -> Result<()> {
+        let mut parts: Vec<Vec<i64>> = Vec::new();
+        for id in ids {
+            let p = &self.cache.get(&id).context("opponent network not loaded")?.prepared;
+            match parts.iter_mut().find(|ids| self.cache[&ids[0]].prepared.same_shape(p)) {
+                Some(part) => part.push(id),
+                None => parts.push(vec![id]),
+            }
+        }
+        let mut old = std::mem::take(&mut self.stacks);
+        for part in parts {
+            if let Some(i) = old.iter().position(|s| s.ids == part) {
+                self.stacks.push(old.swap_remove(i));
+                continue;
+            }
+            let prepared: Vec<&PreparedActor> = part.iter().map(|id| &self.cache[id].prepared).collect();
+            let actors = StackedActors::new(&prepared).map_err(anyhow::Error::msg)?;
+            self.stacks.push(Stack { ids: part, actors });
+        }
+        Ok(())
+    }
+
     /// Loads (or finds in the cache) a member's network; returns its hidden size.
     fn load(&mut self, member: &Player) -> Result<usize> {
         self.tick += 1;
         if let Some(l) = self.cache.get_mut(&member.id) {
             l.last_used = self.tick;
-            return Ok(l.actor.hidden as usize);
+            return Ok(l.prepared.net.hidden as usize);
         }
         let (rel, meta_sha) = member
             .checkpoint
@@ -267,12 +327,13 @@ impl<'a> LeagueHooks<'a> {
             }
         }
         let hidden = actor.hidden as usize;
+        let prepared = PreparedActor::new(&actor, &snapshot.meta.net, snapshot.meta.vector_len());
+        drop((vs, actor));
         self.cache.insert(
             member.id,
             Loaded {
                 snapshot,
-                _vs: vs,
-                actor,
+                prepared,
                 last_used: self.tick,
             },
         );
@@ -286,63 +347,75 @@ impl RolloutHooks for LeagueHooks<'_> {
         let k = self.cfg.num_captors;
         let na = k + 1;
         let team = other.agents(k).len();
-        let mut groups: HashMap<i64, Vec<usize>> = HashMap::new();
+        let mut groups: BTreeMap<i64, Vec<usize>> = BTreeMap::new();
         for (e, w) in self.worlds.iter().enumerate() {
             if let Some(id) = w.network {
                 groups.entry(id).or_default().push(e);
             }
         }
-        let mut ids: Vec<i64> = groups.keys().copied().collect();
-        ids.sort();
+        self.vector_steps += 1;
         let started = Instant::now();
-        for id in ids {
-            let worlds = &groups[&id];
-            let loaded = self.cache.get(&id).context("opponent network not loaded")?;
-            let net = &loaded.snapshot.meta.net;
-            let h = loaded.actor.hidden as usize;
-            let rows = worlds.len() * team;
+        self.restack(groups.keys().copied().collect())?;
+        for stack in &self.stacks {
+            let first = &self.cache[&stack.ids[0]];
+            let net = &first.snapshot.meta.net;
+            let (g, h) = (stack.ids.len(), stack.actors.hidden as usize);
             let (vl, pl) = (venv.cfg.vector_len(), net.input_len());
-            let mut vectors = vec![0f32; rows * vl];
-            let mut patches = vec![0u8; rows * pl];
-            gather_worlds(venv, &venv.vectors, &venv.patches, worlds, other, net, &mut vectors, &mut patches);
-            let mut hidden = Vec::with_capacity(rows * h);
-            for &e in worlds {
-                hidden.extend_from_slice(&self.worlds[e].hidden);
+            // Each opponent's rows padded to the most any of them plays.
+            let r = stack.ids.iter().map(|id| groups[id].len() * team).max().unwrap_or(0);
+            let mut vectors = vec![0f32; g * r * vl];
+            let mut patches = vec![0u8; g * r * pl];
+            let mut hidden = vec![0f32; g * r * h];
+            for (i, id) in stack.ids.iter().enumerate() {
+                let worlds = &groups[id];
+                let rows = worlds.len() * team;
+                gather_worlds(
+                    venv,
+                    &venv.vectors,
+                    &venv.patches,
+                    worlds,
+                    other,
+                    net,
+                    &mut vectors[i * r * vl..(i * r + rows) * vl],
+                    &mut patches[i * r * pl..(i * r + rows) * pl],
+                );
+                for (w, &e) in worlds.iter().enumerate() {
+                    let at = (i * r + w * team) * h;
+                    hidden[at..at + team * h].copy_from_slice(&self.worlds[e].hidden);
+                }
             }
-            let (p, v) = obs_tensors(&patches, &vectors, rows, 1, net.input_side(), Device::Cpu);
-            let h_in = Tensor::from_slice(&hidden).view([rows as i64, h as i64]);
-            let (logits, h_out) = tch::no_grad(|| loaded.actor.step(&p, &v, &h_in));
-            let mut chosen = vec![0i64; rows];
+            let side = net.input_side() as i64;
+            let (g64, r64) = (g as i64, r as i64);
+            let p = Tensor::from_slice(&patches).view([g64, r64, side, side]);
+            let v = Tensor::from_slice(&vectors).view([g64, r64, vl as i64]);
+            let h_in = Tensor::from_slice(&hidden).view([g64, r64, h as i64]);
+            let (logits, h_out) = tch::no_grad(|| stack.actors.step(&p, &v, &h_in));
+            let n = g * r;
+            let mut chosen = vec![0i64; n];
             if self.cfg.greedy_opponents {
-                logits.argmax(1, false).copy_data(&mut chosen, rows);
+                logits.argmax(2, false).copy_data(&mut chosen, n);
             } else {
                 let probs = logits.softmax(-1, TKind::Float);
-                let mut pr = vec![0f32; rows * Action::COUNT];
-                probs.copy_data(&mut pr, rows * Action::COUNT);
-                for (r, c) in chosen.iter_mut().enumerate() {
-                    let p = &pr[r * Action::COUNT..(r + 1) * Action::COUNT];
-                    let mut u = self.rng.gen::<f32>() * p.iter().sum::<f32>();
-                    *c = (Action::COUNT - 1) as i64;
-                    for (i, &x) in p.iter().enumerate() {
-                        if u < x {
-                            *c = i as i64;
-                            break;
-                        }
-                        u -= x;
+                let mut pr = vec![0f32; n * Action::COUNT];
+                probs.copy_data(&mut pr, n * Action::COUNT);
+                for (i, id) in stack.ids.iter().enumerate() {
+                    for row in i * r..i * r + groups[id].len() * team {
+                        chosen[row] = sample(&pr[row * Action::COUNT..(row + 1) * Action::COUNT], &mut self.rng);
                     }
                 }
             }
-            let mut h_new = vec![0f32; rows * h];
-            h_out.copy_data(&mut h_new, rows * h);
-            for (w, &e) in worlds.iter().enumerate() {
-                self.worlds[e]
-                    .hidden
-                    .copy_from_slice(&h_new[w * team * h..(w + 1) * team * h]);
-                for (j, agent) in other.agents(k).enumerate() {
-                    actions[e * na + agent] = Action::from_index(chosen[w * team + j] as usize);
+            let mut h_new = vec![0f32; n * h];
+            h_out.copy_data(&mut h_new, n * h);
+            for (i, id) in stack.ids.iter().enumerate() {
+                for (w, &e) in groups[id].iter().enumerate() {
+                    let row = i * r + w * team;
+                    self.worlds[e].hidden.copy_from_slice(&h_new[row * h..(row + team) * h]);
+                    for (j, agent) in other.agents(k).enumerate() {
+                        actions[e * na + agent] = Action::from_index(chosen[row + j] as usize);
+                    }
                 }
+                self.opponent_rows += (groups[id].len() * team) as u64;
             }
-            self.opponent_rows += rows as u64;
         }
         self.opponent_seconds += started.elapsed().as_secs_f64();
         Ok(())
@@ -398,6 +471,18 @@ impl RolloutHooks for LeagueHooks<'_> {
     }
 }
 
+/// Draws an action index from (unnormalised) probabilities.
+fn sample(p: &[f32], rng: &mut ChaCha8Rng) -> i64 {
+    let mut u = rng.gen::<f32>() * p.iter().sum::<f32>();
+    for (i, &x) in p.iter().enumerate() {
+        if u < x {
+            return i as i64;
+        }
+        u -= x;
+    }
+    (p.len() - 1) as i64
+}
+
 /// Runs one main learner until its budget is spent or `stop` is set;
 /// checkpoints its own state and adds snapshots of itself to the pool.
 pub fn run_learner(dir: &LeagueDir, side: Side, stop: &AtomicBool) -> Result<()> {
@@ -429,6 +514,7 @@ pub fn run_learner(dir: &LeagueDir, side: Side, stop: &AtomicBool) -> Result<()>
         Trainer::new(tcfg.clone(), maps)?
     };
     let mut hooks = LeagueHooks::new(&store, dir, &cfg, side, learner_id)?;
+    hooks.vector_steps = trainer.env_steps / cfg.num_envs as u64;
     hooks.assign_all(trainer.venv_mut())?;
     let mut last_snapshot = store
         .players()?

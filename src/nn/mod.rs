@@ -8,6 +8,7 @@
 //! teammates for MAPPO's centralised critic, just the robot for IPPO's.
 
 pub mod checkpoint;
+pub mod stacked;
 
 pub use checkpoint::{CheckpointController, CheckpointMeta, PolicySnapshot};
 
@@ -136,14 +137,32 @@ impl Encoder {
 struct Trunk {
     encoder: Encoder,
     gru: nn::GRU,
+    /// The GRU's weight_ih, weight_hh, bias_ih, bias_hh (shared with the
+    /// GRU, which keeps its own private): for stacking frozen actors.
+    gru_params: [Tensor; 4],
 }
 
 impl Trunk {
     fn new(p: &nn::Path, cfg: &NetConfig, channels: i64, vector_len: i64) -> Trunk {
+        let gru = nn::gru(p / "gru", cfg.hidden, cfg.hidden, Default::default());
+        let g = p / "gru";
+        let param = |n: &str| g.get(n).expect("nn::gru creates its parameters under these names");
         Trunk {
             encoder: Encoder::new(&(p / "encoder"), cfg, channels, vector_len),
-            gru: nn::gru(p / "gru", cfg.hidden, cfg.hidden, Default::default()),
+            gru,
+            gru_params: [
+                param("weight_ih_l0"),
+                param("weight_hh_l0"),
+                param("bias_ih_l0"),
+                param("bias_hh_l0"),
+            ],
         }
+    }
+
+    /// (weight_ih, weight_hh, bias_ih, bias_hh) of the GRU.
+    fn gru_weights(&self) -> (&Tensor, &Tensor, &Tensor, &Tensor) {
+        let [a, b, c, d] = &self.gru_params;
+        (a, b, c, d)
     }
 
     /// One step for a batch: features [B, hidden] and the next state [B, hidden].
