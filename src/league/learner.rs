@@ -133,6 +133,14 @@ impl<'a> LeagueHooks<'a> {
             opponent_rows: 0,
         };
         hooks.refresh()?;
+        if side == Side::Captors {
+            // The window survives restarts: rebuilt from the matches the
+            // store holds since the current stage began.
+            let since = store.curriculum_history()?.last().map(|(_, _, _, at)| *at).unwrap_or(0);
+            let speed = hooks.curriculum.speed(&cfg.curriculum);
+            let recent = store.recent_outcomes(learner_id, speed, since, cfg.curriculum.window)?;
+            hooks.curriculum.recent = recent.into();
+        }
         Ok(hooks)
     }
 

@@ -500,6 +500,33 @@ impl Store {
             .map_err(|e| self.db(e))
     }
 
+    /// Outcomes (captured or not), oldest first, of the last `limit`
+    /// matches `captor_player` played at `speed_ratio` since `since_ms`: the
+    /// curriculum's window, rebuilt when a learner restarts.
+    pub fn recent_outcomes(
+        &self,
+        captor_player: i64,
+        speed_ratio: f64,
+        since_ms: i64,
+        limit: usize,
+    ) -> Result<Vec<bool>, StoreError> {
+        let rows = self
+            .rt
+            .block_on(
+                sqlx::query(
+                    "SELECT captured FROM matches WHERE captor_player = $1 AND ABS(speed_ratio - $2) < 1e-9 \
+                     AND recorded_at_ms >= $3 ORDER BY id DESC LIMIT $4",
+                )
+                .bind(captor_player)
+                .bind(speed_ratio)
+                .bind(since_ms)
+                .bind(limit as i64)
+                .fetch_all(&self.pool),
+            )
+            .map_err(|e| self.db(e))?;
+        Ok(rows.iter().rev().map(|r| r.get::<i64, _>(0) != 0).collect())
+    }
+
     /// (stage, speed ratio, reason, at ms), oldest first.
     pub fn curriculum_history(&self) -> Result<Vec<(usize, f64, String, i64)>, StoreError> {
         let rows = self
@@ -669,6 +696,23 @@ mod tests {
         assert_eq!(store.crashes().unwrap().len(), 1);
         store.quarantine(t, "files missing").unwrap();
         assert_eq!(store.players().unwrap()[1].quarantined.as_deref(), Some("files missing"));
+    }
+
+    #[test]
+    fn the_curriculum_window_comes_back_from_the_store() {
+        let dir = tempfile::tempdir().unwrap();
+        let store = Store::open(dir.path()).unwrap();
+        let c = store.add_player(&player("captors-main", Side::Captors, Kind::Learner)).unwrap();
+        let t = store.add_player(&player("rule-based", Side::Target, Kind::Heuristic)).unwrap();
+        for (i, won) in [true, false, true, true, false].into_iter().enumerate() {
+            store.record_match(&game(&format!("k/{i}"), c, t, won)).unwrap();
+        }
+        let faster = MatchRecord { speed_ratio: 1.2, ..game("k/fast", c, t, true) };
+        store.record_match(&faster).unwrap();
+        assert_eq!(store.recent_outcomes(c, 1.0, 0, 3).unwrap(), vec![true, true, false], "the last 3, oldest first");
+        assert_eq!(store.recent_outcomes(c, 1.2, 0, 10).unwrap(), vec![true]);
+        assert_eq!(store.recent_outcomes(t, 1.0, 0, 10).unwrap(), Vec::<bool>::new(), "only this captor's");
+        assert!(store.recent_outcomes(c, 1.0, now_ms() + 60_000, 10).unwrap().is_empty(), "only since the stage began");
     }
 
     #[test]
