@@ -39,5 +39,6 @@ pub mod learn;
 pub mod league;
 pub mod map;
 pub mod nn;
+pub mod protocol;
 pub mod render;
 pub mod util;

@@ -16,6 +16,7 @@ use t2e::learn::persist::RunState;
 
 const CONFIG: &str = r#"
 name = "kill-test"
+protocol = "held-out"
 seed = 5
 env_steps_per_learner = 9_600
 maps = "shipped"

@@ -24,6 +24,7 @@ fn chase_config(seed: u64) -> TrainConfig {
         rollout_steps: 40,
         checkpoint_every: 1000,
         device: "cpu".into(),
+        protocol: t2e::protocol::Protocol::HeldOut,
         maps: "unused".into(),
         env: EnvConfig {
             num_captors: 1,

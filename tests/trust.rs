@@ -127,6 +127,7 @@ fn degenerate_options_are_refused() {
             ppo: None,
             iterations: 1,
             device: None,
+            opponents: false,
         };
         let err = t2e::cli::bench::run(args).unwrap_err().to_string();
         assert!(err.contains("--seconds"), "{seconds}: {err}");
@@ -151,7 +152,7 @@ fn nan_in_a_config_is_an_error_naming_the_field() {
         ("env.target_speed", "[env]\ntarget_speed = nan\n"),
     ] {
         let path = dir.path().join("c.toml");
-        std::fs::write(&path, text).unwrap();
+        std::fs::write(&path, format!("protocol = \"held-out\"\n{text}")).unwrap();
         let err = format!("{:#}", TrainConfig::load(&path).unwrap_err());
         assert!(err.contains("c.toml") && err.contains(field), "{field}: {err}");
     }
@@ -240,6 +241,7 @@ fn tiny_config() -> TrainConfig {
         rollout_steps: 20,
         checkpoint_every: 1000,
         device: "cpu".into(),
+        protocol: t2e::protocol::Protocol::HeldOut,
         maps: "unused".into(),
         env: EnvConfig {
             num_captors: 1,

@@ -49,7 +49,9 @@ pub fn run(args: TrainArgs) -> Result<()> {
         cfg.validate()
             .map_err(|e| anyhow::anyhow!("--device: {e}"))?;
     }
-    refuse_test_maps(&cfg.maps)?;
+    if cfg.protocol == crate::protocol::Protocol::HeldOut {
+        refuse_test_maps(&cfg.maps)?;
+    }
     let run_dir = args
         .out
         .clone()
@@ -156,7 +158,8 @@ pub fn run(args: TrainArgs) -> Result<()> {
     Ok(())
 }
 
-/// The Gibson maps are the benchmark's test set: never train on them.
+/// Under the held-out protocol the Gibson maps are the test set: never
+/// train on them (by name here; `Trainer` checks every map's content).
 fn refuse_test_maps(spec: &str) -> Result<()> {
     let head = spec.split(':').next().unwrap_or("");
     let named_test = ["small", "medium", "large", "gibson"].contains(&head);
@@ -166,7 +169,7 @@ fn refuse_test_maps(spec: &str) -> Result<()> {
         .ok()
         .is_some_and(|p| gibson.as_ref().is_some_and(|g| p.starts_with(g)));
     if named_test || is_gibson_dir {
-        bail!("maps = \"{spec}\": the Gibson maps are the test set; train on generated maps (generated:N, shipped or a folder of your own)");
+        bail!("maps = \"{spec}\": the Gibson maps are the test set of protocol = \"held-out\"; train on generated maps (generated:N, shipped or a folder of your own), or set protocol = \"paper\" to train on them as the paper did");
     }
     Ok(())
 }
@@ -315,19 +318,25 @@ mod tests {
     fn a_config_typo_names_the_file_and_the_field() {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("typo.toml");
-        std::fs::write(&path, "name = \"x\"\n[captors.ppo]\nentropy_coeff = 0.02\n").unwrap();
+        std::fs::write(&path, "name = \"x\"\nprotocol = \"held-out\"\n[captors.ppo]\nentropy_coeff = 0.02\n").unwrap();
         let err = format!("{:#}", TrainConfig::load(&path).unwrap_err());
         assert!(
             err.contains("typo.toml") && err.contains("entropy_coeff"),
             "{err}"
         );
-        std::fs::write(&path, "[env]\nnum_captors = 0\n").unwrap();
+        std::fs::write(&path, "protocol = \"held-out\"\n[env]\nnum_captors = 0\n").unwrap();
         let err = format!("{:#}", TrainConfig::load(&path).unwrap_err());
         assert!(
             err.contains("typo.toml") && err.contains("env.num_captors"),
             "{err}"
         );
-        std::fs::write(&path, "[target]\nplay = \"mapo\"\n").unwrap();
+        std::fs::write(&path, "protocol = \"held-out\"\n[target]\nplay = \"mapo\"\n").unwrap();
+        let err = format!("{:#}", TrainConfig::load(&path).unwrap_err());
+        assert!(err.contains("target.play") && err.contains("mapo"), "{err}");
+        std::fs::write(&path, "[target]\nplay = \"mappo\"\n").unwrap();
+        let err = format!("{:#}", TrainConfig::load(&path).unwrap_err());
+        assert!(err.contains("typo.toml") && err.contains("protocol: missing"), "{err}");
+        std::fs::write(&path, "protocol = \"paper\"\n[target]\nplay = \"mapo\"\n").unwrap();
         let err = format!("{:#}", TrainConfig::load(&path).unwrap_err());
         assert!(err.contains("target.play") && err.contains("mapo"), "{err}");
     }

@@ -181,6 +181,9 @@ pub struct Summary {
     pub num_captors: usize,
     pub speed_ratio: f64,
     pub maps: String,
+    /// The protocol the learned players were trained under (`training_protocol`).
+    #[serde(default = "unknown_protocol")]
+    pub protocol: String,
     pub episodes: usize,
     pub episode_length: u32,
     pub seed: u64,
@@ -324,6 +327,31 @@ pub fn run(
     Ok((summarise(setting, maps_label, &records), records))
 }
 
+fn unknown_protocol() -> String {
+    "unknown".into()
+}
+
+/// Under which protocol the setting's learned players were trained, from
+/// their checkpoints' sidecars: "held-out" or "paper"; "-" when no learned
+/// player takes part (heuristics are not trained on any maps); both named
+/// when captors and target differ.
+pub fn training_protocol(setting: &EvalSetting) -> String {
+    let of = |spec: &ControllerSpec, side: Side| match spec {
+        ControllerSpec::Checkpoint(c) => Some(
+            c.snapshot(side)
+                .map(|s| s.meta.protocol.name().to_string())
+                .unwrap_or_else(|_| "unknown".into()),
+        ),
+        _ => None,
+    };
+    match (of(&setting.captors, Side::Captors), of(&setting.target, Side::Target)) {
+        (None, None) => "-".into(),
+        (Some(p), None) | (None, Some(p)) => p,
+        (Some(c), Some(t)) if c == t => c,
+        (Some(c), Some(t)) => format!("captors {c}, target {t}"),
+    }
+}
+
 pub fn summarise(setting: &EvalSetting, maps_label: &str, records: &[EpisodeRecord]) -> Summary {
     let n = records.len().max(1) as f64;
     let captures = records.iter().filter(|r| r.captured).count();
@@ -350,6 +378,7 @@ pub fn summarise(setting: &EvalSetting, maps_label: &str, records: &[EpisodeReco
         num_captors: setting.num_captors,
         speed_ratio: setting.speed_ratio,
         maps: maps_label.to_string(),
+        protocol: training_protocol(setting),
         episodes: records.len(),
         episode_length: setting.episode_length,
         seed: setting.seed,
@@ -366,12 +395,12 @@ pub fn summarise(setting: &EvalSetting, maps_label: &str, records: &[EpisodeReco
 }
 
 /// Markdown table header matching `Summary::table_row`.
-pub const TABLE_HEADER: &str = "| captors | target | K:1 | v_p:v_e | maps | episodes | Time (steps) | SR % [95% CI] | Path Len (m) | mean SoA (m^2) |\n|---|---|---|---|---|---|---|---|---|---|";
+pub const TABLE_HEADER: &str = "| captors | target | K:1 | v_p:v_e | maps | protocol | episodes | Time (steps) | SR % [95% CI] | Path Len (m) | mean SoA (m^2) |\n|---|---|---|---|---|---|---|---|---|---|---|";
 
 impl Summary {
     pub fn table_row(&self) -> String {
         format!(
-            "| {} | {} | {}:1 | 1.0:{} | {}{} | {} | {:.1} | {:.1} [{:.1}, {:.1}] | {:.2} | {} |",
+            "| {} | {} | {}:1 | 1.0:{} | {}{} | {} | {} | {:.1} | {:.1} [{:.1}, {:.1}] | {:.2} | {} |",
             self.captors,
             self.target,
             self.num_captors,
@@ -381,6 +410,7 @@ impl Summary {
                 CaptureRule::Fast => "",
                 CaptureRule::Strict => " (strict capture)",
             },
+            self.protocol,
             self.episodes,
             self.time,
             self.sr,

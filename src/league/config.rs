@@ -10,6 +10,7 @@ use crate::env::{EnvConfig, Side};
 use crate::learn::ppo::PpoConfig;
 use crate::learn::train::{SideConfig, TrainConfig};
 use crate::nn::NetConfig;
+use crate::protocol::Protocol;
 use anyhow::{anyhow, Context, Result};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
@@ -23,7 +24,11 @@ pub struct LeagueConfig {
     pub seed: u64,
     /// Each learner stops after this many environment steps of its own.
     pub env_steps_per_learner: u64,
-    /// Training maps (never the Gibson test set): `generated:N`, `shipped`, a folder.
+    /// "held-out" or "paper" (`crate::protocol`): a config file must name
+    /// it, and the training maps must fit it.
+    pub protocol: Protocol,
+    /// Training maps: held-out, never the Gibson test set (`generated:N`,
+    /// `shipped`, a folder); paper, `gibson`.
     pub maps: String,
     /// K, the number of captors.
     pub num_captors: usize,
@@ -101,6 +106,7 @@ impl Default for LeagueConfig {
             name: "league".into(),
             seed: 0,
             env_steps_per_learner: 2_000_000,
+            protocol: Protocol::HeldOut,
             maps: "generated:20".into(),
             num_captors: 3,
             episode_length: 200,
@@ -124,6 +130,7 @@ impl LeagueConfig {
     pub fn load(path: &Path) -> Result<LeagueConfig> {
         let text = std::fs::read_to_string(path)
             .with_context(|| format!("{}: cannot read", path.display()))?;
+        crate::protocol::require_named(&text).map_err(|e| anyhow!("{}: {e}", path.display()))?;
         Self::parse(&text).map_err(|e| anyhow!("{}: {e}", path.display()))
     }
 
@@ -169,6 +176,7 @@ impl LeagueConfig {
             rollout_steps: self.rollout_steps,
             checkpoint_every: self.checkpoint_every,
             device: "cpu".into(),
+            protocol: self.protocol,
             maps: self.maps.clone(),
             env: EnvConfig {
                 num_captors: self.num_captors,

@@ -179,6 +179,13 @@ pub fn run(dir: &LeagueDir, config: Option<&Path>, run_for: Option<Duration>, st
         }
         (Some(path), false) => {
             let cfg = LeagueConfig::load(path)?;
+            // Refuse maps that do not fit the protocol here, with the file's
+            // name, rather than in learners that crash and restart.
+            let maps = crate::map::catalog::load_prepared(&cfg.maps)
+                .with_context(|| format!("{}: maps = \"{}\"", path.display(), cfg.maps))?;
+            cfg.protocol
+                .check_training_maps(&cfg.maps, &maps)
+                .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
             crate::nn::checkpoint::write_file_atomically(&dir.config_path(), toml::to_string_pretty(&cfg)?.as_bytes())?;
             eprintln!("starting the league {} in {}", cfg.name, dir.root.display());
             cfg

@@ -22,6 +22,7 @@ use crate::nn::{obs_tensors, NetConfig};
 use anyhow::{anyhow, bail, Context, Result};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
+use crate::protocol::Protocol;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -45,8 +46,13 @@ pub struct TrainConfig {
     pub checkpoint_every: u64,
     /// "auto" (CUDA when tch sees a GPU), "cpu" or "cuda".
     pub device: String,
-    /// Training maps: never the Gibson test set. `generated:N` makes N maps
-    /// per size class with the project's generator; also `shipped` or a folder.
+    /// "held-out" (train on generated maps, test on the unseen Gibson maps)
+    /// or "paper" (train on the 26 Gibson maps, as the paper did). A config
+    /// file must name it; the training maps must fit it (checked by content).
+    pub protocol: Protocol,
+    /// Training maps. Held-out: never the Gibson test set; `generated:N`
+    /// makes N maps per size class with the project's generator; also
+    /// `shipped` or a folder. Paper: `gibson`.
     pub maps: String,
     pub env: EnvConfig,
     pub captors: SideConfig,
@@ -84,6 +90,7 @@ impl Default for TrainConfig {
             rollout_steps: 100,
             checkpoint_every: 25,
             device: "auto".into(),
+            protocol: Protocol::HeldOut,
             maps: "generated:20".into(),
             env: EnvConfig::default(),
             captors: SideConfig {
@@ -120,6 +127,7 @@ impl TrainConfig {
     pub fn load(path: &Path) -> Result<TrainConfig> {
         let text = std::fs::read_to_string(path)
             .with_context(|| format!("{}: cannot read", path.display()))?;
+        crate::protocol::require_named(&text).map_err(|e| anyhow!("{}: {e}", path.display()))?;
         let cfg: TrainConfig =
             toml::from_str(&text).map_err(|e| anyhow!("{}: {e}", path.display()))?;
         cfg.validate()
@@ -340,15 +348,9 @@ impl Trainer {
         iteration: u64,
     ) -> Result<Trainer> {
         cfg.validate().map_err(anyhow::Error::msg)?;
-        for m in maps.iter() {
-            if let Some(name) = crate::map::testset::gibson_name(&m.grid) {
-                bail!(
-                    "maps = \"{}\": map '{}' is the Gibson test map {name} (recognised by its content): the Gibson maps are the test set; train on generated maps (generated:N, shipped or a folder of your own)",
-                    cfg.maps,
-                    m.grid.name
-                );
-            }
-        }
+        cfg.protocol
+            .check_training_maps(&cfg.maps, &maps)
+            .map_err(anyhow::Error::msg)?;
         let device = cfg.device();
         if cfg.device == "cuda" && !tch::Cuda::is_available() {
             bail!("device = \"cuda\" but tch sees no CUDA device; use \"auto\" or \"cpu\"");
@@ -725,6 +727,7 @@ impl Trainer {
             env_steps: self.env_steps,
             iteration: self.iteration,
             config_hash: self.config_hash.clone(),
+            protocol: self.cfg.protocol,
             code_version: code_version(),
             learner_state: Some(persist::learner_state(&ls.learner)),
             files: Default::default(),

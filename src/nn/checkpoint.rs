@@ -56,6 +56,11 @@ pub struct CheckpointMeta {
     pub iteration: u64,
     /// Hash of the training configuration (same hash, same settings).
     pub config_hash: String,
+    /// The protocol it was trained under (`crate::protocol`). Checkpoints
+    /// written before the field existed were trained held-out: the Gibson
+    /// maps were refused for training from the start.
+    #[serde(default)]
+    pub protocol: crate::protocol::Protocol,
     /// Crate version and git commit of the code that wrote it.
     pub code_version: String,
     /// Learner state that is not a tensor: value normaliser and Adam step.

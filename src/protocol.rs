@@ -1,0 +1,104 @@
+//! The two evaluation protocols. The paper trained on the 26 Gibson maps and
+//! tested on the same maps (in distribution); this project's default trains
+//! on generated maps and tests on Gibson (maps never seen in training).
+//! Both are legitimate, and their numbers must never be read one for the
+//! other: a training config names its protocol, the training maps must fit
+//! it (the Gibson maps are recognised by content, `map::testset`), and
+//! checkpoints, eval tables and summaries carry it.
+
+use crate::map::PreparedMap;
+use serde::{Deserialize, Serialize};
+use std::fmt;
+
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub enum Protocol {
+    /// Train on generated (or your own) maps; evaluate on Gibson, unseen.
+    #[default]
+    #[serde(rename = "held-out")]
+    HeldOut,
+    /// As the paper: train on the 26 Gibson maps, evaluate on them.
+    #[serde(rename = "paper")]
+    Paper,
+}
+
+impl Protocol {
+    pub fn name(self) -> &'static str {
+        match self {
+            Protocol::HeldOut => "held-out",
+            Protocol::Paper => "paper",
+        }
+    }
+
+    /// What the protocol means, for error messages and table notes.
+    pub fn describe(self) -> &'static str {
+        match self {
+            Protocol::HeldOut => "held-out: trained on generated maps, tested on the unseen Gibson maps",
+            Protocol::Paper => "paper: trained on the 26 Gibson maps and tested on them, as the paper did",
+        }
+    }
+
+    /// Checks that the training maps fit the protocol: none of the Gibson
+    /// test maps under held-out, only Gibson maps under paper. `spec` is the
+    /// config's `maps` value, for the message.
+    pub fn check_training_maps(self, spec: &str, maps: &[std::sync::Arc<PreparedMap>]) -> Result<(), String> {
+        for m in maps {
+            let gibson = crate::map::testset::gibson_name(&m.grid);
+            match (self, gibson) {
+                (Protocol::HeldOut, Some(name)) => {
+                    return Err(format!(
+                        "maps = \"{spec}\": map '{}' is the Gibson test map {name} (recognised by its content), in the test set of protocol = \"held-out\"; train on generated maps (generated:N, shipped or a folder of your own), or set protocol = \"paper\" to train on the test maps as the paper did",
+                        m.grid.name
+                    ))
+                }
+                (Protocol::Paper, None) => {
+                    return Err(format!(
+                        "maps = \"{spec}\": map '{}' is not one of the 26 Gibson maps, and protocol = \"paper\" trains on exactly those (maps = \"gibson\"); use protocol = \"held-out\" for other training maps",
+                        m.grid.name
+                    ))
+                }
+                _ => {}
+            }
+        }
+        Ok(())
+    }
+}
+
+impl fmt::Display for Protocol {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// Refuses a config text (TOML) that does not name its protocol: a default
+/// would let a figure be read under the wrong one. `what` names the file.
+pub fn require_named(text: &str) -> Result<(), String> {
+    let value: toml::Value = toml::from_str(text).map_err(|e| e.to_string())?;
+    if value.get("protocol").is_none() {
+        return Err(
+            "protocol: missing; name the evaluation protocol: protocol = \"held-out\" (train on generated maps, test on the unseen Gibson maps) or protocol = \"paper\" (train and test on the 26 Gibson maps, as the paper did)"
+                .into(),
+        );
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn configs_must_name_it_and_names_round_trip() {
+        assert!(require_named("seed = 1\n").unwrap_err().contains("protocol: missing"));
+        assert!(require_named("protocol = \"paper\"\nseed = 1\n").is_ok());
+        #[derive(Deserialize)]
+        struct C {
+            protocol: Protocol,
+        }
+        let c: C = toml::from_str("protocol = \"held-out\"").unwrap();
+        assert_eq!(c.protocol, Protocol::HeldOut);
+        let c: C = toml::from_str("protocol = \"paper\"").unwrap();
+        assert_eq!(c.protocol, Protocol::Paper);
+        assert!(toml::from_str::<C>("protocol = \"heldout\"").is_err());
+        assert_eq!(Protocol::Paper.to_string(), "paper");
+    }
+}
