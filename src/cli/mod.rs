@@ -7,6 +7,7 @@ pub mod eval;
 pub mod league;
 pub mod maps;
 pub mod render;
+pub mod table;
 pub mod train;
 
 #[derive(Parser, Debug)]
@@ -32,6 +33,9 @@ pub enum Command {
     Train(train::TrainArgs),
     /// Measure environment, ASZ and observation speed and print a table.
     Bench(bench::BenchArgs),
+    /// The paper's Tables II and III (Markdown, LaTeX) from eval folders,
+    /// with the paper's numbers beside ours.
+    Table(table::TableArgs),
     /// Run a league (or resume the one in --dir): captor and target learners
     /// against pools of each other's snapshots.
     Run(league::RunArgs),
@@ -76,6 +80,7 @@ pub fn main() -> anyhow::Result<()> {
         Command::Eval(a) => eval::run(a),
         Command::Render(a) => render::run(a),
         Command::Bench(a) => bench::run(a),
+        Command::Table(a) => table::run(a),
         Command::Train(a) => train::run(a),
         Command::Run(a) => league::run(a),
         Command::Status(a) => league::status(a),

@@ -7,6 +7,8 @@ use crate::env::vec_env::episode_seed;
 use crate::env::{Action, CaptureRule, EnvConfig, Side, TrapEnv};
 use crate::controllers::ControllerSpec;
 use crate::map::PreparedMap;
+
+pub mod paper_table;
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -177,6 +179,10 @@ pub struct EpisodeRecord {
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct Summary {
     pub captors: String,
+    /// What plays the captors: a checkpoint's algorithm (MAPPO, IPPO), else
+    /// the controller (`captors_learner`).
+    #[serde(default = "unknown_protocol")]
+    pub captors_learner: String,
     pub target: String,
     pub num_captors: usize,
     pub speed_ratio: f64,
@@ -352,6 +358,19 @@ pub fn training_protocol(setting: &EvalSetting) -> String {
     }
 }
 
+/// The learner (checkpoint algorithm) or controller behind the captors.
+pub fn captors_learner(spec: &ControllerSpec) -> String {
+    match spec {
+        ControllerSpec::Checkpoint(c) => c
+            .snapshot(Side::Captors)
+            .map(|s| s.meta.algorithm.to_uppercase())
+            .unwrap_or_else(|_| "unknown".into()),
+        ControllerSpec::Heuristic => "expert heuristic".into(),
+        ControllerSpec::Greedy => "ASZ-greedy".into(),
+        other => other.to_string(),
+    }
+}
+
 pub fn summarise(setting: &EvalSetting, maps_label: &str, records: &[EpisodeRecord]) -> Summary {
     let n = records.len().max(1) as f64;
     let captures = records.iter().filter(|r| r.captured).count();
@@ -374,6 +393,7 @@ pub fn summarise(setting: &EvalSetting, maps_label: &str, records: &[EpisodeReco
     }
     Summary {
         captors: setting.captors.to_string(),
+        captors_learner: captors_learner(&setting.captors),
         target: setting.target.to_string(),
         num_captors: setting.num_captors,
         speed_ratio: setting.speed_ratio,

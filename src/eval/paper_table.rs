@@ -1,0 +1,224 @@
+//! The paper's Tables II (3:1) and III (4:1) laid out from eval summaries:
+//! captors against the rule-based target, one row per (speed ratio, captors)
+//! with SR [95% CI], Time and Path Len per map class, the protocol the
+//! captors were trained under, and the paper's SR for the cell beside ours.
+//! Markdown and LaTeX.
+
+use super::{ratio_label, Summary};
+use std::collections::BTreeMap;
+use std::fmt::Write;
+
+/// The paper's reported SR % (small, medium, large) against the rule-based
+/// target, as spec §8 gives them: (K, speed ratio, learner, SR). Trained and
+/// tested on the Gibson maps (paper protocol), 30 M steps per run. Cells the
+/// spec does not quote are absent, not zero.
+pub const PAPER_SR: &[(usize, f64, &str, [f64; 3])] = &[
+    (3, 1.0, "MAPPO", [99.8, 99.8, 94.8]),
+    (3, 1.0, "MAAC", [100.0, 99.8, 91.2]),
+    (3, 1.2, "MAPPO", [92.4, 80.6, 78.4]),
+    (3, 1.4, "MAPPO", [64.2, 43.8, 43.1]),
+    (4, 1.0, "MAPPO", [100.0, 99.8, 99.2]),
+    (4, 1.2, "IPPO", [99.2, 97.8, 95.6]),
+    (4, 1.4, "MAPPO", [93.2, 87.2, 85.6]),
+    (4, 1.4, "IPPO", [94.0, 86.2, 87.6]),
+];
+
+const CLASSES: [&str; 3] = ["small", "medium", "large"];
+
+/// The paper's SR (small / medium / large) for a row: the same learner's
+/// where the paper quotes it, else every learner it quotes for that K and
+/// ratio, named ("MAPPO 99.8 / 99.8 / 94.8; MAAC 100.0 / 99.8 / 91.2").
+fn paper_cells(k: usize, ratio: f64, learner: &str) -> String {
+    let at: Vec<&(usize, f64, &str, [f64; 3])> = PAPER_SR
+        .iter()
+        .filter(|(pk, pr, _, _)| *pk == k && (pr - ratio).abs() < 1e-9)
+        .collect();
+    let three = |sr: &[f64; 3]| format!("{:.1} / {:.1} / {:.1}", sr[0], sr[1], sr[2]);
+    if let Some((_, _, _, sr)) = at.iter().find(|(_, _, l, _)| l.eq_ignore_ascii_case(learner)) {
+        return three(sr);
+    }
+    if at.is_empty() {
+        return "-".into();
+    }
+    at.iter().map(|(_, _, l, sr)| format!("{l} {}", three(sr))).collect::<Vec<_>>().join("; ")
+}
+
+/// One row: a (speed ratio, captors) pair and its summaries per class.
+struct Row<'a> {
+    ratio: f64,
+    captors: String,
+    learner: String,
+    protocol: String,
+    cells: [Option<&'a Summary>; 3],
+}
+
+/// Groups the summaries into the paper's rows. Summaries against anything
+/// but the rule-based target, or on maps other than the three classes, do
+/// not belong in these tables: they are counted in the second value.
+fn rows(summaries: &[Summary]) -> (BTreeMap<usize, Vec<Row<'_>>>, usize) {
+    let mut by_k: BTreeMap<usize, Vec<Row>> = BTreeMap::new();
+    let mut left_out = 0;
+    for s in summaries {
+        let class = CLASSES.iter().position(|c| *c == s.maps);
+        let Some(class) = class.filter(|_| s.target == "heuristic") else {
+            left_out += 1;
+            continue;
+        };
+        let rows = by_k.entry(s.num_captors).or_default();
+        let at = rows
+            .iter()
+            .position(|r| (r.ratio - s.speed_ratio).abs() < 1e-12 && r.captors == s.captors && r.protocol == s.protocol);
+        let i = match at {
+            Some(i) => i,
+            None => {
+                rows.push(Row {
+                    ratio: s.speed_ratio,
+                    captors: s.captors.clone(),
+                    learner: s.captors_learner.clone(),
+                    protocol: s.protocol.clone(),
+                    cells: [None; 3],
+                });
+                rows.len() - 1
+            }
+        };
+        rows[i].cells[class] = Some(s);
+    }
+    for rows in by_k.values_mut() {
+        rows.sort_by(|a, b| a.ratio.total_cmp(&b.ratio).then(a.captors.cmp(&b.captors)));
+    }
+    (by_k, left_out)
+}
+
+fn triple(cells: &[Option<&Summary>; 3], f: impl Fn(&Summary) -> String) -> Vec<String> {
+    cells.iter().map(|c| c.map(&f).unwrap_or_else(|| "-".into())).collect()
+}
+
+/// Markdown: one table per K, and a line per left-out summary count.
+pub fn markdown(summaries: &[Summary]) -> String {
+    let (by_k, left_out) = rows(summaries);
+    let mut out = String::new();
+    for (k, rows) in &by_k {
+        let _ = writeln!(
+            out,
+            "### {k}:1 against the rule-based target (paper Table {})\n",
+            if *k == 3 { "II" } else { "III" }
+        );
+        out.push_str("| v_p:v_e | captors | learner | protocol | SR % small | SR % medium | SR % large | paper SR % small / medium / large | Time (steps) s / m / l | Path Len (m) s / m / l | episodes |\n");
+        out.push_str("|---|---|---|---|---|---|---|---|---|---|---|\n");
+        for r in rows {
+            let sr = triple(&r.cells, |s| format!("{:.1} [{:.1}, {:.1}]", s.sr, s.sr_low, s.sr_high));
+            let time = triple(&r.cells, |s| format!("{:.0}", s.time)).join(" / ");
+            let path = triple(&r.cells, |s| format!("{:.1}", s.path_len)).join(" / ");
+            let paper = paper_cells(*k, r.ratio, &r.learner);
+            let episodes = r.cells.iter().flatten().map(|s| s.episodes).min().unwrap_or(0);
+            let _ = writeln!(
+                out,
+                "| 1.0:{} | {} | {} | {} | {} | {} | {} | {paper} | {time} | {path} | {episodes} |",
+                ratio_label(r.ratio),
+                r.captors,
+                r.learner,
+                r.protocol,
+                sr[0],
+                sr[1],
+                sr[2]
+            );
+        }
+        out.push('\n');
+    }
+    out.push_str("Paper SR: as quoted in spec §8 (paper protocol: trained and tested on the Gibson maps, 30 M steps); for the same learner where the paper quotes it, else the learners it quotes for the cell; - where it quotes none.\n");
+    if left_out > 0 {
+        let _ = writeln!(out, "\n{left_out} summaries left out: against another target than the rule-based one, or on maps other than the three Gibson classes.");
+    }
+    out
+}
+
+fn latex_escape(s: &str) -> String {
+    s.replace('\\', "\\textbackslash{}")
+        .replace('_', "\\_")
+        .replace('%', "\\%")
+        .replace('&', "\\&")
+        .replace('#', "\\#")
+}
+
+/// LaTeX (booktabs): one tabular per K, SR with its interval, paper SR beside.
+pub fn latex(summaries: &[Summary]) -> String {
+    let (by_k, _) = rows(summaries);
+    let mut out = String::from("% t2e-league table: captors against the rule-based target; requires \\usepackage{booktabs}\n");
+    for (k, rows) in &by_k {
+        let _ = writeln!(out, "\\begin{{table}}[t]\n\\centering\n\\caption{{{k}:1 against the rule-based target. SR \\% [95\\% CI] per map class; paper SR from its Table {} (paper protocol).}}", if *k == 3 { "II" } else { "III" });
+        out.push_str("\\begin{tabular}{llllllll}\n\\toprule\n$v_p{:}v_e$ & Learner & Protocol & Small & Medium & Large & Paper (S / M / L) & Time (S / M / L) \\\\\n\\midrule\n");
+        for r in rows {
+            let sr = triple(&r.cells, |s| format!("{:.1} [{:.1}, {:.1}]", s.sr, s.sr_low, s.sr_high));
+            let time = triple(&r.cells, |s| format!("{:.0}", s.time)).join(" / ");
+            let paper = paper_cells(*k, r.ratio, &r.learner);
+            let _ = writeln!(
+                out,
+                "1.0:{} & {} & {} & {} & {} & {} & {} & {} \\\\",
+                ratio_label(r.ratio),
+                latex_escape(&r.learner),
+                latex_escape(&r.protocol),
+                sr[0],
+                sr[1],
+                sr[2],
+                latex_escape(&paper),
+                time
+            );
+        }
+        out.push_str("\\bottomrule\n\\end{tabular}\n\\end{table}\n\n");
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::env::CaptureRule;
+
+    fn summary(k: usize, ratio: f64, maps: &str, target: &str, learner: &str, sr: f64) -> Summary {
+        Summary {
+            captors: format!("ckpt:runs/{learner}"),
+            captors_learner: learner.into(),
+            target: target.into(),
+            num_captors: k,
+            speed_ratio: ratio,
+            maps: maps.into(),
+            protocol: "held-out".into(),
+            episodes: 500,
+            episode_length: 500,
+            seed: 0,
+            capture_rule: CaptureRule::Fast,
+            soa_every: 0,
+            time: 300.0,
+            sr,
+            sr_low: sr - 4.0,
+            sr_high: sr + 4.0,
+            path_len: 25.0,
+            mean_soa_m2: None,
+            soa_curve: Vec::new(),
+        }
+    }
+
+    #[test]
+    fn rows_gather_the_classes_and_put_the_papers_number_beside_ours() {
+        let s = vec![
+            summary(3, 1.0, "small", "heuristic", "MAPPO", 85.8),
+            summary(3, 1.0, "large", "heuristic", "MAPPO", 63.0),
+            summary(3, 1.0, "medium", "heuristic", "MAPPO", 74.6),
+            summary(3, 1.2, "medium", "heuristic", "IPPO", 40.0),
+            summary(3, 1.0, "medium", "ckpt:runs/x", "MAPPO", 10.0),
+            summary(4, 1.4, "small", "heuristic", "IPPO", 50.0),
+        ];
+        let md = markdown(&s);
+        assert!(md.contains("| 1.0:1.0 | ckpt:runs/MAPPO | MAPPO | held-out | 85.8 [81.8, 89.8] | 74.6 [70.6, 78.6] | 63.0 [59.0, 67.0] | 99.8 / 99.8 / 94.8 |"), "{md}");
+        // No IPPO number at 3:1 1.2: the learners the paper quotes there.
+        assert!(md.contains("| MAPPO 92.4 / 80.6 / 78.4 |"), "{md}");
+        let heuristic = Summary { captors: "heuristic".into(), captors_learner: "expert heuristic".into(), ..summary(3, 1.0, "small", "heuristic", "x", 78.4) };
+        assert!(markdown(&[heuristic]).contains("| MAPPO 99.8 / 99.8 / 94.8; MAAC 100.0 / 99.8 / 91.2 |"));
+        assert!(md.contains("| 1.0:1.4 | ckpt:runs/IPPO | IPPO | held-out | 50.0 [46.0, 54.0] | - | - | 94.0 / 86.2 / 87.6 |"), "{md}");
+        assert!(md.contains("Table II") && md.contains("Table III"));
+        assert!(md.contains("1 summaries left out"), "{md}");
+        let tex = latex(&s);
+        assert!(tex.contains("1.0:1.0 & MAPPO & held-out & 85.8 [81.8, 89.8]"), "{tex}");
+        assert_eq!(tex.matches("\\begin{tabular}").count(), 2);
+    }
+}
