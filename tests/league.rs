@@ -257,3 +257,72 @@ fn killed_at_random_moments_the_league_loses_and_duplicates_nothing() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("already running"), "{err}");
 }
+
+#[test]
+fn exploiters_play_the_main_learners_join_the_pool_and_start_again() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = LeagueDir::new(&tmp.path().join("league"));
+    let config = tmp.path().join("league.toml");
+    let text = CONFIG
+        .replace("env_steps_per_learner = 9_600", "env_steps_per_learner = 3_200")
+        .replace("[evaluator]\nepisodes = 3", "[evaluator]\nenabled = false\nepisodes = 3")
+        + "[exploiters]\ncaptors = true\ntarget = true\nwin_rate = 0.99\ntimeout_env_steps = 960\n";
+    std::fs::write(&config, text).unwrap();
+    let out = Command::new(bin())
+        .args(["run", "--config"])
+        .arg(&config)
+        .arg("--dir")
+        .arg(&dir.root)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+
+    let store = Store::open(&dir.root).unwrap();
+    let players = store.players().unwrap();
+    let id = |name: &str| players.iter().find(|p| p.name == name).map(|p| p.id);
+    let payoff = store.payoff().unwrap();
+    for side in [Side::Captors, Side::Target] {
+        let other = match side {
+            Side::Captors => Side::Target,
+            Side::Target => Side::Captors,
+        };
+        let exploiter = players
+            .iter()
+            .find(|p| p.name == format!("{}-exploiter", side.name()))
+            .unwrap_or_else(|| panic!("no {} exploiter in {players:?}", side.name()));
+        assert_eq!(exploiter.kind, Kind::Exploiter);
+        // It snapshots into the pool (the timeout: it cannot reach 99%)...
+        let snaps: Vec<_> = players.iter().filter(|p| p.parent == Some(exploiter.id)).collect();
+        assert!(!snaps.is_empty(), "no snapshot of {}", exploiter.name);
+        for s in &snaps {
+            assert_eq!(s.kind, Kind::Snapshot);
+            assert!(s.name.starts_with(&format!("{}-snap-", exploiter.name)), "{}", s.name);
+        }
+        // ...then starts again from its initial weights.
+        let log = std::fs::read_to_string(dir.root.join("logs").join(format!("{}.log", exploiter.name))).unwrap();
+        assert!(log.contains("back to its initial weights"), "{log}");
+        // It plays only the other side's main learner (its snapshots), or
+        // the heuristic member before the main learner has one.
+        let main = id(&format!("{}-main", other.name())).unwrap();
+        let heuristic = id(&t2e::league::learner::heuristic_name(other)).unwrap();
+        let mut games = 0;
+        for r in &payoff {
+            let (me, them) = match side {
+                Side::Captors => (r.captor, r.target),
+                Side::Target => (r.target, r.captor),
+            };
+            if me != exploiter.id {
+                continue;
+            }
+            games += r.games;
+            let opponent = players.iter().find(|p| p.id == them).unwrap();
+            assert!(
+                them == heuristic || opponent.parent == Some(main),
+                "{} played {}",
+                exploiter.name,
+                opponent.name
+            );
+        }
+        assert!(games > 0, "{} recorded no match", exploiter.name);
+    }
+}

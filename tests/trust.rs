@@ -532,3 +532,25 @@ fn defects_an_adversarial_pass_found_are_fixed() {
     let err = format!("{:#}", Trainer::resume(tiny_config(), tiny_maps(), &run).err().unwrap());
     assert!(err.contains("changed by hand"), "{err}");
 }
+
+#[test]
+fn a_reset_learner_is_back_to_its_initial_weights() {
+    tch::set_num_threads(1);
+    let tmp = tempfile::tempdir().unwrap();
+    let mut t = Trainer::new(tiny_config(), tiny_maps()).unwrap();
+    let (initial, later, reset) = (tmp.path().join("initial"), tmp.path().join("later"), tmp.path().join("reset"));
+    t.save_side(Side::Captors, &initial).unwrap();
+    t.iterate().unwrap();
+    t.save_side(Side::Captors, &later).unwrap();
+    t.reset_learner(Side::Captors, &initial).unwrap();
+    t.save_side(Side::Captors, &reset).unwrap();
+    let files = |d: &Path| read_meta(d).unwrap().files;
+    for f in ["actor.safetensors", "critic.safetensors", "optimizer.safetensors"] {
+        assert_ne!(files(&initial)[f], files(&later)[f], "{f}: training changed nothing");
+        assert_eq!(files(&initial)[f], files(&reset)[f], "{f}: not restored");
+    }
+    let steps = read_meta(&reset).unwrap().env_steps;
+    assert_eq!(steps, read_meta(&later).unwrap().env_steps, "the step count goes on");
+    // Training goes on from there.
+    t.iterate().unwrap();
+}

@@ -58,6 +58,9 @@ pub struct LearnerArgs {
     /// captors or target.
     #[arg(long)]
     pub side: String,
+    /// Run the side's main exploiter instead of its main learner.
+    #[arg(long)]
+    pub exploiter: bool,
 }
 
 static STOP: AtomicBool = AtomicBool::new(false);
@@ -150,11 +153,12 @@ pub fn learner(args: LearnerArgs) -> Result<()> {
         other => bail!("--side {other}: expected captors or target"),
     };
     let dir = LeagueDir::new(&args.dir);
-    let lock_path = dir.learner_dir(side).with_extension("lock");
+    let seat = learner::Seat { side, exploiter: args.exploiter };
+    let lock_path = dir.seat_dir(seat).with_extension("lock");
     std::fs::create_dir_all(lock_path.parent().unwrap())?;
     let Some(_lock) = manager::try_lock(&lock_path)? else {
-        bail!("{}: another {} learner is running this league", lock_path.display(), side.name());
+        bail!("{}: another {} is running this league", lock_path.display(), seat.name());
     };
     on_ctrl_c()?;
-    learner::run_learner(&dir, side, &STOP)
+    learner::run_learner(&dir, seat, &STOP)
 }

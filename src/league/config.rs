@@ -11,6 +11,7 @@ use crate::learn::ppo::PpoConfig;
 use crate::learn::train::{SideConfig, TrainConfig};
 use crate::nn::NetConfig;
 use crate::protocol::Protocol;
+use super::learner::Seat;
 use anyhow::{anyhow, Context, Result};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
@@ -50,6 +51,7 @@ pub struct LeagueConfig {
     pub target: LearnerConfig,
     pub matchmaking: MatchmakingConfig,
     pub snapshots: SnapshotConfig,
+    pub exploiters: ExploiterConfig,
     pub curriculum: CurriculumConfig,
     pub evaluator: EvaluatorConfig,
 }
@@ -100,6 +102,45 @@ impl Default for SnapshotConfig {
     }
 }
 
+/// Main exploiters (AlphaStar): a learner per side that plays only the other
+/// side's main learner (its latest snapshot), adds a snapshot of itself to
+/// the pool when it beats it often enough or after a timeout, and then
+/// starts again from its initial weights. Their snapshots show the main
+/// learners their own weaknesses. Off by default: each is one more process
+/// on the machine's cores.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ExploiterConfig {
+    pub captors: bool,
+    pub target: bool,
+    /// Snapshot (then reset) when the exploiter won at least this share of
+    /// its matches against the main learner since its last snapshot, after
+    /// at least `snapshots.every_env_steps`...
+    pub win_rate: f64,
+    /// ...or after this many env steps anyway.
+    pub timeout_env_steps: u64,
+}
+
+impl Default for ExploiterConfig {
+    fn default() -> Self {
+        ExploiterConfig {
+            captors: false,
+            target: false,
+            win_rate: 0.7,
+            timeout_env_steps: 200_000,
+        }
+    }
+}
+
+impl ExploiterConfig {
+    pub fn enabled(&self, side: Side) -> bool {
+        match side {
+            Side::Captors => self.captors,
+            Side::Target => self.target,
+        }
+    }
+}
+
 impl Default for LeagueConfig {
     fn default() -> Self {
         LeagueConfig {
@@ -120,6 +161,7 @@ impl Default for LeagueConfig {
             target: LearnerConfig::default(),
             matchmaking: MatchmakingConfig::default(),
             snapshots: SnapshotConfig::default(),
+            exploiters: ExploiterConfig::default(),
             curriculum: CurriculumConfig::default(),
             evaluator: EvaluatorConfig::default(),
         }
@@ -150,6 +192,17 @@ impl LeagueConfig {
     /// The training config of one main learner: its side learns; the other
     /// side is played per world by opponents the league draws (a still
     /// placeholder until the first draw).
+    /// The training config of a main learner; an exploiter's differs in its
+    /// name and seed (its own initial weights and episodes).
+    pub fn seat_train_config(&self, seat: Seat) -> TrainConfig {
+        let mut t = self.train_config(seat.side);
+        if seat.exploiter {
+            t.name = seat.name();
+            t.seed ^= 0xE7_0000;
+        }
+        t
+    }
+
     pub fn train_config(&self, side: Side) -> TrainConfig {
         let learner = self.learner(side);
         let learn = SideConfig {
@@ -204,6 +257,12 @@ impl LeagueConfig {
                 "snapshots.win_rate = {}: must be in [0, 1]",
                 self.snapshots.win_rate
             ));
+        }
+        if !(self.exploiters.win_rate.is_finite() && (0.0..=1.0).contains(&self.exploiters.win_rate)) {
+            return Err(format!("exploiters.win_rate = {}: must be in [0, 1]", self.exploiters.win_rate));
+        }
+        if self.exploiters.timeout_env_steps == 0 {
+            return Err("exploiters.timeout_env_steps = 0: must be at least 1".into());
         }
         if self.snapshots.every_env_steps == 0 || self.snapshots.timeout_env_steps == 0 {
             return Err("snapshots.every_env_steps and snapshots.timeout_env_steps must be at least 1".into());

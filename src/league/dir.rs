@@ -35,7 +35,12 @@ impl LeagueDir {
     }
 
     pub fn learner_dir(&self, side: Side) -> PathBuf {
-        self.root.join("learners").join(super::learner::learner_name(side))
+        self.seat_dir(super::learner::Seat::main(side))
+    }
+
+    /// A learner's run folder (main learner or exploiter).
+    pub fn seat_dir(&self, seat: super::learner::Seat) -> PathBuf {
+        self.root.join("learners").join(seat.name())
     }
 
     pub fn players_dir(&self) -> PathBuf {
@@ -66,6 +71,10 @@ impl LeagueDir {
             return cfg.threads_per_learner;
         }
         let cores = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1);
-        (cores / 2).max(1)
+        let learners = 2 + [Side::Captors, Side::Target]
+            .iter()
+            .filter(|s| cfg.exploiters.enabled(**s))
+            .count();
+        (cores / learners).max(1)
     }
 }

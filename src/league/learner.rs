@@ -11,7 +11,7 @@
 use super::config::LeagueConfig;
 use super::curriculum::Curriculum;
 use super::dir::LeagueDir;
-use super::matchmaking::{choose_opponent, draw_seed, pick_slot, slot_seed, Candidate, Opponent};
+use super::matchmaking::{choose_opponent, draw_seed, pick_slot, slot_seed, Candidate, MatchmakingConfig, Opponent};
 use super::store::{Kind, MatchRecord, NewPlayer, Player, Store};
 use crate::controllers::ControllerSpec;
 use crate::env::{Action, Side, VecEnv};
@@ -31,6 +31,32 @@ use tch::{Device, Kind as TKind, Tensor};
 /// The player name of a side's main learner.
 pub fn learner_name(side: Side) -> String {
     format!("{}-main", side.name())
+}
+
+/// Which learner a process runs: a side's main learner or its main exploiter.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Seat {
+    pub side: Side,
+    pub exploiter: bool,
+}
+
+impl Seat {
+    pub fn main(side: Side) -> Seat {
+        Seat { side, exploiter: false }
+    }
+
+    pub fn exploiter(side: Side) -> Seat {
+        Seat { side, exploiter: true }
+    }
+
+    /// Its player name (`captors-main`, `target-exploiter`, ...).
+    pub fn name(self) -> String {
+        if self.exploiter {
+            format!("{}-exploiter", self.side.name())
+        } else {
+            learner_name(self.side)
+        }
+    }
 }
 
 /// The player name of a side's permanent heuristic member.
@@ -74,6 +100,10 @@ pub struct LeagueHooks<'a> {
     side: Side,
     learner_id: i64,
     learner_name: String,
+    /// An exploiter plays only the other side's main learner and leaves the
+    /// curriculum to the main captors.
+    exploiter: bool,
+    matchmaking: MatchmakingConfig,
     /// The other side's playable members, and this learner's record against each.
     members: Vec<Player>,
     candidates: Vec<Candidate>,
@@ -104,16 +134,25 @@ impl<'a> LeagueHooks<'a> {
         store: &'a Store,
         dir: &'a LeagueDir,
         cfg: &'a LeagueConfig,
-        side: Side,
+        seat: Seat,
         learner_id: i64,
     ) -> Result<LeagueHooks<'a>> {
+        let side = seat.side;
+        let mut matchmaking = cfg.matchmaking.clone();
+        if seat.exploiter {
+            // Always the main learner once it has a snapshot; the pool
+            // (heuristics first) until then.
+            matchmaking.main_share = 1.0;
+        }
         let mut hooks = LeagueHooks {
             store,
             dir,
             cfg,
             side,
             learner_id,
-            learner_name: learner_name(side),
+            learner_name: seat.name(),
+            exploiter: seat.exploiter,
+            matchmaking,
             members: Vec::new(),
             candidates: Vec::new(),
             main: None,
@@ -133,7 +172,7 @@ impl<'a> LeagueHooks<'a> {
             opponent_rows: 0,
         };
         hooks.refresh()?;
-        if side == Side::Captors {
+        if side == Side::Captors && !seat.exploiter {
             // The window survives restarts: rebuilt from the matches the
             // store holds since the current stage began.
             let since = store.curriculum_history()?.last().map(|(_, _, _, at)| *at).unwrap_or(0);
@@ -161,6 +200,13 @@ impl<'a> LeagueHooks<'a> {
             .filter(|p| matches!(p.kind, Kind::Snapshot | Kind::Heuristic))
             .cloned()
             .collect();
+        let other_main_id = players.iter().find(|p| p.name == learner_name(other)).map(|p| p.id);
+        if self.exploiter {
+            // An exploiter's pool: the main learner's snapshots, and the
+            // heuristics to play until the main learner has one.
+            self.members
+                .retain(|m| m.kind == Kind::Heuristic || (m.parent.is_some() && m.parent == other_main_id));
+        }
         let payoff = self.store.payoff()?;
         self.candidates = self
             .members
@@ -183,14 +229,10 @@ impl<'a> LeagueHooks<'a> {
                 Candidate { player: m.id, wins, games }
             })
             .collect();
-        let other_main = players
-            .iter()
-            .find(|p| p.name == learner_name(other))
-            .map(|p| p.id);
         self.main = self
             .members
             .iter()
-            .filter(|m| m.kind == Kind::Snapshot && m.parent.is_some() && m.parent == other_main)
+            .filter(|m| m.kind == Kind::Snapshot && m.parent.is_some() && m.parent == other_main_id)
             .max_by_key(|m| m.env_steps)
             .map(|m| m.id);
         if let Some((stage, _, _, _)) = self.store.curriculum_history()?.last() {
@@ -217,7 +259,7 @@ impl<'a> LeagueHooks<'a> {
     fn draw(&mut self, venv: &mut VecEnv, e: usize) -> Result<WorldOpponent> {
         let other = self.other();
         let seed = draw_seed(self.cfg.seed, self.learner_id, e, venv.env(e).seed);
-        let mm = &self.cfg.matchmaking;
+        let mm = &self.matchmaking;
         let pick = if mm.slots == 0 {
             choose_opponent(&self.candidates, self.main, mm, seed)
         } else {
@@ -457,7 +499,7 @@ impl RolloutHooks for LeagueHooks<'_> {
             };
             self.games += 1;
             self.wins += won as u64;
-            if self.side == Side::Captors {
+            if self.side == Side::Captors && !self.exploiter {
                 if let Some(stage) = self.curriculum.record(&self.cfg.curriculum, w.speed, s.captured) {
                     let speed = self.curriculum.speed(&self.cfg.curriculum);
                     self.store.push_curriculum(
@@ -491,19 +533,21 @@ fn sample(p: &[f32], rng: &mut ChaCha8Rng) -> i64 {
     (p.len() - 1) as i64
 }
 
-/// Runs one main learner until its budget is spent or `stop` is set;
-/// checkpoints its own state and adds snapshots of itself to the pool.
-pub fn run_learner(dir: &LeagueDir, side: Side, stop: &AtomicBool) -> Result<()> {
+/// Runs one learner (main or exploiter) until its budget is spent or `stop`
+/// is set; checkpoints its own state and adds snapshots of itself to the
+/// pool (an exploiter then starts again from its initial weights).
+pub fn run_learner(dir: &LeagueDir, seat: Seat, stop: &AtomicBool) -> Result<()> {
+    let side = seat.side;
     let cfg = dir.config()?;
     let threads = dir.threads_per_learner(&cfg);
     tch::set_num_threads(threads as i32);
     let _ = rayon::ThreadPoolBuilder::new().num_threads(threads).build_global();
     let store = Store::open(&dir.root)?;
-    let name = learner_name(side);
+    let name = seat.name();
     let learner_id = store.add_player(&NewPlayer {
         name: name.clone(),
         side,
-        kind: Kind::Learner,
+        kind: if seat.exploiter { Kind::Exploiter } else { Kind::Learner },
         parent: None,
         env_steps: 0,
         curriculum_stage: 0,
@@ -511,8 +555,9 @@ pub fn run_learner(dir: &LeagueDir, side: Side, stop: &AtomicBool) -> Result<()>
     })?;
     let maps = crate::map::catalog::load_prepared(&cfg.maps)
         .with_context(|| format!("maps = \"{}\"", cfg.maps))?;
-    let tcfg = cfg.train_config(side);
-    let run_dir = dir.learner_dir(side);
+    let tcfg = cfg.seat_train_config(seat);
+    let run_dir = dir.seat_dir(seat);
+    let initial = run_dir.join("initial");
     let mut trainer = if run_dir.join("state.json").is_file() {
         let t = Trainer::resume(tcfg.clone(), maps, &run_dir)?;
         eprintln!("{name}: resuming at {} env steps", t.env_steps);
@@ -521,7 +566,11 @@ pub fn run_learner(dir: &LeagueDir, side: Side, stop: &AtomicBool) -> Result<()>
         std::fs::create_dir_all(&run_dir)?;
         Trainer::new(tcfg.clone(), maps)?
     };
-    let mut hooks = LeagueHooks::new(&store, dir, &cfg, side, learner_id)?;
+    if seat.exploiter && !initial.join("meta.json").is_file() {
+        // What every reset returns to (written once, before any training).
+        trainer.save_side(side, &initial)?;
+    }
+    let mut hooks = LeagueHooks::new(&store, dir, &cfg, seat, learner_id)?;
     hooks.vector_steps = trainer.env_steps / cfg.num_envs as u64;
     hooks.assign_all(trainer.venv_mut())?;
     let mut last_snapshot = store
@@ -540,22 +589,34 @@ pub fn run_learner(dir: &LeagueDir, side: Side, stop: &AtomicBool) -> Result<()>
         let m = trainer.iterate_with(&mut hooks)?;
         own_inference += m.time_inference;
         if trainer.iteration % cfg.checkpoint_every == 0 {
-            save_learner(&trainer, &store, dir, side, learner_id)?;
+            save_learner(&trainer, &store, dir, seat, learner_id)?;
         }
         let since = trainer.env_steps - last_snapshot;
         let (w, g) = (hooks.wins - wins_at_snapshot, hooks.games - games_at_snapshot);
-        let winning = g > 0 && w as f64 / g as f64 >= cfg.snapshots.win_rate;
-        if (since >= cfg.snapshots.every_env_steps && winning) || since >= cfg.snapshots.timeout_env_steps {
-            add_snapshot(&trainer, &store, dir, side, learner_id, hooks.curriculum.stage)?;
+        let (win_rate, timeout) = if seat.exploiter {
+            (cfg.exploiters.win_rate, cfg.exploiters.timeout_env_steps)
+        } else {
+            (cfg.snapshots.win_rate, cfg.snapshots.timeout_env_steps)
+        };
+        let winning = g > 0 && w as f64 / g as f64 >= win_rate;
+        if (since >= cfg.snapshots.every_env_steps && winning) || since >= timeout {
+            add_snapshot(&trainer, &store, dir, seat, learner_id, hooks.curriculum.stage)?;
             last_snapshot = trainer.env_steps;
             wins_at_snapshot = hooks.wins;
             games_at_snapshot = hooks.games;
+            if seat.exploiter {
+                trainer.reset_learner(side, &initial)?;
+                // The reset is the new resume point: a restart must not
+                // bring back the weights that were just snapshotted.
+                save_learner(&trainer, &store, dir, seat, learner_id)?;
+                eprintln!("{name}: back to its initial weights");
+            }
         }
         hooks.refresh()?;
         let steps = (cfg.num_envs * cfg.rollout_steps) as f64;
         store.heartbeat(&name, "training", trainer.env_steps, steps / started.elapsed().as_secs_f64())?;
     }
-    save_learner(&trainer, &store, dir, side, learner_id)?;
+    save_learner(&trainer, &store, dir, seat, learner_id)?;
     let state = if trainer.env_steps >= cfg.env_steps_per_learner {
         "done"
     } else {
@@ -582,8 +643,8 @@ pub fn run_learner(dir: &LeagueDir, side: Side, stop: &AtomicBool) -> Result<()>
 }
 
 /// The learner's own resume point, and its row pointed at it.
-fn save_learner(trainer: &Trainer, store: &Store, dir: &LeagueDir, side: Side, id: i64) -> Result<()> {
-    let run_dir = dir.learner_dir(side);
+fn save_learner(trainer: &Trainer, store: &Store, dir: &LeagueDir, seat: Seat, id: i64) -> Result<()> {
+    let run_dir = dir.seat_dir(seat);
     let written = trainer.save(&run_dir)?;
     if let Some(ckpt) = written.first() {
         let sha = crate::util::sha256_file(&ckpt.join("meta.json"))?;
@@ -599,11 +660,16 @@ fn add_snapshot(
     trainer: &Trainer,
     store: &Store,
     dir: &LeagueDir,
-    side: Side,
+    seat: Seat,
     learner_id: i64,
     stage: usize,
 ) -> Result<()> {
-    let name = format!("{}-snap-{:012}", side.name(), trainer.env_steps);
+    let side = seat.side;
+    let name = if seat.exploiter {
+        format!("{}-snap-{:012}", seat.name(), trainer.env_steps)
+    } else {
+        format!("{}-snap-{:012}", side.name(), trainer.env_steps)
+    };
     let folder = dir.players_dir().join(&name);
     trainer.save_side(side, &folder)?;
     let sha = crate::util::sha256_file(&folder.join("meta.json"))?;
@@ -616,7 +682,7 @@ fn add_snapshot(
         curriculum_stage: stage,
         checkpoint: Some((dir.relative(&folder), sha)),
     })?;
-    eprintln!("{}: snapshot {name} joins the pool", learner_name(side));
+    eprintln!("{}: snapshot {name} joins the pool", seat.name());
     Ok(())
 }
 

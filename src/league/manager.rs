@@ -15,7 +15,7 @@
 
 use super::config::LeagueConfig;
 use super::dir::LeagueDir;
-use super::learner::{ensure_heuristic_members, learner_name, reconcile};
+use super::learner::{ensure_heuristic_members, reconcile, Seat};
 use super::store::Store;
 use crate::env::Side;
 use anyhow::{bail, Context, Result};
@@ -81,14 +81,14 @@ pub fn parse_duration(text: &str) -> Result<Duration, String> {
 /// A child process the manager supervises.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Role {
-    Learner(Side),
+    Learner(Seat),
     Evaluator,
 }
 
 impl Role {
     fn name(self) -> String {
         match self {
-            Role::Learner(side) => learner_name(side),
+            Role::Learner(seat) => seat.name(),
             Role::Evaluator => "evaluator".into(),
         }
     }
@@ -117,7 +117,13 @@ fn spawn(dir: &LeagueDir, role: Role) -> Result<Child> {
         .open(role.log_path(dir))?;
     let mut cmd = Command::new(exe);
     match role {
-        Role::Learner(side) => cmd.arg("league-learner").arg("--side").arg(side.name()),
+        Role::Learner(seat) => {
+            cmd.arg("league-learner").arg("--side").arg(seat.side.name());
+            if seat.exploiter {
+                cmd.arg("--exploiter");
+            }
+            &mut cmd
+        }
         Role::Evaluator => cmd.arg("league-evaluator"),
     };
     cmd.arg("--dir")
@@ -211,27 +217,33 @@ pub fn run(dir: &LeagueDir, config: Option<&Path>, run_for: Option<Duration>, st
     for q in quarantined {
         eprintln!("quarantined {q}: its checkpoint files are missing or corrupt");
     }
+    let mut seats = vec![Seat::main(Side::Captors), Seat::main(Side::Target)];
     for side in [Side::Captors, Side::Target] {
+        if cfg.exploiters.enabled(side) {
+            seats.push(Seat::exploiter(side));
+        }
+    }
+    for seat in &seats {
         for sub in ["", "checkpoints"] {
-            crate::nn::checkpoint::clean_stale_temporaries(&dir.learner_dir(side).join(sub))?;
+            crate::nn::checkpoint::clean_stale_temporaries(&dir.seat_dir(*seat).join(sub))?;
         }
     }
 
-    let mut roles = vec![Role::Learner(Side::Captors), Role::Learner(Side::Target)];
+    let mut roles: Vec<Role> = seats.iter().map(|s| Role::Learner(*s)).collect();
     if cfg.evaluator.enabled {
         roles.push(Role::Evaluator);
     }
     let multi = MultiProgress::new();
-    let bars: Vec<ProgressBar> = [Side::Captors, Side::Target]
+    let bars: Vec<ProgressBar> = seats
         .iter()
-        .map(|side| {
+        .map(|seat| {
             let b = multi.add(ProgressBar::new(cfg.env_steps_per_learner));
             b.set_style(
                 ProgressStyle::with_template("{prefix:>12} [{bar:25}] {human_pos}/{human_len} steps {msg}")
                     .unwrap()
                     .progress_chars("=> "),
             );
-            b.set_prefix(learner_name(*side));
+            b.set_prefix(seat.name());
             b
         })
         .collect();

@@ -768,6 +768,21 @@ impl Trainer {
         Ok(())
     }
 
+    /// Puts `side`'s learner back to the checkpoint folder `dir` (weights,
+    /// Adam moments, return statistics) and clears its recurrent states; the
+    /// run's step and iteration counts go on (a league exploiter's reset).
+    pub fn reset_learner(&mut self, side: Side, dir: &Path) -> Result<()> {
+        let ls = self
+            .learners
+            .iter_mut()
+            .find(|l| l.side == side)
+            .with_context(|| format!("no {} learner in this run", side.name()))?;
+        persist::load_learner(dir, &mut ls.learner)?;
+        ls.actor_h = ls.actor_h.zeros_like();
+        ls.critic_h = ls.critic_h.zeros_like();
+        Ok(())
+    }
+
     pub fn learner_sides(&self) -> Vec<(Side, Algorithm)> {
         self.learners
             .iter()
