@@ -47,6 +47,12 @@ pub struct LeagueConfig {
     pub greedy_opponents: bool,
     /// Opponent networks kept loaded per learner.
     pub opponent_cache: usize,
+    /// A main learner more than this many env steps ahead of the other main
+    /// learner waits for it (0: never), so each side trains against the
+    /// other's current strength. Unpaced, the faster side (the one-robot
+    /// target runs about 2.5x the captors' env steps/s) spends its budget
+    /// against the other's early snapshots.
+    pub pace_env_steps: u64,
     pub captors: LearnerConfig,
     pub target: LearnerConfig,
     pub matchmaking: MatchmakingConfig,
@@ -157,6 +163,7 @@ impl Default for LeagueConfig {
             checkpoint_every: 5,
             greedy_opponents: false,
             opponent_cache: 8,
+            pace_env_steps: 20_000,
             captors: LearnerConfig::default(),
             target: LearnerConfig::default(),
             matchmaking: MatchmakingConfig::default(),

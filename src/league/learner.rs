@@ -521,6 +521,48 @@ impl RolloutHooks for LeagueHooks<'_> {
     }
 }
 
+/// Whether a main learner at `mine` env steps waits for the other main
+/// learner, given the other's last heartbeat (state, env steps, age in ms;
+/// None before its first): it does while it is more than `lead` ahead of a
+/// learner that is still training. A learner that is done, stopped or
+/// silent for two minutes (crashed, restarting) is not waited for.
+pub fn should_wait(mine: u64, other: Option<(&str, u64, i64)>, lead: u64) -> bool {
+    if lead == 0 {
+        return false;
+    }
+    match other {
+        None => mine > lead,
+        Some((state, steps, age_ms)) => {
+            matches!(state, "training" | "waiting") && age_ms < 120_000 && mine > steps.saturating_add(lead)
+        }
+    }
+}
+
+/// Waits (heartbeating "waiting") while `should_wait`; returns the seconds waited.
+fn wait_for_other_main(store: &Store, seat: Seat, mine: u64, lead: u64, stop: &AtomicBool) -> Result<f64> {
+    let other = learner_name(match seat.side {
+        Side::Captors => Side::Target,
+        Side::Target => Side::Captors,
+    });
+    let started = Instant::now();
+    let mut announced = false;
+    while !stop.load(Ordering::SeqCst) {
+        let beats = store.heartbeats()?;
+        let now = super::store::now_ms();
+        let theirs = beats.iter().find(|b| b.0 == other).map(|b| (b.2.as_str(), b.3, now - b.5));
+        if !should_wait(mine, theirs, lead) {
+            break;
+        }
+        if !announced {
+            eprintln!("{}: {} env steps ahead of {other} by more than {lead}: waiting for it", seat.name(), mine);
+            announced = true;
+        }
+        store.heartbeat(&seat.name(), "waiting", mine, 0.0)?;
+        std::thread::sleep(std::time::Duration::from_millis(500));
+    }
+    Ok(started.elapsed().as_secs_f64())
+}
+
 /// Draws an action index from (unnormalised) probabilities.
 fn sample(p: &[f32], rng: &mut ChaCha8Rng) -> i64 {
     let mut u = rng.gen::<f32>() * p.iter().sum::<f32>();
@@ -584,7 +626,14 @@ pub fn run_learner(dir: &LeagueDir, seat: Seat, stop: &AtomicBool) -> Result<()>
     store.heartbeat(&name, "training", trainer.env_steps, 0.0)?;
     let (segment_start, steps_at_start) = (Instant::now(), trainer.env_steps);
     let mut own_inference = 0.0;
+    let mut waited = 0.0;
     while trainer.env_steps < cfg.env_steps_per_learner && !stop.load(Ordering::SeqCst) {
+        if !seat.exploiter {
+            waited += wait_for_other_main(&store, seat, trainer.env_steps, cfg.pace_env_steps, stop)?;
+            if stop.load(Ordering::SeqCst) {
+                break;
+            }
+        }
         let started = Instant::now();
         let m = trainer.iterate_with(&mut hooks)?;
         own_inference += m.time_inference;
@@ -622,11 +671,11 @@ pub fn run_learner(dir: &LeagueDir, seat: Seat, stop: &AtomicBool) -> Result<()>
     } else {
         "stopped"
     };
-    let secs = segment_start.elapsed().as_secs_f64();
+    let secs = segment_start.elapsed().as_secs_f64() - waited;
     let rate = (trainer.env_steps - steps_at_start) as f64 / secs.max(1e-9);
     store.heartbeat(&name, state, trainer.env_steps, rate)?;
     eprintln!(
-        "{name}: {state} at {} env steps, {} matches recorded; this run {:.1} s, {rate:.0} env steps/s",
+        "{name}: {state} at {} env steps, {} matches recorded; this run {:.1} s training ({waited:.1} s waiting for the other side), {rate:.0} env steps/s",
         trainer.env_steps, hooks.matches_recorded, secs
     );
     let team = side.agents(cfg.num_captors).len() as f64;
@@ -734,3 +783,22 @@ pub fn ensure_heuristic_members(store: &Store) -> Result<()> {
     }
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_learner_waits_only_for_a_live_learner_it_is_far_ahead_of() {
+        assert!(!should_wait(50_000, Some(("training", 0, 10)), 0), "0: never");
+        assert!(should_wait(30_001, Some(("training", 10_000, 1_000)), 20_000));
+        assert!(!should_wait(30_000, Some(("training", 10_000, 1_000)), 20_000), "exactly the lead");
+        assert!(should_wait(30_001, Some(("waiting", 10_000, 1_000)), 20_000));
+        assert!(!should_wait(90_000, Some(("done", 10_000, 1_000)), 20_000), "done: nothing to wait for");
+        assert!(!should_wait(90_000, Some(("stopped", 10_000, 1_000)), 20_000));
+        assert!(!should_wait(90_000, Some(("training", 10_000, 130_000)), 20_000), "silent: crashed");
+        assert!(should_wait(20_001, None, 20_000), "not started yet");
+        assert!(!should_wait(5_000, None, 20_000));
+    }
+}
+
