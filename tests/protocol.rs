@@ -109,8 +109,14 @@ fn a_config_file_must_name_its_protocol() {
     let err = format!("{:#}", TrainConfig::load(&train).unwrap_err());
     assert!(err.contains("train.toml") && err.contains("heldout"), "{err}");
 
+    // A run folder's own config.toml from before the field reads as held-out.
+    std::fs::write(&train, "name = \"x\"\nmaps = \"shipped\"\n").unwrap();
+    assert_eq!(TrainConfig::load_stored(&train).unwrap().protocol, Protocol::HeldOut);
+
     let league = dir.path().join("league.toml");
     std::fs::write(&league, "name = \"l\"\nmaps = \"shipped\"\n").unwrap();
     let err = format!("{:#}", t2e::league::config::LeagueConfig::load(&league).unwrap_err());
     assert!(err.contains("league.toml") && err.contains("protocol: missing"), "{err}");
+    let stored = t2e::league::config::LeagueConfig::load_stored(&league).unwrap();
+    assert_eq!(stored.protocol, Protocol::HeldOut);
 }

@@ -35,12 +35,11 @@ pub struct TrainArgs {
 static STOP: AtomicBool = AtomicBool::new(false);
 
 pub fn run(args: TrainArgs) -> Result<()> {
-    let config_path = match (&args.config, &args.out, args.resume) {
-        (Some(p), _, _) => p.clone(),
-        (None, Some(out), true) => out.join("config.toml"),
+    let mut cfg = match (&args.config, &args.out, args.resume) {
+        (Some(p), _, _) => TrainConfig::load(p)?,
+        (None, Some(out), true) => TrainConfig::load_stored(&out.join("config.toml"))?,
         _ => bail!("--config is required (or --resume --out RUN_FOLDER to reuse a run's config)"),
     };
-    let mut cfg = TrainConfig::load(&config_path)?;
     if let Some(s) = args.total_env_steps {
         cfg.total_env_steps = s;
     }

@@ -176,10 +176,24 @@ impl Default for LeagueConfig {
 }
 
 impl LeagueConfig {
+    /// A config file as a user wrote it: it must name its protocol.
     pub fn load(path: &Path) -> Result<LeagueConfig> {
+        Self::read(path, true)
+    }
+
+    /// A league directory's own `config.toml`, written by this program. One
+    /// written before configs named their protocol reads as held-out: the
+    /// Gibson maps were refused for training then.
+    pub fn load_stored(path: &Path) -> Result<LeagueConfig> {
+        Self::read(path, false)
+    }
+
+    fn read(path: &Path, require_protocol: bool) -> Result<LeagueConfig> {
         let text = std::fs::read_to_string(path)
             .with_context(|| format!("{}: cannot read", path.display()))?;
-        crate::protocol::require_named(&text).map_err(|e| anyhow!("{}: {e}", path.display()))?;
+        if require_protocol {
+            crate::protocol::require_named(&text).map_err(|e| anyhow!("{}: {e}", path.display()))?;
+        }
         Self::parse(&text).map_err(|e| anyhow!("{}: {e}", path.display()))
     }
 

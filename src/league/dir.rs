@@ -31,7 +31,7 @@ impl LeagueDir {
     }
 
     pub fn config(&self) -> Result<LeagueConfig> {
-        LeagueConfig::load(&self.config_path())
+        LeagueConfig::load_stored(&self.config_path())
     }
 
     pub fn learner_dir(&self, side: Side) -> PathBuf {

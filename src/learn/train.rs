@@ -124,10 +124,24 @@ impl SideConfig {
 
 impl TrainConfig {
     /// Reads a TOML config; errors name the file and the field.
+    /// A config file as a user wrote it: it must name its protocol.
     pub fn load(path: &Path) -> Result<TrainConfig> {
+        Self::read(path, true)
+    }
+
+    /// A run folder's own `config.toml`, written by this program. One written
+    /// before configs named their protocol reads as held-out: the Gibson maps
+    /// were refused for training then.
+    pub fn load_stored(path: &Path) -> Result<TrainConfig> {
+        Self::read(path, false)
+    }
+
+    fn read(path: &Path, require_protocol: bool) -> Result<TrainConfig> {
         let text = std::fs::read_to_string(path)
             .with_context(|| format!("{}: cannot read", path.display()))?;
-        crate::protocol::require_named(&text).map_err(|e| anyhow!("{}: {e}", path.display()))?;
+        if require_protocol {
+            crate::protocol::require_named(&text).map_err(|e| anyhow!("{}: {e}", path.display()))?;
+        }
         let cfg: TrainConfig =
             toml::from_str(&text).map_err(|e| anyhow!("{}: {e}", path.display()))?;
         cfg.validate()
