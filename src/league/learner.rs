@@ -15,7 +15,7 @@ use super::matchmaking::{choose_opponent, draw_seed, pick_slot, slot_seed, Candi
 use super::store::{Kind, MatchRecord, NewPlayer, Player, Store};
 use crate::controllers::ControllerSpec;
 use crate::env::{Action, Side, VecEnv};
-use crate::learn::acting::gather_worlds;
+use crate::learn::acting::{gather_worlds, sample};
 use crate::learn::train::{RolloutHooks, Trainer};
 use crate::nn::stacked::{PreparedActor, StackedActors};
 use crate::nn::PolicySnapshot;
@@ -450,7 +450,7 @@ impl RolloutHooks for LeagueHooks<'_> {
                 probs.copy_data(&mut pr, n * Action::COUNT);
                 for (i, id) in stack.ids.iter().enumerate() {
                     for row in i * r..i * r + groups[id].len() * team {
-                        chosen[row] = sample(&pr[row * Action::COUNT..(row + 1) * Action::COUNT], &mut self.rng);
+                        chosen[row] = sample(&pr[row * Action::COUNT..(row + 1) * Action::COUNT], &mut self.rng) as i64;
                     }
                 }
             }
@@ -561,18 +561,6 @@ fn wait_for_other_main(store: &Store, seat: Seat, mine: u64, lead: u64, stop: &A
         std::thread::sleep(std::time::Duration::from_millis(500));
     }
     Ok(started.elapsed().as_secs_f64())
-}
-
-/// Draws an action index from (unnormalised) probabilities.
-fn sample(p: &[f32], rng: &mut ChaCha8Rng) -> i64 {
-    let mut u = rng.gen::<f32>() * p.iter().sum::<f32>();
-    for (i, &x) in p.iter().enumerate() {
-        if u < x {
-            return i as i64;
-        }
-        u -= x;
-    }
-    (p.len() - 1) as i64
 }
 
 /// Runs one learner (main or exploiter) until its budget is spent or `stop`

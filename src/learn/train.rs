@@ -17,10 +17,10 @@ use crate::controllers::ControllerSpec;
 use crate::map::PreparedMap;
 use super::persist::{self, RunState};
 use crate::nn::checkpoint::{checkpoint_name, clean_stale_temporaries, code_version, CheckpointMeta, FORMAT};
-use super::acting::{gather_side, gather_worlds};
+use super::acting::{gather_side, gather_worlds, sample};
 use crate::nn::{obs_tensors, NetConfig};
 use anyhow::{anyhow, bail, Context, Result};
-use rand::{Rng, SeedableRng};
+use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use crate::protocol::Protocol;
 use serde::{Deserialize, Serialize};
@@ -848,19 +848,6 @@ fn value_truncated_states(
     for (row, value) in rows.iter().zip(out) {
         ls.rollout.final_values[base + *row as usize] = value;
     }
-}
-
-/// Draws an index from a categorical distribution.
-fn sample(p: &[f32], rng: &mut ChaCha8Rng) -> usize {
-    let total: f32 = p.iter().sum();
-    let mut u = rng.gen::<f32>() * total;
-    for (i, &x) in p.iter().enumerate() {
-        if u < x {
-            return i;
-        }
-        u -= x;
-    }
-    p.len() - 1
 }
 
 #[cfg(test)]
