@@ -32,15 +32,23 @@ impl Protocol {
     /// What the protocol means, for error messages and table notes.
     pub fn describe(self) -> &'static str {
         match self {
-            Protocol::HeldOut => "held-out: trained on generated maps, tested on the unseen Gibson maps",
-            Protocol::Paper => "paper: trained on the 26 Gibson maps and tested on them, as the paper did",
+            Protocol::HeldOut => {
+                "held-out: trained on generated maps, tested on the unseen Gibson maps"
+            }
+            Protocol::Paper => {
+                "paper: trained on the 26 Gibson maps and tested on them, as the paper did"
+            }
         }
     }
 
     /// Checks that the training maps fit the protocol: none of the Gibson
     /// test maps under held-out, only Gibson maps under paper. `spec` is the
     /// config's `maps` value, for the message.
-    pub fn check_training_maps(self, spec: &str, maps: &[std::sync::Arc<PreparedMap>]) -> Result<(), String> {
+    pub fn check_training_maps(
+        self,
+        spec: &str,
+        maps: &[std::sync::Arc<PreparedMap>],
+    ) -> Result<(), String> {
         for m in maps {
             let gibson = crate::map::testset::gibson_name(&m.grid);
             match (self, gibson) {
@@ -88,7 +96,9 @@ mod tests {
 
     #[test]
     fn configs_must_name_it_and_names_round_trip() {
-        assert!(require_named("seed = 1\n").unwrap_err().contains("protocol: missing"));
+        assert!(require_named("seed = 1\n")
+            .unwrap_err()
+            .contains("protocol: missing"));
         assert!(require_named("protocol = \"paper\"\nseed = 1\n").is_ok());
         #[derive(Deserialize)]
         struct C {

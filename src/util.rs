@@ -65,6 +65,9 @@ mod tests {
         assert_eq!(safe_component("..", 60), "_");
         assert_eq!(safe_component("heuristic", 60), "heuristic");
         assert_eq!(safe_component("a/b\\c d", 3), "a_b");
-        assert_eq!(sha256_hex(b"abc"), "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad");
+        assert_eq!(
+            sha256_hex(b"abc"),
+            "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad"
+        );
     }
 }

@@ -93,9 +93,8 @@ fn load_traces() -> Option<Traces> {
             collided: false,
         };
         let map = record[map_col].to_string();
-        maps.entry(map.clone()).or_insert_with(|| {
-            Arc::new(PreparedMap::new(load_png(&gibson.join(&map)).unwrap()))
-        });
+        maps.entry(map.clone())
+            .or_insert_with(|| Arc::new(PreparedMap::new(load_png(&gibson.join(&map)).unwrap())));
         rows.push(Row {
             map,
             target_speed: num(speed_col),
@@ -105,7 +104,12 @@ fn load_traces() -> Option<Traces> {
             captured: num(captured_col) != 0.0,
         });
     }
-    assert!(rows.len() > 10_000, "{}: only {} rows", path.display(), rows.len());
+    assert!(
+        rows.len() > 10_000,
+        "{}: only {} rows",
+        path.display(),
+        rows.len()
+    );
     Some(Traces { rows, maps })
 }
 

@@ -1,8 +1,8 @@
 //! The evaluation protocol end to end on real maps.
 
 use std::sync::Arc;
-use t2e::eval::{self, EvalSetting};
 use t2e::controllers::ControllerSpec;
+use t2e::eval::{self, EvalSetting};
 use t2e::map::{self, PreparedMap};
 
 fn shipped_small() -> Arc<Vec<Arc<PreparedMap>>> {

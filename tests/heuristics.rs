@@ -1,9 +1,9 @@
 //! The rule-based robots of spec §7 and the controller catalogue.
 
 use t2e::asz::Source;
+use t2e::controllers::ControllerSpec;
 use t2e::env::physics::{self, Robot};
 use t2e::env::*;
-use t2e::controllers::ControllerSpec;
 use t2e::heuristics::*;
 use t2e::map::Grid;
 

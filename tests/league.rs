@@ -79,14 +79,26 @@ fn check(dir: &LeagueDir) -> (u64, Vec<u64>) {
     let mut seen = BTreeSet::new();
     for p in &players {
         assert!(
-            seen.insert((p.side.name(), p.kind.name(), p.parent, p.env_steps, p.name.clone())),
+            seen.insert((
+                p.side.name(),
+                p.kind.name(),
+                p.parent,
+                p.env_steps,
+                p.name.clone()
+            )),
             "duplicate {p:?}"
         );
     }
-    let snapshots: Vec<_> = players.iter().filter(|p| p.kind == Kind::Snapshot).collect();
+    let snapshots: Vec<_> = players
+        .iter()
+        .filter(|p| p.kind == Kind::Snapshot)
+        .collect();
     let mut steps = BTreeSet::new();
     for s in &snapshots {
-        assert!(steps.insert((s.side.name(), s.env_steps)), "two snapshots of one state: {s:?}");
+        assert!(
+            steps.insert((s.side.name(), s.env_steps)),
+            "two snapshots of one state: {s:?}"
+        );
     }
     // No orphan file: every snapshot folder has a row, every row its files.
     let rels: BTreeSet<String> = players
@@ -100,7 +112,11 @@ fn check(dir: &LeagueDir) -> (u64, Vec<u64>) {
             if name.starts_with('.') {
                 continue; // a temporary a killed writer left: removed at the next start
             }
-            assert!(rels.contains(&dir.relative(&path)), "orphan {}", path.display());
+            assert!(
+                rels.contains(&dir.relative(&path)),
+                "orphan {}",
+                path.display()
+            );
         }
     }
     for s in &snapshots {
@@ -118,7 +134,11 @@ fn check(dir: &LeagueDir) -> (u64, Vec<u64>) {
     }
     let resume: Vec<u64> = [Side::Captors, Side::Target]
         .iter()
-        .map(|&side| RunState::read(&dir.learner_dir(side)).map(|s| s.env_steps).unwrap_or(0))
+        .map(|&side| {
+            RunState::read(&dir.learner_dir(side))
+                .map(|s| s.env_steps)
+                .unwrap_or(0)
+        })
         .collect();
     (store.match_count().unwrap(), resume)
 }
@@ -127,11 +147,21 @@ fn check(dir: &LeagueDir) -> (u64, Vec<u64>) {
 fn learner_pids(manager: u32) -> Vec<i64> {
     let mut pids = Vec::new();
     for e in std::fs::read_dir("/proc").unwrap().flatten() {
-        let Ok(pid) = e.file_name().to_string_lossy().parse::<i64>() else { continue };
-        let Ok(stat) = std::fs::read_to_string(e.path().join("stat")) else { continue };
+        let Ok(pid) = e.file_name().to_string_lossy().parse::<i64>() else {
+            continue;
+        };
+        let Ok(stat) = std::fs::read_to_string(e.path().join("stat")) else {
+            continue;
+        };
         // Fields after the command name (which may hold spaces): state, ppid, ...
-        let Some(rest) = stat.rsplit_once(')').map(|(_, r)| r) else { continue };
-        let ppid: u32 = rest.split_whitespace().nth(1).and_then(|x| x.parse().ok()).unwrap_or(0);
+        let Some(rest) = stat.rsplit_once(')').map(|(_, r)| r) else {
+            continue;
+        };
+        let ppid: u32 = rest
+            .split_whitespace()
+            .nth(1)
+            .and_then(|x| x.parse().ok())
+            .unwrap_or(0);
         if ppid == manager {
             pids.push(pid);
         }
@@ -173,9 +203,15 @@ fn killed_at_random_moments_the_league_loses_and_duplicates_nothing() {
         // Children die with the manager (PR_SET_PDEATHSIG); give them a moment.
         std::thread::sleep(Duration::from_millis(500));
         let (m, r) = check(&dir);
-        assert!(m >= matches, "round {round}: matches went from {matches} to {m}");
+        assert!(
+            m >= matches,
+            "round {round}: matches went from {matches} to {m}"
+        );
         for (side, (before, now)) in resume.iter().zip(&r).enumerate() {
-            assert!(now >= before, "round {round}, learner {side}: resume point went back from {before} to {now}");
+            assert!(
+                now >= before,
+                "round {round}, learner {side}: resume point went back from {before} to {now}"
+            );
         }
         eprintln!("round {round}: killed the {victim}; {m} matches, resume points {r:?}");
         (matches, resume) = (m, r);
@@ -196,7 +232,10 @@ fn killed_at_random_moments_the_league_loses_and_duplicates_nothing() {
                 killed_once = true;
             }
         }
-        assert!(Instant::now() < deadline, "the league did not finish in time");
+        assert!(
+            Instant::now() < deadline,
+            "the league did not finish in time"
+        );
         std::thread::sleep(Duration::from_millis(200));
     }
     let (m, r) = check(&dir);
@@ -206,7 +245,10 @@ fn killed_at_random_moments_the_league_loses_and_duplicates_nothing() {
     let beats = store.heartbeats().unwrap();
     assert!(beats.iter().all(|b| b.2 == "done"), "{beats:?}");
     if killed_once {
-        assert!(!store.crashes().unwrap().is_empty(), "the killed learner is recorded as a crash");
+        assert!(
+            !store.crashes().unwrap().is_empty(),
+            "the killed learner is recorded as a crash"
+        );
     }
     // status: every player, ratings for those who played, a payoff row per pair.
     let report = t2e::league::status::report(&dir).unwrap();
@@ -215,14 +257,28 @@ fn killed_at_random_moments_the_league_loses_and_duplicates_nothing() {
     let games: u64 = report.payoff.iter().map(|p| p.games).sum();
     assert_eq!(games, m, "the payoff table holds every match once");
     for p in report.players.iter().filter(|p| p.games > 0) {
-        assert!(p.rating.is_finite() && p.rating_sigma > 0.0 && p.bt_elo.is_finite(), "{p:?}");
+        assert!(
+            p.rating.is_finite() && p.rating_sigma > 0.0 && p.bt_elo.is_finite(),
+            "{p:?}"
+        );
     }
     let json: serde_json::Value = serde_json::to_value(&report).unwrap();
-    for key in ["league", "matches", "players", "curriculum", "learners", "payoff", "crashes"] {
+    for key in [
+        "league",
+        "matches",
+        "players",
+        "curriculum",
+        "learners",
+        "payoff",
+        "crashes",
+    ] {
         assert!(json.get(key).is_some(), "status --json lacks {key}");
     }
     let text = t2e::league::status::render(&report);
-    assert!(text.contains("payoff") && text.contains("captors-main"), "{text}");
+    assert!(
+        text.contains("payoff") && text.contains("captors-main"),
+        "{text}"
+    );
     let png = tmp.path().join("status.png");
     t2e::league::status::plot(&dir, &report, &png).unwrap();
     assert!(image::open(&png).unwrap().width() >= 900);
@@ -235,24 +291,43 @@ fn killed_at_random_moments_the_league_loses_and_duplicates_nothing() {
     let sums = std::fs::read_to_string(out.join("SHA256SUMS")).unwrap();
     for line in sums.lines() {
         let (sha, name) = line.split_once("  ").unwrap();
-        assert_eq!(t2e::util::sha256_file(&out.join(name)).unwrap(), sha, "{name}");
+        assert_eq!(
+            t2e::util::sha256_file(&out.join(name)).unwrap(),
+            sha,
+            "{name}"
+        );
     }
-    for f in ["actor.safetensors", "meta.json", "league-config.toml", "ratings.csv", "player.json"] {
+    for f in [
+        "actor.safetensors",
+        "meta.json",
+        "league-config.toml",
+        "ratings.csv",
+        "player.json",
+    ] {
         assert!(sums.contains(f), "{f} missing from the export");
     }
     let spec: t2e::controllers::ControllerSpec = format!("ckpt:{}", out.display()).parse().unwrap();
-    let cfg = t2e::env::EnvConfig { num_captors: 2, ..Default::default() };
+    let cfg = t2e::env::EnvConfig {
+        num_captors: 2,
+        ..Default::default()
+    };
     spec.check(Side::Target, &cfg).unwrap();
-    assert!(t2e::league::status::export(&dir, "no-such-player", &tmp.path().join("x"))
-        .unwrap_err()
-        .to_string()
-        .contains("no player"));
+    assert!(
+        t2e::league::status::export(&dir, "no-such-player", &tmp.path().join("x"))
+            .unwrap_err()
+            .to_string()
+            .contains("no player")
+    );
 
     // A second manager on a live league is refused.
     let _held = t2e::league::manager::try_lock(&dir.root.join("league.lock"))
         .unwrap()
         .unwrap();
-    let out = Command::new(bin()).args(["run", "--dir"]).arg(&dir.root).output().unwrap();
+    let out = Command::new(bin())
+        .args(["run", "--dir"])
+        .arg(&dir.root)
+        .output()
+        .unwrap();
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("already running"), "{err}");
@@ -264,8 +339,14 @@ fn exploiters_play_the_main_learners_join_the_pool_and_start_again() {
     let dir = LeagueDir::new(&tmp.path().join("league"));
     let config = tmp.path().join("league.toml");
     let text = CONFIG
-        .replace("env_steps_per_learner = 9_600", "env_steps_per_learner = 3_200")
-        .replace("[evaluator]\nepisodes = 3", "[evaluator]\nenabled = false\nepisodes = 3")
+        .replace(
+            "env_steps_per_learner = 9_600",
+            "env_steps_per_learner = 3_200",
+        )
+        .replace(
+            "[evaluator]\nepisodes = 3",
+            "[evaluator]\nenabled = false\nepisodes = 3",
+        )
         + "[exploiters]\ncaptors = true\ntarget = true\nwin_rate = 0.99\ntimeout_env_steps = 960\n";
     std::fs::write(&config, text).unwrap();
     let out = Command::new(bin())
@@ -275,7 +356,11 @@ fn exploiters_play_the_main_learners_join_the_pool_and_start_again() {
         .arg(&dir.root)
         .output()
         .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
 
     let store = Store::open(&dir.root).unwrap();
     let players = store.players().unwrap();
@@ -292,14 +377,26 @@ fn exploiters_play_the_main_learners_join_the_pool_and_start_again() {
             .unwrap_or_else(|| panic!("no {} exploiter in {players:?}", side.name()));
         assert_eq!(exploiter.kind, Kind::Exploiter);
         // It snapshots into the pool (the timeout: it cannot reach 99%)...
-        let snaps: Vec<_> = players.iter().filter(|p| p.parent == Some(exploiter.id)).collect();
+        let snaps: Vec<_> = players
+            .iter()
+            .filter(|p| p.parent == Some(exploiter.id))
+            .collect();
         assert!(!snaps.is_empty(), "no snapshot of {}", exploiter.name);
         for s in &snaps {
             assert_eq!(s.kind, Kind::Snapshot);
-            assert!(s.name.starts_with(&format!("{}-snap-", exploiter.name)), "{}", s.name);
+            assert!(
+                s.name.starts_with(&format!("{}-snap-", exploiter.name)),
+                "{}",
+                s.name
+            );
         }
         // ...then starts again from its initial weights.
-        let log = std::fs::read_to_string(dir.root.join("logs").join(format!("{}.log", exploiter.name))).unwrap();
+        let log = std::fs::read_to_string(
+            dir.root
+                .join("logs")
+                .join(format!("{}.log", exploiter.name)),
+        )
+        .unwrap();
         assert!(log.contains("back to its initial weights"), "{log}");
         // It plays only the other side's main learner (its snapshots), or
         // the heuristic member before the main learner has one.

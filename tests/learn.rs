@@ -6,9 +6,9 @@ mod common;
 use common::{maps, room};
 use std::path::Path;
 use std::sync::Arc;
+use t2e::controllers::ControllerSpec;
 use t2e::env::{EnvConfig, Side, TrapEnv};
 use t2e::eval::{self, EvalSetting};
-use t2e::controllers::ControllerSpec;
 use t2e::learn::train::{SideConfig, TrainConfig, Trainer};
 use t2e::nn::checkpoint::{named_cpu_tensors, read_meta};
 use t2e::nn::{NetConfig, PolicySnapshot};
@@ -187,7 +187,9 @@ fn a_sidecar_that_does_not_match_the_weights_is_a_clear_error() {
     let dir = tempfile::tempdir().unwrap();
     let trainer = Trainer::new(chase_config(3), chase_maps()).unwrap();
     let ckpt = trainer.save(dir.path()).unwrap().remove(0);
-    if let Err(e) = PolicySnapshot::load(&ckpt, Side::Captors) { panic!("{e:#}"); }
+    if let Err(e) = PolicySnapshot::load(&ckpt, Side::Captors) {
+        panic!("{e:#}");
+    }
 
     edit_meta(&ckpt, "\"hidden\": 32", "\"hidden\": 64");
     let err = format!(

@@ -49,7 +49,10 @@ fn tiny(protocol: Protocol, maps: &str) -> TrainConfig {
 fn the_protocol_decides_the_training_maps_and_travels_into_the_tables() {
     tch::set_num_threads(1);
     let Some(_) = catalog::gibson_dir() else {
-        assert!(std::env::var_os("CI").is_none(), "Gibson maps missing in CI");
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "Gibson maps missing in CI"
+        );
         return;
     };
     let gibson = catalog::load_prepared("gibson").unwrap();
@@ -57,9 +60,18 @@ fn the_protocol_decides_the_training_maps_and_travels_into_the_tables() {
     assert_eq!(gibson.len(), 26);
 
     // Held-out refuses the test maps; paper refuses anything else.
-    let err = Trainer::new(tiny(Protocol::HeldOut, "gibson"), gibson.clone()).err().unwrap().to_string();
-    assert!(err.contains("test set") && err.contains("protocol = \"paper\""), "{err}");
-    let err = Trainer::new(tiny(Protocol::Paper, "shipped"), shipped.clone()).err().unwrap().to_string();
+    let err = Trainer::new(tiny(Protocol::HeldOut, "gibson"), gibson.clone())
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(
+        err.contains("test set") && err.contains("protocol = \"paper\""),
+        "{err}"
+    );
+    let err = Trainer::new(tiny(Protocol::Paper, "shipped"), shipped.clone())
+        .err()
+        .unwrap()
+        .to_string();
     assert!(err.contains("not one of the 26 Gibson maps"), "{err}");
     let mixed: Vec<_> = gibson.iter().chain(shipped.iter()).cloned().collect();
     assert!(Trainer::new(tiny(Protocol::Paper, "mixed"), Arc::new(mixed)).is_err());
@@ -67,17 +79,27 @@ fn the_protocol_decides_the_training_maps_and_travels_into_the_tables() {
     // Each trains where it may, and its checkpoint says under which protocol.
     let runs = tempfile::tempdir().unwrap();
     let mut dirs = Vec::new();
-    for (protocol, maps, spec) in [(Protocol::Paper, gibson.clone(), "gibson"), (Protocol::HeldOut, shipped.clone(), "shipped")] {
+    for (protocol, maps, spec) in [
+        (Protocol::Paper, gibson.clone(), "gibson"),
+        (Protocol::HeldOut, shipped.clone(), "shipped"),
+    ] {
         let mut t = Trainer::new(tiny(protocol, spec), maps).unwrap();
         t.iterate().unwrap();
-        let dir = t.save(&runs.path().join(protocol.name())).unwrap().remove(0);
+        let dir = t
+            .save(&runs.path().join(protocol.name()))
+            .unwrap()
+            .remove(0);
         assert_eq!(read_meta(&dir).unwrap().protocol, protocol);
         dirs.push(dir);
     }
 
     // Eval tables carry it: one learned side, both, or none.
     let small = catalog::load_prepared("gibson:small").unwrap();
-    let ckpt = |d: &std::path::Path| format!("ckpt:{}", d.display()).parse::<ControllerSpec>().unwrap();
+    let ckpt = |d: &std::path::Path| {
+        format!("ckpt:{}", d.display())
+            .parse::<ControllerSpec>()
+            .unwrap()
+    };
     let setting = |captors: ControllerSpec| EvalSetting {
         captors,
         num_captors: 2,
@@ -88,7 +110,11 @@ fn the_protocol_decides_the_training_maps_and_travels_into_the_tables() {
     };
     let (paper, _) = eval::run(&setting(ckpt(&dirs[0])), &small, "small", false).unwrap();
     assert_eq!(paper.protocol, "paper");
-    assert!(paper.table_row().contains("| paper |"), "{}", paper.table_row());
+    assert!(
+        paper.table_row().contains("| paper |"),
+        "{}",
+        paper.table_row()
+    );
     assert!(eval::TABLE_HEADER.contains("| protocol |"));
     let (held_out, _) = eval::run(&setting(ckpt(&dirs[1])), &small, "small", false).unwrap();
     assert_eq!(held_out.protocol, "held-out");
@@ -102,21 +128,40 @@ fn a_config_file_must_name_its_protocol() {
     let train = dir.path().join("train.toml");
     std::fs::write(&train, "name = \"x\"\nmaps = \"shipped\"\n").unwrap();
     let err = format!("{:#}", TrainConfig::load(&train).unwrap_err());
-    assert!(err.contains("train.toml") && err.contains("protocol: missing"), "{err}");
-    std::fs::write(&train, "name = \"x\"\nprotocol = \"paper\"\nmaps = \"gibson\"\n").unwrap();
+    assert!(
+        err.contains("train.toml") && err.contains("protocol: missing"),
+        "{err}"
+    );
+    std::fs::write(
+        &train,
+        "name = \"x\"\nprotocol = \"paper\"\nmaps = \"gibson\"\n",
+    )
+    .unwrap();
     assert_eq!(TrainConfig::load(&train).unwrap().protocol, Protocol::Paper);
     std::fs::write(&train, "name = \"x\"\nprotocol = \"heldout\"\n").unwrap();
     let err = format!("{:#}", TrainConfig::load(&train).unwrap_err());
-    assert!(err.contains("train.toml") && err.contains("heldout"), "{err}");
+    assert!(
+        err.contains("train.toml") && err.contains("heldout"),
+        "{err}"
+    );
 
     // A run folder's own config.toml from before the field reads as held-out.
     std::fs::write(&train, "name = \"x\"\nmaps = \"shipped\"\n").unwrap();
-    assert_eq!(TrainConfig::load_stored(&train).unwrap().protocol, Protocol::HeldOut);
+    assert_eq!(
+        TrainConfig::load_stored(&train).unwrap().protocol,
+        Protocol::HeldOut
+    );
 
     let league = dir.path().join("league.toml");
     std::fs::write(&league, "name = \"l\"\nmaps = \"shipped\"\n").unwrap();
-    let err = format!("{:#}", t2e::league::config::LeagueConfig::load(&league).unwrap_err());
-    assert!(err.contains("league.toml") && err.contains("protocol: missing"), "{err}");
+    let err = format!(
+        "{:#}",
+        t2e::league::config::LeagueConfig::load(&league).unwrap_err()
+    );
+    assert!(
+        err.contains("league.toml") && err.contains("protocol: missing"),
+        "{err}"
+    );
     let stored = t2e::league::config::LeagueConfig::load_stored(&league).unwrap();
     assert_eq!(stored.protocol, Protocol::HeldOut);
 }

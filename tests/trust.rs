@@ -65,8 +65,16 @@ fn eval_never_mixes_up_settings() {
     t2e::cli::eval::run(args).unwrap();
     let r104 = summaries(out.path())[0].clone();
     assert_eq!(r104.speed_ratio, 1.04);
-    assert!(r104.table_row().contains("1.0:1.04"), "{}", r104.table_row());
-    assert_eq!(setting_dirs(out.path()).len(), 2, "1.04 got a folder of its own");
+    assert!(
+        r104.table_row().contains("1.0:1.04"),
+        "{}",
+        r104.table_row()
+    );
+    assert_eq!(
+        setting_dirs(out.path()).len(),
+        2,
+        "1.04 got a folder of its own"
+    );
 
     // The strict rule, resumed: its own result.
     let mut args = eval_args(out.path());
@@ -100,7 +108,10 @@ fn eval_never_mixes_up_settings() {
     );
     assert_eq!(setting_dirs(grid.path()).len(), 2);
     let table = std::fs::read_to_string(grid.path().join("table.md")).unwrap();
-    assert!(table.contains("1.0:1.0 |") && table.contains("1.0:1.04 |"), "{table}");
+    assert!(
+        table.contains("1.0:1.0 |") && table.contains("1.0:1.04 |"),
+        "{table}"
+    );
     drop(base);
 }
 
@@ -111,13 +122,19 @@ fn degenerate_options_are_refused() {
     args.episodes = 0;
     let err = t2e::cli::eval::run(args).unwrap_err().to_string();
     assert!(err.contains("--episodes 0"), "{err}");
-    assert!(!out.path().join("table.md").exists(), "no table for no episodes");
+    assert!(
+        !out.path().join("table.md").exists(),
+        "no table for no episodes"
+    );
     let mut args = eval_args(out.path());
     args.speed_ratio = vec![f64::NAN];
     assert!(t2e::cli::eval::run(args).is_err());
     let mut args = eval_args(out.path());
     args.speed_ratio = vec![1.0, 1.0];
-    assert!(t2e::cli::eval::run(args).unwrap_err().to_string().contains("twice"));
+    assert!(t2e::cli::eval::run(args)
+        .unwrap_err()
+        .to_string()
+        .contains("twice"));
 
     for seconds in [0.0, -1.0, f64::NAN, f64::INFINITY] {
         let args = BenchArgs {
@@ -144,17 +161,35 @@ fn degenerate_options_are_refused() {
 fn nan_in_a_config_is_an_error_naming_the_field() {
     let dir = tempfile::tempdir().unwrap();
     for (field, text) in [
-        ("captors.ppo.entropy_coef", "[captors]\nplay = \"mappo\"\n[captors.ppo]\nentropy_coef = nan\n"),
-        ("captors.ppo.huber_delta", "[captors]\nplay = \"mappo\"\n[captors.ppo]\nhuber_delta = nan\n"),
-        ("captors.ppo.lr", "[captors]\nplay = \"mappo\"\n[captors.ppo]\nlr = inf\n"),
-        ("captors.ppo.max_grad_norm", "[captors]\nplay = \"mappo\"\n[captors.ppo]\nmax_grad_norm = -1.0\n"),
-        ("captors.ppo.adam_eps", "[captors]\nplay = \"mappo\"\n[captors.ppo]\nadam_eps = nan\n"),
+        (
+            "captors.ppo.entropy_coef",
+            "[captors]\nplay = \"mappo\"\n[captors.ppo]\nentropy_coef = nan\n",
+        ),
+        (
+            "captors.ppo.huber_delta",
+            "[captors]\nplay = \"mappo\"\n[captors.ppo]\nhuber_delta = nan\n",
+        ),
+        (
+            "captors.ppo.lr",
+            "[captors]\nplay = \"mappo\"\n[captors.ppo]\nlr = inf\n",
+        ),
+        (
+            "captors.ppo.max_grad_norm",
+            "[captors]\nplay = \"mappo\"\n[captors.ppo]\nmax_grad_norm = -1.0\n",
+        ),
+        (
+            "captors.ppo.adam_eps",
+            "[captors]\nplay = \"mappo\"\n[captors.ppo]\nadam_eps = nan\n",
+        ),
         ("env.target_speed", "[env]\ntarget_speed = nan\n"),
     ] {
         let path = dir.path().join("c.toml");
         std::fs::write(&path, format!("protocol = \"held-out\"\n{text}")).unwrap();
         let err = format!("{:#}", TrainConfig::load(&path).unwrap_err());
-        assert!(err.contains("c.toml") && err.contains(field), "{field}: {err}");
+        assert!(
+            err.contains("c.toml") && err.contains(field),
+            "{field}: {err}"
+        );
     }
 }
 
@@ -223,7 +258,10 @@ fn a_non_finite_update_is_undone() {
     let err = learner.update(&ro, &mut rng).unwrap_err();
     assert!(err.to_string().contains("non-finite"), "{err}");
     assert_eq!(weights(&learner), before, "weights restored");
-    assert_eq!(learner.value_norm, norm_before, "return statistics restored");
+    assert_eq!(
+        learner.value_norm, norm_before,
+        "return statistics restored"
+    );
     assert_eq!(learner.actor_adam.steps, steps_before, "Adam restored");
     // Clean data again: the update goes through and changes the weights.
     ro.rewards[7] = 0.5;
@@ -280,7 +318,11 @@ fn checkpoints_are_never_lost_and_never_silently_replaced() {
     let inode = |p: &Path| std::os::unix::fs::MetadataExt::ino(&std::fs::metadata(p).unwrap());
     let before = inode(&first.join("actor.safetensors"));
     t.save(run.path()).unwrap();
-    assert_eq!(inode(&first.join("actor.safetensors")), before, "identical checkpoint rewritten");
+    assert_eq!(
+        inode(&first.join("actor.safetensors")),
+        before,
+        "identical checkpoint rewritten"
+    );
 
     // Replacing a folder with other content swaps it in one step.
     let dir = run.path().join("swap");
@@ -304,7 +346,10 @@ fn checkpoints_are_never_lost_and_never_silently_replaced() {
     let mut touched = clean_stale_temporaries(&ckpts).unwrap();
     touched.extend(clean_stale_temporaries(run.path()).unwrap());
     assert_eq!(touched.len(), 3, "{touched:?}");
-    assert!(first.join("meta.json").is_file(), "moved-aside checkpoint restored");
+    assert!(
+        first.join("meta.json").is_file(),
+        "moved-aside checkpoint restored"
+    );
     let left: Vec<_> = std::fs::read_dir(&ckpts)
         .unwrap()
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
@@ -318,9 +363,20 @@ fn checkpoints_are_never_lost_and_never_silently_replaced() {
     let snap = PolicySnapshot::load(run.path(), Side::Captors).unwrap();
     assert_eq!(snap.dir, second);
     std::fs::remove_dir_all(&second).unwrap();
-    let err = format!("{:#}", PolicySnapshot::load(run.path(), Side::Captors).unwrap_err());
-    assert!(err.contains("state.json") && err.contains("missing"), "{err}");
-    let err = format!("{:#}", Trainer::resume(tiny_config(), tiny_maps(), run.path()).err().unwrap());
+    let err = format!(
+        "{:#}",
+        PolicySnapshot::load(run.path(), Side::Captors).unwrap_err()
+    );
+    assert!(
+        err.contains("state.json") && err.contains("missing"),
+        "{err}"
+    );
+    let err = format!(
+        "{:#}",
+        Trainer::resume(tiny_config(), tiny_maps(), run.path())
+            .err()
+            .unwrap()
+    );
     assert!(err.contains("missing"), "{err}");
 }
 
@@ -360,8 +416,14 @@ fn weights_are_integrity_checked() {
     let mid = bytes.len() - 40;
     bytes[mid] ^= 0x10;
     std::fs::write(&file, &bytes).unwrap();
-    let err = format!("{:#}", PolicySnapshot::load(&flipped, Side::Captors).unwrap_err());
-    assert!(err.contains("sha256") && err.contains("actor.safetensors"), "{err}");
+    let err = format!(
+        "{:#}",
+        PolicySnapshot::load(&flipped, Side::Captors).unwrap_err()
+    );
+    assert!(
+        err.contains("sha256") && err.contains("actor.safetensors"),
+        "{err}"
+    );
 
     // A NaN written into a weight, with the hash updated to match: still refused.
     let poisoned = copy("poisoned");
@@ -371,13 +433,19 @@ fn weights_are_integrity_checked() {
     tch::Tensor::write_safetensors(&tensors, &file).unwrap();
     let hash = t2e::util::sha256_file(&file).unwrap();
     edit_meta(&poisoned, |v| v["files"]["actor.safetensors"] = hash.into());
-    let err = format!("{:#}", PolicySnapshot::load(&poisoned, Side::Captors).unwrap_err());
+    let err = format!(
+        "{:#}",
+        PolicySnapshot::load(&poisoned, Side::Captors).unwrap_err()
+    );
     assert!(err.contains("NaN or infinite"), "{err}");
 
     // An algorithm this build does not know.
     let unknown = copy("unknown");
     edit_meta(&unknown, |v| v["algorithm"] = "dqn".into());
-    let err = format!("{:#}", PolicySnapshot::load(&unknown, Side::Captors).unwrap_err());
+    let err = format!(
+        "{:#}",
+        PolicySnapshot::load(&unknown, Side::Captors).unwrap_err()
+    );
     assert!(err.contains("dqn"), "{err}");
 
     // A resumed run checks the critic and optimizer files too.
@@ -386,21 +454,39 @@ fn weights_are_integrity_checked() {
     let mid = bytes.len() - 8;
     bytes[mid] ^= 1;
     std::fs::write(&critic, &bytes).unwrap();
-    let err = format!("{:#}", Trainer::resume(tiny_config(), tiny_maps(), run.path()).err().unwrap());
-    assert!(err.contains("sha256") && err.contains("critic.safetensors"), "{err}");
+    let err = format!(
+        "{:#}",
+        Trainer::resume(tiny_config(), tiny_maps(), run.path())
+            .err()
+            .unwrap()
+    );
+    assert!(
+        err.contains("sha256") && err.contains("critic.safetensors"),
+        "{err}"
+    );
 
     // A folder without meta.json says so.
     let bare = run.path().join("bare");
     std::fs::create_dir(&bare).unwrap();
-    std::fs::copy(ckpt.join("actor.safetensors"), bare.join("actor.safetensors")).unwrap();
-    let err = format!("{:#}", PolicySnapshot::load(&bare, Side::Captors).unwrap_err());
+    std::fs::copy(
+        ckpt.join("actor.safetensors"),
+        bare.join("actor.safetensors"),
+    )
+    .unwrap();
+    let err = format!(
+        "{:#}",
+        PolicySnapshot::load(&bare, Side::Captors).unwrap_err()
+    );
     assert!(err.contains("meta.json"), "{err}");
 }
 
 #[test]
 fn test_maps_are_recognised_by_content_wherever_they_sit() {
     let Some(gibson) = t2e::map::catalog::gibson_dir() else {
-        assert!(std::env::var_os("CI").is_none(), "Gibson maps missing in CI");
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "Gibson maps missing in CI"
+        );
         return;
     };
     let copy = tempfile::tempdir().unwrap();
@@ -409,7 +495,10 @@ fn test_maps_are_recognised_by_content_wherever_they_sit() {
     std::fs::copy(&src, &renamed).unwrap();
     let maps = t2e::map::catalog::load_prepared(&renamed.display().to_string()).unwrap();
     let err = Trainer::new(tiny_config(), maps).err().unwrap().to_string();
-    assert!(err.contains("Kettle_floor_trav_0_v3") && err.contains("test set"), "{err}");
+    assert!(
+        err.contains("Kettle_floor_trav_0_v3") && err.contains("test set"),
+        "{err}"
+    );
 }
 
 #[test]
@@ -423,7 +512,10 @@ fn inputs_that_once_misbehaved_give_clear_errors() {
     let huge = dir.path().join("huge.png");
     std::fs::write(&huge, &png).unwrap();
     let err = t2e::map::load_png(&huge).unwrap_err().to_string();
-    assert!(err.contains("huge.png") && err.contains("20000x20000"), "{err}");
+    assert!(
+        err.contains("huge.png") && err.contains("20000x20000"),
+        "{err}"
+    );
 
     // Missing files and folders say "not found".
     for spec in ["nowhere.png", "no-such-folder:small"] {
@@ -442,8 +534,14 @@ fn inputs_that_once_misbehaved_give_clear_errors() {
     )
     .unwrap();
     std::fs::write(bad.join("manifest.csv"), b"map,split\na,sm\xffall\n").unwrap();
-    let err = format!("{:#}", t2e::map::resolve(&bad.display().to_string()).unwrap_err());
-    assert!(err.contains("manifest.csv") && err.contains("UTF-8"), "{err}");
+    let err = format!(
+        "{:#}",
+        t2e::map::resolve(&bad.display().to_string()).unwrap_err()
+    );
+    assert!(
+        err.contains("manifest.csv") && err.contains("UTF-8"),
+        "{err}"
+    );
 
     // A run name cannot leave runs/.
     let cfg = TrainConfig {
@@ -455,7 +553,9 @@ fn inputs_that_once_misbehaved_give_clear_errors() {
     // render writes GIF data, so the file must be a .gif.
     use clap::Parser;
     let cli = t2e::cli::Cli::parse_from(["t2e-league", "render", "--out", "ep.png"]);
-    let t2e::cli::Command::Render(args) = cli.command else { unreachable!() };
+    let t2e::cli::Command::Render(args) = cli.command else {
+        unreachable!()
+    };
     let err = t2e::cli::render::run(args).unwrap_err().to_string();
     assert!(err.contains(".gif"), "{err}");
 }
@@ -470,7 +570,10 @@ fn defects_an_adversarial_pass_found_are_fixed() {
             total_env_steps: 80,
             ..tiny_config()
         };
-        assert!(cfg.validate().unwrap_err().starts_with("num_envs"), "{envs}");
+        assert!(
+            cfg.validate().unwrap_err().starts_with("num_envs"),
+            "{envs}"
+        );
     }
     let cfg = TrainConfig {
         num_envs: 4096,
@@ -482,7 +585,9 @@ fn defects_an_adversarial_pass_found_are_fixed() {
     // A 1x1 map says it is smaller than a cell.
     let dir = tempfile::tempdir().unwrap();
     let one = dir.path().join("one.png");
-    image::GrayImage::from_pixel(1, 1, image::Luma([255])).save(&one).unwrap();
+    image::GrayImage::from_pixel(1, 1, image::Luma([255]))
+        .save(&one)
+        .unwrap();
     let err = t2e::map::load_png(&one).unwrap_err().to_string();
     assert!(err.contains("smaller than one 0.05 m cell"), "{err}");
 
@@ -504,17 +609,22 @@ fn defects_an_adversarial_pass_found_are_fixed() {
     args.resume = true;
     t2e::cli::eval::run(args).unwrap();
     let rows = std::fs::read_to_string(&csv).unwrap().lines().count();
-    assert_eq!(rows, 13, "the setting was played again: header + 12 episodes");
+    assert_eq!(
+        rows, 13,
+        "the setting was played again: header + 12 episodes"
+    );
 
     // maps generate records each map as it goes, and caps --count.
     let gen = dir.path().join("gen");
     t2e::cli::maps::generate_maps(t2e::map::SizeClass::Small, 1, 2, &gen).unwrap();
     let manifest = std::fs::read_to_string(gen.join("manifest.csv")).unwrap();
     assert_eq!(manifest.lines().count(), 3, "{manifest}");
-    assert!(t2e::cli::maps::generate_maps(t2e::map::SizeClass::Small, 1, 1_000_000_000, &gen)
-        .unwrap_err()
-        .to_string()
-        .contains("--count"));
+    assert!(
+        t2e::cli::maps::generate_maps(t2e::map::SizeClass::Small, 1, 1_000_000_000, &gen)
+            .unwrap_err()
+            .to_string()
+            .contains("--count")
+    );
 
     // A state.json edited to disagree with its checkpoint is refused.
     tch::set_num_threads(1);
@@ -529,7 +639,12 @@ fn defects_an_adversarial_pass_found_are_fixed() {
     state["iteration"] = 1.into();
     state["env_steps"] = 80.into();
     std::fs::write(&state_path, state.to_string()).unwrap();
-    let err = format!("{:#}", Trainer::resume(tiny_config(), tiny_maps(), &run).err().unwrap());
+    let err = format!(
+        "{:#}",
+        Trainer::resume(tiny_config(), tiny_maps(), &run)
+            .err()
+            .unwrap()
+    );
     assert!(err.contains("changed by hand"), "{err}");
 }
 
@@ -538,19 +653,35 @@ fn a_reset_learner_is_back_to_its_initial_weights() {
     tch::set_num_threads(1);
     let tmp = tempfile::tempdir().unwrap();
     let mut t = Trainer::new(tiny_config(), tiny_maps()).unwrap();
-    let (initial, later, reset) = (tmp.path().join("initial"), tmp.path().join("later"), tmp.path().join("reset"));
+    let (initial, later, reset) = (
+        tmp.path().join("initial"),
+        tmp.path().join("later"),
+        tmp.path().join("reset"),
+    );
     t.save_side(Side::Captors, &initial).unwrap();
     t.iterate().unwrap();
     t.save_side(Side::Captors, &later).unwrap();
     t.reset_learner(Side::Captors, &initial).unwrap();
     t.save_side(Side::Captors, &reset).unwrap();
     let files = |d: &Path| read_meta(d).unwrap().files;
-    for f in ["actor.safetensors", "critic.safetensors", "optimizer.safetensors"] {
-        assert_ne!(files(&initial)[f], files(&later)[f], "{f}: training changed nothing");
+    for f in [
+        "actor.safetensors",
+        "critic.safetensors",
+        "optimizer.safetensors",
+    ] {
+        assert_ne!(
+            files(&initial)[f],
+            files(&later)[f],
+            "{f}: training changed nothing"
+        );
         assert_eq!(files(&initial)[f], files(&reset)[f], "{f}: not restored");
     }
     let steps = read_meta(&reset).unwrap().env_steps;
-    assert_eq!(steps, read_meta(&later).unwrap().env_steps, "the step count goes on");
+    assert_eq!(
+        steps,
+        read_meta(&later).unwrap().env_steps,
+        "the step count goes on"
+    );
     // Training goes on from there.
     t.iterate().unwrap();
 }

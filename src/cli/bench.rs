@@ -2,8 +2,8 @@
 //! printed as a table beside the reference implementation's figures.
 
 use crate::asz::FastMarching;
-use crate::env::{Action, Controller, EnvConfig, Side, TrapEnv, VecEnv, PATCH_LEN};
 use crate::controllers::ControllerSpec;
+use crate::env::{Action, Controller, EnvConfig, Side, TrapEnv, VecEnv, PATCH_LEN};
 use crate::heuristics::{target_action, Heuristic};
 use crate::map::{self, PreparedMap};
 use anyhow::Result;

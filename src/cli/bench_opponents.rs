@@ -30,16 +30,22 @@ fn random_actor(net: &NetConfig, vector_len: usize) -> (nn::VarStore, Actor) {
 /// Rows of `worlds` worlds (one robot each, as target opponents) split as
 /// evenly as possible among `groups` opponents.
 fn split(worlds: usize, groups: usize) -> Vec<usize> {
-    (0..groups).map(|g| worlds / groups + usize::from(g < worlds % groups)).collect()
+    (0..groups)
+        .map(|g| worlds / groups + usize::from(g < worlds % groups))
+        .collect()
 }
 
 pub fn run(secs: f64, worlds: usize) -> Result<()> {
     tch::set_num_threads(1);
     let net = NetConfig::default();
-    let cfg = EnvConfig { num_captors: 3, ..EnvConfig::default() };
+    let cfg = EnvConfig {
+        num_captors: 3,
+        ..EnvConfig::default()
+    };
     let (vl, side) = (cfg.vector_len(), net.input_side() as i64);
     let h = net.hidden;
-    let patches = |rows: i64, ch: i64| Tensor::randint(2, [rows, ch, side, side], (Kind::Uint8, Device::Cpu));
+    let patches =
+        |rows: i64, ch: i64| Tensor::randint(2, [rows, ch, side, side], (Kind::Uint8, Device::Cpu));
     let vectors = |rows: i64, len: i64| Tensor::randn([rows, len], (Kind::Float, Device::Cpu));
 
     println!("opponent inference per robot row, 1 libtorch thread, hidden {h}, {worlds} worlds\n");
@@ -51,7 +57,11 @@ pub fn run(secs: f64, worlds: usize) -> Result<()> {
     let (_vsa, actor) = random_actor(&net, vl);
     let vsc = nn::VarStore::new(Device::Cpu);
     let critic = Critic::new(&vsc.root(), &net, vl, 3);
-    let (pa, va, ha) = (patches(own_rows, 1), vectors(own_rows, vl as i64), Tensor::zeros([own_rows, h], (Kind::Float, Device::Cpu)));
+    let (pa, va, ha) = (
+        patches(own_rows, 1),
+        vectors(own_rows, vl as i64),
+        Tensor::zeros([own_rows, h], (Kind::Float, Device::Cpu)),
+    );
     let (pc, vc) = (patches(own_rows, 3), vectors(own_rows, 3 * vl as i64));
     let us = per_call_us(secs, || {
         tch::no_grad(|| {
@@ -59,10 +69,16 @@ pub fn run(secs: f64, worlds: usize) -> Result<()> {
             let _ = critic.step(&pc, &vc, &ha);
         });
     });
-    println!("| captor learner's own actor + critic | {own_rows} | 2 | {us:.0} | {:.2} |", us / own_rows as f64);
+    println!(
+        "| captor learner's own actor + critic | {own_rows} | 2 | {us:.0} | {:.2} |",
+        us / own_rows as f64
+    );
 
     let actors: Vec<(nn::VarStore, Actor)> = (0..8).map(|_| random_actor(&net, vl)).collect();
-    let prepared: Vec<PreparedActor> = actors.iter().map(|(_, a)| PreparedActor::new(a, &net, vl)).collect();
+    let prepared: Vec<PreparedActor> = actors
+        .iter()
+        .map(|(_, a)| PreparedActor::new(a, &net, vl))
+        .collect();
     for groups in [1usize, 2, 4, 8] {
         let rows = split(worlds, groups);
         let total = rows.iter().sum::<usize>() as f64;
@@ -70,7 +86,11 @@ pub fn run(secs: f64, worlds: usize) -> Result<()> {
             .iter()
             .map(|&n| {
                 let n = n as i64;
-                (patches(n, 1), vectors(n, vl as i64), Tensor::zeros([n, h], (Kind::Float, Device::Cpu)))
+                (
+                    patches(n, 1),
+                    vectors(n, vl as i64),
+                    Tensor::zeros([n, h], (Kind::Float, Device::Cpu)),
+                )
             })
             .collect();
         let us = per_call_us(secs, || {
@@ -80,18 +100,29 @@ pub fn run(secs: f64, worlds: usize) -> Result<()> {
                 }
             });
         });
-        println!("| {groups} opponents, one pass each | {total} | {groups} | {us:.0} | {:.2} |", us / total);
+        println!(
+            "| {groups} opponents, one pass each | {total} | {groups} | {us:.0} | {:.2} |",
+            us / total
+        );
 
-        let stacked = StackedActors::new(&prepared[..groups].iter().collect::<Vec<_>>()).map_err(anyhow::Error::msg)?;
+        let stacked = StackedActors::new(&prepared[..groups].iter().collect::<Vec<_>>())
+            .map_err(anyhow::Error::msg)?;
         let r = *rows.iter().max().unwrap() as i64;
         let g = groups as i64;
-        let (ps, vs, hs) = (patches(g * r, 1).view([g, r, side, side]), vectors(g * r, vl as i64).view([g, r, -1]), Tensor::zeros([g, r, h], (Kind::Float, Device::Cpu)));
+        let (ps, vs, hs) = (
+            patches(g * r, 1).view([g, r, side, side]),
+            vectors(g * r, vl as i64).view([g, r, -1]),
+            Tensor::zeros([g, r, h], (Kind::Float, Device::Cpu)),
+        );
         let us = per_call_us(secs, || {
             tch::no_grad(|| {
                 let _ = stacked.step(&ps, &vs, &hs);
             });
         });
-        println!("| {groups} opponents, stacked | {total} | 1 | {us:.0} | {:.2} |", us / total);
+        println!(
+            "| {groups} opponents, stacked | {total} | 1 | {us:.0} | {:.2} |",
+            us / total
+        );
         let us = per_call_us(secs, || {
             let _ = StackedActors::new(&prepared[..groups].iter().collect::<Vec<_>>());
         });

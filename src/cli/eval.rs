@@ -1,8 +1,8 @@
 //! `t2e-league eval`: the paper's protocol over one or more settings.
 
+use crate::controllers::ControllerSpec;
 use crate::env::{CaptureRule, EnvConfig, Side};
 use crate::eval::{self, ratio_label, EvalSetting, SettingIdentity, Summary, TABLE_HEADER};
-use crate::controllers::ControllerSpec;
 use crate::map::{self, PreparedMap};
 use crate::render::plot::{self, Series};
 use anyhow::{Context, Result};
@@ -141,8 +141,11 @@ fn write_setting(
         ])?;
     }
     w.flush()?;
-    std::fs::write(dir.join("summary.json"), serde_json::to_string_pretty(summary)?)
-        .with_context(|| format!("cannot write {}", dir.join("summary.json").display()))?;
+    std::fs::write(
+        dir.join("summary.json"),
+        serde_json::to_string_pretty(summary)?,
+    )
+    .with_context(|| format!("cannot write {}", dir.join("summary.json").display()))?;
     if !summary.soa_curve.is_empty() {
         let mut w = csv::Writer::from_path(dir.join("soa.csv"))?;
         w.write_record(["step", "mean_asz_m2", "episodes_running"])?;
@@ -220,8 +223,8 @@ pub fn run(args: EvalArgs) -> Result<()> {
                     capture_rule: args.capture_rule,
                     soa_every: args.soa_every,
                 };
-                let identity = SettingIdentity::of(&setting, spec, &sets[spec])
-                    .map_err(anyhow::Error::msg)?;
+                let identity =
+                    SettingIdentity::of(&setting, spec, &sets[spec]).map_err(anyhow::Error::msg)?;
                 let dir = setting_dir(&args.out, &setting, spec, &identity);
                 let summary = match finished_setting(&dir, &identity).filter(|_| args.resume) {
                     Some(done) => done,
@@ -273,7 +276,10 @@ pub fn run(args: EvalArgs) -> Result<()> {
     }
     for (name, bytes) in [
         ("table.md", table.into_bytes()),
-        ("summary.json", serde_json::to_string_pretty(&summaries)?.into_bytes()),
+        (
+            "summary.json",
+            serde_json::to_string_pretty(&summaries)?.into_bytes(),
+        ),
     ] {
         crate::nn::checkpoint::write_file_atomically(&args.out.join(name), &bytes)
             .with_context(|| format!("cannot write {}", args.out.join(name).display()))?;
@@ -326,13 +332,34 @@ mod tests {
         assert_eq!(finished_setting(&dir, &id), Some(summary));
         // Each of these changes the numbers: none may reuse the result or share its folder.
         let variants = [
-            EvalSetting { episodes: 500, ..setting.clone() },
-            EvalSetting { soa_every: 1, ..setting.clone() },
-            EvalSetting { speed_ratio: 1.04, ..setting.clone() },
-            EvalSetting { capture_rule: CaptureRule::Strict, ..setting.clone() },
-            EvalSetting { seed: 1, ..setting.clone() },
-            EvalSetting { episode_length: 21, ..setting.clone() },
-            EvalSetting { target: ControllerSpec::Random, ..setting.clone() },
+            EvalSetting {
+                episodes: 500,
+                ..setting.clone()
+            },
+            EvalSetting {
+                soa_every: 1,
+                ..setting.clone()
+            },
+            EvalSetting {
+                speed_ratio: 1.04,
+                ..setting.clone()
+            },
+            EvalSetting {
+                capture_rule: CaptureRule::Strict,
+                ..setting.clone()
+            },
+            EvalSetting {
+                seed: 1,
+                ..setting.clone()
+            },
+            EvalSetting {
+                episode_length: 21,
+                ..setting.clone()
+            },
+            EvalSetting {
+                target: ControllerSpec::Random,
+                ..setting.clone()
+            },
         ];
         let mut dirs = vec![dir.clone()];
         for v in &variants {
@@ -344,7 +371,8 @@ mod tests {
         }
         // Other maps under the same name: another identity.
         let grid = crate::map::Grid::with_free_rects("m", 320, &[(100..200, 100..201)]);
-        let other = SettingIdentity::of(&setting, "m", &[Arc::new(PreparedMap::new(grid))]).unwrap();
+        let other =
+            SettingIdentity::of(&setting, "m", &[Arc::new(PreparedMap::new(grid))]).unwrap();
         assert!(finished_setting(&dir, &other).is_none());
         // A folder name never leaves --out, whatever the controller's path says.
         let sneaky = EvalSetting {
@@ -353,7 +381,12 @@ mod tests {
         };
         let d = setting_dir(out.path(), &sneaky, "../x", &id);
         assert_eq!(d.parent().unwrap(), out.path());
-        assert!(d.file_name().unwrap().to_str().unwrap().starts_with("ckpt_etc-vs-heuristic_k3_r1p0_x_"));
+        assert!(d
+            .file_name()
+            .unwrap()
+            .to_str()
+            .unwrap()
+            .starts_with("ckpt_etc-vs-heuristic_k3_r1p0_x_"));
     }
 
     #[test]

@@ -84,7 +84,9 @@ pub fn run(args: RunArgs) -> Result<()> {
             let name = crate::util::safe_component(&cfg.name, 100);
             PathBuf::from("runs/league").join(name)
         }
-        (None, None) => bail!("give --config configs/league-*.toml to start a league, or --dir DIR to resume one"),
+        (None, None) => bail!(
+            "give --config configs/league-*.toml to start a league, or --dir DIR to resume one"
+        ),
     };
     on_ctrl_c()?;
     manager::run(&LeagueDir::new(dir), args.config.as_deref(), run_for, &STOP)
@@ -140,7 +142,10 @@ pub fn evaluator(args: EvaluatorArgs) -> Result<()> {
     let lock_path = dir.root.join("learners").join("evaluator.lock");
     std::fs::create_dir_all(lock_path.parent().unwrap())?;
     let Some(_lock) = manager::try_lock(&lock_path)? else {
-        bail!("{}: another evaluator is running this league", lock_path.display());
+        bail!(
+            "{}: another evaluator is running this league",
+            lock_path.display()
+        );
     };
     on_ctrl_c()?;
     crate::league::evaluator::run_evaluator(&dir, &STOP)
@@ -153,11 +158,18 @@ pub fn learner(args: LearnerArgs) -> Result<()> {
         other => bail!("--side {other}: expected captors or target"),
     };
     let dir = LeagueDir::new(&args.dir);
-    let seat = learner::Seat { side, exploiter: args.exploiter };
+    let seat = learner::Seat {
+        side,
+        exploiter: args.exploiter,
+    };
     let lock_path = dir.seat_dir(seat).with_extension("lock");
     std::fs::create_dir_all(lock_path.parent().unwrap())?;
     let Some(_lock) = manager::try_lock(&lock_path)? else {
-        bail!("{}: another {} is running this league", lock_path.display(), seat.name());
+        bail!(
+            "{}: another {} is running this league",
+            lock_path.display(),
+            seat.name()
+        );
     };
     on_ctrl_c()?;
     learner::run_learner(&dir, seat, &STOP)

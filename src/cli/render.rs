@@ -1,7 +1,7 @@
 //! `t2e-league render`: play one episode and write it as an animated GIF.
 
-use crate::env::{CaptureRule, EnvConfig, Side, TrapEnv};
 use crate::controllers::ControllerSpec;
+use crate::env::{CaptureRule, EnvConfig, Side, TrapEnv};
 use crate::render::episode::{render_episode, RenderOptions};
 use anyhow::{anyhow, Result};
 use std::path::PathBuf;

@@ -22,16 +22,29 @@ pub struct TableArgs {
 pub fn read_summaries(paths: &[PathBuf]) -> Result<Vec<Summary>> {
     let mut all = Vec::new();
     for p in paths {
-        let file = if p.is_dir() { p.join("summary.json") } else { p.clone() };
+        let file = if p.is_dir() {
+            p.join("summary.json")
+        } else {
+            p.clone()
+        };
         if !file.is_file() {
-            bail!("{}: not found (give an eval --out folder or its summary.json)", file.display());
+            bail!(
+                "{}: not found (give an eval --out folder or its summary.json)",
+                file.display()
+            );
         }
-        let text = std::fs::read_to_string(&file).with_context(|| format!("{}: cannot read", file.display()))?;
-        let summaries: Vec<Summary> =
-            serde_json::from_str(&text).with_context(|| format!("{}: not an eval summary", file.display()))?;
+        let text = std::fs::read_to_string(&file)
+            .with_context(|| format!("{}: cannot read", file.display()))?;
+        let summaries: Vec<Summary> = serde_json::from_str(&text)
+            .with_context(|| format!("{}: not an eval summary", file.display()))?;
         for s in &summaries {
             if !(s.sr.is_finite() && (0.0..=100.0).contains(&s.sr) && s.episodes > 0) {
-                bail!("{}: a summary with SR {} over {} episodes: not a result", file.display(), s.sr, s.episodes);
+                bail!(
+                    "{}: a summary with SR {} over {} episodes: not a result",
+                    file.display(),
+                    s.sr,
+                    s.episodes
+                );
             }
         }
         all.extend(summaries);
@@ -47,7 +60,8 @@ pub fn run(args: TableArgs) -> Result<()> {
         std::fs::write(p, &md).with_context(|| format!("cannot write {}", p.display()))?;
     }
     if let Some(p) = &args.latex {
-        std::fs::write(p, paper_table::latex(&summaries)).with_context(|| format!("cannot write {}", p.display()))?;
+        std::fs::write(p, paper_table::latex(&summaries))
+            .with_context(|| format!("cannot write {}", p.display()))?;
     }
     Ok(())
 }

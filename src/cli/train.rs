@@ -317,7 +317,11 @@ mod tests {
     fn a_config_typo_names_the_file_and_the_field() {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("typo.toml");
-        std::fs::write(&path, "name = \"x\"\nprotocol = \"held-out\"\n[captors.ppo]\nentropy_coeff = 0.02\n").unwrap();
+        std::fs::write(
+            &path,
+            "name = \"x\"\nprotocol = \"held-out\"\n[captors.ppo]\nentropy_coeff = 0.02\n",
+        )
+        .unwrap();
         let err = format!("{:#}", TrainConfig::load(&path).unwrap_err());
         assert!(
             err.contains("typo.toml") && err.contains("entropy_coeff"),
@@ -329,12 +333,19 @@ mod tests {
             err.contains("typo.toml") && err.contains("env.num_captors"),
             "{err}"
         );
-        std::fs::write(&path, "protocol = \"held-out\"\n[target]\nplay = \"mapo\"\n").unwrap();
+        std::fs::write(
+            &path,
+            "protocol = \"held-out\"\n[target]\nplay = \"mapo\"\n",
+        )
+        .unwrap();
         let err = format!("{:#}", TrainConfig::load(&path).unwrap_err());
         assert!(err.contains("target.play") && err.contains("mapo"), "{err}");
         std::fs::write(&path, "[target]\nplay = \"mappo\"\n").unwrap();
         let err = format!("{:#}", TrainConfig::load(&path).unwrap_err());
-        assert!(err.contains("typo.toml") && err.contains("protocol: missing"), "{err}");
+        assert!(
+            err.contains("typo.toml") && err.contains("protocol: missing"),
+            "{err}"
+        );
         std::fs::write(&path, "protocol = \"paper\"\n[target]\nplay = \"mapo\"\n").unwrap();
         let err = format!("{:#}", TrainConfig::load(&path).unwrap_err());
         assert!(err.contains("target.play") && err.contains("mapo"), "{err}");

@@ -123,7 +123,12 @@ impl VecEnv {
     /// (reset for the world's current episode), or None to take that side's
     /// actions from `step`'s argument. The league gives each world its own
     /// opponent this way.
-    pub fn script_world(&mut self, world: usize, side: Side, controller: Option<Box<dyn Controller>>) {
+    pub fn script_world(
+        &mut self,
+        world: usize,
+        side: Side,
+        controller: Option<Box<dyn Controller>>,
+    ) {
         let slot = &mut self.slots[world];
         slot.scripted.retain(|(sd, _)| *sd != side);
         if let Some(mut c) = controller {
@@ -133,7 +138,12 @@ impl VecEnv {
     }
 
     /// Sets world `world`'s top speeds (see `TrapEnv::set_speeds`).
-    pub fn set_world_speeds(&mut self, world: usize, captor_speed: f64, target_speed: f64) -> Result<(), String> {
+    pub fn set_world_speeds(
+        &mut self,
+        world: usize,
+        captor_speed: f64,
+        target_speed: f64,
+    ) -> Result<(), String> {
         self.slots[world].env.set_speeds(captor_speed, target_speed)
     }
 
@@ -221,38 +231,43 @@ impl VecEnv {
                     .zip(self.truncated.par_iter_mut()),
             )
             .enumerate()
-            .map(|(e, ((((((slot, vec), patch), (final_vec, final_patch)), rew), act), (term, trunc)))| {
-                let mut acts = [Action::Stop; 33];
-                acts[..na].copy_from_slice(act);
-                let k = slot.env.num_captors();
-                for (side, ctrl) in &mut slot.scripted {
-                    ctrl.act(&slot.env, *side, &mut acts[side.agents(k)]);
-                }
-                slot.env.step_state(&acts[..na], rew);
-                for (r, x) in slot.returns.iter_mut().zip(rew.iter()) {
-                    *r += *x as f64;
-                }
-                *term = slot.env.captured;
-                *trunc = !slot.env.captured && slot.env.steps >= slot.env.cfg.episode_length;
-                let mut stats = None;
-                if *term || *trunc {
-                    let env = &slot.env;
-                    stats = Some(EpisodeStats {
-                        env: e,
-                        seed: env.seed,
-                        map: env.map().grid.name.clone(),
-                        steps: env.steps,
-                        captured: env.captured,
-                        returns: slot.returns.clone(),
-                        captor_path_len: env.path_len[..k].iter().sum::<f64>() / k as f64,
-                    });
-                    slot.write_obs(final_vec, final_patch, vl, obs);
-                    slot.episode += 1;
-                    slot.begin(episode_seed(base, e, slot.episode))?;
-                }
-                slot.write_obs(vec, patch, vl, obs);
-                Ok(stats)
-            })
+            .map(
+                |(
+                    e,
+                    ((((((slot, vec), patch), (final_vec, final_patch)), rew), act), (term, trunc)),
+                )| {
+                    let mut acts = [Action::Stop; 33];
+                    acts[..na].copy_from_slice(act);
+                    let k = slot.env.num_captors();
+                    for (side, ctrl) in &mut slot.scripted {
+                        ctrl.act(&slot.env, *side, &mut acts[side.agents(k)]);
+                    }
+                    slot.env.step_state(&acts[..na], rew);
+                    for (r, x) in slot.returns.iter_mut().zip(rew.iter()) {
+                        *r += *x as f64;
+                    }
+                    *term = slot.env.captured;
+                    *trunc = !slot.env.captured && slot.env.steps >= slot.env.cfg.episode_length;
+                    let mut stats = None;
+                    if *term || *trunc {
+                        let env = &slot.env;
+                        stats = Some(EpisodeStats {
+                            env: e,
+                            seed: env.seed,
+                            map: env.map().grid.name.clone(),
+                            steps: env.steps,
+                            captured: env.captured,
+                            returns: slot.returns.clone(),
+                            captor_path_len: env.path_len[..k].iter().sum::<f64>() / k as f64,
+                        });
+                        slot.write_obs(final_vec, final_patch, vl, obs);
+                        slot.episode += 1;
+                        slot.begin(episode_seed(base, e, slot.episode))?;
+                    }
+                    slot.write_obs(vec, patch, vl, obs);
+                    Ok(stats)
+                },
+            )
             .collect();
         self.finished.clear();
         for r in results {

@@ -3,9 +3,9 @@
 //! Path Len and the size of the Absolutely Safe Zone over time (SoA).
 
 use crate::asz::{cells_to_m2, FastMarching};
+use crate::controllers::ControllerSpec;
 use crate::env::vec_env::episode_seed;
 use crate::env::{Action, CaptureRule, EnvConfig, Side, TrapEnv};
-use crate::controllers::ControllerSpec;
 use crate::map::PreparedMap;
 
 pub mod paper_table;
@@ -51,7 +51,10 @@ impl EvalSetting {
     /// Checks the numbers a user gave; the error names the option.
     pub fn validate(&self) -> Result<(), String> {
         if self.episodes == 0 {
-            return Err("--episodes 0: needs at least one episode (an SR of 0 episodes is no result)".into());
+            return Err(
+                "--episodes 0: needs at least one episode (an SR of 0 episodes is no result)"
+                    .into(),
+            );
         }
         if self.episodes > 10_000_000 {
             return Err(format!("--episodes {}: at most 10,000,000", self.episodes));
@@ -350,7 +353,10 @@ pub fn training_protocol(setting: &EvalSetting) -> String {
         ),
         _ => None,
     };
-    match (of(&setting.captors, Side::Captors), of(&setting.target, Side::Target)) {
+    match (
+        of(&setting.captors, Side::Captors),
+        of(&setting.target, Side::Target),
+    ) {
         (None, None) => "-".into(),
         (Some(p), None) | (None, Some(p)) => p,
         (Some(c), Some(t)) if c == t => c,

@@ -34,13 +34,19 @@ fn paper_cells(k: usize, ratio: f64, learner: &str) -> String {
         .filter(|(pk, pr, _, _)| *pk == k && (pr - ratio).abs() < 1e-9)
         .collect();
     let three = |sr: &[f64; 3]| format!("{:.1} / {:.1} / {:.1}", sr[0], sr[1], sr[2]);
-    if let Some((_, _, _, sr)) = at.iter().find(|(_, _, l, _)| l.eq_ignore_ascii_case(learner)) {
+    if let Some((_, _, _, sr)) = at
+        .iter()
+        .find(|(_, _, l, _)| l.eq_ignore_ascii_case(learner))
+    {
         return three(sr);
     }
     if at.is_empty() {
         return "-".into();
     }
-    at.iter().map(|(_, _, l, sr)| format!("{l} {}", three(sr))).collect::<Vec<_>>().join("; ")
+    at.iter()
+        .map(|(_, _, l, sr)| format!("{l} {}", three(sr)))
+        .collect::<Vec<_>>()
+        .join("; ")
 }
 
 /// One row: a (speed ratio, captors) pair and its summaries per class.
@@ -65,9 +71,11 @@ fn rows(summaries: &[Summary]) -> (BTreeMap<usize, Vec<Row<'_>>>, usize) {
             continue;
         };
         let rows = by_k.entry(s.num_captors).or_default();
-        let at = rows
-            .iter()
-            .position(|r| (r.ratio - s.speed_ratio).abs() < 1e-12 && r.captors == s.captors && r.protocol == s.protocol);
+        let at = rows.iter().position(|r| {
+            (r.ratio - s.speed_ratio).abs() < 1e-12
+                && r.captors == s.captors
+                && r.protocol == s.protocol
+        });
         let i = match at {
             Some(i) => i,
             None => {
@@ -90,7 +98,10 @@ fn rows(summaries: &[Summary]) -> (BTreeMap<usize, Vec<Row<'_>>>, usize) {
 }
 
 fn triple(cells: &[Option<&Summary>; 3], f: impl Fn(&Summary) -> String) -> Vec<String> {
-    cells.iter().map(|c| c.map(&f).unwrap_or_else(|| "-".into())).collect()
+    cells
+        .iter()
+        .map(|c| c.map(&f).unwrap_or_else(|| "-".into()))
+        .collect()
 }
 
 /// Markdown: one table per K, and a line per left-out summary count.
@@ -106,11 +117,19 @@ pub fn markdown(summaries: &[Summary]) -> String {
         out.push_str("| v_p:v_e | captors | learner | protocol | SR % small | SR % medium | SR % large | paper SR % small / medium / large | Time (steps) s / m / l | Path Len (m) s / m / l | episodes |\n");
         out.push_str("|---|---|---|---|---|---|---|---|---|---|---|\n");
         for r in rows {
-            let sr = triple(&r.cells, |s| format!("{:.1} [{:.1}, {:.1}]", s.sr, s.sr_low, s.sr_high));
+            let sr = triple(&r.cells, |s| {
+                format!("{:.1} [{:.1}, {:.1}]", s.sr, s.sr_low, s.sr_high)
+            });
             let time = triple(&r.cells, |s| format!("{:.0}", s.time)).join(" / ");
             let path = triple(&r.cells, |s| format!("{:.1}", s.path_len)).join(" / ");
             let paper = paper_cells(*k, r.ratio, &r.learner);
-            let episodes = r.cells.iter().flatten().map(|s| s.episodes).min().unwrap_or(0);
+            let episodes = r
+                .cells
+                .iter()
+                .flatten()
+                .map(|s| s.episodes)
+                .min()
+                .unwrap_or(0);
             let _ = writeln!(
                 out,
                 "| 1.0:{} | {} | {} | {} | {} | {} | {} | {paper} | {time} | {path} | {episodes} |",
@@ -148,7 +167,9 @@ pub fn latex(summaries: &[Summary]) -> String {
         let _ = writeln!(out, "\\begin{{table}}[t]\n\\centering\n\\caption{{{k}:1 against the rule-based target. SR \\% [95\\% CI] per map class; paper SR from its Table {} (paper protocol).}}", if *k == 3 { "II" } else { "III" });
         out.push_str("\\begin{tabular}{llllllll}\n\\toprule\n$v_p{:}v_e$ & Learner & Protocol & Small & Medium & Large & Paper (S / M / L) & Time (S / M / L) \\\\\n\\midrule\n");
         for r in rows {
-            let sr = triple(&r.cells, |s| format!("{:.1} [{:.1}, {:.1}]", s.sr, s.sr_low, s.sr_high));
+            let sr = triple(&r.cells, |s| {
+                format!("{:.1} [{:.1}, {:.1}]", s.sr, s.sr_low, s.sr_high)
+            });
             let time = triple(&r.cells, |s| format!("{:.0}", s.time)).join(" / ");
             let paper = paper_cells(*k, r.ratio, &r.learner);
             let _ = writeln!(
@@ -212,13 +233,21 @@ mod tests {
         assert!(md.contains("| 1.0:1.0 | ckpt:runs/MAPPO | MAPPO | held-out | 85.8 [81.8, 89.8] | 74.6 [70.6, 78.6] | 63.0 [59.0, 67.0] | 99.8 / 99.8 / 94.8 |"), "{md}");
         // No IPPO number at 3:1 1.2: the learners the paper quotes there.
         assert!(md.contains("| MAPPO 92.4 / 80.6 / 78.4 |"), "{md}");
-        let heuristic = Summary { captors: "heuristic".into(), captors_learner: "expert heuristic".into(), ..summary(3, 1.0, "small", "heuristic", "x", 78.4) };
-        assert!(markdown(&[heuristic]).contains("| MAPPO 99.8 / 99.8 / 94.8; MAAC 100.0 / 99.8 / 91.2 |"));
+        let heuristic = Summary {
+            captors: "heuristic".into(),
+            captors_learner: "expert heuristic".into(),
+            ..summary(3, 1.0, "small", "heuristic", "x", 78.4)
+        };
+        assert!(markdown(&[heuristic])
+            .contains("| MAPPO 99.8 / 99.8 / 94.8; MAAC 100.0 / 99.8 / 91.2 |"));
         assert!(md.contains("| 1.0:1.4 | ckpt:runs/IPPO | IPPO | held-out | 50.0 [46.0, 54.0] | - | - | 94.0 / 86.2 / 87.6 |"), "{md}");
         assert!(md.contains("Table II") && md.contains("Table III"));
         assert!(md.contains("1 summaries left out"), "{md}");
         let tex = latex(&s);
-        assert!(tex.contains("1.0:1.0 & MAPPO & held-out & 85.8 [81.8, 89.8]"), "{tex}");
+        assert!(
+            tex.contains("1.0:1.0 & MAPPO & held-out & 85.8 [81.8, 89.8]"),
+            "{tex}"
+        );
         assert_eq!(tex.matches("\\begin{tabular}").count(), 2);
     }
 }

@@ -5,13 +5,13 @@
 
 use super::curriculum::CurriculumConfig;
 use super::evaluator::EvaluatorConfig;
+use super::learner::Seat;
 use super::matchmaking::MatchmakingConfig;
 use crate::env::{EnvConfig, Side};
 use crate::learn::ppo::PpoConfig;
 use crate::learn::train::{SideConfig, TrainConfig};
 use crate::nn::NetConfig;
 use crate::protocol::Protocol;
-use super::learner::Seat;
 use anyhow::{anyhow, Context, Result};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
@@ -192,7 +192,8 @@ impl LeagueConfig {
         let text = std::fs::read_to_string(path)
             .with_context(|| format!("{}: cannot read", path.display()))?;
         if require_protocol {
-            crate::protocol::require_named(&text).map_err(|e| anyhow!("{}: {e}", path.display()))?;
+            crate::protocol::require_named(&text)
+                .map_err(|e| anyhow!("{}: {e}", path.display()))?;
         }
         Self::parse(&text).map_err(|e| anyhow!("{}: {e}", path.display()))
     }
@@ -241,10 +242,11 @@ impl LeagueConfig {
         };
         TrainConfig {
             name: format!("{}-main", side.name()),
-            seed: self.seed ^ match side {
-                Side::Captors => 0xC0,
-                Side::Target => 0x7A,
-            },
+            seed: self.seed
+                ^ match side {
+                    Side::Captors => 0xC0,
+                    Side::Target => 0x7A,
+                },
             total_env_steps: self.env_steps_per_learner,
             num_envs: self.num_envs,
             rollout_steps: self.rollout_steps,
@@ -273,20 +275,29 @@ impl LeagueConfig {
         self.evaluator
             .validate()
             .map_err(|e| format!("evaluator.{e}"))?;
-        if !(self.snapshots.win_rate.is_finite() && (0.0..=1.0).contains(&self.snapshots.win_rate)) {
+        if !(self.snapshots.win_rate.is_finite() && (0.0..=1.0).contains(&self.snapshots.win_rate))
+        {
             return Err(format!(
                 "snapshots.win_rate = {}: must be in [0, 1]",
                 self.snapshots.win_rate
             ));
         }
-        if !(self.exploiters.win_rate.is_finite() && (0.0..=1.0).contains(&self.exploiters.win_rate)) {
-            return Err(format!("exploiters.win_rate = {}: must be in [0, 1]", self.exploiters.win_rate));
+        if !(self.exploiters.win_rate.is_finite()
+            && (0.0..=1.0).contains(&self.exploiters.win_rate))
+        {
+            return Err(format!(
+                "exploiters.win_rate = {}: must be in [0, 1]",
+                self.exploiters.win_rate
+            ));
         }
         if self.exploiters.timeout_env_steps == 0 {
             return Err("exploiters.timeout_env_steps = 0: must be at least 1".into());
         }
         if self.snapshots.every_env_steps == 0 || self.snapshots.timeout_env_steps == 0 {
-            return Err("snapshots.every_env_steps and snapshots.timeout_env_steps must be at least 1".into());
+            return Err(
+                "snapshots.every_env_steps and snapshots.timeout_env_steps must be at least 1"
+                    .into(),
+            );
         }
         let per_iteration = (self.num_envs * self.rollout_steps) as u64;
         if self.env_steps_per_learner < per_iteration.max(1) {
@@ -299,7 +310,10 @@ impl LeagueConfig {
             return Err("opponent_cache = 0: must hold at least one network".into());
         }
         if self.threads_per_learner > 256 {
-            return Err(format!("threads_per_learner = {}: at most 256", self.threads_per_learner));
+            return Err(format!(
+                "threads_per_learner = {}: at most 256",
+                self.threads_per_learner
+            ));
         }
         for side in [Side::Captors, Side::Target] {
             let algo = &self.learner(side).algorithm;

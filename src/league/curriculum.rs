@@ -38,20 +38,28 @@ impl CurriculumConfig {
         }
         for (i, &s) in self.stages.iter().enumerate() {
             if !(s.is_finite() && s > 0.0 && s <= 10.0) {
-                return Err(format!("stages[{i}] = {s}: must be a speed ratio in (0, 10]"));
+                return Err(format!(
+                    "stages[{i}] = {s}: must be a speed ratio in (0, 10]"
+                ));
             }
             if i > 0 && s <= self.stages[i - 1] {
                 return Err(format!("stages[{i}] = {s}: stages must increase"));
             }
         }
         if !(self.promote_at.is_finite() && self.promote_at > 0.0 && self.promote_at <= 1.0) {
-            return Err(format!("promote_at = {}: must be in (0, 1]", self.promote_at));
+            return Err(format!(
+                "promote_at = {}: must be in (0, 1]",
+                self.promote_at
+            ));
         }
         if self.window == 0 {
             return Err("window = 0: must be at least 1 match".into());
         }
         if !(self.replay_share.is_finite() && (0.0..1.0).contains(&self.replay_share)) {
-            return Err(format!("replay_share = {}: must be in [0, 1)", self.replay_share));
+            return Err(format!(
+                "replay_share = {}: must be in [0, 1)",
+                self.replay_share
+            ));
         }
         Ok(())
     }
@@ -80,7 +88,12 @@ impl Curriculum {
 
     /// Records one match of the main captors; returns the new stage when it
     /// moves on. Matches at other speeds (replays) do not count.
-    pub fn record(&mut self, cfg: &CurriculumConfig, speed: f64, captors_won: bool) -> Option<usize> {
+    pub fn record(
+        &mut self,
+        cfg: &CurriculumConfig,
+        speed: f64,
+        captors_won: bool,
+    ) -> Option<usize> {
         if speed != self.speed(cfg) {
             return None;
         }
@@ -90,7 +103,10 @@ impl Curriculum {
         }
         let wins = self.recent.iter().filter(|&&w| w).count();
         let full = self.recent.len() == cfg.window;
-        if full && wins as f64 >= cfg.promote_at * cfg.window as f64 && self.stage + 1 < cfg.stages.len() {
+        if full
+            && wins as f64 >= cfg.promote_at * cfg.window as f64
+            && self.stage + 1 < cfg.stages.len()
+        {
             self.stage += 1;
             self.recent.clear();
             return Some(self.stage);
@@ -164,11 +180,20 @@ mod tests {
 
     #[test]
     fn bad_settings_name_the_field() {
-        let bad = CurriculumConfig { stages: vec![1.0, 1.0], ..Default::default() };
+        let bad = CurriculumConfig {
+            stages: vec![1.0, 1.0],
+            ..Default::default()
+        };
         assert!(bad.validate().unwrap_err().starts_with("stages[1]"));
-        let bad = CurriculumConfig { promote_at: f64::NAN, ..Default::default() };
+        let bad = CurriculumConfig {
+            promote_at: f64::NAN,
+            ..Default::default()
+        };
         assert!(bad.validate().unwrap_err().starts_with("promote_at"));
-        let bad = CurriculumConfig { replay_share: 1.0, ..Default::default() };
+        let bad = CurriculumConfig {
+            replay_share: 1.0,
+            ..Default::default()
+        };
         assert!(bad.validate().unwrap_err().starts_with("replay_share"));
     }
 }

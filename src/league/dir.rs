@@ -70,7 +70,9 @@ impl LeagueDir {
         if cfg.threads_per_learner > 0 {
             return cfg.threads_per_learner;
         }
-        let cores = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1);
+        let cores = std::thread::available_parallelism()
+            .map(|n| n.get())
+            .unwrap_or(1);
         let learners = 2 + [Side::Captors, Side::Target]
             .iter()
             .filter(|s| cfg.exploiters.enabled(**s))

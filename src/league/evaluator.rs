@@ -12,9 +12,9 @@ use super::store::{Kind, MatchRecord, Store};
 use crate::controllers::ControllerSpec;
 use crate::env::{CaptureRule, Side};
 use crate::eval::{play_episode, EvalSetting};
+use crate::map::PreparedMap;
 use anyhow::{Context, Result};
 use serde::{Deserialize, Serialize};
-use crate::map::PreparedMap;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -73,11 +73,18 @@ fn evaluate_pending(
         .iter()
         .filter(|p| p.kind == Kind::Snapshot && p.quarantined.is_none())
     {
-        let Some(panel) = players.iter().find(|p| p.name == heuristic_name(other(member.side))) else {
+        let Some(panel) = players
+            .iter()
+            .find(|p| p.name == heuristic_name(other(member.side)))
+        else {
             continue;
         };
-        let (rel, _) = member.checkpoint.as_ref().context("snapshot without a checkpoint")?;
-        let spec = ControllerSpec::Checkpoint(crate::controllers::CheckpointSpec::new(dir.root.join(rel)));
+        let (rel, _) = member
+            .checkpoint
+            .as_ref()
+            .context("snapshot without a checkpoint")?;
+        let spec =
+            ControllerSpec::Checkpoint(crate::controllers::CheckpointSpec::new(dir.root.join(rel)));
         let (captors, target) = match member.side {
             Side::Captors => (spec.clone(), ControllerSpec::Heuristic),
             Side::Target => (ControllerSpec::Heuristic, spec.clone()),
@@ -141,7 +148,9 @@ fn evaluate_pending(
 pub fn run_evaluator(dir: &LeagueDir, stop: &AtomicBool) -> Result<()> {
     let cfg = dir.config()?;
     tch::set_num_threads(1);
-    let _ = rayon::ThreadPoolBuilder::new().num_threads(1).build_global();
+    let _ = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build_global();
     let store = Store::open(&dir.root)?;
     let maps = crate::map::catalog::load_prepared(&cfg.maps)
         .with_context(|| format!("maps = \"{}\"", cfg.maps))?;
@@ -168,7 +177,11 @@ pub fn run_evaluator(dir: &LeagueDir, stop: &AtomicBool) -> Result<()> {
         }
         store.heartbeat("evaluator", "evaluating", total as u64, 0.0)?;
     }
-    let state = if stop.load(Ordering::SeqCst) { "stopped" } else { "done" };
+    let state = if stop.load(Ordering::SeqCst) {
+        "stopped"
+    } else {
+        "done"
+    };
     store.heartbeat("evaluator", state, total as u64, 0.0)?;
     eprintln!("evaluator: {state}, {total} panel episodes played");
     Ok(())

@@ -11,7 +11,9 @@
 use super::config::LeagueConfig;
 use super::curriculum::Curriculum;
 use super::dir::LeagueDir;
-use super::matchmaking::{choose_opponent, draw_seed, pick_slot, slot_seed, Candidate, MatchmakingConfig, Opponent};
+use super::matchmaking::{
+    choose_opponent, draw_seed, pick_slot, slot_seed, Candidate, MatchmakingConfig, Opponent,
+};
 use super::store::{Kind, MatchRecord, NewPlayer, Player, Store};
 use crate::controllers::ControllerSpec;
 use crate::env::{Action, Side, VecEnv};
@@ -42,11 +44,17 @@ pub struct Seat {
 
 impl Seat {
     pub fn main(side: Side) -> Seat {
-        Seat { side, exploiter: false }
+        Seat {
+            side,
+            exploiter: false,
+        }
     }
 
     pub fn exploiter(side: Side) -> Seat {
-        Seat { side, exploiter: true }
+        Seat {
+            side,
+            exploiter: true,
+        }
     }
 
     /// Its player name (`captors-main`, `target-exploiter`, ...).
@@ -175,7 +183,11 @@ impl<'a> LeagueHooks<'a> {
         if side == Side::Captors && !seat.exploiter {
             // The window survives restarts: rebuilt from the matches the
             // store holds since the current stage began.
-            let since = store.curriculum_history()?.last().map(|(_, _, _, at)| *at).unwrap_or(0);
+            let since = store
+                .curriculum_history()?
+                .last()
+                .map(|(_, _, _, at)| *at)
+                .unwrap_or(0);
             let speed = hooks.curriculum.speed(&cfg.curriculum);
             let recent = store.recent_outcomes(learner_id, speed, since, cfg.curriculum.window)?;
             hooks.curriculum.recent = recent.into();
@@ -200,12 +212,16 @@ impl<'a> LeagueHooks<'a> {
             .filter(|p| matches!(p.kind, Kind::Snapshot | Kind::Heuristic))
             .cloned()
             .collect();
-        let other_main_id = players.iter().find(|p| p.name == learner_name(other)).map(|p| p.id);
+        let other_main_id = players
+            .iter()
+            .find(|p| p.name == learner_name(other))
+            .map(|p| p.id);
         if self.exploiter {
             // An exploiter's pool: the main learner's snapshots, and the
             // heuristics to play until the main learner has one.
-            self.members
-                .retain(|m| m.kind == Kind::Heuristic || (m.parent.is_some() && m.parent == other_main_id));
+            self.members.retain(|m| {
+                m.kind == Kind::Heuristic || (m.parent.is_some() && m.parent == other_main_id)
+            });
         }
         let payoff = self.store.payoff()?;
         self.candidates = self
@@ -226,7 +242,11 @@ impl<'a> LeagueHooks<'a> {
                         };
                     }
                 }
-                Candidate { player: m.id, wins, games }
+                Candidate {
+                    player: m.id,
+                    wins,
+                    games,
+                }
             })
             .collect();
         self.main = self
@@ -278,7 +298,10 @@ impl<'a> LeagueHooks<'a> {
         let player = match pick {
             Some(Opponent::Main) => self.main.expect("main drawn only when there is one"),
             Some(Opponent::Member(id)) => id,
-            None => bail!("the {} pool is empty: the heuristic member is missing", other.name()),
+            None => bail!(
+                "the {} pool is empty: the heuristic member is missing",
+                other.name()
+            ),
         };
         let Some(member) = self.members.iter().find(|m| m.id == player).cloned() else {
             if self.slots_window.is_some() {
@@ -290,10 +313,19 @@ impl<'a> LeagueHooks<'a> {
         };
         let u: f64 = ChaCha8Rng::seed_from_u64(seed ^ 0x5BEED).gen();
         let speed = self.curriculum.sample_speed(&self.cfg.curriculum, u);
-        venv.set_world_speeds(e, 1.0, speed).map_err(anyhow::Error::msg)?;
+        venv.set_world_speeds(e, 1.0, speed)
+            .map_err(anyhow::Error::msg)?;
         let network = match member.kind {
             Kind::Heuristic => {
-                venv.script_world(e, other, Some(ControllerSpec::Heuristic.build(other).map_err(anyhow::Error::msg)?));
+                venv.script_world(
+                    e,
+                    other,
+                    Some(
+                        ControllerSpec::Heuristic
+                            .build(other)
+                            .map_err(anyhow::Error::msg)?,
+                    ),
+                );
                 None
             }
             _ => match self.load(&member) {
@@ -326,8 +358,15 @@ impl<'a> LeagueHooks<'a> {
     fn restack(&mut self, ids: Vec<i64>) -> Result<()> {
         let mut parts: Vec<Vec<i64>> = Vec::new();
         for id in ids {
-            let p = &self.cache.get(&id).context("opponent network not loaded")?.prepared;
-            match parts.iter_mut().find(|ids| self.cache[&ids[0]].prepared.same_shape(p)) {
+            let p = &self
+                .cache
+                .get(&id)
+                .context("opponent network not loaded")?
+                .prepared;
+            match parts
+                .iter_mut()
+                .find(|ids| self.cache[&ids[0]].prepared.same_shape(p))
+            {
                 Some(part) => part.push(id),
                 None => parts.push(vec![id]),
             }
@@ -338,7 +377,8 @@ impl<'a> LeagueHooks<'a> {
                 self.stacks.push(old.swap_remove(i));
                 continue;
             }
-            let prepared: Vec<&PreparedActor> = part.iter().map(|id| &self.cache[id].prepared).collect();
+            let prepared: Vec<&PreparedActor> =
+                part.iter().map(|id| &self.cache[id].prepared).collect();
             let actors = StackedActors::new(&prepared).map_err(anyhow::Error::msg)?;
             self.stacks.push(Stack { ids: part, actors });
         }
@@ -360,7 +400,10 @@ impl<'a> LeagueHooks<'a> {
         let got = crate::util::sha256_file(&dir.join("meta.json"))
             .with_context(|| format!("{}: meta.json missing", dir.display()))?;
         if got != meta_sha {
-            bail!("{}: meta.json does not match the sha256 the store recorded", dir.display());
+            bail!(
+                "{}: meta.json does not match the sha256 the store recorded",
+                dir.display()
+            );
         }
         let snapshot = Arc::new(PolicySnapshot::load(&dir, self.other())?);
         let (vs, actor) = snapshot.build_actor(Device::Cpu)?;
@@ -412,7 +455,12 @@ impl RolloutHooks for LeagueHooks<'_> {
             let (g, h) = (stack.ids.len(), stack.actors.hidden as usize);
             let (vl, pl) = (venv.cfg.vector_len(), net.input_len());
             // Each opponent's rows padded to the most any of them plays.
-            let r = stack.ids.iter().map(|id| groups[id].len() * team).max().unwrap_or(0);
+            let r = stack
+                .ids
+                .iter()
+                .map(|id| groups[id].len() * team)
+                .max()
+                .unwrap_or(0);
             let mut vectors = vec![0f32; g * r * vl];
             let mut patches = vec![0u8; g * r * pl];
             let mut hidden = vec![0f32; g * r * h];
@@ -450,7 +498,10 @@ impl RolloutHooks for LeagueHooks<'_> {
                 probs.copy_data(&mut pr, n * Action::COUNT);
                 for (i, id) in stack.ids.iter().enumerate() {
                     for row in i * r..i * r + groups[id].len() * team {
-                        chosen[row] = sample(&pr[row * Action::COUNT..(row + 1) * Action::COUNT], &mut self.rng) as i64;
+                        chosen[row] = sample(
+                            &pr[row * Action::COUNT..(row + 1) * Action::COUNT],
+                            &mut self.rng,
+                        ) as i64;
                     }
                 }
             }
@@ -459,7 +510,9 @@ impl RolloutHooks for LeagueHooks<'_> {
             for (i, id) in stack.ids.iter().enumerate() {
                 for (w, &e) in groups[id].iter().enumerate() {
                     let row = i * r + w * team;
-                    self.worlds[e].hidden.copy_from_slice(&h_new[row * h..(row + team) * h]);
+                    self.worlds[e]
+                        .hidden
+                        .copy_from_slice(&h_new[row * h..(row + team) * h]);
                     for (j, agent) in other.agents(k).enumerate() {
                         actions[e * na + agent] = Action::from_index(chosen[row + j] as usize);
                     }
@@ -500,7 +553,10 @@ impl RolloutHooks for LeagueHooks<'_> {
             self.games += 1;
             self.wins += won as u64;
             if self.side == Side::Captors && !self.exploiter {
-                if let Some(stage) = self.curriculum.record(&self.cfg.curriculum, w.speed, s.captured) {
+                if let Some(stage) =
+                    self.curriculum
+                        .record(&self.cfg.curriculum, w.speed, s.captured)
+                {
                     let speed = self.curriculum.speed(&self.cfg.curriculum);
                     self.store.push_curriculum(
                         stage,
@@ -533,13 +589,21 @@ pub fn should_wait(mine: u64, other: Option<(&str, u64, i64)>, lead: u64) -> boo
     match other {
         None => mine > lead,
         Some((state, steps, age_ms)) => {
-            matches!(state, "training" | "waiting") && age_ms < 120_000 && mine > steps.saturating_add(lead)
+            matches!(state, "training" | "waiting")
+                && age_ms < 120_000
+                && mine > steps.saturating_add(lead)
         }
     }
 }
 
 /// Waits (heartbeating "waiting") while `should_wait`; returns the seconds waited.
-fn wait_for_other_main(store: &Store, seat: Seat, mine: u64, lead: u64, stop: &AtomicBool) -> Result<f64> {
+fn wait_for_other_main(
+    store: &Store,
+    seat: Seat,
+    mine: u64,
+    lead: u64,
+    stop: &AtomicBool,
+) -> Result<f64> {
     let other = learner_name(match seat.side {
         Side::Captors => Side::Target,
         Side::Target => Side::Captors,
@@ -549,12 +613,19 @@ fn wait_for_other_main(store: &Store, seat: Seat, mine: u64, lead: u64, stop: &A
     while !stop.load(Ordering::SeqCst) {
         let beats = store.heartbeats()?;
         let now = super::store::now_ms();
-        let theirs = beats.iter().find(|b| b.0 == other).map(|b| (b.2.as_str(), b.3, now - b.5));
+        let theirs = beats
+            .iter()
+            .find(|b| b.0 == other)
+            .map(|b| (b.2.as_str(), b.3, now - b.5));
         if !should_wait(mine, theirs, lead) {
             break;
         }
         if !announced {
-            eprintln!("{}: {} env steps ahead of {other} by more than {lead}: waiting for it", seat.name(), mine);
+            eprintln!(
+                "{}: {} env steps ahead of {other} by more than {lead}: waiting for it",
+                seat.name(),
+                mine
+            );
             announced = true;
         }
         store.heartbeat(&seat.name(), "waiting", mine, 0.0)?;
@@ -571,13 +642,19 @@ pub fn run_learner(dir: &LeagueDir, seat: Seat, stop: &AtomicBool) -> Result<()>
     let cfg = dir.config()?;
     let threads = dir.threads_per_learner(&cfg);
     tch::set_num_threads(threads as i32);
-    let _ = rayon::ThreadPoolBuilder::new().num_threads(threads).build_global();
+    let _ = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build_global();
     let store = Store::open(&dir.root)?;
     let name = seat.name();
     let learner_id = store.add_player(&NewPlayer {
         name: name.clone(),
         side,
-        kind: if seat.exploiter { Kind::Exploiter } else { Kind::Learner },
+        kind: if seat.exploiter {
+            Kind::Exploiter
+        } else {
+            Kind::Learner
+        },
         parent: None,
         env_steps: 0,
         curriculum_stage: 0,
@@ -617,7 +694,8 @@ pub fn run_learner(dir: &LeagueDir, seat: Seat, stop: &AtomicBool) -> Result<()>
     let mut waited = 0.0;
     while trainer.env_steps < cfg.env_steps_per_learner && !stop.load(Ordering::SeqCst) {
         if !seat.exploiter {
-            waited += wait_for_other_main(&store, seat, trainer.env_steps, cfg.pace_env_steps, stop)?;
+            waited +=
+                wait_for_other_main(&store, seat, trainer.env_steps, cfg.pace_env_steps, stop)?;
             if stop.load(Ordering::SeqCst) {
                 break;
             }
@@ -629,7 +707,10 @@ pub fn run_learner(dir: &LeagueDir, seat: Seat, stop: &AtomicBool) -> Result<()>
             save_learner(&trainer, &store, dir, seat, learner_id)?;
         }
         let since = trainer.env_steps - last_snapshot;
-        let (w, g) = (hooks.wins - wins_at_snapshot, hooks.games - games_at_snapshot);
+        let (w, g) = (
+            hooks.wins - wins_at_snapshot,
+            hooks.games - games_at_snapshot,
+        );
         let (win_rate, timeout) = if seat.exploiter {
             (cfg.exploiters.win_rate, cfg.exploiters.timeout_env_steps)
         } else {
@@ -637,7 +718,14 @@ pub fn run_learner(dir: &LeagueDir, seat: Seat, stop: &AtomicBool) -> Result<()>
         };
         let winning = g > 0 && w as f64 / g as f64 >= win_rate;
         if (since >= cfg.snapshots.every_env_steps && winning) || since >= timeout {
-            add_snapshot(&trainer, &store, dir, seat, learner_id, hooks.curriculum.stage)?;
+            add_snapshot(
+                &trainer,
+                &store,
+                dir,
+                seat,
+                learner_id,
+                hooks.curriculum.stage,
+            )?;
             last_snapshot = trainer.env_steps;
             wins_at_snapshot = hooks.wins;
             games_at_snapshot = hooks.games;
@@ -651,7 +739,12 @@ pub fn run_learner(dir: &LeagueDir, seat: Seat, stop: &AtomicBool) -> Result<()>
         }
         hooks.refresh()?;
         let steps = (cfg.num_envs * cfg.rollout_steps) as f64;
-        store.heartbeat(&name, "training", trainer.env_steps, steps / started.elapsed().as_secs_f64())?;
+        store.heartbeat(
+            &name,
+            "training",
+            trainer.env_steps,
+            steps / started.elapsed().as_secs_f64(),
+        )?;
     }
     save_learner(&trainer, &store, dir, seat, learner_id)?;
     let state = if trainer.env_steps >= cfg.env_steps_per_learner {
@@ -680,7 +773,13 @@ pub fn run_learner(dir: &LeagueDir, seat: Seat, stop: &AtomicBool) -> Result<()>
 }
 
 /// The learner's own resume point, and its row pointed at it.
-fn save_learner(trainer: &Trainer, store: &Store, dir: &LeagueDir, seat: Seat, id: i64) -> Result<()> {
+fn save_learner(
+    trainer: &Trainer,
+    store: &Store,
+    dir: &LeagueDir,
+    seat: Seat,
+    id: i64,
+) -> Result<()> {
     let run_dir = dir.seat_dir(seat);
     let written = trainer.save(&run_dir)?;
     if let Some(ckpt) = written.first() {
@@ -737,15 +836,23 @@ pub fn reconcile(dir: &LeagueDir, store: &Store) -> Result<(Vec<String>, Vec<Str
         for e in entries {
             let path = e?.path();
             let rel = dir.relative(&path);
-            if !players.iter().any(|p| p.checkpoint.as_ref().is_some_and(|(r, _)| *r == rel)) {
+            if !players
+                .iter()
+                .any(|p| p.checkpoint.as_ref().is_some_and(|(r, _)| *r == rel))
+            {
                 std::fs::remove_dir_all(&path)
                     .with_context(|| format!("cannot remove {}", path.display()))?;
                 removed.push(rel);
             }
         }
     }
-    for p in players.iter().filter(|p| p.kind == Kind::Snapshot && p.quarantined.is_none()) {
-        let Some((rel, sha)) = &p.checkpoint else { continue };
+    for p in players
+        .iter()
+        .filter(|p| p.kind == Kind::Snapshot && p.quarantined.is_none())
+    {
+        let Some((rel, sha)) = &p.checkpoint else {
+            continue;
+        };
         let meta = dir.root.join(rel).join("meta.json");
         let ok = crate::util::sha256_file(&meta).is_ok_and(|got| &got == sha)
             && PolicySnapshot::load(&dir.root.join(rel), p.side).is_ok();
@@ -778,15 +885,38 @@ mod tests {
 
     #[test]
     fn a_learner_waits_only_for_a_live_learner_it_is_far_ahead_of() {
-        assert!(!should_wait(50_000, Some(("training", 0, 10)), 0), "0: never");
-        assert!(should_wait(30_001, Some(("training", 10_000, 1_000)), 20_000));
-        assert!(!should_wait(30_000, Some(("training", 10_000, 1_000)), 20_000), "exactly the lead");
-        assert!(should_wait(30_001, Some(("waiting", 10_000, 1_000)), 20_000));
-        assert!(!should_wait(90_000, Some(("done", 10_000, 1_000)), 20_000), "done: nothing to wait for");
-        assert!(!should_wait(90_000, Some(("stopped", 10_000, 1_000)), 20_000));
-        assert!(!should_wait(90_000, Some(("training", 10_000, 130_000)), 20_000), "silent: crashed");
+        assert!(
+            !should_wait(50_000, Some(("training", 0, 10)), 0),
+            "0: never"
+        );
+        assert!(should_wait(
+            30_001,
+            Some(("training", 10_000, 1_000)),
+            20_000
+        ));
+        assert!(
+            !should_wait(30_000, Some(("training", 10_000, 1_000)), 20_000),
+            "exactly the lead"
+        );
+        assert!(should_wait(
+            30_001,
+            Some(("waiting", 10_000, 1_000)),
+            20_000
+        ));
+        assert!(
+            !should_wait(90_000, Some(("done", 10_000, 1_000)), 20_000),
+            "done: nothing to wait for"
+        );
+        assert!(!should_wait(
+            90_000,
+            Some(("stopped", 10_000, 1_000)),
+            20_000
+        ));
+        assert!(
+            !should_wait(90_000, Some(("training", 10_000, 130_000)), 20_000),
+            "silent: crashed"
+        );
         assert!(should_wait(20_001, None, 20_000), "not started yet");
         assert!(!should_wait(5_000, None, 20_000));
     }
 }
-

@@ -73,7 +73,9 @@ pub fn parse_duration(text: &str) -> Result<Duration, String> {
         _ => return Err(format!("--for {text}: unknown unit '{unit}' (s, m or h)")),
     };
     if !(secs.is_finite() && secs > 0.0 && secs <= 30.0 * 86400.0) {
-        return Err(format!("--for {text}: must be more than 0 and at most 30 days"));
+        return Err(format!(
+            "--for {text}: must be more than 0 and at most 30 days"
+        ));
     }
     Ok(Duration::from_secs_f64(secs))
 }
@@ -118,7 +120,9 @@ fn spawn(dir: &LeagueDir, role: Role) -> Result<Child> {
     let mut cmd = Command::new(exe);
     match role {
         Role::Learner(seat) => {
-            cmd.arg("league-learner").arg("--side").arg(seat.side.name());
+            cmd.arg("league-learner")
+                .arg("--side")
+                .arg(seat.side.name());
             if seat.exploiter {
                 cmd.arg("--exploiter");
             }
@@ -154,7 +158,12 @@ fn log_tail(path: &Path) -> String {
 }
 
 /// Starts or resumes the league in `dir` and runs it to its end.
-pub fn run(dir: &LeagueDir, config: Option<&Path>, run_for: Option<Duration>, stop: &AtomicBool) -> Result<()> {
+pub fn run(
+    dir: &LeagueDir,
+    config: Option<&Path>,
+    run_for: Option<Duration>,
+    stop: &AtomicBool,
+) -> Result<()> {
     std::fs::create_dir_all(&dir.root)
         .with_context(|| format!("cannot create {}", dir.root.display()))?;
     let lock_path = dir.root.join("league.lock");
@@ -192,7 +201,10 @@ pub fn run(dir: &LeagueDir, config: Option<&Path>, run_for: Option<Duration>, st
             cfg.protocol
                 .check_training_maps(&cfg.maps, &maps)
                 .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
-            crate::nn::checkpoint::write_file_atomically(&dir.config_path(), toml::to_string_pretty(&cfg)?.as_bytes())?;
+            crate::nn::checkpoint::write_file_atomically(
+                &dir.config_path(),
+                toml::to_string_pretty(&cfg)?.as_bytes(),
+            )?;
             eprintln!("starting the league {} in {}", cfg.name, dir.root.display());
             cfg
         }
@@ -239,9 +251,11 @@ pub fn run(dir: &LeagueDir, config: Option<&Path>, run_for: Option<Duration>, st
         .map(|seat| {
             let b = multi.add(ProgressBar::new(cfg.env_steps_per_learner));
             b.set_style(
-                ProgressStyle::with_template("{prefix:>12} [{bar:25}] {human_pos}/{human_len} steps {msg}")
-                    .unwrap()
-                    .progress_chars("=> "),
+                ProgressStyle::with_template(
+                    "{prefix:>12} [{bar:25}] {human_pos}/{human_len} steps {msg}",
+                )
+                .unwrap()
+                .progress_chars("=> "),
             );
             b.set_prefix(seat.name());
             b
@@ -262,9 +276,13 @@ pub fn run(dir: &LeagueDir, config: Option<&Path>, run_for: Option<Duration>, st
     let mut stopping = false;
     let mut last_status = Instant::now() - Duration::from_secs(60);
     loop {
-        if !stopping && (stop.load(Ordering::SeqCst) || deadline.is_some_and(|d| Instant::now() >= d)) {
+        if !stopping
+            && (stop.load(Ordering::SeqCst) || deadline.is_some_and(|d| Instant::now() >= d))
+        {
             stopping = true;
-            multi.println("stopping: each learner finishes its iteration and checkpoints").ok();
+            multi
+                .println("stopping: each learner finishes its iteration and checkpoints")
+                .ok();
             for l in &learners {
                 if let Some(c) = &l.child {
                     // SAFETY: signalling our own child by pid.
@@ -329,7 +347,10 @@ pub fn run(dir: &LeagueDir, config: Option<&Path>, run_for: Option<Duration>, st
             for (bar, l) in bars.iter().zip(&learners) {
                 if let Some(b) = beats.iter().find(|b| b.0 == l.role.name()) {
                     bar.set_position(b.3);
-                    bar.set_message(format!("| {:.0} steps/s | {} | {matches} matches", b.4, b.2));
+                    bar.set_message(format!(
+                        "| {:.0} steps/s | {} | {matches} matches",
+                        b.4, b.2
+                    ));
                 }
             }
         }

@@ -73,7 +73,10 @@ impl MatchmakingConfig {
             }
         }
         if self.slots > 64 {
-            return Err(format!("slots = {}: must be in 0..=64 (0 = no slots)", self.slots));
+            return Err(format!(
+                "slots = {}: must be in 0..=64 (0 = no slots)",
+                self.slots
+            ));
         }
         Ok(())
     }
@@ -118,7 +121,11 @@ pub fn pfsp_probabilities(pool: &[Candidate], cfg: &MatchmakingConfig) -> Vec<f6
     weights
         .iter()
         .map(|w| {
-            let pfsp = if total > 0.0 && total.is_finite() { w / total } else { uniform };
+            let pfsp = if total > 0.0 && total.is_finite() {
+                w / total
+            } else {
+                uniform
+            };
             (1.0 - cfg.floor) * pfsp + cfg.floor * uniform
         })
         .collect()
@@ -136,7 +143,11 @@ pub enum Opponent {
 /// The seed of one opponent draw: from (league seed, learner, world,
 /// episode) only, so a league replays whatever the scheduling.
 pub fn draw_seed(league_seed: u64, learner: i64, world: usize, episode: u64) -> u64 {
-    episode_seed(league_seed ^ (learner as u64).rotate_left(17), world, episode) ^ 0x4c45_4147_5545
+    episode_seed(
+        league_seed ^ (learner as u64).rotate_left(17),
+        world,
+        episode,
+    ) ^ 0x4c45_4147_5545
 }
 
 /// The seed of slot `slot`'s draw in window `window` (a window being
@@ -183,27 +194,41 @@ mod tests {
     use super::*;
 
     fn cand(player: i64, wins: f64, games: f64) -> Candidate {
-        Candidate { player, wins, games }
+        Candidate {
+            player,
+            wins,
+            games,
+        }
     }
 
     #[test]
     fn pfsp_weights_match_hand_computed_values() {
         let pool = [cand(1, 1.0, 4.0), cand(2, 3.0, 4.0), cand(3, 0.0, 0.0)];
         // Win rates 0.25, 0.75, 0.5 (no games yet).
-        let hard = MatchmakingConfig { floor: 0.0, ..Default::default() };
+        let hard = MatchmakingConfig {
+            floor: 0.0,
+            ..Default::default()
+        };
         // (1-x)^2: 0.5625, 0.0625, 0.25; total 0.875.
         let p = pfsp_probabilities(&pool, &hard);
         for (got, want) in p.iter().zip([0.5625 / 0.875, 0.0625 / 0.875, 0.25 / 0.875]) {
             assert!((got - want).abs() < 1e-12, "{p:?}");
         }
-        let var = MatchmakingConfig { weighting: Weighting::Var, floor: 0.0, ..Default::default() };
+        let var = MatchmakingConfig {
+            weighting: Weighting::Var,
+            floor: 0.0,
+            ..Default::default()
+        };
         // x(1-x): 0.1875, 0.1875, 0.25; total 0.625.
         let p = pfsp_probabilities(&pool, &var);
         for (got, want) in p.iter().zip([0.3, 0.3, 0.4]) {
             assert!((got - want).abs() < 1e-12, "{p:?}");
         }
         // The floor: 10% spread evenly.
-        let floored = MatchmakingConfig { floor: 0.1, ..Default::default() };
+        let floored = MatchmakingConfig {
+            floor: 0.1,
+            ..Default::default()
+        };
         let p = pfsp_probabilities(&pool, &floored);
         assert!((p[1] - (0.9 * 0.0625 / 0.875 + 0.1 / 3.0)).abs() < 1e-12);
         assert!((p.iter().sum::<f64>() - 1.0).abs() < 1e-12);
@@ -213,11 +238,21 @@ mod tests {
     fn degenerate_pools_still_give_a_distribution() {
         // The learner beats everyone: f_hard is 0 everywhere -> uniform.
         let beaten = [cand(1, 5.0, 5.0), cand(2, 9.0, 9.0)];
-        let cfg = MatchmakingConfig { floor: 0.0, ..Default::default() };
+        let cfg = MatchmakingConfig {
+            floor: 0.0,
+            ..Default::default()
+        };
         assert_eq!(pfsp_probabilities(&beaten, &cfg), vec![0.5, 0.5]);
         // Var is 0 at both ends too.
-        let var = MatchmakingConfig { weighting: Weighting::Var, floor: 0.0, ..Default::default() };
-        assert_eq!(pfsp_probabilities(&[cand(1, 0.0, 3.0), cand(2, 3.0, 3.0)], &var), vec![0.5, 0.5]);
+        let var = MatchmakingConfig {
+            weighting: Weighting::Var,
+            floor: 0.0,
+            ..Default::default()
+        };
+        assert_eq!(
+            pfsp_probabilities(&[cand(1, 0.0, 3.0), cand(2, 3.0, 3.0)], &var),
+            vec![0.5, 0.5]
+        );
         assert!(pfsp_probabilities(&[], &cfg).is_empty());
         assert_eq!(choose_opponent(&[], None, &cfg, 1), None);
         assert_eq!(choose_opponent(&[], Some(7), &cfg, 1), Some(Opponent::Main));
@@ -233,31 +268,50 @@ mod tests {
         for episode in 0..n {
             let seed = draw_seed(9, 2, 3, episode);
             let o = choose_opponent(&pool, Some(99), &cfg, seed).unwrap();
-            assert_eq!(choose_opponent(&pool, Some(99), &cfg, seed), Some(o), "replays");
+            assert_eq!(
+                choose_opponent(&pool, Some(99), &cfg, seed),
+                Some(o),
+                "replays"
+            );
             counts[match o {
                 Opponent::Main => 0,
                 Opponent::Member(id) => id as usize,
             }] += 1;
         }
         let share = |c: usize| c as f64 / n as f64;
-        assert!((share(counts[0]) - cfg.main_share).abs() < 0.01, "{counts:?}");
+        assert!(
+            (share(counts[0]) - cfg.main_share).abs() < 0.01,
+            "{counts:?}"
+        );
         for i in 0..3 {
             let want = (1.0 - cfg.main_share) * p[i];
-            assert!((share(counts[i + 1]) - want).abs() < 0.01, "{counts:?} vs {p:?}");
+            assert!(
+                (share(counts[i + 1]) - want).abs() < 0.01,
+                "{counts:?} vs {p:?}"
+            );
         }
-        assert_ne!(draw_seed(9, 2, 3, 0), draw_seed(9, 3, 3, 0), "learners draw apart");
+        assert_ne!(
+            draw_seed(9, 2, 3, 0),
+            draw_seed(9, 3, 3, 0),
+            "learners draw apart"
+        );
     }
 
     #[test]
     fn slots_keep_the_marginal_and_bound_the_opponents_in_play() {
         let pool = [cand(1, 1.0, 4.0), cand(2, 3.0, 4.0), cand(3, 0.0, 0.0)];
-        let cfg = MatchmakingConfig { slots: 3, ..MatchmakingConfig::default() };
+        let cfg = MatchmakingConfig {
+            slots: 3,
+            ..MatchmakingConfig::default()
+        };
         let p = pfsp_probabilities(&pool, &cfg);
         let (windows, worlds) = (8_000u64, 8usize);
         let mut counts = [0usize; 4];
         for window in 0..windows {
             let slots: Vec<Opponent> = (0..cfg.slots)
-                .map(|s| choose_opponent(&pool, Some(99), &cfg, slot_seed(9, 2, s, window)).unwrap())
+                .map(|s| {
+                    choose_opponent(&pool, Some(99), &cfg, slot_seed(9, 2, s, window)).unwrap()
+                })
                 .collect();
             let mut in_play = std::collections::HashSet::new();
             for world in 0..worlds {
@@ -274,12 +328,20 @@ mod tests {
         // episode's opponent still follows the PFSP mixture (draws within a
         // window are correlated, hence the looser tolerance).
         let share = |c: usize| c as f64 / (windows as usize * worlds) as f64;
-        assert!((share(counts[0]) - cfg.main_share).abs() < 0.02, "{counts:?}");
+        assert!(
+            (share(counts[0]) - cfg.main_share).abs() < 0.02,
+            "{counts:?}"
+        );
         for i in 0..3 {
             let want = (1.0 - cfg.main_share) * p[i];
-            assert!((share(counts[i + 1]) - want).abs() < 0.02, "{counts:?} vs {p:?}");
+            assert!(
+                (share(counts[i + 1]) - want).abs() < 0.02,
+                "{counts:?} vs {p:?}"
+            );
         }
-        let picks: std::collections::HashSet<usize> = (0..200).map(|e| pick_slot(3, draw_seed(1, 1, 0, e))).collect();
+        let picks: std::collections::HashSet<usize> = (0..200)
+            .map(|e| pick_slot(3, draw_seed(1, 1, 0, e)))
+            .collect();
         assert_eq!(picks.len(), 3, "every slot gets picked");
     }
 }

@@ -25,21 +25,40 @@ pub struct Rating {
 impl Default for Rating {
     fn default() -> Self {
         let r = WengLinRating::new();
-        Rating { mu: r.rating, sigma: r.uncertainty }
+        Rating {
+            mu: r.rating,
+            sigma: r.uncertainty,
+        }
     }
 }
 
 /// The ratings after one match between a captor team and a target.
 pub fn update(captors: Rating, target: Rating, captors_won: bool) -> (Rating, Rating) {
     let (c, t) = weng_lin(
-        &WengLinRating { rating: captors.mu, uncertainty: captors.sigma },
-        &WengLinRating { rating: target.mu, uncertainty: target.sigma },
-        if captors_won { &Outcomes::WIN } else { &Outcomes::LOSS },
+        &WengLinRating {
+            rating: captors.mu,
+            uncertainty: captors.sigma,
+        },
+        &WengLinRating {
+            rating: target.mu,
+            uncertainty: target.sigma,
+        },
+        if captors_won {
+            &Outcomes::WIN
+        } else {
+            &Outcomes::LOSS
+        },
         &WengLinConfig::new(),
     );
     (
-        Rating { mu: c.rating, sigma: c.uncertainty },
-        Rating { mu: t.rating, sigma: t.uncertainty },
+        Rating {
+            mu: c.rating,
+            sigma: c.uncertainty,
+        },
+        Rating {
+            mu: t.rating,
+            sigma: t.uncertainty,
+        },
     )
 }
 
@@ -102,19 +121,45 @@ mod tests {
     #[test]
     fn bradley_terry_recovers_odds_and_keeps_the_undefeated_finite() {
         // A beats B 3 times in 4 over 4000 games: odds 3, 400 log10 3 = 190.85 apart.
-        let r = bradley_terry(2, &[PairRecord { a: 0, b: 1, wins: 3000.0, games: 4000.0 }]);
+        let r = bradley_terry(
+            2,
+            &[PairRecord {
+                a: 0,
+                b: 1,
+                wins: 3000.0,
+                games: 4000.0,
+            }],
+        );
         assert!(((r[0] - r[1]) - 190.85).abs() < 1.0, "{r:?}");
         // Transitivity through a common opponent: A-B odds 3, B-C odds 3 -> A-C odds 9.
         let r = bradley_terry(
             3,
             &[
-                PairRecord { a: 0, b: 1, wins: 3000.0, games: 4000.0 },
-                PairRecord { a: 1, b: 2, wins: 3000.0, games: 4000.0 },
+                PairRecord {
+                    a: 0,
+                    b: 1,
+                    wins: 3000.0,
+                    games: 4000.0,
+                },
+                PairRecord {
+                    a: 1,
+                    b: 2,
+                    wins: 3000.0,
+                    games: 4000.0,
+                },
             ],
         );
         assert!(((r[0] - r[2]) - 381.7).abs() < 2.0, "{r:?}");
         // Never lost: large but finite; no games: at the reference.
-        let r = bradley_terry(3, &[PairRecord { a: 0, b: 1, wins: 10.0, games: 10.0 }]);
+        let r = bradley_terry(
+            3,
+            &[PairRecord {
+                a: 0,
+                b: 1,
+                wins: 10.0,
+                games: 10.0,
+            }],
+        );
         assert!(r.iter().all(|x| x.is_finite()) && r[0] > r[1], "{r:?}");
         assert!(r[2].abs() < 1e-6, "{r:?}");
     }

@@ -190,14 +190,16 @@ pub fn report(dir: &LeagueDir) -> Result<StatusReport> {
         learners: store
             .heartbeats()?
             .into_iter()
-            .map(|(name, pid, state, env_steps, steps_per_s, at)| LearnerRow {
-                name,
-                pid,
-                state,
-                env_steps,
-                steps_per_s,
-                heartbeat_age_s: (now - at) as f64 / 1000.0,
-            })
+            .map(
+                |(name, pid, state, env_steps, steps_per_s, at)| LearnerRow {
+                    name,
+                    pid,
+                    state,
+                    env_steps,
+                    steps_per_s,
+                    heartbeat_age_s: (now - at) as f64 / 1000.0,
+                },
+            )
             .collect(),
         payoff: payoff
             .iter()
@@ -224,7 +226,11 @@ pub fn report(dir: &LeagueDir) -> Result<StatusReport> {
 /// The report as text: players, learners, curriculum, payoff matrix, crashes.
 pub fn render(r: &StatusReport) -> String {
     let mut s = String::new();
-    let _ = writeln!(s, "league {} ({}), {} matches\n", r.league, r.dir, r.matches);
+    let _ = writeln!(
+        s,
+        "league {} ({}), {} matches\n",
+        r.league, r.dir, r.matches
+    );
     let _ = writeln!(
         s,
         "{:>3}  {:<26} {:<8} {:<9} {:>6} {:>11} {:>15} {:>8} {:>6} {:>7}",
@@ -240,7 +246,9 @@ pub fn render(r: &StatusReport) -> String {
             p.name,
             p.side,
             p.kind,
-            p.parent.map(|x| x.to_string()).unwrap_or_else(|| "-".into()),
+            p.parent
+                .map(|x| x.to_string())
+                .unwrap_or_else(|| "-".into()),
             p.env_steps,
             p.rating,
             p.rating_sigma,
@@ -278,7 +286,11 @@ pub fn render(r: &StatusReport) -> String {
         crate::eval::ratio_label(r.curriculum.speed_ratio)
     );
     for h in &r.curriculum.history {
-        let _ = writeln!(s, "  -> stage {} (1.0:{}): {}", h.stage, h.speed_ratio, h.reason);
+        let _ = writeln!(
+            s,
+            "  -> stage {} (1.0:{}): {}",
+            h.stage, h.speed_ratio, h.reason
+        );
     }
     let name = |id: i64| {
         r.players
@@ -287,9 +299,22 @@ pub fn render(r: &StatusReport) -> String {
             .map(|p| p.name.clone())
             .unwrap_or_else(|| id.to_string())
     };
-    let captors: Vec<i64> = r.players.iter().filter(|p| p.side == "captors").map(|p| p.id).collect();
-    let targets: Vec<i64> = r.players.iter().filter(|p| p.side == "target").map(|p| p.id).collect();
-    let _ = writeln!(s, "\npayoff (captor win % / games; rows captors, columns targets):");
+    let captors: Vec<i64> = r
+        .players
+        .iter()
+        .filter(|p| p.side == "captors")
+        .map(|p| p.id)
+        .collect();
+    let targets: Vec<i64> = r
+        .players
+        .iter()
+        .filter(|p| p.side == "target")
+        .map(|p| p.id)
+        .collect();
+    let _ = writeln!(
+        s,
+        "\npayoff (captor win % / games; rows captors, columns targets):"
+    );
     let _ = write!(s, "{:<26}", "");
     for t in &targets {
         let _ = write!(s, " {:>14}", format!("#{t}"));
@@ -302,7 +327,13 @@ pub fn render(r: &StatusReport) -> String {
                 .payoff
                 .iter()
                 .find(|p| p.captor == *c && p.target == *t)
-                .map(|p| format!("{:.0}% / {}", 100.0 * p.captor_wins as f64 / p.games as f64, p.games))
+                .map(|p| {
+                    format!(
+                        "{:.0}% / {}",
+                        100.0 * p.captor_wins as f64 / p.games as f64,
+                        p.games
+                    )
+                })
                 .unwrap_or_else(|| "-".into());
             let _ = write!(s, " {cell:>14}");
         }
@@ -314,7 +345,13 @@ pub fn render(r: &StatusReport) -> String {
     if !r.crashes.is_empty() {
         let _ = writeln!(s, "\ncrashes:");
         for c in &r.crashes {
-            let _ = writeln!(s, "  {} ({}): {}", c.learner, c.exit_status, c.message.lines().last().unwrap_or(""));
+            let _ = writeln!(
+                s,
+                "  {} ({}): {}",
+                c.learner,
+                c.exit_status,
+                c.message.lines().last().unwrap_or("")
+            );
         }
     }
     s
@@ -333,11 +370,18 @@ pub fn export(dir: &LeagueDir, player: &str, out: &Path) -> Result<()> {
             format!(
                 "no player '{player}' in {} (players: {})",
                 dir.root.display(),
-                players.iter().map(|p| p.name.as_str()).collect::<Vec<_>>().join(", ")
+                players
+                    .iter()
+                    .map(|p| p.name.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", ")
             )
         })?;
     let Some((rel, meta_sha)) = &p.checkpoint else {
-        bail!("{} is a heuristic member: it has no weights to export", p.name);
+        bail!(
+            "{} is a heuristic member: it has no weights to export",
+            p.name
+        );
     };
     let src = dir.root.join(rel);
     let got = crate::util::sha256_file(&src.join("meta.json"))
@@ -362,20 +406,31 @@ pub fn export(dir: &LeagueDir, player: &str, out: &Path) -> Result<()> {
         std::fs::copy(dir.config_path(), tmp.join("league-config.toml"))?;
         let mut csv = String::from("match_id,mu,sigma,at_ms\n");
         for (m, mu, sigma, at) in store.rating_history(p.id)? {
-            let _ = writeln!(csv, "{},{mu},{sigma},{at}", m.map(|x| x.to_string()).unwrap_or_default());
+            let _ = writeln!(
+                csv,
+                "{},{mu},{sigma},{at}",
+                m.map(|x| x.to_string()).unwrap_or_default()
+            );
         }
         std::fs::write(tmp.join("ratings.csv"), csv)?;
         let info = serde_json::json!({
             "player": p.name, "id": p.id, "side": p.side.name(), "kind": p.kind.name(),
             "parent": p.parent, "env_steps": p.env_steps, "league": dir.root.display().to_string(),
         });
-        std::fs::write(tmp.join("player.json"), serde_json::to_string_pretty(&info)?)?;
+        std::fs::write(
+            tmp.join("player.json"),
+            serde_json::to_string_pretty(&info)?,
+        )?;
         let mut names: Vec<_> = std::fs::read_dir(tmp)?
             .map(|e| e.map(|e| e.file_name().to_string_lossy().into_owned()))
             .collect::<std::io::Result<_>>()?;
         names.sort();
         for n in names {
-            let _ = writeln!(manifest, "{}  {n}", crate::util::sha256_file(&tmp.join(&n))?);
+            let _ = writeln!(
+                manifest,
+                "{}  {n}",
+                crate::util::sha256_file(&tmp.join(&n))?
+            );
         }
         std::fs::write(tmp.join("SHA256SUMS"), manifest)?;
         Ok(())
@@ -387,7 +442,9 @@ pub fn export(dir: &LeagueDir, player: &str, out: &Path) -> Result<()> {
 pub fn best_player(r: &StatusReport, side: Side) -> Option<String> {
     r.players
         .iter()
-        .filter(|p| p.side == side.name() && p.kind != "heuristic" && p.quarantined.is_none() && p.games > 0)
+        .filter(|p| {
+            p.side == side.name() && p.kind != "heuristic" && p.quarantined.is_none() && p.games > 0
+        })
         .max_by(|a, b| a.bt_elo.total_cmp(&b.bt_elo))
         .map(|p| p.name.clone())
 }
@@ -410,10 +467,21 @@ pub fn plot(dir: &LeagueDir, r: &StatusReport, path: &Path) -> Result<()> {
         if points.is_empty() {
             continue;
         }
-        let label = if p.kind == "snapshot" { String::new() } else { p.name.clone() };
+        let label = if p.kind == "snapshot" {
+            String::new()
+        } else {
+            p.name.clone()
+        };
         series.push(Series::new(label, points, palette(i)));
     }
-    let ratings = line_plot(&series, &format!("live ratings, league {}", r.league), "match", "Weng-Lin rating", 900, 420);
+    let ratings = line_plot(
+        &series,
+        &format!("live ratings, league {}", r.league),
+        "match",
+        "Weng-Lin rating",
+        900,
+        420,
+    );
     let captors: Vec<&PlayerRow> = r.players.iter().filter(|p| p.side == "captors").collect();
     let targets: Vec<&PlayerRow> = r.players.iter().filter(|p| p.side == "target").collect();
     let cell = 38i64;
@@ -421,35 +489,74 @@ pub fn plot(dir: &LeagueDir, r: &StatusReport, path: &Path) -> Result<()> {
     let height = (top + cell * captors.len() as i64 + 40).max(200) as u32;
     let width = 900u32.max((left + cell * targets.len() as i64 + 20) as u32);
     let mut heat = RgbImage::from_pixel(width, height, Rgb([255, 255, 255]));
-    draw_text_centered(&mut heat, width as i32 / 2, 8, "payoff: captor win rate (rows captors, columns targets; blank = no games)", Rgb([0, 0, 0]), 1);
+    draw_text_centered(
+        &mut heat,
+        width as i32 / 2,
+        8,
+        "payoff: captor win rate (rows captors, columns targets; blank = no games)",
+        Rgb([0, 0, 0]),
+        1,
+    );
     for (j, t) in targets.iter().enumerate() {
         let x = left + cell * j as i64;
-        draw_text_centered(&mut heat, (x + cell / 2) as i32, (top - 30) as i32, &format!("#{}", t.id), Rgb([0, 0, 0]), 1);
+        draw_text_centered(
+            &mut heat,
+            (x + cell / 2) as i32,
+            (top - 30) as i32,
+            &format!("#{}", t.id),
+            Rgb([0, 0, 0]),
+            1,
+        );
     }
     for (i, c) in captors.iter().enumerate() {
         let y = top + cell * i as i64;
         let name: String = c.name.chars().take(27).collect();
-        draw_text(&mut heat, 8, (y + cell / 2 - 4) as i32, &name, Rgb([0, 0, 0]), 1);
+        draw_text(
+            &mut heat,
+            8,
+            (y + cell / 2 - 4) as i32,
+            &name,
+            Rgb([0, 0, 0]),
+            1,
+        );
         for (j, t) in targets.iter().enumerate() {
             let x = left + cell * j as i64;
-            if let Some(p) = r.payoff.iter().find(|p| p.captor == c.id && p.target == t.id) {
+            if let Some(p) = r
+                .payoff
+                .iter()
+                .find(|p| p.captor == c.id && p.target == t.id)
+            {
                 let w = p.captor_wins as f64 / p.games.max(1) as f64;
                 // Blue (targets win) to red (captors win).
                 let color = Rgb([(255.0 * w) as u8, 60, (255.0 * (1.0 - w)) as u8]);
                 fill_rect(&mut heat, x, y, cell, cell, color);
-                draw_text_centered(&mut heat, (x + cell / 2) as i32, (y + cell / 2 - 4) as i32, &format!("{:.0}", 100.0 * w), Rgb([255, 255, 255]), 1);
+                draw_text_centered(
+                    &mut heat,
+                    (x + cell / 2) as i32,
+                    (y + cell / 2 - 4) as i32,
+                    &format!("{:.0}", 100.0 * w),
+                    Rgb([255, 255, 255]),
+                    1,
+                );
             }
             draw_rect(&mut heat, x, y, cell, cell, Rgb([200, 200, 200]));
         }
     }
-    let legend: Vec<String> = targets.iter().map(|t| format!("#{} {}", t.id, t.name)).collect();
+    let legend: Vec<String> = targets
+        .iter()
+        .map(|t| format!("#{} {}", t.id, t.name))
+        .collect();
     for (k, line) in legend.iter().enumerate() {
         let (x, y) = (left + cell * targets.len() as i64 + 20, top + 12 * k as i64);
         if x + 200 < width as i64 {
             draw_text(&mut heat, x as i32, y as i32, line, Rgb([60, 60, 60]), 1);
         }
     }
-    let mut img = RgbImage::from_pixel(ratings.width().max(heat.width()), ratings.height() + heat.height(), Rgb([255, 255, 255]));
+    let mut img = RgbImage::from_pixel(
+        ratings.width().max(heat.width()),
+        ratings.height() + heat.height(),
+        Rgb([255, 255, 255]),
+    );
     image::imageops::replace(&mut img, &ratings, 0, 0);
     image::imageops::replace(&mut img, &heat, 0, ratings.height() as i64);
     save_png(&img, path)

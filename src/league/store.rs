@@ -471,20 +471,33 @@ impl Store {
     }
 
     /// A player's live ratings, oldest first: (match id, mu, sigma, at ms).
-    pub fn rating_history(&self, player: i64) -> Result<Vec<(Option<i64>, f64, f64, i64)>, StoreError> {
+    pub fn rating_history(
+        &self,
+        player: i64,
+    ) -> Result<Vec<(Option<i64>, f64, f64, i64)>, StoreError> {
         let rows = self
             .rt
             .block_on(
-                sqlx::query("SELECT match_id, mu, sigma, at_ms FROM ratings WHERE player = $1 ORDER BY id")
-                    .bind(player)
-                    .fetch_all(&self.pool),
+                sqlx::query(
+                    "SELECT match_id, mu, sigma, at_ms FROM ratings WHERE player = $1 ORDER BY id",
+                )
+                .bind(player)
+                .fetch_all(&self.pool),
             )
             .map_err(|e| self.db(e))?;
-        Ok(rows.iter().map(|r| (r.get(0), r.get(1), r.get(2), r.get(3))).collect())
+        Ok(rows
+            .iter()
+            .map(|r| (r.get(0), r.get(1), r.get(2), r.get(3)))
+            .collect())
     }
 
     /// Appends a curriculum stage change.
-    pub fn push_curriculum(&self, stage: usize, speed_ratio: f64, reason: &str) -> Result<(), StoreError> {
+    pub fn push_curriculum(
+        &self,
+        stage: usize,
+        speed_ratio: f64,
+        reason: &str,
+    ) -> Result<(), StoreError> {
         self.rt
             .block_on(
                 sqlx::query(
@@ -595,7 +608,12 @@ impl Store {
             .collect())
     }
 
-    pub fn record_crash(&self, learner: &str, exit_status: &str, message: &str) -> Result<(), StoreError> {
+    pub fn record_crash(
+        &self,
+        learner: &str,
+        exit_status: &str,
+        message: &str,
+    ) -> Result<(), StoreError> {
         self.rt
             .block_on(
                 sqlx::query(
@@ -663,21 +681,35 @@ mod tests {
     fn matches_count_once_and_move_ratings() {
         let dir = tempfile::tempdir().unwrap();
         let store = Store::open(dir.path()).unwrap();
-        let c = store.add_player(&player("captors-main", Side::Captors, Kind::Learner)).unwrap();
-        let t = store.add_player(&player("rule-based", Side::Target, Kind::Heuristic)).unwrap();
+        let c = store
+            .add_player(&player("captors-main", Side::Captors, Kind::Learner))
+            .unwrap();
+        let t = store
+            .add_player(&player("rule-based", Side::Target, Kind::Heuristic))
+            .unwrap();
         assert_eq!(
-            store.add_player(&player("captors-main", Side::Captors, Kind::Learner)).unwrap(),
+            store
+                .add_player(&player("captors-main", Side::Captors, Kind::Learner))
+                .unwrap(),
             c,
             "adding twice is a no-op"
         );
         assert!(store.record_match(&game("a/0/0", c, t, true)).unwrap());
-        assert!(!store.record_match(&game("a/0/0", c, t, true)).unwrap(), "same key: no-op");
+        assert!(
+            !store.record_match(&game("a/0/0", c, t, true)).unwrap(),
+            "same key: no-op"
+        );
         assert!(store.record_match(&game("a/0/1", c, t, false)).unwrap());
         assert!(store.record_match(&game("a/1/0", c, t, true)).unwrap());
         assert_eq!(store.match_count().unwrap(), 3);
         assert_eq!(
             store.payoff().unwrap(),
-            vec![PairResult { captor: c, target: t, captor_wins: 2, games: 3 }]
+            vec![PairResult {
+                captor: c,
+                target: t,
+                captor_wins: 2,
+                games: 3
+            }]
         );
         let r = store.ratings().unwrap();
         assert!(r[&c].mu > r[&t].mu, "{r:?}");
@@ -686,33 +718,71 @@ mod tests {
         let store = Store::open(dir.path()).unwrap();
         assert_eq!(store.players().unwrap().len(), 2);
         assert_eq!(store.config_once("a = 1").unwrap(), "a = 1");
-        assert_eq!(store.config_once("a = 2").unwrap(), "a = 1", "the first config stays");
-        store.push_curriculum(1, 1.2, "captors won 61% at 1.0").unwrap();
+        assert_eq!(
+            store.config_once("a = 2").unwrap(),
+            "a = 1",
+            "the first config stays"
+        );
+        store
+            .push_curriculum(1, 1.2, "captors won 61% at 1.0")
+            .unwrap();
         assert_eq!(store.curriculum_history().unwrap()[0].1, 1.2);
-        store.heartbeat("captors-main", "training", 640, 512.0).unwrap();
-        store.heartbeat("captors-main", "training", 1280, 530.0).unwrap();
+        store
+            .heartbeat("captors-main", "training", 640, 512.0)
+            .unwrap();
+        store
+            .heartbeat("captors-main", "training", 1280, 530.0)
+            .unwrap();
         assert_eq!(store.heartbeats().unwrap().len(), 1);
-        store.record_crash("target-main", "signal 9", "killed").unwrap();
+        store
+            .record_crash("target-main", "signal 9", "killed")
+            .unwrap();
         assert_eq!(store.crashes().unwrap().len(), 1);
         store.quarantine(t, "files missing").unwrap();
-        assert_eq!(store.players().unwrap()[1].quarantined.as_deref(), Some("files missing"));
+        assert_eq!(
+            store.players().unwrap()[1].quarantined.as_deref(),
+            Some("files missing")
+        );
     }
 
     #[test]
     fn the_curriculum_window_comes_back_from_the_store() {
         let dir = tempfile::tempdir().unwrap();
         let store = Store::open(dir.path()).unwrap();
-        let c = store.add_player(&player("captors-main", Side::Captors, Kind::Learner)).unwrap();
-        let t = store.add_player(&player("rule-based", Side::Target, Kind::Heuristic)).unwrap();
+        let c = store
+            .add_player(&player("captors-main", Side::Captors, Kind::Learner))
+            .unwrap();
+        let t = store
+            .add_player(&player("rule-based", Side::Target, Kind::Heuristic))
+            .unwrap();
         for (i, won) in [true, false, true, true, false].into_iter().enumerate() {
-            store.record_match(&game(&format!("k/{i}"), c, t, won)).unwrap();
+            store
+                .record_match(&game(&format!("k/{i}"), c, t, won))
+                .unwrap();
         }
-        let faster = MatchRecord { speed_ratio: 1.2, ..game("k/fast", c, t, true) };
+        let faster = MatchRecord {
+            speed_ratio: 1.2,
+            ..game("k/fast", c, t, true)
+        };
         store.record_match(&faster).unwrap();
-        assert_eq!(store.recent_outcomes(c, 1.0, 0, 3).unwrap(), vec![true, true, false], "the last 3, oldest first");
+        assert_eq!(
+            store.recent_outcomes(c, 1.0, 0, 3).unwrap(),
+            vec![true, true, false],
+            "the last 3, oldest first"
+        );
         assert_eq!(store.recent_outcomes(c, 1.2, 0, 10).unwrap(), vec![true]);
-        assert_eq!(store.recent_outcomes(t, 1.0, 0, 10).unwrap(), Vec::<bool>::new(), "only this captor's");
-        assert!(store.recent_outcomes(c, 1.0, now_ms() + 60_000, 10).unwrap().is_empty(), "only since the stage began");
+        assert_eq!(
+            store.recent_outcomes(t, 1.0, 0, 10).unwrap(),
+            Vec::<bool>::new(),
+            "only this captor's"
+        );
+        assert!(
+            store
+                .recent_outcomes(c, 1.0, now_ms() + 60_000, 10)
+                .unwrap()
+                .is_empty(),
+            "only since the stage began"
+        );
     }
 
     #[test]

@@ -17,7 +17,16 @@ pub fn gather_side(
     patches: &mut [u8],
 ) {
     let worlds: Vec<usize> = (0..venv.num_envs()).collect();
-    gather_worlds(venv, &venv.vectors, &venv.patches, &worlds, side, net, vectors, patches);
+    gather_worlds(
+        venv,
+        &venv.vectors,
+        &venv.patches,
+        &worlds,
+        side,
+        net,
+        vectors,
+        patches,
+    );
 }
 
 /// `gather_side` for some worlds only, from `src_vectors` / `src_patches`
@@ -50,7 +59,6 @@ pub fn gather_worlds(
         }
     }
 }
-
 
 /// Draws an action index from (unnormalised) probabilities, as every policy
 /// that samples does: learners while training, league opponents.

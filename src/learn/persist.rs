@@ -6,8 +6,8 @@
 use super::ppo::{PpoLearner, ValueNorm};
 use crate::env::Side;
 use crate::nn::checkpoint::{
-    load_into, named_cpu_tensors, read_checked, read_meta, write_checkpoint,
-    write_file_atomically, CheckpointMeta, Written,
+    load_into, named_cpu_tensors, read_checked, read_meta, write_checkpoint, write_file_atomically,
+    CheckpointMeta, Written,
 };
 use anyhow::{anyhow, Context, Result};
 use serde::{Deserialize, Serialize};
@@ -61,7 +61,10 @@ pub fn learner_state(learner: &PpoLearner) -> serde_json::Value {
 /// Writes `learner` as the checkpoint folder `dir` with sidecar `meta`.
 pub fn save_learner(dir: &Path, learner: &PpoLearner, meta: CheckpointMeta) -> Result<Written> {
     let mut optimizer = Vec::new();
-    for (prefix, adam) in [("actor.", &learner.actor_adam), ("critic.", &learner.critic_adam)] {
+    for (prefix, adam) in [
+        ("actor.", &learner.actor_adam),
+        ("critic.", &learner.critic_adam),
+    ] {
         optimizer.extend(
             adam.state_tensors()
                 .into_iter()
@@ -86,8 +89,16 @@ pub fn load_learner(dir: &Path, learner: &mut PpoLearner) -> Result<CheckpointMe
     let actor = read_checked(dir, &meta, "actor.safetensors")?;
     let critic = read_checked(dir, &meta, "critic.safetensors")?;
     let optimizer = read_checked(dir, &meta, "optimizer.safetensors")?;
-    load_into(&mut learner.actor_vs, &actor, &dir.join("actor.safetensors"))?;
-    load_into(&mut learner.critic_vs, &critic, &dir.join("critic.safetensors"))?;
+    load_into(
+        &mut learner.actor_vs,
+        &actor,
+        &dir.join("actor.safetensors"),
+    )?;
+    load_into(
+        &mut learner.critic_vs,
+        &critic,
+        &dir.join("critic.safetensors"),
+    )?;
     let st: LearnerState = serde_json::from_value(
         meta.learner_state
             .clone()
@@ -97,7 +108,10 @@ pub fn load_learner(dir: &Path, learner: &mut PpoLearner) -> Result<CheckpointMe
     let split = |prefix: &str| -> Vec<(String, tch::Tensor)> {
         optimizer
             .iter()
-            .filter_map(|(n, t)| n.strip_prefix(prefix).map(|n| (n.to_string(), t.shallow_clone())))
+            .filter_map(|(n, t)| {
+                n.strip_prefix(prefix)
+                    .map(|n| (n.to_string(), t.shallow_clone()))
+            })
             .collect()
     };
     learner

@@ -543,7 +543,11 @@ impl PpoLearner {
         }
     }
 
-    fn update_unguarded(&mut self, ro: &Rollout, rng: &mut ChaCha8Rng) -> Result<UpdateStats, BadUpdate> {
+    fn update_unguarded(
+        &mut self,
+        ro: &Rollout,
+        rng: &mut ChaCha8Rng,
+    ) -> Result<UpdateStats, BadUpdate> {
         let cfg = self.cfg.clone();
         let dev = self.device;
         let (steps, rows, l, hdim) = (ro.steps, ro.rows, ro.chunk_len, ro.hidden as i64);
@@ -729,7 +733,9 @@ mod tests {
         let dones = [0.0, 1.0, 0.0];
         let last = [4.0];
         let zeros = [0.0; 3];
-        let (adv, ret) = gae(&rewards, &values, &dones, &zeros, &zeros, &last, 1, 0.5, 0.5);
+        let (adv, ret) = gae(
+            &rewards, &values, &dones, &zeros, &zeros, &last, 1, 0.5, 0.5,
+        );
         // t=2: delta = 3 + 0.5*4 - 2 = 3; A = 3.
         // t=1: delta = 2 + 0 - 1 = 1 (done: no bootstrap); A = 1.
         // t=0: delta = 1 + 0.5*1 - 0.5 = 1; A = 1 + 0.25*1 = 1.25.
@@ -761,7 +767,17 @@ mod tests {
         let truncated = [0.0, 1.0, 0.0];
         // Stale numbers where `truncated` is 0 must not count.
         let final_values = [100.0, 6.0, 100.0];
-        let (adv, ret) = gae(&rewards, &values, &dones, &truncated, &final_values, &[4.0], 1, 0.5, 0.5);
+        let (adv, ret) = gae(
+            &rewards,
+            &values,
+            &dones,
+            &truncated,
+            &final_values,
+            &[4.0],
+            1,
+            0.5,
+            0.5,
+        );
         // t=2: delta = 3 + 0.5*4 - 2 = 3; A = 3 (the next episode, as before).
         // t=1: delta = 2 + 0.5*6 - 1 = 4; A = 4 (bootstrapped, and the
         //      advantage of t=2 still does not flow back across the boundary).
@@ -769,7 +785,17 @@ mod tests {
         assert_eq!(adv, vec![2.0, 4.0, 3.0]);
         assert_eq!(ret, vec![2.5, 5.0, 5.0]);
         // Ended by capture instead: no bootstrap (A = 1 at t=1, as in the test above).
-        let (adv, _) = gae(&rewards, &values, &dones, &[0.0; 3], &final_values, &[4.0], 1, 0.5, 0.5);
+        let (adv, _) = gae(
+            &rewards,
+            &values,
+            &dones,
+            &[0.0; 3],
+            &final_values,
+            &[4.0],
+            1,
+            0.5,
+            0.5,
+        );
         assert_eq!(adv, vec![1.25, 1.0, 3.0]);
     }
 

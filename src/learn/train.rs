@@ -9,20 +9,22 @@
 //! `checkpoints/SIDE-STEPS/` and `state.json`, which names the checkpoints
 //! a `--resume` continues from.
 
+use super::acting::{gather_side, gather_worlds, sample};
+use super::persist::{self, RunState};
 use super::ppo::{PpoConfig, PpoLearner, Rollout, UpdateStats};
 use super::Algorithm;
+use crate::controllers::ControllerSpec;
 use crate::env::vec_env::episode_seed;
 use crate::env::{Action, EnvConfig, Side, VecEnv};
-use crate::controllers::ControllerSpec;
 use crate::map::PreparedMap;
-use super::persist::{self, RunState};
-use crate::nn::checkpoint::{checkpoint_name, clean_stale_temporaries, code_version, CheckpointMeta, FORMAT};
-use super::acting::{gather_side, gather_worlds, sample};
+use crate::nn::checkpoint::{
+    checkpoint_name, clean_stale_temporaries, code_version, CheckpointMeta, FORMAT,
+};
 use crate::nn::{obs_tensors, NetConfig};
+use crate::protocol::Protocol;
 use anyhow::{anyhow, bail, Context, Result};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
-use crate::protocol::Protocol;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -140,7 +142,8 @@ impl TrainConfig {
         let text = std::fs::read_to_string(path)
             .with_context(|| format!("{}: cannot read", path.display()))?;
         if require_protocol {
-            crate::protocol::require_named(&text).map_err(|e| anyhow!("{}: {e}", path.display()))?;
+            crate::protocol::require_named(&text)
+                .map_err(|e| anyhow!("{}: {e}", path.display()))?;
         }
         let cfg: TrainConfig =
             toml::from_str(&text).map_err(|e| anyhow!("{}: {e}", path.display()))?;
@@ -156,10 +159,16 @@ impl TrainConfig {
         env.validate().map_err(|e| format!("env.{e}"))?;
         validate_name(&self.name)?;
         if !(1..=4096).contains(&self.num_envs) {
-            return Err(format!("num_envs = {}: must be in 1..=4096 (the paper uses 16 to 32)", self.num_envs));
+            return Err(format!(
+                "num_envs = {}: must be in 1..=4096 (the paper uses 16 to 32)",
+                self.num_envs
+            ));
         }
         if !(1..=100_000).contains(&self.rollout_steps) {
-            return Err(format!("rollout_steps = {}: must be in 1..=100000", self.rollout_steps));
+            return Err(format!(
+                "rollout_steps = {}: must be in 1..=100000",
+                self.rollout_steps
+            ));
         }
         if self.num_envs * self.rollout_steps > 4_000_000 {
             return Err(format!(
@@ -841,7 +850,11 @@ fn value_truncated_states(
             .critic_h
             .index_select(0, &Tensor::from_slice(&rows).to_device(device));
         let (cp, cv) = ls.learner.view.critic_inputs(&p, &v, team);
-        ls.learner.critic.step(&cp, &cv, &h).0.to_device(Device::Cpu)
+        ls.learner
+            .critic
+            .step(&cp, &cv, &h)
+            .0
+            .to_device(Device::Cpu)
     });
     let mut out = vec![0f32; n];
     values.copy_data(&mut out, n);

@@ -53,7 +53,12 @@ fn read_class_list(path: &Path) -> Result<BTreeMap<String, SizeClass>> {
         csv::Reader::from_path(path).with_context(|| format!("{}: cannot read", path.display()))?;
     let headers = reader
         .headers()
-        .with_context(|| format!("{}: cannot read its header (a CSV file in UTF-8 is expected)", path.display()))?
+        .with_context(|| {
+            format!(
+                "{}: cannot read its header (a CSV file in UTF-8 is expected)",
+                path.display()
+            )
+        })?
         .clone();
     let col = |name: &str| headers.iter().position(|h| h.trim() == name);
     let (Some(map_col), Some(split_col)) = (col("map"), col("split")) else {
@@ -66,7 +71,11 @@ fn read_class_list(path: &Path) -> Result<BTreeMap<String, SizeClass>> {
     let mut out = BTreeMap::new();
     for (i, rec) in reader.records().enumerate() {
         let rec = rec.with_context(|| {
-            format!("{}: row {} (a CSV file in UTF-8 is expected)", path.display(), i + 2)
+            format!(
+                "{}: row {} (a CSV file in UTF-8 is expected)",
+                path.display(),
+                i + 2
+            )
         })?;
         let class: SizeClass = rec[split_col].parse().map_err(|e: String| {
             anyhow::anyhow!("{}: row {}, field 'split': {e}", path.display(), i + 2)

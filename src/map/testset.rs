@@ -8,32 +8,110 @@ use super::Grid;
 
 /// (name, content hash) of the 26 Gibson maps of `../shared/maps/gibson`.
 pub const GIBSON_GRIDS: [(&str, &str); 26] = [
-    ("Avonia_floor_trav_0_v3", "f709e5ed4701a584b455587de6fb65e55d04498563cd5ca94f9a4ec58d3d081f"),
-    ("Barboursville_floor_trav_0_v3", "01b8ffcd3013492fd2ecfcdb96e97a9e0f28cf028a5381cc59f24e35580a38f9"),
-    ("Beach_floor_trav_0_v3", "1581aff429977b97d13aaadfb4d46745d1e7742be7b9ea79a17d4d80a469ab5a"),
-    ("Chrisney_floor_trav_0_v3", "d1c8769842c9d823e4120f93a405de39aa248d5d3926055f803d67d3a8af1d46"),
-    ("Churchton_floor_trav_0_v3", "6bd2fbb24e377778358407a444b0c679859185ecf20c96108ad8ef8016e217c6"),
-    ("Colebrook_floor_trav_0_v3", "20573ae7135c9060e55203f5b07cc0e5af1e480d00e4bf3e91d4efc88fcc37ac"),
-    ("Couderay_floor_trav_0_v3", "aaaf315c2906387a22ae2a075cc7c67ad531e58f4287316bd8ef1d7c23e9521b"),
-    ("Delton_floor_trav_0_v3", "41d14a6365905bd550e1e922e2d0406d60c7cfacce683c5e0046dae8cfb39638"),
-    ("Gaylord_floor_trav_0_v3", "844086f51c69cfbe2d8eab2f2bac0f790cef5794acd4a262445ecce48a7e5647"),
-    ("Goodyear_floor_trav_0_v3", "b00622ef82f02b4438bab446bdb70338c81c511d237d47798d301fa4a17b459e"),
-    ("Goodyear_floor_trav_1_v3", "3c788495ee2205f5c29046449f30a6dbaa70ba411f943e320e056659584ff7f8"),
-    ("Graceville_floor_trav_0_v3", "65ebe54303aab24705b6d7bef1901ccfa2a14b4049d4380f151d9fb2cac19877"),
-    ("Greigsville_floor_trav_0_v3", "d43b4162422350fb153724183f14a143e82c4dd986e2f919cc82c14137a87448"),
-    ("Halfway_floor_trav_0_v3", "6747ce44362c5ac0d8ec7cab9056afe3ee1a6b3f42fe40b945dbf6208267ee67"),
-    ("Hillsdale_floor_trav_0_v3", "c237f5dcd2bd7c112ce9db1eafd00db3bcb240b3c72e636e3b0a339ada001d77"),
-    ("Hominy_floor_trav_0_v3", "7ff39048caedb20d4f05f7aae855f0ac61a7a3d29e23ca14759e4831bd1b160c"),
-    ("Hornsby_floor_trav_0_v3", "a4077ab04dff2b693a9c3f1d90a6ddb5338151bcade602d7c5b7d6fdd9e25bd6"),
-    ("Hortense_floor_trav_1_v3", "cb1b6603acf57e299983ccad736408eb7427d647e9f180afb713302bfa6a7811"),
-    ("Kettle_floor_trav_0_v3", "04a65f7cbcdd68a98b5b270d45dfe956f7fdb78166ce845b60154b7b8a39fc1e"),
-    ("Kettle_floor_trav_1_v3", "00261a9c3baefa5b4ece7b98877178c1ea9ccd7fee7b1b6f870601bfd5e5dbf1"),
-    ("Ladue_floor_trav_0_v3", "757352f1d7b7974e341078b368b02660a897228c15aee33d7e53721800f38a47"),
-    ("Ladue_floor_trav_1_v3", "14f59376c483192475d22a72e67a4ad8ef2aa4e5011a029bbbf084bd3eb972b6"),
-    ("Rockport_floor_trav_0_v3", "18c6d3d1c712b9da08272619de07f4263157a25343ee7dbd49a7af6b55b12f52"),
-    ("Sasakwa_floor_trav_0_v3", "70f03fea8f14b74c246c9a06c75729f6fe2d532d97d88e8dd59af0038b09d6f9"),
-    ("Sisters_floor_trav_1_v3", "f637e171c032dfbc6a43266a05274620a9820daebb491cf81d59e69bd6fef6d2"),
-    ("Timberon_floor_trav_1_v3", "cd1a714444a2149190e82b21f745726b5892fffa6c50a701e3baeb14428a0a4c"),
+    (
+        "Avonia_floor_trav_0_v3",
+        "f709e5ed4701a584b455587de6fb65e55d04498563cd5ca94f9a4ec58d3d081f",
+    ),
+    (
+        "Barboursville_floor_trav_0_v3",
+        "01b8ffcd3013492fd2ecfcdb96e97a9e0f28cf028a5381cc59f24e35580a38f9",
+    ),
+    (
+        "Beach_floor_trav_0_v3",
+        "1581aff429977b97d13aaadfb4d46745d1e7742be7b9ea79a17d4d80a469ab5a",
+    ),
+    (
+        "Chrisney_floor_trav_0_v3",
+        "d1c8769842c9d823e4120f93a405de39aa248d5d3926055f803d67d3a8af1d46",
+    ),
+    (
+        "Churchton_floor_trav_0_v3",
+        "6bd2fbb24e377778358407a444b0c679859185ecf20c96108ad8ef8016e217c6",
+    ),
+    (
+        "Colebrook_floor_trav_0_v3",
+        "20573ae7135c9060e55203f5b07cc0e5af1e480d00e4bf3e91d4efc88fcc37ac",
+    ),
+    (
+        "Couderay_floor_trav_0_v3",
+        "aaaf315c2906387a22ae2a075cc7c67ad531e58f4287316bd8ef1d7c23e9521b",
+    ),
+    (
+        "Delton_floor_trav_0_v3",
+        "41d14a6365905bd550e1e922e2d0406d60c7cfacce683c5e0046dae8cfb39638",
+    ),
+    (
+        "Gaylord_floor_trav_0_v3",
+        "844086f51c69cfbe2d8eab2f2bac0f790cef5794acd4a262445ecce48a7e5647",
+    ),
+    (
+        "Goodyear_floor_trav_0_v3",
+        "b00622ef82f02b4438bab446bdb70338c81c511d237d47798d301fa4a17b459e",
+    ),
+    (
+        "Goodyear_floor_trav_1_v3",
+        "3c788495ee2205f5c29046449f30a6dbaa70ba411f943e320e056659584ff7f8",
+    ),
+    (
+        "Graceville_floor_trav_0_v3",
+        "65ebe54303aab24705b6d7bef1901ccfa2a14b4049d4380f151d9fb2cac19877",
+    ),
+    (
+        "Greigsville_floor_trav_0_v3",
+        "d43b4162422350fb153724183f14a143e82c4dd986e2f919cc82c14137a87448",
+    ),
+    (
+        "Halfway_floor_trav_0_v3",
+        "6747ce44362c5ac0d8ec7cab9056afe3ee1a6b3f42fe40b945dbf6208267ee67",
+    ),
+    (
+        "Hillsdale_floor_trav_0_v3",
+        "c237f5dcd2bd7c112ce9db1eafd00db3bcb240b3c72e636e3b0a339ada001d77",
+    ),
+    (
+        "Hominy_floor_trav_0_v3",
+        "7ff39048caedb20d4f05f7aae855f0ac61a7a3d29e23ca14759e4831bd1b160c",
+    ),
+    (
+        "Hornsby_floor_trav_0_v3",
+        "a4077ab04dff2b693a9c3f1d90a6ddb5338151bcade602d7c5b7d6fdd9e25bd6",
+    ),
+    (
+        "Hortense_floor_trav_1_v3",
+        "cb1b6603acf57e299983ccad736408eb7427d647e9f180afb713302bfa6a7811",
+    ),
+    (
+        "Kettle_floor_trav_0_v3",
+        "04a65f7cbcdd68a98b5b270d45dfe956f7fdb78166ce845b60154b7b8a39fc1e",
+    ),
+    (
+        "Kettle_floor_trav_1_v3",
+        "00261a9c3baefa5b4ece7b98877178c1ea9ccd7fee7b1b6f870601bfd5e5dbf1",
+    ),
+    (
+        "Ladue_floor_trav_0_v3",
+        "757352f1d7b7974e341078b368b02660a897228c15aee33d7e53721800f38a47",
+    ),
+    (
+        "Ladue_floor_trav_1_v3",
+        "14f59376c483192475d22a72e67a4ad8ef2aa4e5011a029bbbf084bd3eb972b6",
+    ),
+    (
+        "Rockport_floor_trav_0_v3",
+        "18c6d3d1c712b9da08272619de07f4263157a25343ee7dbd49a7af6b55b12f52",
+    ),
+    (
+        "Sasakwa_floor_trav_0_v3",
+        "70f03fea8f14b74c246c9a06c75729f6fe2d532d97d88e8dd59af0038b09d6f9",
+    ),
+    (
+        "Sisters_floor_trav_1_v3",
+        "f637e171c032dfbc6a43266a05274620a9820daebb491cf81d59e69bd6fef6d2",
+    ),
+    (
+        "Timberon_floor_trav_1_v3",
+        "cd1a714444a2149190e82b21f745726b5892fffa6c50a701e3baeb14428a0a4c",
+    ),
 ];
 
 /// The Gibson map `grid` is, if it is one (by content, not by name).

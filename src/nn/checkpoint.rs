@@ -132,7 +132,10 @@ fn same_files(a: &Path, b: &Path) -> bool {
     let list = |d: &Path| -> Option<BTreeMap<String, PathBuf>> {
         std::fs::read_dir(d)
             .ok()?
-            .map(|e| e.ok().map(|e| (e.file_name().to_string_lossy().into_owned(), e.path())))
+            .map(|e| {
+                e.ok()
+                    .map(|e| (e.file_name().to_string_lossy().into_owned(), e.path()))
+            })
             .collect()
     };
     let (Some(fa), Some(fb)) = (list(a), list(b)) else {
@@ -140,10 +143,11 @@ fn same_files(a: &Path, b: &Path) -> bool {
     };
     fa.len() == fb.len()
         && fa.iter().all(|(name, pa)| {
-            fb.get(name).is_some_and(|pb| match (std::fs::read(pa), std::fs::read(pb)) {
-                (Ok(x), Ok(y)) => x == y,
-                _ => false,
-            })
+            fb.get(name)
+                .is_some_and(|pb| match (std::fs::read(pa), std::fs::read(pb)) {
+                    (Ok(x), Ok(y)) => x == y,
+                    _ => false,
+                })
         })
 }
 
@@ -188,7 +192,10 @@ pub fn write_dir_atomically(dir: &Path, fill: impl FnOnce(&Path) -> Result<()>) 
     let parent = dir.parent().unwrap_or(Path::new("."));
     std::fs::create_dir_all(parent)
         .with_context(|| format!("cannot create {}", parent.display()))?;
-    let name = dir.file_name().context("checkpoint path has no name")?.to_string_lossy();
+    let name = dir
+        .file_name()
+        .context("checkpoint path has no name")?
+        .to_string_lossy();
     let tmp = parent.join(format!(".{name}.tmp-{}", std::process::id()));
     if tmp.exists() {
         std::fs::remove_dir_all(&tmp)?;
@@ -230,7 +237,10 @@ pub fn write_dir_atomically(dir: &Path, fill: impl FnOnce(&Path) -> Result<()>) 
 /// Writes a file atomically (temporary sibling, synced, then renamed).
 pub fn write_file_atomically(path: &Path, bytes: &[u8]) -> Result<()> {
     use std::io::Write;
-    let name = path.file_name().context("file path has no name")?.to_string_lossy();
+    let name = path
+        .file_name()
+        .context("file path has no name")?
+        .to_string_lossy();
     let tmp = path.with_file_name(format!(".{name}.tmp-{}", std::process::id()));
     let mut f =
         std::fs::File::create(&tmp).with_context(|| format!("cannot write {}", tmp.display()))?;
@@ -260,11 +270,21 @@ pub fn clean_stale_temporaries(dir: &Path) -> Result<Vec<PathBuf>> {
     };
     for e in entries {
         let path = e?.path();
-        let file = path.file_name().unwrap_or_default().to_string_lossy().into_owned();
-        let Some(rest) = file.strip_prefix('.') else { continue };
+        let file = path
+            .file_name()
+            .unwrap_or_default()
+            .to_string_lossy()
+            .into_owned();
+        let Some(rest) = file.strip_prefix('.') else {
+            continue;
+        };
         for (marker, restore) in [(".tmp-", false), (".old-", true)] {
-            let Some((name, pid)) = rest.rsplit_once(marker) else { continue };
-            let Ok(pid) = pid.parse::<u32>() else { continue };
+            let Some((name, pid)) = rest.rsplit_once(marker) else {
+                continue;
+            };
+            let Ok(pid) = pid.parse::<u32>() else {
+                continue;
+            };
             if pid != std::process::id() && pid_alive(pid) {
                 continue;
             }
@@ -357,14 +377,21 @@ pub fn check_finite(tensors: &[(String, Tensor)], file: &Path) -> Result<()> {
     for (name, t) in tensors {
         let all_finite = tch::no_grad(|| t.isfinite().all().int64_value(&[]) == 1);
         if !all_finite {
-            bail!("{}: tensor '{name}' holds NaN or infinite values", file.display());
+            bail!(
+                "{}: tensor '{name}' holds NaN or infinite values",
+                file.display()
+            );
         }
     }
     Ok(())
 }
 
 /// Reads one weight file of a checkpoint: hash verified, values finite.
-pub fn read_checked(dir: &Path, meta: &CheckpointMeta, file: &str) -> Result<Vec<(String, Tensor)>> {
+pub fn read_checked(
+    dir: &Path,
+    meta: &CheckpointMeta,
+    file: &str,
+) -> Result<Vec<(String, Tensor)>> {
     verify_file(dir, meta, file)?;
     let path = dir.join(file);
     let tensors = read_tensors(&path)?;
@@ -427,10 +454,18 @@ pub fn read_meta(dir: &Path) -> Result<CheckpointMeta> {
         );
     }
     if !(meta.speed_ratio.is_finite() && meta.speed_ratio > 0.0) {
-        bail!("{}: speed_ratio = {}: not a speed ratio", path.display(), meta.speed_ratio);
+        bail!(
+            "{}: speed_ratio = {}: not a speed ratio",
+            path.display(),
+            meta.speed_ratio
+        );
     }
     if meta.num_captors == 0 || meta.num_captors > 32 {
-        bail!("{}: num_captors = {}: must be between 1 and 32", path.display(), meta.num_captors);
+        bail!(
+            "{}: num_captors = {}: must be between 1 and 32",
+            path.display(),
+            meta.num_captors
+        );
     }
     meta.net
         .validate()

@@ -146,7 +146,10 @@ impl Trunk {
     fn new(p: &nn::Path, cfg: &NetConfig, channels: i64, vector_len: i64) -> Trunk {
         let gru = nn::gru(p / "gru", cfg.hidden, cfg.hidden, Default::default());
         let g = p / "gru";
-        let param = |n: &str| g.get(n).expect("nn::gru creates its parameters under these names");
+        let param = |n: &str| {
+            g.get(n)
+                .expect("nn::gru creates its parameters under these names")
+        };
         Trunk {
             encoder: Encoder::new(&(p / "encoder"), cfg, channels, vector_len),
             gru,

@@ -153,7 +153,13 @@ impl StackedActors {
             .view([rows, g, -1])
             .transpose(0, 1);
         let x = t[PATCH_B].baddbmm(&x, &t[PATCH_W], 1, 1).relu();
-        let v = vectors.layer_norm([self.vector_len], None::<Tensor>, None::<Tensor>, 1e-5, false);
+        let v = vectors.layer_norm(
+            [self.vector_len],
+            None::<Tensor>,
+            None::<Tensor>,
+            1e-5,
+            false,
+        );
         let v = v * &t[NORM_W] + &t[NORM_B];
         let v = t[VECTOR_B].baddbmm(&v, &t[VECTOR_W], 1, 1).relu();
         let x = Tensor::cat(&[x, v], 2);
@@ -199,7 +205,10 @@ mod tests {
                 (vs, a)
             })
             .collect();
-        let prepared: Vec<PreparedActor> = stores.iter().map(|(_, a)| PreparedActor::new(a, &cfg, vl)).collect();
+        let prepared: Vec<PreparedActor> = stores
+            .iter()
+            .map(|(_, a)| PreparedActor::new(a, &cfg, vl))
+            .collect();
         let stacked = StackedActors::new(&prepared.iter().collect::<Vec<_>>()).unwrap();
         let side = cfg.input_side() as i64;
         let rows_of = [3i64, 1, 2];
@@ -219,10 +228,19 @@ mod tests {
             let got_h = h_new.get(gi).narrow(0, 0, n);
             let dl = f64::try_from((got_logits - &want_logits).abs().max()).unwrap();
             let dh = f64::try_from((got_h - &want_h).abs().max()).unwrap();
-            assert!(dl < 1e-5 && dh < 1e-5, "group {g}: logits differ by {dl}, state by {dh}");
-            assert!(f64::try_from(want_logits.abs().max()).unwrap() > 1e-3, "test weights too small to tell");
+            assert!(
+                dl < 1e-5 && dh < 1e-5,
+                "group {g}: logits differ by {dl}, state by {dh}"
+            );
+            assert!(
+                f64::try_from(want_logits.abs().max()).unwrap() > 1e-3,
+                "test weights too small to tell"
+            );
         }
-        let other = NetConfig { hidden: 32, ..cfg.clone() };
+        let other = NetConfig {
+            hidden: 32,
+            ..cfg.clone()
+        };
         let vs = nn::VarStore::new(Device::Cpu);
         let odd = PreparedActor::new(&Actor::new(&vs.root(), &other, vl), &other, vl);
         assert!(StackedActors::new(&[&prepared[0], &odd]).is_err());

@@ -564,8 +564,8 @@ pub fn render_episode(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::env::{EnvConfig, Robot};
     use crate::controllers::ControllerSpec;
+    use crate::env::{EnvConfig, Robot};
     use image::codecs::gif::GifDecoder;
     use image::AnimationDecoder;
     use std::sync::Arc;
