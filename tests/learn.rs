@@ -43,6 +43,7 @@ fn chase_config(seed: u64) -> TrainConfig {
                 epochs: 4,
                 ..Default::default()
             },
+            ..SideConfig::default()
         },
         target: SideConfig {
             play: "still".into(),
@@ -276,6 +277,159 @@ fn both_sides_learn_together_and_a_frozen_checkpoint_can_be_the_opponent() {
         .to_string();
     assert!(
         err.contains("target.play") && err.contains("captors policy"),
+        "{err}"
+    );
+}
+
+/// The chase task for an off-policy learner: replay from the first
+/// rollout on, several gradient steps per rollout.
+fn off_policy_chase(play: &str, seed: u64) -> TrainConfig {
+    let mut cfg = chase_config(seed);
+    cfg.captors.play = play.into();
+    cfg.captors.maddpg = t2e::learn::maddpg::MaddpgConfig {
+        learning_starts: 640,
+        replay_ratio: 8.0,
+        buffer_steps: 50_000,
+        actor_lr: 1e-3,
+        critic_lr: 1e-3,
+        epsilon_anneal_steps: 20_000,
+        ..Default::default()
+    };
+    cfg.captors.maac = t2e::learn::maac::MaacConfig {
+        learning_starts: 640,
+        replay_ratio: 8.0,
+        buffer_steps: 50_000,
+        tau: 0.01,
+        attention_heads: 2,
+        ..Default::default()
+    };
+    cfg
+}
+
+/// The bar of `a_captor_learns_to_reach_a_still_target`, for an off-policy
+/// learner; its replay ratio of 8 takes more gradient steps per env step,
+/// and 200 iterations instead of 150.
+fn off_policy_learns_the_chase(play: &str) {
+    tch::set_num_threads(1);
+    let mut trainer = Trainer::new(off_policy_chase(play, 1), chase_maps()).unwrap();
+    let before = mean_return(&mut trainer, 3);
+    for _ in 0..200 {
+        trainer.iterate().unwrap();
+    }
+    let after = mean_return(&mut trainer, 5);
+    eprintln!("{play} chase: untrained {before:.1}, trained {after:.1}");
+    assert!(before < 20.0, "{play}: untrained return {before:.1}");
+    assert!(
+        after > before + 60.0 && after > 80.0,
+        "{play}: learned return {after:.1} (untrained {before:.1})"
+    );
+}
+
+#[test]
+fn maddpg_learns_to_reach_a_still_target() {
+    off_policy_learns_the_chase("maddpg");
+}
+
+#[test]
+fn maac_learns_to_reach_a_still_target() {
+    off_policy_learns_the_chase("maac");
+}
+
+#[test]
+fn off_policy_checkpoints_keep_their_target_networks_resume_and_play() {
+    tch::set_num_threads(1);
+    let dir = tempfile::tempdir().unwrap();
+    let mut checkpoints = Vec::new();
+    for play in ["maddpg", "maac"] {
+        // Two captors, so the centralised critics read a teammate.
+        let mut cfg = off_policy_chase(play, 3);
+        cfg.env.num_captors = 2;
+        cfg.captors.maddpg.replay_ratio = 1.0;
+        cfg.captors.maac.replay_ratio = 1.0;
+        let run = dir.path().join(play);
+        let mut trainer = Trainer::new(cfg.clone(), chase_maps()).unwrap();
+        let first = trainer.iterate().unwrap();
+        // The replay fills during the first rollout; learning starts after it.
+        assert!(first.captor_value_loss.is_some(), "{play}: no update");
+        assert!(first.captor_approx_kl.is_none() && first.captor_clip_frac.is_none());
+        trainer.iterate().unwrap();
+        let written = trainer.save(&run).unwrap();
+        let ckpt = &written[0];
+        let meta = read_meta(ckpt).unwrap();
+        assert_eq!((meta.algorithm.as_str(), meta.num_captors), (play, 2));
+        let files =
+            |dir: &Path, name: &str| t2e::nn::checkpoint::read_tensors(&dir.join(name)).unwrap();
+        // Soft updates keep the targets behind the online networks, and the
+        // checkpoint keeps both.
+        let (actor, target_actor) = (
+            files(ckpt, "actor.safetensors"),
+            files(ckpt, "target_actor.safetensors"),
+        );
+        assert_eq!(actor.len(), target_actor.len());
+        assert!(
+            actor
+                .iter()
+                .zip(&target_actor)
+                .any(|((_, a), (_, t))| !a.equal(t)),
+            "{play}: target actor equals the actor"
+        );
+        // Resuming restores every file exactly (the replay refills).
+        let resumed = Trainer::resume(cfg.clone(), chase_maps(), &run).unwrap();
+        let again = resumed.save(&run.join("again")).unwrap();
+        for name in [
+            "actor.safetensors",
+            "critic.safetensors",
+            "target_actor.safetensors",
+            "target_critic.safetensors",
+            "optimizer.safetensors",
+        ] {
+            let (a, b) = (files(ckpt, name), files(&again[0], name));
+            assert_eq!(a.len(), b.len(), "{play} {name}");
+            assert!(
+                a.iter()
+                    .zip(&b)
+                    .all(|((n1, x), (n2, y))| n1 == n2 && x.equal(y)),
+                "{play}: {name} differs after resume"
+            );
+        }
+        assert_eq!(
+            read_meta(&again[0]).unwrap().learner_state,
+            meta.learner_state
+        );
+        let mut resumed = resumed;
+        assert!(resumed.iterate().unwrap().captor_value_loss.is_some());
+
+        // Its actor plays in eval like any checkpoint, deterministically.
+        let setting = EvalSetting {
+            captors: format!("ckpt:{}", ckpt.display()).parse().unwrap(),
+            target: ControllerSpec::Still,
+            num_captors: 2,
+            episodes: 4,
+            episode_length: 30,
+            soa_every: 0,
+            ..EvalSetting::default()
+        };
+        let (summary, r1) = eval::run(&setting, &chase_maps(), "room", false).unwrap();
+        let (_, r2) = eval::run(&setting, &chase_maps(), "room", false).unwrap();
+        assert_eq!(r1, r2);
+        assert_eq!(summary.captors_learner, play.to_uppercase());
+        checkpoints.push((cfg, ckpt.clone()));
+    }
+    // A checkpoint of one algorithm does not load into a learner of another.
+    let (maddpg_cfg, _) = &checkpoints[0];
+    let (_, maac_ckpt) = &checkpoints[1];
+    let mut learner = t2e::learn::maddpg::MaddpgLearner::new(
+        maddpg_cfg.captors.maddpg.clone(),
+        maddpg_cfg.captors.net.clone(),
+        maddpg_cfg.env.vector_len(),
+        2,
+        tch::Device::Cpu,
+    );
+    let err = t2e::learn::persist::load_learner(maac_ckpt, &mut learner)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("a maac checkpoint") && err.contains("maddpg"),
         "{err}"
     );
 }

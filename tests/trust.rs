@@ -141,7 +141,7 @@ fn degenerate_options_are_refused() {
             maps: Some("shipped".into()),
             seconds,
             envs: 4,
-            ppo: None,
+            train: None,
             iterations: 1,
             device: None,
             opponents: false,
@@ -208,11 +208,11 @@ fn learner_and_rollout() -> (PpoLearner, Rollout) {
     };
     let (steps, rows, vl) = (10, 4, 10);
     let learner = PpoLearner::new(
+        t2e::learn::Algorithm::Mappo,
         cfg,
         net.clone(),
         vl,
         1,
-        t2e::learn::Algorithm::Mappo.critic_view(),
         tch::Device::Cpu,
     );
     let mut ro = Rollout::new(steps, rows, vl, &net, 10);
@@ -294,6 +294,7 @@ fn tiny_config() -> TrainConfig {
                 patch_pool: 4,
             },
             ppo: PpoConfig::default(),
+            ..SideConfig::default()
         },
         target: SideConfig {
             play: "still".into(),

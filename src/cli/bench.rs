@@ -23,14 +23,16 @@ pub struct BenchArgs {
     /// Worlds in the batched rows.
     #[arg(long, default_value_t = 64)]
     pub envs: usize,
-    /// Instead of the environment table, time whole PPO iterations (rollout
-    /// + update) of this training config and print where the time goes.
-    #[arg(long)]
-    pub ppo: Option<std::path::PathBuf>,
-    /// PPO iterations to time (after one warm-up iteration).
+    /// Instead of the environment table, time whole training iterations
+    /// (rollout + update) of this training config, any learner, and print
+    /// where the time goes (`--ppo` is the older name).
+    #[arg(long, alias = "ppo")]
+    pub train: Option<std::path::PathBuf>,
+    /// Iterations to time, after warming up (one iteration; an off-policy
+    /// learner's until its replay holds `learning_starts` and it updates).
     #[arg(long, default_value_t = 5)]
     pub iterations: usize,
-    /// Device for --ppo: auto, cpu or cuda.
+    /// Device for --train: auto, cpu or cuda.
     #[arg(long)]
     pub device: Option<String>,
     /// Instead of the environment table, time a league learner's opponent
@@ -40,7 +42,7 @@ pub struct BenchArgs {
     pub opponents: bool,
 }
 
-/// Times whole PPO iterations of a training config.
+/// Times whole training iterations of a training config, any learner.
 fn ppo_table(args: &BenchArgs, path: &std::path::Path) -> Result<()> {
     let mut cfg = crate::learn::train::TrainConfig::load(path)?;
     if let Some(d) = &args.device {
@@ -48,7 +50,12 @@ fn ppo_table(args: &BenchArgs, path: &std::path::Path) -> Result<()> {
     }
     let maps = map::catalog::load_prepared(&cfg.maps)?;
     let mut trainer = crate::learn::train::Trainer::new(cfg.clone(), maps)?;
-    trainer.iterate()?;
+    for _ in 0..1000 {
+        let m = trainer.iterate()?;
+        if m.captor_value_loss.is_some() || m.target_value_loss.is_some() {
+            break;
+        }
+    }
     let (mut secs, mut env, mut inf, mut upd, mut steps) = (0.0, 0.0, 0.0, 0.0, 0u64);
     for _ in 0..args.iterations.max(1) {
         let m = trainer.iterate()?;
@@ -158,7 +165,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
     if args.iterations == 0 {
         anyhow::bail!("--iterations 0: needs at least one timed iteration");
     }
-    if let Some(p) = &args.ppo {
+    if let Some(p) = &args.train {
         return ppo_table(&args, p);
     }
     if args.opponents {

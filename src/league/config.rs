@@ -8,6 +8,8 @@ use super::evaluator::EvaluatorConfig;
 use super::learner::Seat;
 use super::matchmaking::MatchmakingConfig;
 use crate::env::{EnvConfig, Side};
+use crate::learn::maac::MaacConfig;
+use crate::learn::maddpg::MaddpgConfig;
 use crate::learn::ppo::PpoConfig;
 use crate::learn::train::{SideConfig, TrainConfig};
 use crate::nn::NetConfig;
@@ -66,10 +68,20 @@ pub struct LeagueConfig {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct LearnerConfig {
-    /// "mappo" or "ippo".
+    /// "mappo", "ippo", "maddpg" or "maac".
     pub algorithm: String,
     pub ppo: PpoConfig,
+    /// MADDPG's settings (stored only where they differ from the defaults).
+    #[serde(skip_serializing_if = "is_default")]
+    pub maddpg: MaddpgConfig,
+    /// MAAC's settings (as MADDPG's).
+    #[serde(skip_serializing_if = "is_default")]
+    pub maac: MaacConfig,
     pub net: NetConfig,
+}
+
+fn is_default<T: Default + PartialEq>(x: &T) -> bool {
+    *x == T::default()
 }
 
 impl Default for LearnerConfig {
@@ -80,6 +92,8 @@ impl Default for LearnerConfig {
                 minibatches: 4,
                 ..PpoConfig::default()
             },
+            maddpg: MaddpgConfig::default(),
+            maac: MaacConfig::default(),
             net: NetConfig::default(),
         }
     }
@@ -230,6 +244,8 @@ impl LeagueConfig {
         let learn = SideConfig {
             play: learner.algorithm.clone(),
             ppo: learner.ppo.clone(),
+            maddpg: learner.maddpg.clone(),
+            maac: learner.maac.clone(),
             net: learner.net.clone(),
         };
         let other = SideConfig {
@@ -317,9 +333,9 @@ impl LeagueConfig {
         }
         for side in [Side::Captors, Side::Target] {
             let algo = &self.learner(side).algorithm;
-            if !["mappo", "ippo"].contains(&algo.as_str()) {
+            if crate::learn::Algorithm::parse(algo).is_none() {
                 return Err(format!(
-                    "{}.algorithm = \"{algo}\": expected mappo or ippo",
+                    "{}.algorithm = \"{algo}\": expected mappo, ippo, maddpg or maac",
                     side.name()
                 ));
             }

@@ -46,6 +46,23 @@ pub fn team_index(rows: usize, team: usize, device: Device) -> Tensor {
         .to_device(device)
 }
 
+/// Row indices of each row's teammates (the other rows of its world), in
+/// order: [rows * (team - 1)].
+pub fn mates_index(rows: usize, team: usize, device: Device) -> Tensor {
+    let mut idx = Vec::with_capacity(rows * team.saturating_sub(1));
+    for row in 0..rows {
+        let world = row / team * team;
+        idx.extend(
+            (world..world + team)
+                .filter(|&m| m != row)
+                .map(|m| m as i64),
+        );
+    }
+    Tensor::from_slice(&idx)
+        .to_kind(Kind::Int64)
+        .to_device(device)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -56,6 +73,10 @@ mod tests {
         let mut v = [0i64; 18];
         idx.copy_data(&mut v, 18);
         assert_eq!(v, [0, 1, 2, 1, 0, 2, 2, 0, 1, 3, 4, 5, 4, 3, 5, 5, 3, 4]);
+        let mates = mates_index(6, 3, Device::Cpu);
+        let mut m = [0i64; 12];
+        mates.copy_data(&mut m, 12);
+        assert_eq!(m, [1, 2, 0, 2, 0, 1, 4, 5, 3, 5, 3, 4]);
         let patches = Tensor::arange(6, (Kind::Uint8, Device::Cpu))
             .view([6, 1, 1, 1])
             .expand([6, 1, 24, 24], false)

@@ -1,10 +1,15 @@
-//! Learners: recurrent PPO with a centralised (MAPPO) or decentralised
-//! (IPPO) critic, and the training loop that plays either side, or both,
-//! against heuristics, frozen checkpoints or each other.
+//! Learners: the paper's four, recurrent PPO with a centralised (MAPPO) or
+//! decentralised (IPPO) critic and the off-policy MADDPG and MAAC, and the
+//! training loop that plays either side, or both, against heuristics,
+//! frozen checkpoints or each other.
 
 pub mod acting;
 pub mod ippo;
+pub mod learner;
+pub mod maac;
+pub mod maddpg;
 pub mod mappo;
+pub mod offpolicy;
 pub mod persist;
 pub mod ppo;
 pub mod train;
@@ -16,6 +21,8 @@ use serde::{Deserialize, Serialize};
 pub enum Algorithm {
     Mappo,
     Ippo,
+    Maddpg,
+    Maac,
 }
 
 impl Algorithm {
@@ -23,13 +30,34 @@ impl Algorithm {
         match self {
             Algorithm::Mappo => "mappo",
             Algorithm::Ippo => "ippo",
+            Algorithm::Maddpg => "maddpg",
+            Algorithm::Maac => "maac",
         }
     }
 
+    pub const ALL: [Algorithm; 4] = [
+        Algorithm::Mappo,
+        Algorithm::Ippo,
+        Algorithm::Maddpg,
+        Algorithm::Maac,
+    ];
+
+    /// The algorithm a config or sidecar names, if any.
+    pub fn parse(name: &str) -> Option<Algorithm> {
+        Algorithm::ALL.into_iter().find(|a| a.name() == name)
+    }
+
+    /// Whether it learns from a replay of past experience.
+    pub fn off_policy(self) -> bool {
+        matches!(self, Algorithm::Maddpg | Algorithm::Maac)
+    }
+
+    /// What PPO's critic reads: the whole team's observations (MAPPO) or
+    /// the robot's own (IPPO, and anything else asked).
     pub fn critic_view(self) -> Box<dyn ppo::CriticView> {
         match self {
             Algorithm::Mappo => Box::new(mappo::Mappo),
-            Algorithm::Ippo => Box::new(ippo::Ippo),
+            _ => Box::new(ippo::Ippo),
         }
     }
 }

@@ -3,13 +3,12 @@
 //! its integrity checks) and a run's `state.json`. Kept apart from the
 //! training loop so the league's learners write and read the same folders.
 
-use super::ppo::{PpoLearner, ValueNorm};
+use super::learner::Learner;
 use crate::env::Side;
 use crate::nn::checkpoint::{
-    load_into, named_cpu_tensors, read_checked, read_meta, write_checkpoint, write_file_atomically,
-    CheckpointMeta, Written,
+    read_checked, read_meta, write_checkpoint, write_file_atomically, CheckpointMeta, Written,
 };
-use anyhow::{anyhow, Context, Result};
+use anyhow::{bail, Context, Result};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
@@ -40,88 +39,39 @@ impl RunState {
     }
 }
 
-/// A learner's state that is not a tensor, kept in `meta.json`.
-#[derive(Serialize, Deserialize)]
-struct LearnerState {
-    value_norm: ValueNorm,
-    actor_adam_steps: u64,
-    critic_adam_steps: u64,
+/// Writes `learner` as the checkpoint folder `dir` with sidecar `meta`
+/// (its `learner_state` filled in here).
+pub fn save_learner(
+    dir: &Path,
+    learner: &dyn Learner,
+    mut meta: CheckpointMeta,
+) -> Result<Written> {
+    meta.learner_state = Some(learner.learner_state());
+    write_checkpoint(dir, meta, &learner.checkpoint_files())
 }
 
-/// The `learner_state` of a sidecar for `learner` as it is now.
-pub fn learner_state(learner: &PpoLearner) -> serde_json::Value {
-    serde_json::to_value(LearnerState {
-        value_norm: learner.value_norm.clone(),
-        actor_adam_steps: learner.actor_adam.steps,
-        critic_adam_steps: learner.critic_adam.steps,
-    })
-    .expect("serialisable")
-}
-
-/// Writes `learner` as the checkpoint folder `dir` with sidecar `meta`.
-pub fn save_learner(dir: &Path, learner: &PpoLearner, meta: CheckpointMeta) -> Result<Written> {
-    let mut optimizer = Vec::new();
-    for (prefix, adam) in [
-        ("actor.", &learner.actor_adam),
-        ("critic.", &learner.critic_adam),
-    ] {
-        optimizer.extend(
-            adam.state_tensors()
-                .into_iter()
-                .map(|(n, t)| (format!("{prefix}{n}"), t)),
+/// Loads the checkpoint folder `dir` into `learner`: every file the learner
+/// keeps (weights, optimizer moments, target networks), each checked
+/// against its recorded hash, and its state. A checkpoint of another
+/// algorithm is refused before anything is loaded.
+pub fn load_learner(dir: &Path, learner: &mut dyn Learner) -> Result<CheckpointMeta> {
+    let meta = read_meta(dir)?;
+    let algorithm = learner.algorithm().name();
+    if meta.algorithm != algorithm {
+        bail!(
+            "{}: a {} checkpoint, but this learner is {algorithm}",
+            dir.join("meta.json").display(),
+            meta.algorithm
         );
     }
-    write_checkpoint(
-        dir,
-        meta,
-        &[
-            ("actor.safetensors", named_cpu_tensors(&learner.actor_vs)),
-            ("critic.safetensors", named_cpu_tensors(&learner.critic_vs)),
-            ("optimizer.safetensors", optimizer),
-        ],
-    )
-}
-
-/// Loads the checkpoint folder `dir` into `learner`: weights, Adam moments
-/// and return statistics, every file checked against its recorded hash.
-pub fn load_learner(dir: &Path, learner: &mut PpoLearner) -> Result<CheckpointMeta> {
-    let meta = read_meta(dir)?;
-    let actor = read_checked(dir, &meta, "actor.safetensors")?;
-    let critic = read_checked(dir, &meta, "critic.safetensors")?;
-    let optimizer = read_checked(dir, &meta, "optimizer.safetensors")?;
-    load_into(
-        &mut learner.actor_vs,
-        &actor,
-        &dir.join("actor.safetensors"),
-    )?;
-    load_into(
-        &mut learner.critic_vs,
-        &critic,
-        &dir.join("critic.safetensors"),
-    )?;
-    let st: LearnerState = serde_json::from_value(
-        meta.learner_state
-            .clone()
-            .with_context(|| format!("{}: meta.json has no learner_state", dir.display()))?,
-    )
-    .with_context(|| format!("{}: learner_state", dir.display()))?;
-    let split = |prefix: &str| -> Vec<(String, tch::Tensor)> {
-        optimizer
-            .iter()
-            .filter_map(|(n, t)| {
-                n.strip_prefix(prefix)
-                    .map(|n| (n.to_string(), t.shallow_clone()))
-            })
-            .collect()
-    };
-    learner
-        .actor_adam
-        .load_state(&split("actor."), st.actor_adam_steps)
-        .map_err(|e| anyhow!("{}: {e}", dir.display()))?;
-    learner
-        .critic_adam
-        .load_state(&split("critic."), st.critic_adam_steps)
-        .map_err(|e| anyhow!("{}: {e}", dir.display()))?;
-    learner.value_norm = st.value_norm;
+    let mut files = Vec::new();
+    for (name, _) in learner.checkpoint_files() {
+        files.push((name, read_checked(dir, &meta, name)?));
+    }
+    let state = meta
+        .learner_state
+        .clone()
+        .with_context(|| format!("{}: meta.json has no learner_state", dir.display()))?;
+    learner.restore(&files, state, dir)?;
     Ok(meta)
 }

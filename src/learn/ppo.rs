@@ -3,10 +3,14 @@
 //! value loss, Adam, and the update that ties them together, top to bottom.
 //! MAPPO and IPPO differ only in what the critic reads (`mappo.rs`, `ippo.rs`).
 
+use super::learner::{file, optimizer_file, restore_optimizers, Learner, NamedTensors};
+use super::Algorithm;
+use crate::nn::checkpoint::{load_into, named_cpu_tensors};
 use crate::nn::{Actor, Critic, NetConfig};
 use rand::seq::SliceRandom;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
+use std::path::Path;
 use tch::{nn, Device, Kind, Tensor};
 
 /// Every PPO hyperparameter, with the paper's settings (spec §9) as defaults.
@@ -378,6 +382,16 @@ pub struct Rollout {
     pub actor_h: Vec<f32>,
     pub critic_h: Vec<f32>,
     pub last_values: Vec<f32>,
+    /// Observations of the states truncated episodes reached (where
+    /// `truncated` is 1; stale elsewhere), as the network reads them: the
+    /// off-policy learners bootstrap their TD targets from them.
+    pub final_patches: Vec<u8>,
+    pub final_vectors: Vec<f32>,
+    /// Observations after the rollout's last step, and their masks (0 where
+    /// that step starts an episode): the last chunk's next observations.
+    pub last_patches: Vec<u8>,
+    pub last_vectors: Vec<f32>,
+    pub last_masks: Vec<f32>,
 }
 
 impl Rollout {
@@ -411,6 +425,11 @@ impl Rollout {
             actor_h: vec![0.0; chunks * rows * hidden],
             critic_h: vec![0.0; chunks * rows * hidden],
             last_values: vec![0.0; rows],
+            final_patches: vec![0; n * net.input_len()],
+            final_vectors: vec![0.0; n * vector_len],
+            last_patches: vec![0; rows * net.input_len()],
+            last_vectors: vec![0.0; rows * vector_len],
+            last_masks: vec![1.0; rows],
         }
     }
 }
@@ -436,10 +455,33 @@ pub struct UpdateStats {
     pub clip_frac: f64,
     pub actor_grad_norm: f64,
     pub critic_grad_norm: f64,
+    /// Gradient steps the numbers above average over (0: the learner did
+    /// not learn this time, e.g. an off-policy replay still filling).
+    pub gradient_steps: usize,
+}
+
+impl UpdateStats {
+    /// Sums over gradient steps become means.
+    pub fn average(&mut self) {
+        let n = self.gradient_steps.max(1) as f64;
+        for x in [
+            &mut self.policy_loss,
+            &mut self.value_loss,
+            &mut self.entropy,
+            &mut self.approx_kl,
+            &mut self.clip_frac,
+            &mut self.actor_grad_norm,
+            &mut self.critic_grad_norm,
+        ] {
+            *x /= n;
+        }
+    }
 }
 
 /// One side's learning state: networks, optimisers, return statistics.
 pub struct PpoLearner {
+    /// MAPPO or IPPO: which critic view.
+    pub algorithm: Algorithm,
     pub cfg: PpoConfig,
     pub net: NetConfig,
     pub device: Device,
@@ -457,13 +499,14 @@ pub struct PpoLearner {
 
 impl PpoLearner {
     pub fn new(
+        algorithm: Algorithm,
         cfg: PpoConfig,
         net: NetConfig,
         vector_len: usize,
         team: usize,
-        view: Box<dyn CriticView>,
         device: Device,
     ) -> PpoLearner {
+        let view = algorithm.critic_view();
         let actor_vs = nn::VarStore::new(device);
         let actor = Actor::new(&actor_vs.root(), &net, vector_len);
         let critic_vs = nn::VarStore::new(device);
@@ -476,6 +519,7 @@ impl PpoLearner {
         let actor_adam = Adam::new(&actor_vs, cfg.lr, cfg.adam_eps);
         let critic_adam = Adam::new(&critic_vs, cfg.lr, cfg.adam_eps);
         PpoLearner {
+            algorithm,
             cfg,
             net,
             device,
@@ -613,7 +657,6 @@ impl PpoLearner {
         let per_batch = sequences.div_ceil(cfg.minibatches);
         let mut order: Vec<usize> = (0..sequences).collect();
         let mut stats = UpdateStats::default();
-        let mut batches = 0.0;
         for _ in 0..cfg.epochs {
             order.shuffle(rng);
             for mb in order.chunks(per_batch) {
@@ -688,21 +731,104 @@ impl PpoLearner {
                 stats.approx_kl +=
                     tch::no_grad(|| (&old - &new_logp).mean(Kind::Float).double_value(&[]));
                 stats.clip_frac += clip_frac;
-                batches += 1.0;
+                stats.gradient_steps += 1;
             }
         }
-        for x in [
-            &mut stats.policy_loss,
-            &mut stats.value_loss,
-            &mut stats.entropy,
-            &mut stats.approx_kl,
-            &mut stats.clip_frac,
-            &mut stats.actor_grad_norm,
-            &mut stats.critic_grad_norm,
-        ] {
-            *x /= batches;
-        }
+        stats.average();
         Ok(stats)
+    }
+}
+
+/// A PPO learner's state that is not a tensor, kept in `meta.json`.
+#[derive(Serialize, Deserialize)]
+struct PpoState {
+    value_norm: ValueNorm,
+    actor_adam_steps: u64,
+    critic_adam_steps: u64,
+}
+
+impl Learner for PpoLearner {
+    fn algorithm(&self) -> Algorithm {
+        self.algorithm
+    }
+    fn net(&self) -> &NetConfig {
+        &self.net
+    }
+    fn actor(&self) -> &Actor {
+        &self.actor
+    }
+    fn team(&self) -> usize {
+        self.team
+    }
+    fn critic_agents(&self) -> usize {
+        self.view.critic_agents(self.team)
+    }
+    fn chunk_len(&self) -> usize {
+        self.cfg.chunk_len
+    }
+    fn needs_values(&self) -> bool {
+        true
+    }
+    fn critic_step(
+        &self,
+        patches: &Tensor,
+        vectors: &Tensor,
+        h: &Tensor,
+    ) -> (Option<Tensor>, Tensor) {
+        let (cp, cv) = self.view.critic_inputs(patches, vectors, self.team);
+        let (values, h) = self.critic.step(&cp, &cv, h);
+        (Some(values), h)
+    }
+    fn update(&mut self, ro: &Rollout, rng: &mut ChaCha8Rng) -> Result<UpdateStats, BadUpdate> {
+        PpoLearner::update(self, ro, rng)
+    }
+    fn max_bad_updates(&self) -> u32 {
+        self.cfg.max_bad_updates
+    }
+    fn checkpoint_files(&self) -> Vec<(&'static str, NamedTensors)> {
+        vec![
+            ("actor.safetensors", named_cpu_tensors(&self.actor_vs)),
+            ("critic.safetensors", named_cpu_tensors(&self.critic_vs)),
+            (
+                "optimizer.safetensors",
+                optimizer_file(&self.actor_adam, &self.critic_adam),
+            ),
+        ]
+    }
+    fn learner_state(&self) -> serde_json::Value {
+        serde_json::to_value(PpoState {
+            value_norm: self.value_norm.clone(),
+            actor_adam_steps: self.actor_adam.steps,
+            critic_adam_steps: self.critic_adam.steps,
+        })
+        .expect("serialisable")
+    }
+    fn restore(
+        &mut self,
+        files: &[(&'static str, NamedTensors)],
+        state: serde_json::Value,
+        dir: &Path,
+    ) -> anyhow::Result<()> {
+        let st: PpoState = serde_json::from_value(state)
+            .map_err(|e| anyhow::anyhow!("{}: learner_state: {e}", dir.display()))?;
+        load_into(
+            &mut self.actor_vs,
+            file(files, "actor.safetensors"),
+            &dir.join("actor.safetensors"),
+        )?;
+        load_into(
+            &mut self.critic_vs,
+            file(files, "critic.safetensors"),
+            &dir.join("critic.safetensors"),
+        )?;
+        restore_optimizers(
+            files,
+            (&mut self.actor_adam, st.actor_adam_steps),
+            (&mut self.critic_adam, st.critic_adam_steps),
+            dir,
+        )?;
+        self.value_norm = st.value_norm;
+        Ok(())
     }
 }
 

@@ -10,6 +10,10 @@
 //! a `--resume` continues from.
 
 use super::acting::{gather_side, gather_worlds, sample};
+use super::learner::Learner;
+use super::maac::{MaacConfig, MaacLearner};
+use super::maddpg::{MaddpgConfig, MaddpgLearner};
+use super::offpolicy::sequence_bytes;
 use super::persist::{self, RunState};
 use super::ppo::{PpoConfig, PpoLearner, Rollout, UpdateStats};
 use super::Algorithm;
@@ -65,11 +69,23 @@ pub struct TrainConfig {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct SideConfig {
-    /// "mappo" or "ippo" to learn; otherwise a controller that does not
-    /// learn: heuristic, greedy, random, still or ckpt:PATH.
+    /// "mappo", "ippo", "maddpg" or "maac" to learn; otherwise a controller
+    /// that does not learn: heuristic, greedy, random, still or ckpt:PATH.
     pub play: String,
+    /// MAPPO's and IPPO's settings.
     pub ppo: PpoConfig,
+    /// MADDPG's settings (left out of the stored config, and so of the
+    /// config hash, while they are the defaults).
+    #[serde(skip_serializing_if = "is_default")]
+    pub maddpg: MaddpgConfig,
+    /// MAAC's settings (as MADDPG's).
+    #[serde(skip_serializing_if = "is_default")]
+    pub maac: MaacConfig,
     pub net: NetConfig,
+}
+
+fn is_default<T: Default + PartialEq>(x: &T) -> bool {
+    *x == T::default()
 }
 
 impl Default for SideConfig {
@@ -77,6 +93,8 @@ impl Default for SideConfig {
         SideConfig {
             play: "heuristic".into(),
             ppo: PpoConfig::default(),
+            maddpg: MaddpgConfig::default(),
+            maac: MaacConfig::default(),
             net: NetConfig::default(),
         }
     }
@@ -113,13 +131,38 @@ pub enum Role {
 
 impl SideConfig {
     pub fn role(&self) -> Result<Role, String> {
-        match self.play.trim() {
-            "mappo" => Ok(Role::Learn(Algorithm::Mappo)),
-            "ippo" => Ok(Role::Learn(Algorithm::Ippo)),
-            other => other
-                .parse::<ControllerSpec>()
-                .map(Role::Script)
-                .map_err(|e| format!("play = \"{other}\": {e}; or mappo / ippo to learn")),
+        let play = self.play.trim();
+        if let Some(algorithm) = Algorithm::parse(play) {
+            return Ok(Role::Learn(algorithm));
+        }
+        play.parse::<ControllerSpec>()
+            .map(Role::Script)
+            .map_err(|e| {
+                format!("play = \"{play}\": {e}; or mappo / ippo / maddpg / maac to learn")
+            })
+    }
+
+    /// The recurrent chunk length `algorithm` trains on.
+    pub fn chunk_len(&self, algorithm: Algorithm) -> usize {
+        match algorithm {
+            Algorithm::Mappo | Algorithm::Ippo => self.ppo.chunk_len,
+            Algorithm::Maddpg => self.maddpg.chunk_len,
+            Algorithm::Maac => self.maac.chunk_len,
+        }
+    }
+
+    /// Checks the settings of `algorithm`; the error names the field.
+    fn validate_learner(&self, algorithm: Algorithm) -> Result<(), String> {
+        self.net.validate().map_err(|e| format!("net.{e}"))?;
+        match algorithm {
+            Algorithm::Mappo | Algorithm::Ippo => {
+                self.ppo.validate().map_err(|e| format!("ppo.{e}"))
+            }
+            Algorithm::Maddpg => self.maddpg.validate().map_err(|e| format!("maddpg.{e}")),
+            Algorithm::Maac => self
+                .maac
+                .validate(&self.net)
+                .map_err(|e| format!("maac.{e}")),
         }
     }
 }
@@ -198,20 +241,30 @@ impl TrainConfig {
             ("target", &self.target, Side::Target),
         ] {
             match side_cfg.role().map_err(|e| format!("{name}.{e}"))? {
-                Role::Learn(_) => {
+                Role::Learn(algorithm) => {
                     learners += 1;
                     side_cfg
-                        .ppo
-                        .validate()
-                        .map_err(|e| format!("{name}.ppo.{e}"))?;
-                    side_cfg
-                        .net
-                        .validate()
-                        .map_err(|e| format!("{name}.net.{e}"))?;
-                    if !self.rollout_steps.is_multiple_of(side_cfg.ppo.chunk_len) {
+                        .validate_learner(algorithm)
+                        .map_err(|e| format!("{name}.{e}"))?;
+                    let chunk_len = side_cfg.chunk_len(algorithm);
+                    let field = if algorithm.off_policy() {
+                        algorithm.name()
+                    } else {
+                        "ppo"
+                    };
+                    if !self.rollout_steps.is_multiple_of(chunk_len) {
                         return Err(format!(
-                            "rollout_steps = {} is not a multiple of {name}.ppo.chunk_len = {}",
-                            self.rollout_steps, side_cfg.ppo.chunk_len
+                            "rollout_steps = {} is not a multiple of {name}.{field}.chunk_len = {chunk_len}",
+                            self.rollout_steps
+                        ));
+                    }
+                    // A replayed sequence holds the state of at most one
+                    // truncation to bootstrap from.
+                    if algorithm.off_policy() && self.env.episode_length as usize <= chunk_len {
+                        return Err(format!(
+                            "env.episode_length = {}: must exceed {name}.{field}.chunk_len = {chunk_len} for {}",
+                            self.env.episode_length,
+                            algorithm.name()
                         ));
                     }
                 }
@@ -221,7 +274,7 @@ impl TrainConfig {
             }
         }
         if learners == 0 {
-            return Err("neither captors.play nor target.play is a learner (mappo or ippo): nothing to train".into());
+            return Err("neither captors.play nor target.play is a learner (mappo, ippo, maddpg or maac): nothing to train".into());
         }
         Ok(())
     }
@@ -296,8 +349,7 @@ fn validate_name(name: &str) -> Result<(), String> {
 /// One learning side during training.
 struct LearnerSide {
     side: Side,
-    algorithm: Algorithm,
-    learner: PpoLearner,
+    learner: Box<dyn Learner>,
     rollout: Rollout,
     team: usize,
     rows: usize,
@@ -399,24 +451,23 @@ impl Trainer {
                 Role::Learn(algorithm) => {
                     let team = side.agents(k).len();
                     let rows = team * cfg.num_envs;
-                    let learner = PpoLearner::new(
-                        side_cfg.ppo.clone(),
-                        side_cfg.net.clone(),
+                    let learner = build_learner(
+                        algorithm,
+                        side,
+                        side_cfg,
                         env_cfg.vector_len(),
                         team,
-                        algorithm.critic_view(),
                         device,
-                    );
+                    )?;
                     let h = side_cfg.net.hidden;
                     learners.push(LearnerSide {
                         side,
-                        algorithm,
                         rollout: Rollout::new(
                             cfg.rollout_steps,
                             rows,
                             env_cfg.vector_len(),
                             &side_cfg.net,
-                            side_cfg.ppo.chunk_len,
+                            side_cfg.chunk_len(algorithm),
                         ),
                         learner,
                         team,
@@ -490,7 +541,7 @@ impl Trainer {
                     dir.display()
                 );
             }
-            let meta = persist::load_learner(&dir, &mut ls.learner)?;
+            let meta = persist::load_learner(&dir, ls.learner.as_mut())?;
             if (meta.env_steps, meta.iteration) != (state.env_steps, state.iteration) {
                 bail!(
                     "{}: says {} env steps at iteration {}, but the checkpoint it names ({}) holds {} at iteration {}; the run folder was changed by hand",
@@ -533,11 +584,11 @@ impl Trainer {
                 let ro = &mut ls.rollout;
                 let rows = ls.rows;
                 let base = t * rows;
-                let pl = ls.learner.net.input_len();
+                let pl = ls.learner.net().input_len();
                 gather_side(
                     &self.venv,
                     ls.side,
-                    &ls.learner.net,
+                    ls.learner.net(),
                     &mut ro.vectors[base * vl..(base + rows) * vl],
                     &mut ro.patches[base * pl..(base + rows) * pl],
                 );
@@ -566,12 +617,11 @@ impl Trainer {
                     .unsqueeze(1);
                 let lr = &ls.learner;
                 let (probs, values, ha, hc) = tch::no_grad(|| {
-                    let (logits, ha) = lr.actor.step(&p, &v, &(&ls.actor_h * &m));
-                    let (cp, cv) = lr.view.critic_inputs(&p, &v, ls.team);
-                    let (values, hc) = lr.critic.step(&cp, &cv, &(&ls.critic_h * &m));
+                    let (logits, ha) = lr.actor().step(&p, &v, &(&ls.actor_h * &m));
+                    let (values, hc) = lr.critic_step(&p, &v, &(&ls.critic_h * &m));
                     (
                         logits.softmax(-1, Kind::Float).to_device(Device::Cpu),
-                        values.to_device(Device::Cpu),
+                        values.map(|v| v.to_device(Device::Cpu)),
                         ha,
                         hc,
                     )
@@ -580,7 +630,15 @@ impl Trainer {
                 ls.critic_h = hc;
                 let mut pr = vec![0f32; rows * Action::COUNT];
                 probs.copy_data(&mut pr, rows * Action::COUNT);
-                values.copy_data(&mut ro.values[base..base + rows], rows);
+                if let Some(values) = values {
+                    values.copy_data(&mut ro.values[base..base + rows], rows);
+                }
+                let epsilon = lr.exploration() as f32;
+                if epsilon > 0.0 {
+                    let uniform = epsilon / Action::COUNT as f32;
+                    pr.iter_mut()
+                        .for_each(|p| *p = (1.0 - epsilon) * *p + uniform);
+                }
                 for row in 0..rows {
                     let p = &pr[row * Action::COUNT..(row + 1) * Action::COUNT];
                     let a = sample(p, &mut self.rng);
@@ -613,7 +671,7 @@ impl Trainer {
                     ls.next_mask[row] = (!done) as u8 as f32;
                 }
                 if !truncated_worlds.is_empty() {
-                    value_truncated_states(&self.venv, ls, &truncated_worlds, base, self.device);
+                    keep_truncated_states(&self.venv, ls, &truncated_worlds, base, self.device);
                 }
             }
             for s in &self.venv.finished {
@@ -626,41 +684,57 @@ impl Trainer {
             time_inference += (t1 - t0).as_secs_f64();
             time_env += t1.elapsed().as_secs_f64();
         }
-        // Values of the states after the rollout, for bootstrapping.
+        // The states after the rollout (and their values), for bootstrapping.
         let t2 = Instant::now();
         for ls in &mut self.learners {
             let ro = &mut ls.rollout;
             let rows = ls.rows;
-            let pl = ls.learner.net.input_len();
-            let mut vecs = vec![0f32; rows * vl];
-            let mut pats = vec![0u8; rows * pl];
-            gather_side(&self.venv, ls.side, &ls.learner.net, &mut vecs, &mut pats);
-            let (p, v) = obs_tensors(&pats, &vecs, rows, 1, ro.patch_side, self.device);
+            gather_side(
+                &self.venv,
+                ls.side,
+                ls.learner.net(),
+                &mut ro.last_vectors,
+                &mut ro.last_patches,
+            );
+            ro.last_masks.copy_from_slice(&ls.next_mask);
+            if !ls.learner.needs_values() {
+                continue;
+            }
+            let (p, v) = obs_tensors(
+                &ro.last_patches,
+                &ro.last_vectors,
+                rows,
+                1,
+                ro.patch_side,
+                self.device,
+            );
             let m = Tensor::from_slice(&ls.next_mask)
                 .to_device(self.device)
                 .unsqueeze(1);
             let values = tch::no_grad(|| {
-                let (cp, cv) = ls.learner.view.critic_inputs(&p, &v, ls.team);
                 ls.learner
-                    .critic
-                    .step(&cp, &cv, &(&ls.critic_h * &m))
+                    .critic_step(&p, &v, &(&ls.critic_h * &m))
                     .0
+                    .expect("a learner that needs values gives them")
                     .to_device(Device::Cpu)
             });
             values.copy_data(&mut ro.last_values, rows);
         }
         time_inference += t2.elapsed().as_secs_f64();
         let t3 = Instant::now();
-        let mut updates: Vec<(Side, UpdateStats)> = Vec::new();
+        let mut updates: Vec<(Side, Algorithm, UpdateStats)> = Vec::new();
         for ls in &mut self.learners {
             match ls.learner.update(&ls.rollout, &mut self.rng) {
                 Ok(stats) => {
                     ls.bad_updates = 0;
-                    updates.push((ls.side, stats));
+                    // No gradient step (a replay still filling): no losses to report.
+                    if stats.gradient_steps > 0 {
+                        updates.push((ls.side, ls.learner.algorithm(), stats));
+                    }
                 }
                 Err(bad) => {
                     ls.bad_updates += 1;
-                    let limit = ls.learner.cfg.max_bad_updates;
+                    let limit = ls.learner.max_bad_updates();
                     tracing::warn!(
                         "{} update at iteration {}: {bad} ({} in a row, limit {limit})",
                         ls.side.name(),
@@ -707,7 +781,7 @@ impl Trainer {
             time_update,
             ..Metrics::default()
         };
-        for (side, u) in updates {
+        for (side, algorithm, u) in updates {
             let fields = match side {
                 Side::Captors => [
                     &mut m.captor_policy_loss,
@@ -724,14 +798,16 @@ impl Trainer {
                     &mut m.target_clip_frac,
                 ],
             };
+            // KL and clipping are PPO's; an off-policy learner leaves them empty.
+            let ppo_only = |x: f64| (!algorithm.off_policy()).then_some(x);
             for (f, v) in fields.into_iter().zip([
-                u.policy_loss,
-                u.value_loss,
-                u.entropy,
-                u.approx_kl,
-                u.clip_frac,
+                Some(u.policy_loss),
+                Some(u.value_loss),
+                Some(u.entropy),
+                ppo_only(u.approx_kl),
+                ppo_only(u.clip_frac),
             ]) {
-                *f = Some(v);
+                *f = v;
             }
         }
         Ok(m)
@@ -742,17 +818,17 @@ impl Trainer {
         CheckpointMeta {
             format: FORMAT,
             side: ls.side,
-            algorithm: ls.algorithm.name().into(),
-            net: ls.learner.net.clone(),
+            algorithm: ls.learner.algorithm().name().into(),
+            net: ls.learner.net().clone(),
             num_captors: self.cfg.env.num_captors,
-            critic_agents: ls.learner.view.critic_agents(ls.team),
+            critic_agents: ls.learner.critic_agents(),
             speed_ratio: self.cfg.env.speed_ratio(),
             env_steps: self.env_steps,
             iteration: self.iteration,
             config_hash: self.config_hash.clone(),
             protocol: self.cfg.protocol,
             code_version: code_version(),
-            learner_state: Some(persist::learner_state(&ls.learner)),
+            learner_state: None,
             files: Default::default(),
         }
     }
@@ -764,7 +840,7 @@ impl Trainer {
         for ls in &self.learners {
             let name = checkpoint_name(ls.side, self.env_steps);
             let dir = run_dir.join("checkpoints").join(&name);
-            persist::save_learner(&dir, &ls.learner, self.meta(ls))?;
+            persist::save_learner(&dir, ls.learner.as_ref(), self.meta(ls))?;
             written.push(dir);
             names.push((ls.side, name));
         }
@@ -787,7 +863,7 @@ impl Trainer {
             .iter()
             .find(|l| l.side == side)
             .with_context(|| format!("no {} learner in this run", side.name()))?;
-        persist::save_learner(dir, &ls.learner, self.meta(ls))?;
+        persist::save_learner(dir, ls.learner.as_ref(), self.meta(ls))?;
         Ok(())
     }
 
@@ -800,7 +876,7 @@ impl Trainer {
             .iter_mut()
             .find(|l| l.side == side)
             .with_context(|| format!("no {} learner in this run", side.name()))?;
-        persist::load_learner(dir, &mut ls.learner)?;
+        persist::load_learner(dir, ls.learner.as_mut())?;
         ls.actor_h = ls.actor_h.zeros_like();
         ls.critic_h = ls.critic_h.zeros_like();
         Ok(())
@@ -809,23 +885,78 @@ impl Trainer {
     pub fn learner_sides(&self) -> Vec<(Side, Algorithm)> {
         self.learners
             .iter()
-            .map(|l| (l.side, l.algorithm))
+            .map(|l| (l.side, l.learner.algorithm()))
             .collect()
     }
 }
 
-/// The critic's values of the states that episodes cut off by the step
-/// limit reached (the vector env's final observations), continuing each
-/// row's recurrent state, into the rollout's `final_values` at step offset
-/// `base`: truncation is not the end of the game, so GAE bootstraps there.
-fn value_truncated_states(
+/// The learner `algorithm` for `side`, its replay (if any) checked to fit in memory.
+fn build_learner(
+    algorithm: Algorithm,
+    side: Side,
+    side_cfg: &SideConfig,
+    vector_len: usize,
+    team: usize,
+    device: Device,
+) -> Result<Box<dyn Learner>> {
+    let net = side_cfg.net.clone();
+    if algorithm.off_policy() {
+        let (steps, len) = match algorithm {
+            Algorithm::Maddpg => (side_cfg.maddpg.buffer_steps, side_cfg.maddpg.chunk_len),
+            _ => (side_cfg.maac.buffer_steps, side_cfg.maac.chunk_len),
+        };
+        let bytes = (steps / len).max(1)
+            * sequence_bytes(len, team, net.input_len(), vector_len, net.hidden as usize);
+        const LIMIT: usize = 16 << 30;
+        if bytes > LIMIT {
+            bail!(
+                "{}.{}.buffer_steps = {steps}: the replay would take {:.1} GiB (at most {} GiB); lower it or net.patch_pool / net.hidden",
+                side.name(),
+                algorithm.name(),
+                bytes as f64 / (1u64 << 30) as f64,
+                LIMIT >> 30
+            );
+        }
+    }
+    Ok(match algorithm {
+        Algorithm::Mappo | Algorithm::Ippo => Box::new(PpoLearner::new(
+            algorithm,
+            side_cfg.ppo.clone(),
+            net,
+            vector_len,
+            team,
+            device,
+        )),
+        Algorithm::Maddpg => Box::new(MaddpgLearner::new(
+            side_cfg.maddpg.clone(),
+            net,
+            vector_len,
+            team,
+            device,
+        )),
+        Algorithm::Maac => Box::new(MaacLearner::new(
+            side_cfg.maac.clone(),
+            net,
+            vector_len,
+            team,
+            device,
+        )),
+    })
+}
+
+/// The states that episodes cut off by the step limit reached (the vector
+/// env's final observations) into the rollout at step offset `base`, and,
+/// for a learner that needs values, the critic's values of them, continuing
+/// each row's recurrent state, into `final_values`: truncation is not the
+/// end of the game, so GAE and TD targets bootstrap there.
+fn keep_truncated_states(
     venv: &VecEnv,
     ls: &mut LearnerSide,
     worlds: &[usize],
     base: usize,
     device: Device,
 ) {
-    let net = &ls.learner.net;
+    let net = ls.learner.net();
     let (vl, pl, team) = (venv.cfg.vector_len(), net.input_len(), ls.team);
     let n = worlds.len() * team;
     let mut vectors = vec![0f32; n * vl];
@@ -844,16 +975,24 @@ fn value_truncated_states(
         .iter()
         .flat_map(|&e| (0..team).map(move |j| (e * team + j) as i64))
         .collect();
+    let ro = &mut ls.rollout;
+    for (i, &row) in rows.iter().enumerate() {
+        let at = base + row as usize;
+        ro.final_patches[at * pl..(at + 1) * pl].copy_from_slice(&patches[i * pl..(i + 1) * pl]);
+        ro.final_vectors[at * vl..(at + 1) * vl].copy_from_slice(&vectors[i * vl..(i + 1) * vl]);
+    }
+    if !ls.learner.needs_values() {
+        return;
+    }
     let (p, v) = obs_tensors(&patches, &vectors, n, 1, ls.rollout.patch_side, device);
     let values = tch::no_grad(|| {
         let h = ls
             .critic_h
             .index_select(0, &Tensor::from_slice(&rows).to_device(device));
-        let (cp, cv) = ls.learner.view.critic_inputs(&p, &v, team);
         ls.learner
-            .critic
-            .step(&cp, &cv, &h)
+            .critic_step(&p, &v, &h)
             .0
+            .expect("a learner that needs values gives them")
             .to_device(Device::Cpu)
     });
     let mut out = vec![0f32; n];

@@ -34,7 +34,7 @@ use tch::{nn, Device, Kind, Tensor};
 pub const FORMAT: u32 = 2;
 
 /// The learners whose checkpoints this build can load.
-pub const KNOWN_ALGORITHMS: [&str; 2] = ["mappo", "ippo"];
+pub const KNOWN_ALGORITHMS: [&str; 4] = ["mappo", "ippo", "maddpg", "maac"];
 
 /// The sidecar of a checkpoint.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

@@ -132,9 +132,10 @@ impl Encoder {
     }
 }
 
-/// Encoder + GRU: the recurrent trunk both networks share in shape.
+/// Encoder + GRU: the recurrent trunk every network here shares in shape
+/// (the off-policy learners' Q critics put their own heads on it).
 #[derive(Debug)]
-struct Trunk {
+pub(crate) struct Trunk {
     encoder: Encoder,
     gru: nn::GRU,
     /// The GRU's weight_ih, weight_hh, bias_ih, bias_hh (shared with the
@@ -143,7 +144,7 @@ struct Trunk {
 }
 
 impl Trunk {
-    fn new(p: &nn::Path, cfg: &NetConfig, channels: i64, vector_len: i64) -> Trunk {
+    pub(crate) fn new(p: &nn::Path, cfg: &NetConfig, channels: i64, vector_len: i64) -> Trunk {
         let gru = nn::gru(p / "gru", cfg.hidden, cfg.hidden, Default::default());
         let g = p / "gru";
         let param = |n: &str| {
@@ -169,7 +170,7 @@ impl Trunk {
     }
 
     /// One step for a batch: features [B, hidden] and the next state [B, hidden].
-    fn step(&self, patches: &Tensor, vectors: &Tensor, h: &Tensor) -> (Tensor, Tensor) {
+    pub(crate) fn step(&self, patches: &Tensor, vectors: &Tensor, h: &Tensor) -> (Tensor, Tensor) {
         let x = self.encoder.forward(patches, vectors);
         let state = self.gru.step(&x, &nn::GRUState(h.unsqueeze(0)));
         let h = state.0.squeeze_dim(0);
@@ -180,7 +181,13 @@ impl Trunk {
     /// major ([len * batch, ...]); `masks` [len, batch] is 0 where a step starts
     /// a new episode, which zeroes the state carried into it. Returns the
     /// features of every step, [len * batch, hidden].
-    fn unroll(&self, patches: &Tensor, vectors: &Tensor, h0: &Tensor, masks: &Tensor) -> Tensor {
+    pub(crate) fn unroll(
+        &self,
+        patches: &Tensor,
+        vectors: &Tensor,
+        h0: &Tensor,
+        masks: &Tensor,
+    ) -> Tensor {
         let len = masks.size()[0];
         let batch = masks.size()[1];
         let x = self
@@ -249,6 +256,23 @@ impl Actor {
         self.trunk
             .unroll(patches, vectors, h0, masks)
             .apply(&self.head)
+    }
+
+    /// The recurrent states of every step of a chunk, [len * batch, hidden]
+    /// (the off-policy learners continue a state past a truncation).
+    pub fn unroll_states(
+        &self,
+        patches: &Tensor,
+        vectors: &Tensor,
+        h0: &Tensor,
+        masks: &Tensor,
+    ) -> Tensor {
+        self.trunk.unroll(patches, vectors, h0, masks)
+    }
+
+    /// Logits from recurrent states.
+    pub fn logits(&self, states: &Tensor) -> Tensor {
+        states.apply(&self.head)
     }
 }
 

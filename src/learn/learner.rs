@@ -1,0 +1,117 @@
+//! What the training loop needs of a learning side, whatever its algorithm:
+//! the actor it acts with, the critic pass it makes while acting (PPO keeps
+//! the values for GAE; the off-policy learners only carry the critic's
+//! recurrent state, which their replay stores), the update on a rollout, and
+//! the tensors and state a checkpoint holds. The algorithms themselves read
+//! top to bottom in their own files (`ppo.rs`, `maddpg.rs`, `maac.rs`).
+
+use super::ppo::{Adam, BadUpdate, Rollout, UpdateStats};
+use super::Algorithm;
+use crate::nn::{Actor, NetConfig};
+use rand_chacha::ChaCha8Rng;
+use std::path::Path;
+use tch::Tensor;
+
+/// Named tensors of one checkpoint file.
+pub type NamedTensors = Vec<(String, Tensor)>;
+
+pub trait Learner {
+    fn algorithm(&self) -> Algorithm;
+    fn net(&self) -> &NetConfig;
+    /// The policy every robot of the side acts with (and that eval, render
+    /// and the league's pools load from `actor.safetensors`).
+    fn actor(&self) -> &Actor;
+    /// Robots per world on this side.
+    fn team(&self) -> usize;
+    /// Observations the critic's encoder reads per row (the sidecar records it).
+    fn critic_agents(&self) -> usize;
+    /// Recurrent chunk length of the rollout this learner trains on.
+    fn chunk_len(&self) -> usize;
+    /// Whether the rollout must hold critic values (`values`, `final_values`,
+    /// `last_values`): PPO bootstraps GAE from them; off-policy learners
+    /// compute their targets at update time.
+    fn needs_values(&self) -> bool;
+    /// The critic's acting-time pass over rows of whole teams (a world's
+    /// robots adjacent), patches [rows, 1, S, S] and vectors [rows, V]: the
+    /// values where `needs_values`, and the critic's next recurrent state.
+    fn critic_step(
+        &self,
+        patches: &Tensor,
+        vectors: &Tensor,
+        h: &Tensor,
+    ) -> (Option<Tensor>, Tensor);
+    /// Learns from one rollout. A non-finite loss or gradient undoes
+    /// everything the update changed.
+    fn update(&mut self, ro: &Rollout, rng: &mut ChaCha8Rng) -> Result<UpdateStats, BadUpdate>;
+    /// Share of actions drawn uniformly instead of from the policy while
+    /// training (MADDPG's epsilon-greedy exploration; 0 for the others).
+    fn exploration(&self) -> f64 {
+        0.0
+    }
+    /// Updates undone in a row before training stops.
+    fn max_bad_updates(&self) -> u32;
+    /// The files of a checkpoint (`actor.safetensors` first) and their tensors on the CPU.
+    fn checkpoint_files(&self) -> Vec<(&'static str, NamedTensors)>;
+    /// What is not a tensor (optimizer step counts, return statistics), for `meta.json`.
+    fn learner_state(&self) -> serde_json::Value;
+    /// Puts the learner back to a checkpoint's files (as `checkpoint_files`
+    /// names them, hashes already checked) and state; `dir` names errors.
+    fn restore(
+        &mut self,
+        files: &[(&'static str, NamedTensors)],
+        state: serde_json::Value,
+        dir: &Path,
+    ) -> anyhow::Result<()>;
+}
+
+/// The tensors of `name` among a checkpoint's files.
+pub fn file<'a>(files: &'a [(&'static str, NamedTensors)], name: &str) -> &'a NamedTensors {
+    &files
+        .iter()
+        .find(|(n, _)| *n == name)
+        .expect("restore gets every file checkpoint_files names")
+        .1
+}
+
+/// The tensors of `files` whose names start with `prefix`, prefix removed.
+pub fn with_prefix(tensors: &NamedTensors, prefix: &str) -> NamedTensors {
+    tensors
+        .iter()
+        .filter_map(|(n, t)| {
+            n.strip_prefix(prefix)
+                .map(|n| (n.to_string(), t.shallow_clone()))
+        })
+        .collect()
+}
+
+/// Both Adams' moments in one `optimizer.safetensors`, prefixed `actor.`
+/// and `critic.`: the layout every learner's checkpoint uses.
+pub fn optimizer_file(actor: &Adam, critic: &Adam) -> NamedTensors {
+    let mut optimizer = Vec::new();
+    for (prefix, adam) in [("actor.", actor), ("critic.", critic)] {
+        optimizer.extend(
+            adam.state_tensors()
+                .into_iter()
+                .map(|(n, t)| (format!("{prefix}{n}"), t)),
+        );
+    }
+    optimizer
+}
+
+/// The inverse of `optimizer_file`, with each Adam's step count from the
+/// learner's state.
+pub fn restore_optimizers(
+    files: &[(&'static str, NamedTensors)],
+    (actor, actor_steps): (&mut Adam, u64),
+    (critic, critic_steps): (&mut Adam, u64),
+    dir: &Path,
+) -> anyhow::Result<()> {
+    let optimizer = file(files, "optimizer.safetensors");
+    actor
+        .load_state(&with_prefix(optimizer, "actor."), actor_steps)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", dir.display()))?;
+    critic
+        .load_state(&with_prefix(optimizer, "critic."), critic_steps)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", dir.display()))?;
+    Ok(())
+}

@@ -1,0 +1,585 @@
+//! MAAC, Multi-Actor-Attention-Critic (Iqbal and Sha 2019), recurrent, as
+//! the paper benchmarks it: off-policy soft actor-critic with a centralised
+//! critic that attends to teammates. Teammates share one actor and one
+//! critic; the replay of 10-step sequences with stored recurrent states,
+//! the TD target and the soft target updates are `offpolicy.rs`.
+//!
+//! The critic, for robot i of a team:
+//! - s_i = the trunk (CNN + MLP + GRU, spec §9) over i's own observation;
+//! - e_j = MLP(s_j, one-hot a_j) for every teammate j;
+//! - per head: query W_q s_i, keys W_k e_j, values leaky_relu(W_v e_j) of the
+//!   teammates j != i; weights softmax_j(q . k_j / sqrt(d)); x_i their
+//!   weighted values, the heads concatenated;
+//! - Q_i(o, a_-i, .) = MLP(s_i, x_i): one value per own action.
+//!
+//! One update phase, after each rollout:
+//! 1. the rollout's chunks go into the replay;
+//! 2. once it holds `learning_starts` steps, `replay_ratio` x (new steps) /
+//!    (batch_size x chunk_len) gradient steps, each on `batch_size` sequences:
+//!    - critic: y = r + gamma (Q'(o', a') - alpha log pi'(a'_i | o'_i)), a'
+//!      sampled from the target policies, bootstrapped at truncations from
+//!      the state reached, not at captures; loss (Q_i(o, a) - y)^2 plus a
+//!      small penalty on the attention logits (the original's);
+//!    - actor: actions sampled from the current policies; the advantage
+//!      Q_i(a_i) - sum_a pi(a) Q_i(a) (a counterfactual baseline: the other
+//!      robots' actions fixed); loss log pi(a_i) (alpha log pi(a_i) - A),
+//!      the factor held constant, plus a penalty on the logits;
+//!    - targets: theta' <- tau theta + (1 - tau) theta'.
+
+use super::learner::{Learner, NamedTensors};
+use super::offpolicy::{
+    check_replay, gradient_steps, one_hot, td_target, within, Batch, Params, SequenceReplay,
+};
+use super::ppo::{BadUpdate, Rollout, UpdateStats};
+use super::Algorithm;
+use crate::env::Action;
+use crate::nn::{Actor, NetConfig, Trunk};
+use rand_chacha::ChaCha8Rng;
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+use tch::{nn, Device, Kind, Tensor};
+
+/// Every MAAC hyperparameter. The paper gives none beyond the shared ones
+/// (gamma 0.99, chunks of 10, hidden 128); the rest are the original MAAC's
+/// (Iqbal and Sha 2019: Adam at 1e-3 for actor and critic, tau 1e-3,
+/// reward scale 100, i.e. entropy weight 0.01, 4 attention heads,
+/// attention and logit penalties 1e-3, critic gradient clip 10 per robot,
+/// actor clip 0.5, a buffer of 10^6 transitions).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct MaacConfig {
+    pub actor_lr: f64,
+    pub critic_lr: f64,
+    pub adam_eps: f64,
+    /// Discount (paper: 0.99).
+    pub gamma: f64,
+    /// Soft target update rate (original: 1e-3).
+    pub tau: f64,
+    /// Entropy weight alpha (original: 1 / reward scale 100).
+    pub entropy_coef: f64,
+    /// Attention heads; they split the hidden width (original: 4).
+    pub attention_heads: i64,
+    /// Penalty on the squared attention logits (original: 1e-3).
+    pub attention_reg: f64,
+    /// Penalty on the squared policy logits (original: 1e-3).
+    pub logit_reg: f64,
+    /// Steps per replayed sequence, the GRU's training window (paper: 10).
+    pub chunk_len: usize,
+    /// Sequences per gradient step.
+    pub batch_size: usize,
+    /// Replay capacity in world-steps.
+    pub buffer_steps: usize,
+    /// World-steps in the replay before the first update.
+    pub learning_starts: usize,
+    /// World-steps sampled for learning per world-step collected.
+    /// Default 1 (each step replayed once on average), a CPU budget: the
+    /// original replayed about 3.4 (4 x 1024 transitions every 100 steps
+    /// of 12 worlds).
+    pub replay_ratio: f64,
+    /// Critic gradient clip per robot of the team (original: 10 x robots).
+    pub critic_max_grad_norm: f64,
+    /// Actor gradient clip (original: 0.5).
+    pub actor_max_grad_norm: f64,
+    /// Update phases undone in a row (non-finite loss) before training stops.
+    pub max_bad_updates: u32,
+}
+
+impl Default for MaacConfig {
+    fn default() -> Self {
+        MaacConfig {
+            actor_lr: 1e-3,
+            critic_lr: 1e-3,
+            adam_eps: 1e-5,
+            gamma: 0.99,
+            tau: 1e-3,
+            entropy_coef: 0.01,
+            attention_heads: 4,
+            attention_reg: 1e-3,
+            logit_reg: 1e-3,
+            chunk_len: 10,
+            batch_size: 32,
+            buffer_steps: 200_000,
+            learning_starts: 5_000,
+            replay_ratio: 1.0,
+            critic_max_grad_norm: 10.0,
+            actor_max_grad_norm: 0.5,
+            max_bad_updates: 3,
+        }
+    }
+}
+
+impl MaacConfig {
+    pub fn validate(&self, net: &NetConfig) -> Result<(), String> {
+        within("actor_lr", self.actor_lr, 0.0, 0.1, false)?;
+        within("critic_lr", self.critic_lr, 0.0, 0.1, false)?;
+        within("adam_eps", self.adam_eps, 0.0, 1.0, false)?;
+        within("gamma", self.gamma, 0.0, 1.0, true)?;
+        within("tau", self.tau, 0.0, 1.0, false)?;
+        within("entropy_coef", self.entropy_coef, 0.0, 10.0, true)?;
+        within("attention_reg", self.attention_reg, 0.0, 10.0, true)?;
+        within("logit_reg", self.logit_reg, 0.0, 10.0, true)?;
+        within("replay_ratio", self.replay_ratio, 0.0, 1000.0, false)?;
+        within(
+            "critic_max_grad_norm",
+            self.critic_max_grad_norm,
+            0.0,
+            1e6,
+            false,
+        )?;
+        within(
+            "actor_max_grad_norm",
+            self.actor_max_grad_norm,
+            0.0,
+            1e6,
+            false,
+        )?;
+        if self.attention_heads < 1 || net.hidden % self.attention_heads != 0 {
+            return Err(format!(
+                "attention_heads = {}: must be at least 1 and divide net.hidden = {}",
+                self.attention_heads, net.hidden
+            ));
+        }
+        check_replay(
+            self.chunk_len,
+            self.batch_size,
+            self.buffer_steps,
+            self.learning_starts,
+        )?;
+        if self.max_bad_updates == 0 {
+            return Err("max_bad_updates = 0: must be at least 1".into());
+        }
+        Ok(())
+    }
+}
+
+/// Scaled dot-product attention of every robot over its teammates.
+/// `q`, `k`, `v`: [worlds, heads, team, d]. Returns the attended values
+/// [worlds, heads, team, d], the weights [worlds, heads, team, team] (zero
+/// on the diagonal: a robot attends only to the others) and the logits.
+pub fn attend(q: &Tensor, k: &Tensor, v: &Tensor) -> (Tensor, Tensor, Tensor) {
+    let (team, d) = (q.size()[2], q.size()[3]);
+    let logits = q.matmul(&k.transpose(-1, -2)) / (d as f64).sqrt();
+    let own = Tensor::eye(team, (Kind::Bool, q.device()));
+    let weights = logits
+        .masked_fill(&own, f64::NEG_INFINITY)
+        .softmax(-1, Kind::Float);
+    (weights.matmul(v), weights, logits)
+}
+
+/// The attention critic (see the module's notes).
+pub struct AttentionCritic {
+    trunk: Trunk,
+    state_action: nn::Linear,
+    query: nn::Linear,
+    key: nn::Linear,
+    value: nn::Linear,
+    q_fc: nn::Linear,
+    q_out: nn::Linear,
+    heads: i64,
+    team: i64,
+}
+
+impl AttentionCritic {
+    pub fn new(
+        p: &nn::Path,
+        net: &NetConfig,
+        vector_len: usize,
+        team: usize,
+        heads: i64,
+    ) -> AttentionCritic {
+        let h = net.hidden;
+        let no_bias = nn::LinearConfig {
+            bias: false,
+            ..Default::default()
+        };
+        AttentionCritic {
+            trunk: Trunk::new(p, net, 1, vector_len as i64),
+            state_action: nn::linear(
+                p / "state_action",
+                h + Action::COUNT as i64,
+                h,
+                Default::default(),
+            ),
+            query: nn::linear(p / "query", h, h, no_bias),
+            key: nn::linear(p / "key", h, h, no_bias),
+            value: nn::linear(p / "value", h, h, Default::default()),
+            q_fc: nn::linear(p / "q_fc", 2 * h, h, Default::default()),
+            q_out: nn::linear(p / "q_out", h, Action::COUNT as i64, Default::default()),
+            heads,
+            team: team as i64,
+        }
+    }
+
+    /// Recurrent states of a chunk, each robot's own observation.
+    pub fn unroll(
+        &self,
+        patches: &Tensor,
+        vectors: &Tensor,
+        h0: &Tensor,
+        masks: &Tensor,
+    ) -> Tensor {
+        self.trunk.unroll(patches, vectors, h0, masks)
+    }
+
+    pub fn step(&self, patches: &Tensor, vectors: &Tensor, h: &Tensor) -> Tensor {
+        self.trunk.step(patches, vectors, h).1
+    }
+
+    /// From states [N, hidden] and one-hot actions [N, 5] of rows of whole
+    /// teams: Q of every own action [N, 5], and the attention logits
+    /// between teammates (for their penalty; empty for a team of one).
+    pub fn q_all(&self, states: &Tensor, actions: &Tensor) -> (Tensor, Tensor) {
+        let (n, h) = (states.size()[0], states.size()[1]);
+        let (team, heads) = (self.team, self.heads);
+        let attended;
+        let logits;
+        if team == 1 {
+            attended = states.zeros_like();
+            logits = Tensor::zeros([0], (Kind::Float, states.device()));
+        } else {
+            let e = Tensor::cat(&[states, actions], 1)
+                .apply(&self.state_action)
+                .leaky_relu();
+            let split = |x: Tensor| {
+                x.view([n / team, team, heads, h / heads])
+                    .permute([0, 2, 1, 3])
+            };
+            let (x, _, l) = attend(
+                &split(states.apply(&self.query)),
+                &split(e.apply(&self.key)),
+                &split(e.apply(&self.value).leaky_relu()),
+            );
+            attended = x.permute([0, 2, 1, 3]).reshape([n, h]);
+            let off = Tensor::eye(team, (Kind::Bool, states.device())).logical_not();
+            logits = l.masked_select(&off);
+        }
+        let q = Tensor::cat(&[states, &attended], 1)
+            .apply(&self.q_fc)
+            .leaky_relu()
+            .apply(&self.q_out);
+        (q, logits)
+    }
+}
+
+pub struct MaacLearner {
+    pub cfg: MaacConfig,
+    pub net: NetConfig,
+    pub device: Device,
+    pub team: usize,
+    /// Online and target variables, optimisers and clocks.
+    pub params: Params,
+    pub actor: Actor,
+    pub critic: AttentionCritic,
+    pub target_actor: Actor,
+    pub target_critic: AttentionCritic,
+    pub replay: SequenceReplay,
+}
+
+/// (sampled actions [N], their log-probabilities [N]) of logits [N, 5].
+fn sample_actions(logits: &Tensor) -> (Tensor, Tensor) {
+    let logp = logits.log_softmax(-1, Kind::Float);
+    let a = logp.exp().multinomial(1, true);
+    (a.squeeze_dim(1), logp.gather(1, &a, false).squeeze_dim(1))
+}
+
+impl MaacLearner {
+    pub fn new(
+        cfg: MaacConfig,
+        net: NetConfig,
+        vector_len: usize,
+        team: usize,
+        device: Device,
+    ) -> MaacLearner {
+        let heads = cfg.attention_heads;
+        let (params, (actor, critic, target_actor, target_critic)) = Params::new(
+            device,
+            cfg.actor_lr,
+            cfg.critic_lr,
+            cfg.adam_eps,
+            |p| Actor::new(p, &net, vector_len),
+            |p| AttentionCritic::new(p, &net, vector_len, team, heads),
+        );
+        let replay = SequenceReplay::new(
+            (cfg.buffer_steps / cfg.chunk_len).max(1),
+            cfg.chunk_len,
+            team,
+            net.input_side(),
+            vector_len,
+            net.hidden as usize,
+        );
+        MaacLearner {
+            cfg,
+            net,
+            device,
+            team,
+            params,
+            actor,
+            critic,
+            target_actor,
+            target_critic,
+            replay,
+        }
+    }
+
+    /// The soft TD targets of a batch, [len * rows].
+    fn targets(&self, b: &Batch) -> Tensor {
+        let (l, n) = (b.len as i64, b.rows as i64);
+        let alpha = self.cfg.entropy_coef;
+        tch::no_grad(|| {
+            let ha = self
+                .target_actor
+                .unroll_states(&b.patches, &b.vectors, &b.actor_h0, &b.masks);
+            let hc = self
+                .target_critic
+                .unroll(&b.patches, &b.vectors, &b.critic_h0, &b.masks);
+            let soft_value = |ha: &Tensor, hc: &Tensor| {
+                let (a, logp) = sample_actions(&self.target_actor.logits(ha));
+                let (q, _) = self
+                    .target_critic
+                    .q_all(hc, &one_hot(&a, Action::COUNT as i64));
+                q.gather(1, &a.unsqueeze(1), false).squeeze_dim(1) - logp * alpha
+            };
+            let next = soft_value(&ha, &hc).narrow(0, n, l * n);
+            let mut final_value = next.zeros_like();
+            if let Some((state_rows, final_rows, at)) = b.truncated_rows() {
+                let p = b.final_patches.index_select(0, &final_rows);
+                let v = b.final_vectors.index_select(0, &final_rows);
+                let (_, ha_f) = self
+                    .target_actor
+                    .step(&p, &v, &ha.index_select(0, &state_rows));
+                let hc_f = self
+                    .target_critic
+                    .step(&p, &v, &hc.index_select(0, &state_rows));
+                final_value = final_value.index_copy(0, &at, &soft_value(&ha_f, &hc_f));
+            }
+            td_target(
+                &b.rewards,
+                &b.dones,
+                &b.truncated,
+                &next,
+                &final_value,
+                self.cfg.gamma,
+            )
+        })
+    }
+
+    /// One gradient step of critic, actor and targets on a batch.
+    fn gradient_step(&mut self, b: &Batch, stats: &mut UpdateStats) -> Result<(), BadUpdate> {
+        let cfg = self.cfg.clone();
+        let y = self.targets(b);
+        let (p, v, m) = b.now();
+
+        let hc = self.critic.unroll(&p, &v, &b.critic_h0, &m);
+        let (q_all, attention_logits) = self
+            .critic
+            .q_all(&hc, &one_hot(&b.actions, Action::COUNT as i64));
+        let q = q_all
+            .gather(1, &b.actions.unsqueeze(1), false)
+            .squeeze_dim(1);
+        let mut critic_loss = (&q - &y).square().mean(Kind::Float);
+        if attention_logits.numel() > 0 {
+            critic_loss += cfg.attention_reg * attention_logits.square().mean(Kind::Float);
+        }
+
+        let ha = self.actor.unroll_states(&p, &v, &b.actor_h0, &m);
+        let logits = self.actor.logits(&ha);
+        let logp_all = logits.log_softmax(-1, Kind::Float);
+        let (a, _) = tch::no_grad(|| sample_actions(&logits));
+        let advantage = tch::no_grad(|| {
+            let (q_pi, _) = self.critic.q_all(&hc, &one_hot(&a, Action::COUNT as i64));
+            let baseline = (logp_all.exp() * &q_pi).sum_dim_intlist(-1, false, Kind::Float);
+            q_pi.gather(1, &a.unsqueeze(1), false).squeeze_dim(1) - baseline
+        });
+        let logp = logp_all.gather(1, &a.unsqueeze(1), false).squeeze_dim(1);
+        let factor = (cfg.entropy_coef * &logp - advantage).detach();
+        let actor_loss =
+            (&logp * factor).mean(Kind::Float) + cfg.logit_reg * logits.square().mean(Kind::Float);
+
+        let (cl, al) = (critic_loss.double_value(&[]), actor_loss.double_value(&[]));
+        if !(cl.is_finite() && al.is_finite()) {
+            return Err(BadUpdate(format!("critic loss {cl}, actor loss {al}")));
+        }
+        self.params.critic_adam.zero_grad();
+        critic_loss.backward();
+        let critic_norm = self
+            .params
+            .critic_adam
+            .clip_grad_norm(cfg.critic_max_grad_norm * self.team as f64);
+        self.params.actor_adam.zero_grad();
+        actor_loss.backward();
+        let actor_norm = self
+            .params
+            .actor_adam
+            .clip_grad_norm(cfg.actor_max_grad_norm);
+        if !(actor_norm.is_finite() && critic_norm.is_finite()) {
+            return Err(BadUpdate(format!(
+                "gradient norm not finite (actor {actor_norm}, critic {critic_norm})"
+            )));
+        }
+        self.params.critic_adam.step();
+        self.params.actor_adam.step();
+        self.params.update_targets(cfg.tau);
+        self.params.gradient_steps += 1;
+
+        let entropy = tch::no_grad(|| {
+            -(logp_all.exp() * &logp_all)
+                .sum_dim_intlist(-1, false, Kind::Float)
+                .mean(Kind::Float)
+        });
+        stats.policy_loss += al;
+        stats.value_loss += cl;
+        stats.entropy += entropy.double_value(&[]);
+        stats.actor_grad_norm += actor_norm;
+        stats.critic_grad_norm += critic_norm;
+        stats.gradient_steps += 1;
+        Ok(())
+    }
+
+    fn update_unguarded(
+        &mut self,
+        ro: &Rollout,
+        rng: &mut ChaCha8Rng,
+    ) -> Result<UpdateStats, BadUpdate> {
+        let mut stats = UpdateStats::default();
+        let l = self.cfg.chunk_len;
+        if self.replay.filled * l < self.cfg.learning_starts {
+            return Ok(stats);
+        }
+        let new_steps = ro.steps * ro.rows / self.team;
+        let steps = gradient_steps(self.cfg.replay_ratio, new_steps, self.cfg.batch_size, l);
+        for _ in 0..steps {
+            let b = self.replay.sample(self.cfg.batch_size, rng, self.device);
+            self.gradient_step(&b, &mut stats)?;
+        }
+        stats.average();
+        Ok(stats)
+    }
+}
+
+impl Learner for MaacLearner {
+    fn algorithm(&self) -> Algorithm {
+        Algorithm::Maac
+    }
+    fn net(&self) -> &NetConfig {
+        &self.net
+    }
+    fn actor(&self) -> &Actor {
+        &self.actor
+    }
+    fn team(&self) -> usize {
+        self.team
+    }
+    fn critic_agents(&self) -> usize {
+        1
+    }
+    fn chunk_len(&self) -> usize {
+        self.cfg.chunk_len
+    }
+    fn needs_values(&self) -> bool {
+        false
+    }
+    fn critic_step(
+        &self,
+        patches: &Tensor,
+        vectors: &Tensor,
+        h: &Tensor,
+    ) -> (Option<Tensor>, Tensor) {
+        (None, self.critic.step(patches, vectors, h))
+    }
+    fn update(&mut self, ro: &Rollout, rng: &mut ChaCha8Rng) -> Result<UpdateStats, BadUpdate> {
+        self.replay.push_rollout(ro);
+        let undo = self.params.undo_point();
+        self.update_unguarded(ro, rng)
+            .inspect_err(|_| self.params.undo(undo))
+    }
+    fn max_bad_updates(&self) -> u32 {
+        self.cfg.max_bad_updates
+    }
+    fn checkpoint_files(&self) -> Vec<(&'static str, NamedTensors)> {
+        self.params.checkpoint_files()
+    }
+    fn learner_state(&self) -> serde_json::Value {
+        self.params.state()
+    }
+    /// As MADDPG's: everything but the replay, which refills.
+    fn restore(
+        &mut self,
+        files: &[(&'static str, NamedTensors)],
+        state: serde_json::Value,
+        dir: &Path,
+    ) -> anyhow::Result<()> {
+        self.params.restore(files, state, dir)?;
+        self.replay.clear();
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn values(t: &Tensor) -> Vec<f32> {
+        let n = t.numel();
+        let mut v = vec![0f32; n];
+        t.contiguous().copy_data(&mut v, n);
+        v
+    }
+
+    #[test]
+    fn attention_weights_on_a_tiny_team_match_hand_computation() {
+        // One world, one head, three robots, d = 4 (scores divide by 2).
+        let t = |v: &[f32]| Tensor::from_slice(v).view([1, 1, 3, 4]);
+        let q = t(&[2., 0., 0., 0., 0., 0., 0., 0., 0., 0., 0., 4.]);
+        let k = t(&[9., 9., 9., 9., 1., 0., 0., 0., 0., 1., 0., 1.]);
+        let v = t(&[7., 7., 7., 7., 1., 0., 0., 0., 0., 0., 0., 1.]);
+        let (x, w, _) = attend(&q, &k, &v);
+        let w = values(&w);
+        let e = std::f32::consts::E;
+        // Robot 0: scores to robots 1 and 2 are 2/2 = 1 and 0 (its own, 9 x 2 / 2,
+        // is masked): weights e/(e+1) and 1/(e+1).
+        let expected0 = [0.0, e / (e + 1.0), 1.0 / (e + 1.0)];
+        // Robot 1: a zero query weighs robots 0 and 2 equally.
+        let expected1 = [0.5, 0.0, 0.5];
+        // Robot 2: scores 4 x 9 / 2 = 18 to robot 0 and 4 x 0 / 2 = 0 to robot 1.
+        let expected2 = [
+            1.0 / (1.0 + (-18f32).exp()),
+            (-18f32).exp() / (1.0 + (-18f32).exp()),
+            0.0,
+        ];
+        for (got, want) in w
+            .iter()
+            .zip(expected0.iter().chain(&expected1).chain(&expected2))
+        {
+            assert!((got - want).abs() < 1e-6, "{w:?}");
+        }
+        // Robot 0 attends e/(e+1) to value (1,0,0,0) and 1/(e+1) to (0,0,0,1).
+        let x = values(&x);
+        let want = [e / (e + 1.0), 0.0, 0.0, 1.0 / (e + 1.0)];
+        for (got, want) in x[..4].iter().zip(want) {
+            assert!((got - want).abs() < 1e-6, "{x:?}");
+        }
+    }
+
+    #[test]
+    fn q_values_do_not_depend_on_the_robots_own_replayed_action() {
+        // Q_i(o, a_-i, .) reads the others' actions only: changing robot 0's
+        // action changes its teammates' Q, not its own.
+        tch::manual_seed(0);
+        let vs = nn::VarStore::new(Device::Cpu);
+        let net = NetConfig {
+            hidden: 16,
+            ..NetConfig::default()
+        };
+        let critic = AttentionCritic::new(&vs.root(), &net, 10, 3, 2);
+        let states = Tensor::randn([3, 16], (Kind::Float, Device::Cpu));
+        let a1 = one_hot(&Tensor::from_slice(&[0i64, 1, 2]), 5);
+        let a2 = one_hot(&Tensor::from_slice(&[4i64, 1, 2]), 5);
+        let (q1, logits) = critic.q_all(&states, &a1);
+        let (q2, _) = critic.q_all(&states, &a2);
+        assert_eq!(logits.size(), vec![2 * 3 * 2]);
+        let diff = (&q1 - &q2).abs().sum_dim_intlist(-1, false, Kind::Float);
+        let d = values(&diff);
+        assert!(d[0] < 1e-6, "{d:?}");
+        assert!(d[1] > 1e-6 && d[2] > 1e-6, "{d:?}");
+    }
+}

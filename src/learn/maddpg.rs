@@ -1,0 +1,472 @@
+//! MADDPG (Lowe et al. 2017) for discrete actions, recurrent, as the paper
+//! benchmarks it: off-policy; a deterministic-gradient actor made
+//! differentiable through the Gumbel-softmax straight-through estimator; a
+//! centralised Q critic that reads every teammate's observation and action
+//! (the robot's own first); target networks with soft updates; a replay of
+//! 10-step sequences with stored recurrent states (`offpolicy.rs`).
+//! Teammates share one actor and one critic, as with MAPPO.
+//!
+//! One update phase, after each rollout:
+//! 1. the rollout's chunks go into the replay;
+//! 2. once it holds `learning_starts` steps, `replay_ratio` x (new steps) /
+//!    (batch_size x chunk_len) gradient steps, each on `batch_size` sampled
+//!    sequences:
+//!    - critic: y = r + gamma Q'(o', a'), a' the target actor's greedy
+//!      actions (one-hot), bootstrapped at truncations from the state
+//!      reached, not at captures; loss (Q(o, a) - y)^2;
+//!    - actor: a robot's action replaced by a Gumbel-softmax sample of its
+//!      policy (teammates keep the replayed ones); loss -Q(o, a) plus a
+//!      small penalty on the logits (the original's regulariser);
+//!    - targets: theta' <- tau theta + (1 - tau) theta'.
+
+use super::learner::{Learner, NamedTensors};
+use super::mappo::{mates_index, Mappo};
+use super::offpolicy::{
+    check_replay, gradient_steps, gumbel_noise, gumbel_softmax_st, one_hot, td_target, within,
+    Batch, Params, SequenceReplay,
+};
+use super::ppo::{BadUpdate, CriticView, Rollout, UpdateStats};
+use super::Algorithm;
+use crate::env::Action;
+use crate::nn::{Actor, NetConfig, Trunk};
+use rand_chacha::ChaCha8Rng;
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+use tch::{nn, Device, Kind, Tensor};
+
+/// Every MADDPG hyperparameter. The paper gives none for its off-policy
+/// learners beyond the shared ones (gamma 0.99, chunks of 10, hidden 128);
+/// the rest are the original MADDPG's (Lowe et al. 2017: Adam, tau 0.01,
+/// logit penalty 1e-3, Gumbel temperature 1, a buffer of 10^6 transitions),
+/// except the learning rate (the original's 1e-2 suits its two-layer MLPs,
+/// not a CNN and GRU; here the upper end of the paper's PPO range) and the
+/// gradient clip (the paper's 10, spec §9: the original's 0.5 held learning
+/// on the chase task of tests/learn.rs to half the return in the same
+/// steps, 48 vs 106 after 200 iterations, at this game's reward scale).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct MaddpgConfig {
+    /// Adam learning rate of the actor.
+    pub actor_lr: f64,
+    /// Adam learning rate of the critic.
+    pub critic_lr: f64,
+    pub adam_eps: f64,
+    /// Discount (paper: 0.99).
+    pub gamma: f64,
+    /// Soft target update rate (original: 0.01).
+    pub tau: f64,
+    /// Steps per replayed sequence, the GRU's training window (paper: 10).
+    pub chunk_len: usize,
+    /// Sequences per gradient step (32 x 10 steps; the original's batch was
+    /// 1024 transitions of one robot, this is 320 world-steps of a team).
+    pub batch_size: usize,
+    /// Replay capacity in world-steps (original: 10^6 transitions; 200,000
+    /// world-steps of a 3-captor team is about 0.4 GB with the default net).
+    pub buffer_steps: usize,
+    /// World-steps in the replay before the first update.
+    pub learning_starts: usize,
+    /// World-steps sampled for learning per world-step collected.
+    /// Default 1 (each step replayed once on average), a CPU budget: the
+    /// original replayed about 10 (1024 transitions every 100). On the
+    /// 3:1, 1.0 grid cell, 4 did not help within 117 k steps (README).
+    pub replay_ratio: f64,
+    /// Exploration while acting: this share of actions is uniform instead of
+    /// the policy's, annealed linearly from `epsilon_start` to
+    /// `epsilon_finish` over `epsilon_anneal_steps` world-steps. The
+    /// original MADDPG explores through its sampled policy alone; with
+    /// discrete actions the straight-through actor turns near-deterministic
+    /// within a few hundred updates, so discrete-action MADDPGs (the
+    /// off-policy MARL benchmark's, 1.0 to 0.05 over 50,000 steps) add this.
+    pub epsilon_start: f64,
+    pub epsilon_finish: f64,
+    pub epsilon_anneal_steps: u64,
+    /// Temperature of the Gumbel-softmax relaxation (original: 1).
+    pub gumbel_temperature: f64,
+    /// Penalty on the squared logits in the actor loss (original: 1e-3).
+    pub logit_reg: f64,
+    /// Gradient clip, global norm per network (paper: 10; original: 0.5).
+    pub max_grad_norm: f64,
+    /// Update phases undone in a row (non-finite loss) before training stops.
+    pub max_bad_updates: u32,
+}
+
+impl Default for MaddpgConfig {
+    fn default() -> Self {
+        MaddpgConfig {
+            actor_lr: 5e-4,
+            critic_lr: 5e-4,
+            adam_eps: 1e-5,
+            gamma: 0.99,
+            tau: 0.01,
+            chunk_len: 10,
+            batch_size: 32,
+            buffer_steps: 200_000,
+            learning_starts: 5_000,
+            replay_ratio: 1.0,
+            epsilon_start: 1.0,
+            epsilon_finish: 0.05,
+            epsilon_anneal_steps: 50_000,
+            gumbel_temperature: 1.0,
+            logit_reg: 1e-3,
+            max_grad_norm: 10.0,
+            max_bad_updates: 3,
+        }
+    }
+}
+
+impl MaddpgConfig {
+    pub fn validate(&self) -> Result<(), String> {
+        within("actor_lr", self.actor_lr, 0.0, 0.1, false)?;
+        within("critic_lr", self.critic_lr, 0.0, 0.1, false)?;
+        within("adam_eps", self.adam_eps, 0.0, 1.0, false)?;
+        within("gamma", self.gamma, 0.0, 1.0, true)?;
+        within("tau", self.tau, 0.0, 1.0, false)?;
+        within("replay_ratio", self.replay_ratio, 0.0, 1000.0, false)?;
+        within(
+            "gumbel_temperature",
+            self.gumbel_temperature,
+            0.0,
+            100.0,
+            false,
+        )?;
+        within("logit_reg", self.logit_reg, 0.0, 10.0, true)?;
+        within("max_grad_norm", self.max_grad_norm, 0.0, 1e6, false)?;
+        check_replay(
+            self.chunk_len,
+            self.batch_size,
+            self.buffer_steps,
+            self.learning_starts,
+        )?;
+        if self.max_bad_updates == 0 {
+            return Err("max_bad_updates = 0: must be at least 1".into());
+        }
+        Ok(())
+    }
+}
+
+/// The centralised Q function: the trunk over the team's observations (own
+/// first, as MAPPO's critic reads them), then the team's one-hot actions
+/// (own first) joined after the GRU, so the recurrent state depends on
+/// observations only and the replay's stored state stays valid.
+pub struct QCritic {
+    trunk: Trunk,
+    fc: nn::Linear,
+    out: nn::Linear,
+    team: usize,
+}
+
+impl QCritic {
+    pub fn new(p: &nn::Path, net: &NetConfig, vector_len: usize, team: usize) -> QCritic {
+        let h = net.hidden;
+        let actions = (team * Action::COUNT) as i64;
+        QCritic {
+            trunk: Trunk::new(p, net, team as i64, (vector_len * team) as i64),
+            fc: nn::linear(p / "q_fc", h + actions, h, Default::default()),
+            out: nn::linear(p / "q_out", h, 1, Default::default()),
+            team,
+        }
+    }
+
+    /// Recurrent states of a chunk over rows of whole teams.
+    pub fn unroll(
+        &self,
+        patches: &Tensor,
+        vectors: &Tensor,
+        h0: &Tensor,
+        masks: &Tensor,
+    ) -> Tensor {
+        let (cp, cv) = Mappo.critic_inputs(patches, vectors, self.team);
+        self.trunk.unroll(&cp, &cv, h0, masks)
+    }
+
+    pub fn step(&self, patches: &Tensor, vectors: &Tensor, h: &Tensor) -> Tensor {
+        let (cp, cv) = Mappo.critic_inputs(patches, vectors, self.team);
+        self.trunk.step(&cp, &cv, h).1
+    }
+
+    /// Q [N] from states [N, hidden] and the team's actions [N, team * 5].
+    pub fn q(&self, states: &Tensor, team_actions: &Tensor) -> Tensor {
+        Tensor::cat(&[states, team_actions], 1)
+            .apply(&self.fc)
+            .relu()
+            .apply(&self.out)
+            .squeeze_dim(1)
+    }
+}
+
+/// Each row's action first, then its teammates' (from `all`): [N, team * 5].
+pub fn team_actions(own: &Tensor, all: &Tensor, team: usize) -> Tensor {
+    if team == 1 {
+        return own.shallow_clone();
+    }
+    let n = own.size()[0];
+    let mates = all
+        .index_select(0, &mates_index(n as usize, team, own.device()))
+        .view([n, -1]);
+    Tensor::cat(&[own, &mates], 1)
+}
+
+pub struct MaddpgLearner {
+    pub cfg: MaddpgConfig,
+    pub net: NetConfig,
+    pub device: Device,
+    pub team: usize,
+    /// Online and target variables, optimisers and clocks.
+    pub params: Params,
+    pub actor: Actor,
+    pub critic: QCritic,
+    pub target_actor: Actor,
+    pub target_critic: QCritic,
+    pub replay: SequenceReplay,
+}
+
+impl MaddpgLearner {
+    pub fn new(
+        cfg: MaddpgConfig,
+        net: NetConfig,
+        vector_len: usize,
+        team: usize,
+        device: Device,
+    ) -> MaddpgLearner {
+        let (params, (actor, critic, target_actor, target_critic)) = Params::new(
+            device,
+            cfg.actor_lr,
+            cfg.critic_lr,
+            cfg.adam_eps,
+            |p| Actor::new(p, &net, vector_len),
+            |p| QCritic::new(p, &net, vector_len, team),
+        );
+        let replay = SequenceReplay::new(
+            (cfg.buffer_steps / cfg.chunk_len).max(1),
+            cfg.chunk_len,
+            team,
+            net.input_side(),
+            vector_len,
+            net.hidden as usize,
+        );
+        MaddpgLearner {
+            cfg,
+            net,
+            device,
+            team,
+            params,
+            actor,
+            critic,
+            target_actor,
+            target_critic,
+            replay,
+        }
+    }
+
+    /// The TD targets of a batch, [len * rows].
+    fn targets(&self, b: &Batch) -> Tensor {
+        let (l, n) = (b.len as i64, b.rows as i64);
+        tch::no_grad(|| {
+            let ha = self
+                .target_actor
+                .unroll_states(&b.patches, &b.vectors, &b.actor_h0, &b.masks);
+            let hc = self
+                .target_critic
+                .unroll(&b.patches, &b.vectors, &b.critic_h0, &b.masks);
+            let greedy = |states: &Tensor| {
+                one_hot(
+                    &self.target_actor.logits(states).argmax(-1, false),
+                    Action::COUNT as i64,
+                )
+            };
+            let value = |ha: &Tensor, hc: &Tensor| {
+                let a = greedy(ha);
+                self.target_critic.q(hc, &team_actions(&a, &a, self.team))
+            };
+            let next = value(&ha, &hc).narrow(0, n, l * n);
+            let mut final_value = next.zeros_like();
+            if let Some((state_rows, final_rows, at)) = b.truncated_rows() {
+                let p = b.final_patches.index_select(0, &final_rows);
+                let v = b.final_vectors.index_select(0, &final_rows);
+                let (_, ha_f) = self
+                    .target_actor
+                    .step(&p, &v, &ha.index_select(0, &state_rows));
+                let hc_f = self
+                    .target_critic
+                    .step(&p, &v, &hc.index_select(0, &state_rows));
+                final_value = final_value.index_copy(0, &at, &value(&ha_f, &hc_f));
+            }
+            td_target(
+                &b.rewards,
+                &b.dones,
+                &b.truncated,
+                &next,
+                &final_value,
+                self.cfg.gamma,
+            )
+        })
+    }
+
+    /// One gradient step of critic, actor and targets on a batch.
+    fn gradient_step(&mut self, b: &Batch, stats: &mut UpdateStats) -> Result<(), BadUpdate> {
+        let cfg = self.cfg.clone();
+        let y = self.targets(b);
+        let (p, v, m) = b.now();
+        let buffer_actions = one_hot(&b.actions, Action::COUNT as i64);
+
+        // Critic first, stepped before the actor's loss is built: that loss
+        // runs through the critic, and its gradient must not move it.
+        let hc = self.critic.unroll(&p, &v, &b.critic_h0, &m);
+        let q = self.critic.q(
+            &hc,
+            &team_actions(&buffer_actions, &buffer_actions, self.team),
+        );
+        let critic_loss = (&q - &y).square().mean(Kind::Float);
+        let cl = critic_loss.double_value(&[]);
+        if !cl.is_finite() {
+            return Err(BadUpdate(format!("critic loss {cl}")));
+        }
+        self.params.critic_adam.zero_grad();
+        critic_loss.backward();
+        let critic_norm = self.params.critic_adam.clip_grad_norm(cfg.max_grad_norm);
+        if !critic_norm.is_finite() {
+            return Err(BadUpdate(format!("critic gradient norm {critic_norm}")));
+        }
+        self.params.critic_adam.step();
+
+        let ha = self.actor.unroll_states(&p, &v, &b.actor_h0, &m);
+        let logits = self.actor.logits(&ha);
+        let sampled = gumbel_softmax_st(&logits, &gumbel_noise(&logits), cfg.gumbel_temperature);
+        let q_pi = self.critic.q(
+            &hc.detach(),
+            &team_actions(&sampled, &buffer_actions, self.team),
+        );
+        let actor_loss =
+            -q_pi.mean(Kind::Float) + cfg.logit_reg * logits.square().mean(Kind::Float);
+        let al = actor_loss.double_value(&[]);
+        if !al.is_finite() {
+            return Err(BadUpdate(format!("actor loss {al}")));
+        }
+        self.params.actor_adam.zero_grad();
+        actor_loss.backward();
+        let actor_norm = self.params.actor_adam.clip_grad_norm(cfg.max_grad_norm);
+        if !actor_norm.is_finite() {
+            return Err(BadUpdate(format!("actor gradient norm {actor_norm}")));
+        }
+        self.params.actor_adam.step();
+        self.params.update_targets(cfg.tau);
+        self.params.gradient_steps += 1;
+
+        let entropy = tch::no_grad(|| {
+            let lp = logits.log_softmax(-1, Kind::Float);
+            -(lp.exp() * &lp)
+                .sum_dim_intlist(-1, false, Kind::Float)
+                .mean(Kind::Float)
+        });
+        stats.policy_loss += al;
+        stats.value_loss += cl;
+        stats.entropy += entropy.double_value(&[]);
+        stats.actor_grad_norm += actor_norm;
+        stats.critic_grad_norm += critic_norm;
+        stats.gradient_steps += 1;
+        Ok(())
+    }
+
+    fn update_unguarded(
+        &mut self,
+        ro: &Rollout,
+        rng: &mut ChaCha8Rng,
+    ) -> Result<UpdateStats, BadUpdate> {
+        let mut stats = UpdateStats::default();
+        let l = self.cfg.chunk_len;
+        if self.replay.filled * l < self.cfg.learning_starts {
+            return Ok(stats);
+        }
+        let new_steps = ro.steps * ro.rows / self.team;
+        let steps = gradient_steps(self.cfg.replay_ratio, new_steps, self.cfg.batch_size, l);
+        for _ in 0..steps {
+            let b = self.replay.sample(self.cfg.batch_size, rng, self.device);
+            self.gradient_step(&b, &mut stats)?;
+        }
+        stats.average();
+        Ok(stats)
+    }
+}
+
+impl Learner for MaddpgLearner {
+    fn algorithm(&self) -> Algorithm {
+        Algorithm::Maddpg
+    }
+    fn net(&self) -> &NetConfig {
+        &self.net
+    }
+    fn actor(&self) -> &Actor {
+        &self.actor
+    }
+    fn team(&self) -> usize {
+        self.team
+    }
+    fn critic_agents(&self) -> usize {
+        self.team
+    }
+    fn chunk_len(&self) -> usize {
+        self.cfg.chunk_len
+    }
+    fn needs_values(&self) -> bool {
+        false
+    }
+    fn critic_step(
+        &self,
+        patches: &Tensor,
+        vectors: &Tensor,
+        h: &Tensor,
+    ) -> (Option<Tensor>, Tensor) {
+        (None, self.critic.step(patches, vectors, h))
+    }
+    fn exploration(&self) -> f64 {
+        let c = &self.cfg;
+        let done = (self.params.collected_steps as f64 / c.epsilon_anneal_steps as f64).min(1.0);
+        c.epsilon_start + (c.epsilon_finish - c.epsilon_start) * done
+    }
+    fn update(&mut self, ro: &Rollout, rng: &mut ChaCha8Rng) -> Result<UpdateStats, BadUpdate> {
+        self.replay.push_rollout(ro);
+        self.params.collected_steps += (ro.steps * ro.rows / self.team) as u64;
+        let undo = self.params.undo_point();
+        self.update_unguarded(ro, rng)
+            .inspect_err(|_| self.params.undo(undo))
+    }
+    fn max_bad_updates(&self) -> u32 {
+        self.cfg.max_bad_updates
+    }
+    fn checkpoint_files(&self) -> Vec<(&'static str, NamedTensors)> {
+        self.params.checkpoint_files()
+    }
+    fn learner_state(&self) -> serde_json::Value {
+        self.params.state()
+    }
+    /// Weights, target networks, Adam moments and clocks come back exactly;
+    /// the replay starts empty and refills for `learning_starts` steps
+    /// before learning resumes. Saving it would write `buffer_steps`
+    /// world-steps (0.4 GB by default) at every checkpoint, and the data the
+    /// current policy collects again is what the critic needs most.
+    fn restore(
+        &mut self,
+        files: &[(&'static str, NamedTensors)],
+        state: serde_json::Value,
+        dir: &Path,
+    ) -> anyhow::Result<()> {
+        self.params.restore(files, state, dir)?;
+        self.replay.clear();
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn each_row_reads_its_own_action_first_then_its_teammates() {
+        let own = Tensor::from_slice(&[10f32, 11., 12., 13.]).view([4, 1]);
+        let all = Tensor::from_slice(&[0f32, 1., 2., 3.]).view([4, 1]);
+        let ta = team_actions(&own, &all, 2);
+        let mut v = [0f32; 8];
+        ta.copy_data(&mut v, 8);
+        assert_eq!(v, [10., 1., 11., 0., 12., 3., 13., 2.]);
+    }
+}
