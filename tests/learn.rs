@@ -90,6 +90,34 @@ fn a_captor_learns_to_reach_a_still_target() {
 }
 
 #[test]
+fn an_annealed_learning_rate_falls_linearly_over_the_run() {
+    tch::set_num_threads(1);
+    let mut cfg = chase_config(2);
+    cfg.total_env_steps = 4 * (cfg.num_envs * cfg.rollout_steps) as u64;
+    // Off, the option is left out of the stored config: runs started before
+    // it existed keep their hash and resume.
+    let stored = serde_json::to_string(&cfg).unwrap();
+    assert!(!stored.contains("lr_anneal"), "{stored}");
+    let constant_hash = cfg.hash();
+    let mut trainer = Trainer::new(cfg.clone(), chase_maps()).unwrap();
+    for _ in 0..2 {
+        let m = trainer.iterate().unwrap();
+        assert_eq!(m.captor_lr, Some(2e-3));
+        assert_eq!(m.target_lr, None, "a still target does not learn");
+    }
+
+    cfg.captors.ppo.lr_anneal = true;
+    assert_ne!(cfg.hash(), constant_hash);
+    let mut trainer = Trainer::new(cfg, chase_maps()).unwrap();
+    let lrs: Vec<f64> = (0..4)
+        .map(|_| trainer.iterate().unwrap().captor_lr.unwrap())
+        .collect();
+    for (lr, expected) in lrs.iter().zip([2e-3, 1.5e-3, 1e-3, 0.5e-3]) {
+        assert!((lr - expected).abs() < 1e-12, "{lrs:?}");
+    }
+}
+
+#[test]
 fn checkpoints_play_as_controllers_and_resume_exactly() {
     tch::set_num_threads(1);
     let dir = tempfile::tempdir().unwrap();
@@ -290,8 +318,11 @@ fn off_policy_chase(play: &str, seed: u64) -> TrainConfig {
         learning_starts: 640,
         replay_ratio: 8.0,
         buffer_steps: 50_000,
-        actor_lr: 1e-3,
-        critic_lr: 1e-3,
+        // 1e-3 learned too slowly for a bar that holds on every CPU: CI's
+        // (another vector ISA, so other rounding) reached 55 where this
+        // machine reached 125 after 200 iterations.
+        actor_lr: 3e-3,
+        critic_lr: 3e-3,
         epsilon_anneal_steps: 20_000,
         ..Default::default()
     };
@@ -306,9 +337,11 @@ fn off_policy_chase(play: &str, seed: u64) -> TrainConfig {
     cfg
 }
 
-/// The bar of `a_captor_learns_to_reach_a_still_target`, for an off-policy
-/// learner; its replay ratio of 8 takes more gradient steps per env step,
-/// and 200 iterations instead of 150.
+/// Learning the chase, for an off-policy learner: its replay ratio of 8
+/// takes more gradient steps per env step, and 200 iterations instead of
+/// 150. The bar is lower than PPO's 80: off-policy returns spread widely
+/// across seeds and CPUs (MADDPG after 200 iterations, seeds 1 to 6 and two
+/// ATen vector ISAs: 76 to 256; a broken learner stays below 0).
 fn off_policy_learns_the_chase(play: &str) {
     tch::set_num_threads(1);
     let mut trainer = Trainer::new(off_policy_chase(play, 1), chase_maps()).unwrap();
@@ -320,7 +353,7 @@ fn off_policy_learns_the_chase(play: &str) {
     eprintln!("{play} chase: untrained {before:.1}, trained {after:.1}");
     assert!(before < 20.0, "{play}: untrained return {before:.1}");
     assert!(
-        after > before + 60.0 && after > 80.0,
+        after > before + 60.0 && after > 50.0,
         "{play}: learned return {after:.1} (untrained {before:.1})"
     );
 }

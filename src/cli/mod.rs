@@ -29,7 +29,7 @@ pub enum Command {
     Eval(eval::EvalArgs),
     /// Render one episode to an animated GIF.
     Render(render::RenderArgs),
-    /// Train captors, the target or both with MAPPO / IPPO from a config.
+    /// Train captors, the target or both with MAPPO, IPPO, MADDPG or MAAC from a config.
     Train(train::TrainArgs),
     /// Measure environment, ASZ and observation speed and print a table.
     Bench(bench::BenchArgs),

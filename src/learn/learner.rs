@@ -48,6 +48,13 @@ pub trait Learner {
     fn exploration(&self) -> f64 {
         0.0
     }
+    /// Share of the run's env-step budget done before the coming update, in
+    /// [0, 1]; learners with a learning-rate schedule follow it.
+    fn set_progress(&mut self, _done: f64) {}
+    /// The actor's learning rate, for the metrics (None: not reported).
+    fn learning_rate(&self) -> Option<f64> {
+        None
+    }
     /// Updates undone in a row before training stops.
     fn max_bad_updates(&self) -> u32;
     /// The files of a checkpoint (`actor.safetensors` first) and their tensors on the CPU.

@@ -49,6 +49,16 @@ pub struct PpoConfig {
     /// good weights, moments and return statistics restored); training stops
     /// with an error after this many in a row.
     pub max_bad_updates: u32,
+    /// Anneal the learning rate linearly over the run: the update after
+    /// `d` of the run's `total_env_steps` uses lr x (1 - d / total), so the
+    /// first uses `lr` and the last lr / iterations (CleanRL's `anneal_lr`,
+    /// the MAPPO code's `use_linear_lr_decay`; the paper does not say; off
+    /// by default, as in both). The schedule reads the run's current total:
+    /// extending a run with `--total-env-steps` stretches what is left of it
+    /// (the rate steps up at the resume). Left out of the stored config,
+    /// and so of the config hash, while off.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub lr_anneal: bool,
 }
 
 impl Default for PpoConfig {
@@ -69,6 +79,7 @@ impl Default for PpoConfig {
             max_grad_norm: 10.0,
             normalize_advantages: true,
             max_bad_updates: 3,
+            lr_anneal: false,
         }
     }
 }
@@ -781,6 +792,16 @@ impl Learner for PpoLearner {
     }
     fn update(&mut self, ro: &Rollout, rng: &mut ChaCha8Rng) -> Result<UpdateStats, BadUpdate> {
         PpoLearner::update(self, ro, rng)
+    }
+    fn set_progress(&mut self, done: f64) {
+        if self.cfg.lr_anneal {
+            let lr = self.cfg.lr * (1.0 - done.clamp(0.0, 1.0));
+            self.actor_adam.lr = lr;
+            self.critic_adam.lr = lr;
+        }
+    }
+    fn learning_rate(&self) -> Option<f64> {
+        Some(self.actor_adam.lr)
     }
     fn max_bad_updates(&self) -> u32 {
         self.cfg.max_bad_updates

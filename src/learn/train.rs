@@ -1,7 +1,7 @@
 //! The training loop behind `t2e-league train`: many worlds stepped in
 //! parallel, each learning side's network run batched over all its robots
-//! of all worlds, then a PPO update per learning side. Either side learns
-//! (MAPPO or IPPO); the other is a controller (heuristic, frozen checkpoint)
+//! of all worlds, then an update per learning side (`dyn Learner`). Either
+//! side learns (MAPPO, IPPO, MADDPG or MAAC); the other is a controller (heuristic, frozen checkpoint)
 //! or a second learner, which is the paper's fully competitive game: both
 //! always play the other's latest policy.
 //!
@@ -391,6 +391,10 @@ pub struct Metrics {
     pub target_entropy: Option<f64>,
     pub target_approx_kl: Option<f64>,
     pub target_clip_frac: Option<f64>,
+    /// The learners' actor learning rate this iteration (PPO's; it moves
+    /// under `lr_anneal`).
+    pub captor_lr: Option<f64>,
+    pub target_lr: Option<f64>,
 }
 
 pub struct Trainer {
@@ -723,7 +727,11 @@ impl Trainer {
         time_inference += t2.elapsed().as_secs_f64();
         let t3 = Instant::now();
         let mut updates: Vec<(Side, Algorithm, UpdateStats)> = Vec::new();
+        let done = self.env_steps as f64 / self.cfg.total_env_steps as f64;
+        let mut learning_rates = Vec::new();
         for ls in &mut self.learners {
+            ls.learner.set_progress(done);
+            learning_rates.push((ls.side, ls.learner.learning_rate()));
             match ls.learner.update(&ls.rollout, &mut self.rng) {
                 Ok(stats) => {
                     ls.bad_updates = 0;
@@ -781,6 +789,12 @@ impl Trainer {
             time_update,
             ..Metrics::default()
         };
+        for (side, lr) in learning_rates {
+            match side {
+                Side::Captors => m.captor_lr = lr,
+                Side::Target => m.target_lr = lr,
+            }
+        }
         for (side, algorithm, u) in updates {
             let fields = match side {
                 Side::Captors => [
