@@ -42,7 +42,9 @@ use tch::{nn, Device, Kind, Tensor};
 /// not a CNN and GRU; here the upper end of the paper's PPO range) and the
 /// gradient clip (the paper's 10, spec §9: the original's 0.5 held learning
 /// on the chase task of tests/learn.rs to half the return in the same
-/// steps, 48 vs 106 after 200 iterations at lr 1e-3, at this game's reward scale).
+/// steps, 48 vs 106 after 200 iterations at lr 1e-3, at this game's
+/// reward scale). A rate of 3e-3 learns that task faster but did not get
+/// MADDPG to a capture on the 3:1, 1.0 grid cell in 150 k steps (README).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct MaddpgConfig {
