@@ -22,8 +22,8 @@
 use super::learner::{Learner, NamedTensors};
 use super::mappo::{mates_index, Mappo};
 use super::offpolicy::{
-    check_replay, gradient_steps, gumbel_noise, gumbel_softmax_st, one_hot, td_target, within,
-    Batch, Params, SequenceReplay,
+    check_replay, gumbel_noise, gumbel_softmax_st, one_hot, td_target, within, Batch, Params,
+    ReplayLearner, ReplaySchedule, SequenceReplay,
 };
 use super::ppo::{BadUpdate, CriticView, Rollout, UpdateStats};
 use super::Algorithm;
@@ -369,25 +369,27 @@ impl MaddpgLearner {
         stats.gradient_steps += 1;
         Ok(())
     }
+}
 
-    fn update_unguarded(
-        &mut self,
-        ro: &Rollout,
-        rng: &mut ChaCha8Rng,
-    ) -> Result<UpdateStats, BadUpdate> {
-        let mut stats = UpdateStats::default();
-        let l = self.cfg.chunk_len;
-        if self.replay.filled * l < self.cfg.learning_starts {
-            return Ok(stats);
+impl ReplayLearner for MaddpgLearner {
+    fn replay(&mut self) -> &mut SequenceReplay {
+        &mut self.replay
+    }
+    fn params(&mut self) -> &mut Params {
+        &mut self.params
+    }
+    fn schedule(&self) -> ReplaySchedule {
+        ReplaySchedule {
+            replay_ratio: self.cfg.replay_ratio,
+            batch_size: self.cfg.batch_size,
+            learning_starts: self.cfg.learning_starts,
         }
-        let new_steps = ro.steps * ro.rows / self.team;
-        let steps = gradient_steps(self.cfg.replay_ratio, new_steps, self.cfg.batch_size, l);
-        for _ in 0..steps {
-            let b = self.replay.sample(self.cfg.batch_size, rng, self.device);
-            self.gradient_step(&b, &mut stats)?;
-        }
-        stats.average();
-        Ok(stats)
+    }
+    fn device(&self) -> Device {
+        self.device
+    }
+    fn gradient_step(&mut self, b: &Batch, stats: &mut UpdateStats) -> Result<(), BadUpdate> {
+        MaddpgLearner::gradient_step(self, b, stats)
     }
 }
 
@@ -427,11 +429,7 @@ impl Learner for MaddpgLearner {
         c.epsilon_start + (c.epsilon_finish - c.epsilon_start) * done
     }
     fn update(&mut self, ro: &Rollout, rng: &mut ChaCha8Rng) -> Result<UpdateStats, BadUpdate> {
-        self.replay.push_rollout(ro);
-        self.params.collected_steps += (ro.steps * ro.rows / self.team) as u64;
-        let undo = self.params.undo_point();
-        self.update_unguarded(ro, rng)
-            .inspect_err(|_| self.params.undo(undo))
+        self.update_phase(ro, rng)
     }
     fn max_bad_updates(&self) -> u32 {
         self.cfg.max_bad_updates

@@ -14,7 +14,7 @@
 //! next episode's first one.
 
 use super::learner::{file, optimizer_file, restore_optimizers, NamedTensors};
-use super::ppo::{Adam, Rollout};
+use super::ppo::{Adam, BadUpdate, Rollout, UpdateStats};
 use crate::nn::checkpoint::{load_into, named_cpu_tensors};
 use crate::nn::obs_tensors;
 use rand::Rng;
@@ -571,6 +571,58 @@ impl Params {
         self.gradient_steps = st.gradient_steps;
         self.collected_steps = st.collected_steps;
         Ok(())
+    }
+}
+
+/// How an update phase draws on the replay: the fields both configs share.
+pub struct ReplaySchedule {
+    pub replay_ratio: f64,
+    pub batch_size: usize,
+    pub learning_starts: usize,
+}
+
+/// What the update phase MADDPG and MAAC share needs of each, and the
+/// phase itself; the algorithms differ only in their gradient step.
+pub trait ReplayLearner {
+    fn replay(&mut self) -> &mut SequenceReplay;
+    fn params(&mut self) -> &mut Params;
+    fn schedule(&self) -> ReplaySchedule;
+    fn device(&self) -> Device;
+    /// One gradient step on a sampled batch (critic, actor, targets), its
+    /// losses and norms added to `stats`.
+    fn gradient_step(&mut self, b: &Batch, stats: &mut UpdateStats) -> Result<(), BadUpdate>;
+
+    /// After each rollout: its chunks into the replay and its world-steps
+    /// onto the clock; then, once the replay holds `learning_starts`
+    /// world-steps, `gradient_steps(..)` sampled batches. A non-finite step
+    /// undoes the whole phase (weights, targets, moments), not the replay.
+    fn update_phase(
+        &mut self,
+        ro: &Rollout,
+        rng: &mut ChaCha8Rng,
+    ) -> Result<UpdateStats, BadUpdate> {
+        let replay = self.replay();
+        replay.push_rollout(ro);
+        let (filled, len, team) = (replay.filled, replay.len, replay.team);
+        let new_steps = ro.steps * ro.rows / team;
+        self.params().collected_steps += new_steps as u64;
+        let mut stats = UpdateStats::default();
+        let schedule = self.schedule();
+        if filled * len < schedule.learning_starts {
+            return Ok(stats);
+        }
+        let undo = self.params().undo_point();
+        let steps = gradient_steps(schedule.replay_ratio, new_steps, schedule.batch_size, len);
+        let device = self.device();
+        for _ in 0..steps {
+            let b = self.replay().sample(schedule.batch_size, rng, device);
+            if let Err(bad) = self.gradient_step(&b, &mut stats) {
+                self.params().undo(undo);
+                return Err(bad);
+            }
+        }
+        stats.average();
+        Ok(stats)
     }
 }
 
