@@ -112,11 +112,14 @@ fn check(dir: &LeagueDir) -> (u64, Vec<u64>) {
             if name.starts_with('.') {
                 continue; // a temporary a killed writer left: removed at the next start
             }
-            assert!(
-                rels.contains(&dir.relative(&path)),
-                "orphan {}",
-                path.display()
-            );
+            if !rels.contains(&dir.relative(&path)) {
+                // A writer killed between the folder and its row leaves a
+                // complete snapshot that the next start adopts.
+                let meta = t2e::nn::checkpoint::read_meta(&path)
+                    .unwrap_or_else(|e| panic!("orphan {}: {e:#}", path.display()));
+                assert!(meta.league.is_some(), "orphan {}", path.display());
+                t2e::nn::PolicySnapshot::load(&path, meta.side).unwrap();
+            }
         }
     }
     for s in &snapshots {
@@ -243,7 +246,10 @@ fn killed_at_random_moments_the_league_loses_and_duplicates_nothing() {
     assert_eq!(r, vec![9_600, 9_600], "both learners reach their budget");
     let store = Store::open(&dir.root).unwrap();
     let beats = store.heartbeats().unwrap();
-    assert!(beats.iter().all(|b| b.2 == "done"), "{beats:?}");
+    assert!(
+        beats.iter().all(|b| b.state == "done"),
+        "{beats:?}"
+    );
     if killed_once {
         assert!(
             !store.crashes().unwrap().is_empty(),

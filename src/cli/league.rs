@@ -19,7 +19,7 @@ pub struct RunArgs {
     pub dir: Option<PathBuf>,
     /// Stop after this long (e.g. 90s, 10m, 2h): every learner finishes its
     /// iteration and checkpoints. Without it, the league runs to its budget.
-    #[arg(long = "for", value_name = "DURATION")]
+    #[arg(long = "for", value_name = "DURATION", allow_hyphen_values = true)]
     pub run_for: Option<String>,
 }
 
@@ -148,7 +148,22 @@ pub fn evaluator(args: EvaluatorArgs) -> Result<()> {
         );
     };
     on_ctrl_c()?;
-    crate::league::evaluator::run_evaluator(&dir, &STOP)
+    exit_with(crate::league::evaluator::run_evaluator(&dir, &STOP))
+}
+
+/// A league process's exit code (`league::supervision`): the manager reads
+/// the outcome from it.
+fn exit_with(result: Result<learner::Outcome>) -> Result<()> {
+    use crate::league::supervision::{EXIT_CANNOT_START, EXIT_STOPPED};
+    match result {
+        Ok(learner::Outcome::Done) => Ok(()),
+        Ok(learner::Outcome::Stopped) => std::process::exit(EXIT_STOPPED),
+        Err(e) if e.downcast_ref::<learner::CannotStart>().is_some() => {
+            eprintln!("error: {e:#}");
+            std::process::exit(EXIT_CANNOT_START)
+        }
+        Err(e) => Err(e),
+    }
 }
 
 pub fn learner(args: LearnerArgs) -> Result<()> {
@@ -172,5 +187,5 @@ pub fn learner(args: LearnerArgs) -> Result<()> {
         );
     };
     on_ctrl_c()?;
-    learner::run_learner(&dir, seat, &STOP)
+    exit_with(learner::run_learner(&dir, seat, &STOP))
 }

@@ -315,6 +315,26 @@ impl LeagueConfig {
                     .into(),
             );
         }
+        // The worlds and the rollout first: the budget check below divides
+        // by them, and must not blame the budget for an impossible rollout.
+        if !(1..=4096).contains(&self.num_envs) {
+            return Err(format!(
+                "num_envs = {}: must be in 1..=4096 (worlds per learner)",
+                self.num_envs
+            ));
+        }
+        if !(1..=100_000).contains(&self.rollout_steps) {
+            return Err(format!(
+                "rollout_steps = {}: must be in 1..=100000",
+                self.rollout_steps
+            ));
+        }
+        if self.num_envs * self.rollout_steps > 4_000_000 {
+            return Err(format!(
+                "num_envs x rollout_steps = {} x {}: a rollout of more than 4,000,000 steps does not fit in memory",
+                self.num_envs, self.rollout_steps
+            ));
+        }
         let per_iteration = (self.num_envs * self.rollout_steps) as u64;
         if self.env_steps_per_learner < per_iteration.max(1) {
             return Err(format!(
@@ -360,6 +380,14 @@ mod tests {
         assert!(err.contains("target.ppo.entropy_coef"), "{err}");
         let err = LeagueConfig::parse("env_steps_per_learner = 0\n").unwrap_err();
         assert!(err.starts_with("env_steps_per_learner = 0"), "{err}");
+        // An impossible rollout is named as such, not blamed on the budget.
+        let err = LeagueConfig::parse("num_envs = 100000\n").unwrap_err();
+        assert!(err.starts_with("num_envs = 100000"), "{err}");
+        let err = LeagueConfig::parse("rollout_steps = 0\n").unwrap_err();
+        assert!(err.starts_with("rollout_steps = 0"), "{err}");
+        let err = LeagueConfig::parse("[evaluator]\nepisodes = 0\n").unwrap_err();
+        assert!(err.starts_with("evaluator.episodes = 0"), "{err}");
+        LeagueConfig::parse("[evaluator]\nenabled = false\nepisodes = 0\n").unwrap();
         let shipped = Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/league-default.toml");
         LeagueConfig::load(&shipped).unwrap();
     }

@@ -4,6 +4,8 @@
 //! ```text
 //! runs/league/NAME/
 //!     config.toml          the league's config (as started)
+//!     league.json          the league's identity (also in the store and in
+//!                          every snapshot's meta.json)
 //!     league.db            the store (SQLite, WAL)
 //!     league.lock          held by the live manager (flock)
 //!     learners/SIDE-main/  each main learner's run folder (state.json, checkpoints/)
@@ -13,8 +15,35 @@
 
 use super::config::LeagueConfig;
 use crate::env::Side;
-use anyhow::Result;
+use anyhow::{bail, Context, Result};
+use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
+
+/// `league.json`: which league a directory holds. The id is random, written
+/// once when the league starts; the store and every snapshot carry it too.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LeagueIdentity {
+    pub league_id: String,
+    pub name: String,
+}
+
+/// A fresh league id: 16 hex digits from the clock, the pid and a counter,
+/// hashed.
+pub fn new_league_id() -> String {
+    use std::sync::atomic::{AtomicU64, Ordering};
+    static COUNTER: AtomicU64 = AtomicU64::new(0);
+    let nanos = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map(|d| d.as_nanos())
+        .unwrap_or(0);
+    let seed = format!(
+        "{nanos}/{}/{}",
+        std::process::id(),
+        COUNTER.fetch_add(1, Ordering::SeqCst)
+    );
+    crate::util::sha256_hex(seed.as_bytes())[..16].to_string()
+}
 
 #[derive(Clone, Debug)]
 pub struct LeagueDir {
@@ -32,6 +61,85 @@ impl LeagueDir {
 
     pub fn config(&self) -> Result<LeagueConfig> {
         LeagueConfig::load_stored(&self.config_path())
+    }
+
+    pub fn identity_path(&self) -> PathBuf {
+        self.root.join("league.json")
+    }
+
+    /// The identity `league.json` holds; None when the file is absent.
+    pub fn identity(&self) -> Result<Option<LeagueIdentity>> {
+        let path = self.identity_path();
+        if !path.exists() {
+            return Ok(None);
+        }
+        let text = std::fs::read_to_string(&path)
+            .with_context(|| format!("{}: cannot read", path.display()))?;
+        let id: LeagueIdentity = serde_json::from_str(&text)
+            .with_context(|| format!("{}: not a league identity", path.display()))?;
+        if id.league_id.is_empty() {
+            bail!("{}: league_id is empty", path.display());
+        }
+        Ok(Some(id))
+    }
+
+    pub fn write_identity(&self, id: &LeagueIdentity) -> Result<()> {
+        crate::nn::checkpoint::write_file_atomically(
+            &self.identity_path(),
+            serde_json::to_string_pretty(id)?.as_bytes(),
+        )
+    }
+
+    /// What on disk shows that a league lived here, beside its store: the
+    /// identity file, snapshot folders, learners' run states and
+    /// checkpoints. Empty for a new (or never started) league.
+    pub fn league_files(&self) -> Vec<String> {
+        let mut found = Vec::new();
+        if self.identity_path().exists() {
+            found.push("league.json".to_string());
+        }
+        let visible = |dir: &Path| -> usize {
+            std::fs::read_dir(dir)
+                .map(|it| {
+                    it.flatten()
+                        .filter(|e| !e.file_name().to_string_lossy().starts_with('.'))
+                        .count()
+                })
+                .unwrap_or(0)
+        };
+        let snapshots = visible(&self.players_dir());
+        if snapshots > 0 {
+            found.push(format!("{snapshots} snapshot folders in players/"));
+        }
+        if let Ok(it) = std::fs::read_dir(self.root.join("learners")) {
+            let mut seats: Vec<_> = it.flatten().filter(|e| e.path().is_dir()).collect();
+            seats.sort_by_key(|e| e.file_name());
+            for e in seats {
+                let path = e.path();
+                let checkpoints = visible(&path.join("checkpoints"));
+                if path.join("state.json").exists() || checkpoints > 0 {
+                    found.push(format!(
+                        "learners/{}/ ({checkpoints} checkpoints{})",
+                        e.file_name().to_string_lossy(),
+                        if path.join("state.json").exists() {
+                            ", state.json"
+                        } else {
+                            ""
+                        }
+                    ));
+                }
+            }
+        }
+        found
+    }
+
+    /// Whether `path` (which need not exist yet) lies inside this league
+    /// directory, symbolic links resolved.
+    pub fn contains(&self, path: &Path) -> bool {
+        let (Some(root), Some(p)) = (resolve(&self.root), resolve(path)) else {
+            return false;
+        };
+        p.starts_with(root)
     }
 
     pub fn learner_dir(&self, side: Side) -> PathBuf {
@@ -78,5 +186,61 @@ impl LeagueDir {
             .filter(|s| cfg.exploiters.enabled(**s))
             .count();
         (cores / learners).max(1)
+    }
+}
+
+/// `path` made absolute, `.` and `..` folded lexically, and symbolic links
+/// resolved in the part of it that exists.
+fn resolve(path: &Path) -> Option<PathBuf> {
+    use std::path::Component;
+    let abs = if path.is_absolute() {
+        path.to_path_buf()
+    } else {
+        std::env::current_dir().ok()?.join(path)
+    };
+    let mut normal = PathBuf::new();
+    for c in abs.components() {
+        match c {
+            Component::ParentDir => {
+                normal.pop();
+            }
+            Component::CurDir => {}
+            other => normal.push(other.as_os_str()),
+        }
+    }
+    let mut existing = normal.clone();
+    let mut rest = Vec::new();
+    loop {
+        if let Ok(c) = existing.canonicalize() {
+            let mut out = c;
+            for part in rest.iter().rev() {
+                out.push(part);
+            }
+            return Some(out);
+        }
+        rest.push(existing.file_name()?.to_os_string());
+        if !existing.pop() {
+            return None;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn paths_inside_the_league_are_recognised_however_written() {
+        let tmp = tempfile::tempdir().unwrap();
+        let dir = LeagueDir::new(tmp.path().join("league"));
+        std::fs::create_dir_all(dir.players_dir()).unwrap();
+        assert!(dir.contains(&dir.players_dir().join("new-export")));
+        assert!(dir.contains(&dir.root.join("a/b/../c")));
+        assert!(dir.contains(&tmp.path().join("league/./players/x")));
+        assert!(!dir.contains(&tmp.path().join("elsewhere/x")));
+        assert!(!dir.contains(&tmp.path().join("league/../x")));
+        std::os::unix::fs::symlink(dir.players_dir(), tmp.path().join("alias")).unwrap();
+        assert!(dir.contains(&tmp.path().join("alias/x")), "through a link");
+        assert_ne!(new_league_id(), new_league_id());
     }
 }

@@ -7,7 +7,7 @@
 
 use super::config::LeagueConfig;
 use super::dir::LeagueDir;
-use super::learner::{heuristic_name, learner_name};
+use super::learner::{heuristic_name, learner_name, CannotStart, Outcome};
 use super::store::{Kind, MatchRecord, Store};
 use crate::controllers::ControllerSpec;
 use crate::env::{CaptureRule, Side};
@@ -44,6 +44,12 @@ impl EvaluatorConfig {
     pub fn validate(&self) -> Result<(), String> {
         if !(self.cpu_share.is_finite() && self.cpu_share > 0.0 && self.cpu_share <= 1.0) {
             return Err(format!("cpu_share = {}: must be in (0, 1]", self.cpu_share));
+        }
+        if self.enabled && self.episodes == 0 {
+            return Err(
+                "episodes = 0: every snapshot must play at least one panel episode (or set enabled = false)"
+                    .into(),
+            );
         }
         if self.episodes > 100_000 {
             return Err(format!("episodes = {}: at most 100000", self.episodes));
@@ -143,28 +149,31 @@ fn evaluate_pending(
     Ok(played)
 }
 
-/// Runs until Ctrl-C / SIGINT, or until both learners are done and every
-/// snapshot has its panel games.
-pub fn run_evaluator(dir: &LeagueDir, stop: &AtomicBool) -> Result<()> {
-    let cfg = dir.config()?;
+/// Runs until Ctrl-C / SIGINT (`Outcome::Stopped`), or until both learners
+/// are done and every snapshot has its panel games (`Outcome::Done`).
+pub fn run_evaluator(dir: &LeagueDir, stop: &AtomicBool) -> Result<Outcome> {
+    let opened = super::open::open_process(dir)
+        .map_err(|e| anyhow::Error::new(CannotStart(format!("{e:#}"))))?;
+    let (cfg, store) = (opened.cfg, opened.store);
     tch::set_num_threads(1);
     let _ = rayon::ThreadPoolBuilder::new()
         .num_threads(1)
         .build_global();
-    let store = Store::open(&dir.root)?;
     let maps = crate::map::catalog::load_prepared(&cfg.maps)
-        .with_context(|| format!("maps = \"{}\"", cfg.maps))?;
-    store.heartbeat("evaluator", "evaluating", 0, 0.0)?;
-    let mut total = 0usize;
+        .with_context(|| format!("maps = \"{}\"", cfg.maps))
+        .map_err(|e| anyhow::Error::new(CannotStart(format!("{e:#}"))))?;
+    // The count covers every evaluator process of this league, not only this one.
+    let mut total = store.matches_recorded_by("evaluator")?;
+    store.heartbeat("evaluator", "evaluating", total, None)?;
     while !stop.load(Ordering::SeqCst) {
         let played = evaluate_pending(dir, &cfg, &maps, &store, stop)?;
-        total += played;
+        total += played as u64;
         if played == 0 {
             let beats = store.heartbeats()?;
             let done = [Side::Captors, Side::Target].iter().all(|s| {
                 beats
                     .iter()
-                    .any(|b| b.0 == learner_name(*s) && b.2 == "done")
+                    .any(|b| b.learner == learner_name(*s) && b.state == "done")
             });
             if done {
                 // One more pass: a last snapshot may have landed since.
@@ -175,14 +184,18 @@ pub fn run_evaluator(dir: &LeagueDir, stop: &AtomicBool) -> Result<()> {
             }
             std::thread::sleep(Duration::from_secs(2));
         }
-        store.heartbeat("evaluator", "evaluating", total as u64, 0.0)?;
+        store.heartbeat("evaluator", "evaluating", total, None)?;
     }
-    let state = if stop.load(Ordering::SeqCst) {
-        "stopped"
+    let outcome = if stop.load(Ordering::SeqCst) {
+        Outcome::Stopped
     } else {
-        "done"
+        Outcome::Done
     };
-    store.heartbeat("evaluator", state, total as u64, 0.0)?;
-    eprintln!("evaluator: {state}, {total} panel episodes played");
-    Ok(())
+    let state = match outcome {
+        Outcome::Done => "done",
+        Outcome::Stopped => "stopped",
+    };
+    store.heartbeat("evaluator", state, total, None)?;
+    eprintln!("evaluator: {state}, {total} panel episodes played in this league");
+    Ok(outcome)
 }

@@ -14,6 +14,7 @@ use super::dir::LeagueDir;
 use super::matchmaking::{
     choose_opponent, draw_seed, pick_slot, slot_seed, Candidate, MatchmakingConfig, Opponent,
 };
+use super::pool::{add_snapshot, SnapshotOutcome};
 use super::store::{Kind, MatchRecord, NewPlayer, Player, Store};
 use crate::controllers::ControllerSpec;
 use crate::env::{Action, Side, VecEnv};
@@ -186,7 +187,7 @@ impl<'a> LeagueHooks<'a> {
             let since = store
                 .curriculum_history()?
                 .last()
-                .map(|(_, _, _, at)| *at)
+                .map(|c| c.at_ms)
                 .unwrap_or(0);
             let speed = hooks.curriculum.speed(&cfg.curriculum);
             let recent = store.recent_outcomes(learner_id, speed, since, cfg.curriculum.window)?;
@@ -255,9 +256,9 @@ impl<'a> LeagueHooks<'a> {
             .filter(|m| m.kind == Kind::Snapshot && m.parent.is_some() && m.parent == other_main_id)
             .max_by_key(|m| m.env_steps)
             .map(|m| m.id);
-        if let Some((stage, _, _, _)) = self.store.curriculum_history()?.last() {
-            if *stage != self.curriculum.stage {
-                self.curriculum.stage = *stage;
+        if let Some(change) = self.store.curriculum_history()?.last() {
+            if change.stage != self.curriculum.stage {
+                self.curriculum.stage = change.stage;
                 self.curriculum.recent.clear();
             }
         }
@@ -615,8 +616,8 @@ fn wait_for_other_main(
         let now = super::store::now_ms();
         let theirs = beats
             .iter()
-            .find(|b| b.0 == other)
-            .map(|b| (b.2.as_str(), b.3, now - b.5));
+            .find(|b| b.learner == other)
+            .map(|b| (b.state.as_str(), b.env_steps, now - b.at_ms));
         if !should_wait(mine, theirs, lead) {
             break;
         }
@@ -628,28 +629,67 @@ fn wait_for_other_main(
             );
             announced = true;
         }
-        store.heartbeat(&seat.name(), "waiting", mine, 0.0)?;
+        store.heartbeat(&seat.name(), "waiting", mine, None)?;
         std::thread::sleep(std::time::Duration::from_millis(500));
     }
     Ok(started.elapsed().as_secs_f64())
 }
 
+/// How a learner process ended (its exit code: `supervision`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Outcome {
+    /// It reached its budget.
+    Done,
+    /// It was stopped (SIGINT) before its budget, after checkpointing.
+    Stopped,
+}
+
+/// An error before the learner trained a step: restarting would fail the
+/// same way (`supervision::EXIT_CANNOT_START`).
+#[derive(Debug, thiserror::Error)]
+#[error("{0}")]
+pub struct CannotStart(pub String);
+
+fn cannot_start(e: anyhow::Error) -> anyhow::Error {
+    anyhow::Error::new(CannotStart(format!("{e:#}")))
+}
+
 /// Runs one learner (main or exploiter) until its budget is spent or `stop`
 /// is set; checkpoints its own state and adds snapshots of itself to the
-/// pool (an exploiter then starts again from its initial weights).
-pub fn run_learner(dir: &LeagueDir, seat: Seat, stop: &AtomicBool) -> Result<()> {
-    let side = seat.side;
-    let cfg = dir.config()?;
+/// pool (an exploiter then starts again from its initial weights). Errors
+/// before the first iteration are `CannotStart`.
+pub fn run_learner(dir: &LeagueDir, seat: Seat, stop: &AtomicBool) -> Result<Outcome> {
+    let opened = super::open::open_process(dir).map_err(cannot_start)?;
+    let (cfg, store, league_id) = (opened.cfg, opened.store, opened.league_id);
+    if seat.exploiter && !cfg.exploiters.enabled(seat.side) {
+        return Err(cannot_start(anyhow::anyhow!(
+            "{}: this league has no {} (exploiters.{} = false in {})",
+            dir.root.display(),
+            seat.name(),
+            seat.side.name(),
+            dir.config_path().display()
+        )));
+    }
     let threads = dir.threads_per_learner(&cfg);
     tch::set_num_threads(threads as i32);
     let _ = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build_global();
-    let store = Store::open(&dir.root)?;
+    let started = start_learner(dir, &cfg, &store, seat).map_err(cannot_start)?;
+    train_learner(dir, &cfg, &store, &league_id, seat, started, stop)
+}
+
+/// A learner ready to train: its trainer at its resume point.
+struct Started {
+    trainer: Trainer,
+    learner_id: i64,
+}
+
+fn start_learner(dir: &LeagueDir, cfg: &LeagueConfig, store: &Store, seat: Seat) -> Result<Started> {
     let name = seat.name();
     let learner_id = store.add_player(&NewPlayer {
         name: name.clone(),
-        side,
+        side: seat.side,
         kind: if seat.exploiter {
             Kind::Exploiter
         } else {
@@ -660,26 +700,164 @@ pub fn run_learner(dir: &LeagueDir, seat: Seat, stop: &AtomicBool) -> Result<()>
         curriculum_stage: 0,
         checkpoint: None,
     })?;
+    let row = store
+        .players()?
+        .into_iter()
+        .find(|p| p.id == learner_id)
+        .context("the learner's own row vanished")?;
     let maps = crate::map::catalog::load_prepared(&cfg.maps)
         .with_context(|| format!("maps = \"{}\"", cfg.maps))?;
     let tcfg = cfg.seat_train_config(seat);
     let run_dir = dir.seat_dir(seat);
-    let initial = run_dir.join("initial");
-    let mut trainer = if run_dir.join("state.json").is_file() {
-        let t = Trainer::resume(tcfg.clone(), maps, &run_dir)?;
-        eprintln!("{name}: resuming at {} env steps", t.env_steps);
-        t
-    } else {
-        std::fs::create_dir_all(&run_dir)?;
-        Trainer::new(tcfg.clone(), maps)?
+    let trainer = match resume_point(dir, store, &row, &tcfg)? {
+        ResumePoint::Fresh => {
+            std::fs::create_dir_all(&run_dir)?;
+            Trainer::new(tcfg, maps)?
+        }
+        ResumePoint::State => {
+            let t = Trainer::resume(tcfg, maps, &run_dir)?;
+            eprintln!("{name}: resuming at {} env steps", t.env_steps);
+            t
+        }
     };
+    Ok(Started {
+        trainer,
+        learner_id,
+    })
+}
+
+/// Where a learner starts: from nothing, or from what its `state.json`
+/// names (rebuilt first from the checkpoint the store names, if the file
+/// was lost). Never from nothing when the store or the disk shows that it
+/// trained before.
+enum ResumePoint {
+    Fresh,
+    State,
+}
+
+fn resume_point(
+    dir: &LeagueDir,
+    store: &Store,
+    row: &super::store::Player,
+    tcfg: &crate::learn::train::TrainConfig,
+) -> Result<ResumePoint> {
+    use crate::learn::persist::RunState;
+    let run_dir = dir.seat_dir(Seat {
+        side: row.side,
+        exploiter: row.kind == Kind::Exploiter,
+    });
+    let state_path = run_dir.join("state.json");
+    if state_path.is_file() {
+        let state = RunState::read(&run_dir)?;
+        if state.env_steps < row.env_steps {
+            bail!(
+                "{}: at {} env steps, but the store ({}) recorded {} at {} env steps; it would train again over steps it already played. Put the newer state.json back",
+                state_path.display(),
+                state.env_steps,
+                store.path().display(),
+                row.name,
+                row.env_steps
+            );
+        }
+        return Ok(ResumePoint::State);
+    }
+    // state.json is lost (or was never written: a first save killed
+    // between its checkpoint and its state): resume from the newest of the
+    // learner's checkpoints that verifies, is not behind the store's
+    // record, and was written under this config.
+    let checkpoints_dir = run_dir.join("checkpoints");
+    let mut names: Vec<String> = std::fs::read_dir(&checkpoints_dir)
+        .map(|it| {
+            it.flatten()
+                .map(|e| e.file_name().to_string_lossy().into_owned())
+                .filter(|n| n.starts_with(&format!("{}-", row.side.name())))
+                .collect()
+        })
+        .unwrap_or_default();
+    names.sort();
+    let mut rejected = Vec::new();
+    for name in names.iter().rev() {
+        let ckpt = checkpoints_dir.join(name);
+        let usable = (|| -> Result<crate::nn::checkpoint::CheckpointMeta> {
+            let meta = crate::nn::checkpoint::read_meta(&ckpt)?;
+            for file in meta.files.keys() {
+                crate::nn::checkpoint::verify_file(&ckpt, &meta, file)?;
+            }
+            if meta.config_hash != tcfg.hash() {
+                bail!("written under another config (hash {})", meta.config_hash);
+            }
+            if meta.env_steps < row.env_steps {
+                bail!(
+                    "at {} env steps, behind the store's {}",
+                    meta.env_steps,
+                    row.env_steps
+                );
+            }
+            Ok(meta)
+        })();
+        match usable {
+            Ok(meta) => {
+                RunState {
+                    iteration: meta.iteration,
+                    env_steps: meta.env_steps,
+                    wall_s: 0.0,
+                    config_hash: meta.config_hash.clone(),
+                    checkpoints: vec![(row.side, name.clone())],
+                }
+                .write(&run_dir)?;
+                eprintln!(
+                    "{}: {} was missing; rebuilt from {}, its newest checkpoint that verifies ({} env steps)",
+                    row.name,
+                    state_path.display(),
+                    ckpt.display(),
+                    meta.env_steps
+                );
+                return Ok(ResumePoint::State);
+            }
+            Err(e) => rejected.push(format!("{name}: {e:#}")),
+        }
+    }
+    if row.env_steps == 0 && row.checkpoint.is_none() && rejected.is_empty() {
+        return Ok(ResumePoint::Fresh);
+    }
+    bail!(
+        "{}: missing, and no checkpoint in {} can stand in for it (the store ({}) records {} at {} env steps{}); refusing to start it over. Put state.json back",
+        state_path.display(),
+        checkpoints_dir.display(),
+        store.path().display(),
+        row.name,
+        row.env_steps,
+        if rejected.is_empty() {
+            String::new()
+        } else {
+            format!("; {}", rejected.join("; "))
+        }
+    )
+}
+
+fn train_learner(
+    dir: &LeagueDir,
+    cfg: &LeagueConfig,
+    store: &Store,
+    league_id: &str,
+    seat: Seat,
+    started: Started,
+    stop: &AtomicBool,
+) -> Result<Outcome> {
+    let side = seat.side;
+    let name = seat.name();
+    let Started {
+        mut trainer,
+        learner_id,
+    } = started;
+    let run_dir = dir.seat_dir(seat);
+    let initial = run_dir.join("initial");
     if seat.exploiter && !initial.join("meta.json").is_file() {
         // What every reset returns to (written once, before any training).
         trainer.save_side(side, &initial)?;
     }
-    let mut hooks = LeagueHooks::new(&store, dir, &cfg, seat, learner_id)?;
+    let mut hooks = LeagueHooks::new(store, dir, cfg, seat, learner_id)?;
     hooks.vector_steps = trainer.env_steps / cfg.num_envs as u64;
-    hooks.assign_all(trainer.venv_mut())?;
     let mut last_snapshot = store
         .players()?
         .iter()
@@ -687,15 +865,23 @@ pub fn run_learner(dir: &LeagueDir, seat: Seat, stop: &AtomicBool) -> Result<()>
         .map(|p| p.env_steps)
         .max()
         .unwrap_or(0);
+    if seat.exploiter && last_snapshot == trainer.env_steps && trainer.env_steps > 0 {
+        // Killed between its snapshot and its reset: reset now, or it would
+        // go on training the weights it just added to the pool.
+        trainer.reset_learner(side, &initial)?;
+        save_learner(&trainer, store, dir, seat, learner_id)?;
+        eprintln!("{name}: back to its initial weights (its last snapshot is its resume point)");
+    }
+    hooks.assign_all(trainer.venv_mut())?;
     let (mut wins_at_snapshot, mut games_at_snapshot) = (0u64, 0u64);
-    store.heartbeat(&name, "training", trainer.env_steps, 0.0)?;
+    store.heartbeat(&name, "training", trainer.env_steps, None)?;
     let (segment_start, steps_at_start) = (Instant::now(), trainer.env_steps);
     let mut own_inference = 0.0;
     let mut waited = 0.0;
     while trainer.env_steps < cfg.env_steps_per_learner && !stop.load(Ordering::SeqCst) {
         if !seat.exploiter {
             waited +=
-                wait_for_other_main(&store, seat, trainer.env_steps, cfg.pace_env_steps, stop)?;
+                wait_for_other_main(store, seat, trainer.env_steps, cfg.pace_env_steps, stop)?;
             if stop.load(Ordering::SeqCst) {
                 break;
             }
@@ -703,10 +889,7 @@ pub fn run_learner(dir: &LeagueDir, seat: Seat, stop: &AtomicBool) -> Result<()>
         let started = Instant::now();
         let m = trainer.iterate_with(&mut hooks)?;
         own_inference += m.time_inference;
-        if trainer.iteration % cfg.checkpoint_every == 0 {
-            save_learner(&trainer, &store, dir, seat, learner_id)?;
-        }
-        let since = trainer.env_steps - last_snapshot;
+        let since = trainer.env_steps.saturating_sub(last_snapshot);
         let (w, g) = (
             hooks.wins - wins_at_snapshot,
             hooks.games - games_at_snapshot,
@@ -718,14 +901,26 @@ pub fn run_learner(dir: &LeagueDir, seat: Seat, stop: &AtomicBool) -> Result<()>
         };
         let winning = g > 0 && w as f64 / g as f64 >= win_rate;
         if (since >= cfg.snapshots.every_env_steps && winning) || since >= timeout {
-            add_snapshot(
+            // The learner's own checkpoint first: a restart then resumes at
+            // or after this snapshot, so it never takes one under a name
+            // the pool already holds.
+            save_learner(&trainer, store, dir, seat, learner_id)?;
+            match add_snapshot(
                 &trainer,
-                &store,
+                store,
                 dir,
+                league_id,
                 seat,
                 learner_id,
                 hooks.curriculum.stage,
-            )?;
+            )? {
+                SnapshotOutcome::Added(snap) => {
+                    eprintln!("{name}: snapshot {snap} joins the pool")
+                }
+                SnapshotOutcome::AlreadyInPool(snap) => eprintln!(
+                    "{name}: {snap} is already in the pool (recorded before a restart); it stays as recorded"
+                ),
+            }
             last_snapshot = trainer.env_steps;
             wins_at_snapshot = hooks.wins;
             games_at_snapshot = hooks.games;
@@ -733,9 +928,11 @@ pub fn run_learner(dir: &LeagueDir, seat: Seat, stop: &AtomicBool) -> Result<()>
                 trainer.reset_learner(side, &initial)?;
                 // The reset is the new resume point: a restart must not
                 // bring back the weights that were just snapshotted.
-                save_learner(&trainer, &store, dir, seat, learner_id)?;
+                save_learner(&trainer, store, dir, seat, learner_id)?;
                 eprintln!("{name}: back to its initial weights");
             }
+        } else if trainer.iteration % cfg.checkpoint_every == 0 {
+            save_learner(&trainer, store, dir, seat, learner_id)?;
         }
         hooks.refresh()?;
         let steps = (cfg.num_envs * cfg.rollout_steps) as f64;
@@ -743,24 +940,31 @@ pub fn run_learner(dir: &LeagueDir, seat: Seat, stop: &AtomicBool) -> Result<()>
             &name,
             "training",
             trainer.env_steps,
-            steps / started.elapsed().as_secs_f64(),
+            Some(steps / started.elapsed().as_secs_f64()),
         )?;
     }
-    save_learner(&trainer, &store, dir, seat, learner_id)?;
-    let state = if trainer.env_steps >= cfg.env_steps_per_learner {
-        "done"
+    save_learner(&trainer, store, dir, seat, learner_id)?;
+    let outcome = if trainer.env_steps >= cfg.env_steps_per_learner {
+        Outcome::Done
     } else {
-        "stopped"
+        Outcome::Stopped
+    };
+    let state = match outcome {
+        Outcome::Done => "done",
+        Outcome::Stopped => "stopped",
     };
     let secs = segment_start.elapsed().as_secs_f64() - waited;
-    let rate = (trainer.env_steps - steps_at_start) as f64 / secs.max(1e-9);
-    store.heartbeat(&name, state, trainer.env_steps, rate)?;
+    let trained = trainer.env_steps - steps_at_start;
+    let rate = trained as f64 / secs.max(1e-9);
+    // A run that trained no step (a finished league started again) keeps
+    // the rate it reported last.
+    store.heartbeat(&name, state, trainer.env_steps, (trained > 0).then_some(rate))?;
     eprintln!(
         "{name}: {state} at {} env steps, {} matches recorded; this run {:.1} s training ({waited:.1} s waiting for the other side), {rate:.0} env steps/s",
         trainer.env_steps, hooks.matches_recorded, secs
     );
     let team = side.agents(cfg.num_captors).len() as f64;
-    let own_rows = (trainer.env_steps - steps_at_start) as f64 * team;
+    let own_rows = trained as f64 * team;
     if own_rows > 0.0 && hooks.opponent_rows > 0 {
         eprintln!(
             "{name}: inference per robot row: own networks (actor + critic, sampling) {:.2} us, opponent networks (actor, batched per opponent) {:.2} us over {} rows",
@@ -769,7 +973,7 @@ pub fn run_learner(dir: &LeagueDir, seat: Seat, stop: &AtomicBool) -> Result<()>
             hooks.opponent_rows
         );
     }
-    Ok(())
+    Ok(outcome)
 }
 
 /// The learner's own resume point, and its row pointed at it.
@@ -786,95 +990,6 @@ fn save_learner(
         let sha = crate::util::sha256_file(&ckpt.join("meta.json"))?;
         let rel = dir.relative(ckpt);
         store.update_learner(id, trainer.env_steps, (&rel, &sha))?;
-    }
-    Ok(())
-}
-
-/// A frozen copy of the learner joins the pool: files written (synced,
-/// renamed into place) before the row that names them.
-fn add_snapshot(
-    trainer: &Trainer,
-    store: &Store,
-    dir: &LeagueDir,
-    seat: Seat,
-    learner_id: i64,
-    stage: usize,
-) -> Result<()> {
-    let side = seat.side;
-    let name = if seat.exploiter {
-        format!("{}-snap-{:012}", seat.name(), trainer.env_steps)
-    } else {
-        format!("{}-snap-{:012}", side.name(), trainer.env_steps)
-    };
-    let folder = dir.players_dir().join(&name);
-    trainer.save_side(side, &folder)?;
-    let sha = crate::util::sha256_file(&folder.join("meta.json"))?;
-    store.add_player(&NewPlayer {
-        name: name.clone(),
-        side,
-        kind: Kind::Snapshot,
-        parent: Some(learner_id),
-        env_steps: trainer.env_steps,
-        curriculum_stage: stage,
-        checkpoint: Some((dir.relative(&folder), sha)),
-    })?;
-    eprintln!("{}: snapshot {name} joins the pool", seat.name());
-    Ok(())
-}
-
-/// Checks a league directory's pool against its files at start: snapshot
-/// folders without a row are removed (a writer died between the files and
-/// the row), rows whose files are missing or corrupt are quarantined.
-/// Returns (removed folders, quarantined players).
-pub fn reconcile(dir: &LeagueDir, store: &Store) -> Result<(Vec<String>, Vec<String>)> {
-    let players = store.players()?;
-    let mut removed = Vec::new();
-    let mut quarantined = Vec::new();
-    let players_dir = dir.players_dir();
-    crate::nn::checkpoint::clean_stale_temporaries(&players_dir)?;
-    if let Ok(entries) = std::fs::read_dir(&players_dir) {
-        for e in entries {
-            let path = e?.path();
-            let rel = dir.relative(&path);
-            if !players
-                .iter()
-                .any(|p| p.checkpoint.as_ref().is_some_and(|(r, _)| *r == rel))
-            {
-                std::fs::remove_dir_all(&path)
-                    .with_context(|| format!("cannot remove {}", path.display()))?;
-                removed.push(rel);
-            }
-        }
-    }
-    for p in players
-        .iter()
-        .filter(|p| p.kind == Kind::Snapshot && p.quarantined.is_none())
-    {
-        let Some((rel, sha)) = &p.checkpoint else {
-            continue;
-        };
-        let meta = dir.root.join(rel).join("meta.json");
-        let ok = crate::util::sha256_file(&meta).is_ok_and(|got| &got == sha)
-            && PolicySnapshot::load(&dir.root.join(rel), p.side).is_ok();
-        if !ok {
-            store.quarantine(p.id, "checkpoint files missing or corrupt at league start")?;
-            quarantined.push(p.name.clone());
-        }
-    }
-    Ok((removed, quarantined))
-}
-
-pub fn ensure_heuristic_members(store: &Store) -> Result<()> {
-    for side in [Side::Captors, Side::Target] {
-        store.add_player(&NewPlayer {
-            name: heuristic_name(side),
-            side,
-            kind: Kind::Heuristic,
-            parent: None,
-            env_steps: 0,
-            curriculum_stage: 0,
-            checkpoint: None,
-        })?;
     }
     Ok(())
 }

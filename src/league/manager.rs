@@ -1,10 +1,12 @@
 //! `t2e-league run`: the league's manager. It starts a league (or resumes
-//! the one its directory holds), spawns each main learner as a child
-//! process of the same binary, and supervises them: a learner that crashes
-//! is restarted from its last checkpoint with back-off, and the crash is
-//! recorded in the store. It stops at the budget (the learners stop
-//! themselves), after `--for`, or on Ctrl-C: every learner finishes its
-//! iteration, checkpoints and exits.
+//! the one its directory holds, after `open::plan_start`'s checks), spawns
+//! each learner and the evaluator as child processes of the same binary,
+//! and supervises them: every exit has one outcome (`supervision`): a crash
+//! is recorded and restarted from the last checkpoint with back-off until
+//! the crash budget is spent, a process that cannot start stops the league
+//! with its error. It stops at the budget (the learners stop themselves),
+//! after `--for`, or on Ctrl-C: every learner finishes its iteration,
+//! checkpoints and exits. Every line it prints reaches a redirected log.
 //!
 //! Processes, not threads: a crash stays in its process, each process sizes
 //! its own libtorch and rayon pools, and the processes share nothing but the
@@ -14,9 +16,13 @@
 //! killed manager never leaves a learner running twice.
 
 use super::config::LeagueConfig;
-use super::dir::LeagueDir;
-use super::learner::{ensure_heuristic_members, reconcile, Seat};
-use super::store::Store;
+use super::dir::{new_league_id, LeagueDir, LeagueIdentity};
+use super::learner::Seat;
+use super::open::{plan_start, StartPlan};
+use super::pool::{ensure_heuristic_members, reconcile};
+use super::store::{now_ms, Store};
+use super::supervision::{classify, decide, last_error_line, CrashBudget, Exit, Next};
+use crate::nn::checkpoint::write_file_atomically;
 use crate::env::Side;
 use anyhow::{bail, Context, Result};
 use indicatif::{MultiProgress, ProgressBar, ProgressStyle};
@@ -103,11 +109,15 @@ impl Role {
 struct Supervised {
     role: Role,
     child: Option<Child>,
-    /// Why it is not running: finished (done or stopped) or waiting to restart.
+    /// Finished: done, or stopped when the manager asked.
     finished: bool,
     restart_at: Option<Instant>,
     failures: u32,
     started: Instant,
+    /// Length of its log when it started: what it printed since is its own.
+    log_offset: u64,
+    /// Its crashes: (at ms, cause), for the crash budget.
+    crashes: Vec<(i64, String)>,
 }
 
 fn spawn(dir: &LeagueDir, role: Role) -> Result<Child> {
@@ -150,83 +160,136 @@ fn spawn(dir: &LeagueDir, role: Role) -> Result<Child> {
         .with_context(|| format!("cannot start the {}", role.name()))
 }
 
-/// The last lines of a learner's log, for the crash record.
-fn log_tail(path: &Path) -> String {
-    let text = std::fs::read_to_string(path).unwrap_or_default();
-    let lines: Vec<&str> = text.lines().rev().take(5).collect();
+/// What a log holds from byte `offset` on.
+fn log_since(path: &Path, offset: u64) -> String {
+    use std::io::{Read, Seek, SeekFrom};
+    let mut text = String::new();
+    if let Ok(mut f) = File::open(path) {
+        if f.seek(SeekFrom::Start(offset)).is_ok() {
+            let _ = f.read_to_string(&mut text);
+        }
+    }
+    text
+}
+
+/// The last lines of a text, for the crash record.
+fn tail(text: &str, n: usize) -> String {
+    let lines: Vec<&str> = text.lines().rev().take(n).collect();
     lines.into_iter().rev().collect::<Vec<_>>().join("\n")
 }
 
-/// Starts or resumes the league in `dir` and runs it to its end.
+/// Prints a line above the progress bars on a terminal, and plainly where
+/// stderr is redirected (indicatif draws nothing there, lines included).
+fn say(multi: &MultiProgress, line: impl AsRef<str>) {
+    if multi.is_hidden() {
+        eprintln!("{}", line.as_ref());
+    } else {
+        multi.println(line.as_ref()).ok();
+    }
+}
+
+/// Starts or resumes the league in `dir` and runs it to its end. Every
+/// check (`open::plan_start`) passes before anything is written.
 pub fn run(
     dir: &LeagueDir,
     config: Option<&Path>,
     run_for: Option<Duration>,
     stop: &AtomicBool,
 ) -> Result<()> {
-    std::fs::create_dir_all(&dir.root)
-        .with_context(|| format!("cannot create {}", dir.root.display()))?;
-    let lock_path = dir.root.join("league.lock");
-    let Some(_lock) = try_lock(&lock_path)? else {
-        bail!(
-            "{}: a manager (pid {}) is already running this league; stop it first (Ctrl-C) or pick another --dir",
-            dir.root.display(),
-            lock_holder(&lock_path)
-        );
+    let (plan, _lock) = {
+        // The lock comes first (two managers must not both decide), but a
+        // directory that does not exist yet is created only once the plan
+        // says a league starts there.
+        let held = if dir.root.is_dir() {
+            Some(lock(dir)?)
+        } else {
+            None
+        };
+        let plan = plan_start(dir, config)?;
+        (plan, held)
     };
-    let cfg = match (config, dir.config_path().is_file()) {
-        (Some(path), true) => {
-            let given = LeagueConfig::load(path)?;
-            let stored = dir.config()?;
-            if given != stored {
-                bail!(
-                    "{} already holds a league started with another config ({}); resume it without --config, or pick another --dir",
-                    dir.root.display(),
+    let (cfg, league_id) = match plan {
+        StartPlan::New(cfg) => {
+            // Refuse maps that do not fit the protocol here, with the file's
+            // name, rather than in learners that cannot start.
+            let origin = config
+                .map(|p| p.display().to_string())
+                .unwrap_or_else(|| dir.config_path().display().to_string());
+            let maps = crate::map::catalog::load_prepared(&cfg.maps)
+                .with_context(|| format!("{origin}: maps = \"{}\"", cfg.maps))?;
+            cfg.protocol
+                .check_training_maps(&cfg.maps, &maps)
+                .map_err(|e| anyhow::anyhow!("{origin}: {e}"))?;
+            std::fs::create_dir_all(&dir.root)
+                .with_context(|| format!("cannot create {}", dir.root.display()))?;
+            (cfg, None)
+        }
+        StartPlan::Resume {
+            cfg,
+            restore_config,
+            identity,
+            write_identity,
+            set_store_identity,
+        } => {
+            if restore_config {
+                write_file_atomically(&dir.config_path(), toml::to_string_pretty(&cfg)?.as_bytes())?;
+                eprintln!(
+                    "{}: was missing; restored from the league's store",
                     dir.config_path().display()
                 );
             }
-            eprintln!("resuming the league in {}", dir.root.display());
-            stored
+            if set_store_identity {
+                Store::open_existing(&dir.root)?.set_league_id_once(&identity.league_id)?;
+            }
+            if write_identity {
+                dir.write_identity(&identity)?;
+            }
+            eprintln!("resuming the league {} in {}", cfg.name, dir.root.display());
+            (cfg, Some(identity.league_id))
         }
-        (None, true) => {
-            eprintln!("resuming the league in {}", dir.root.display());
-            dir.config()?
-        }
-        (Some(path), false) => {
-            let cfg = LeagueConfig::load(path)?;
-            // Refuse maps that do not fit the protocol here, with the file's
-            // name, rather than in learners that crash and restart.
-            let maps = crate::map::catalog::load_prepared(&cfg.maps)
-                .with_context(|| format!("{}: maps = \"{}\"", path.display(), cfg.maps))?;
-            cfg.protocol
-                .check_training_maps(&cfg.maps, &maps)
-                .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
-            crate::nn::checkpoint::write_file_atomically(
-                &dir.config_path(),
-                toml::to_string_pretty(&cfg)?.as_bytes(),
-            )?;
-            eprintln!("starting the league {} in {}", cfg.name, dir.root.display());
-            cfg
-        }
-        (None, false) => bail!(
-            "{} holds no league: give --config configs/league-*.toml to start one",
-            dir.root.display()
-        ),
     };
-    let store = Store::open(&dir.root)?;
-    let stored = store.config_once(&toml::to_string_pretty(&cfg)?)?;
-    if LeagueConfig::parse(&stored).ok().as_ref() != Some(&cfg) {
-        bail!(
-            "{}: config.toml differs from the config the league's store was started with",
-            dir.root.display()
-        );
-    }
+    let _lock = match _lock {
+        Some(l) => l,
+        None => lock(dir)?,
+    };
+    let store = match &league_id {
+        Some(_) => Store::open_existing(&dir.root)?,
+        None => Store::open(&dir.root)?,
+    };
+    let league_id = match league_id {
+        Some(id) => id,
+        None => {
+            // A new league: the store first (config, identity), then
+            // league.json and config.toml; a start killed in between resumes.
+            let stored = store.config_once(&toml::to_string_pretty(&cfg)?)?;
+            if LeagueConfig::parse(&stored).ok().as_ref() != Some(&cfg) {
+                bail!(
+                    "{}: its store was started with another config",
+                    dir.root.display()
+                );
+            }
+            let id = store.set_league_id_once(&new_league_id())?;
+            dir.write_identity(&LeagueIdentity {
+                league_id: id.clone(),
+                name: cfg.name.clone(),
+            })?;
+            write_file_atomically(&dir.config_path(), toml::to_string_pretty(&cfg)?.as_bytes())?;
+            eprintln!("starting the league {} in {}", cfg.name, dir.root.display());
+            id
+        }
+    };
     ensure_heuristic_members(&store)?;
-    let (removed, quarantined) = reconcile(dir, &store)?;
-    for r in removed {
-        eprintln!("removed {r}: a snapshot folder without a row (its writer was killed)");
+    let found = reconcile(dir, &store, &league_id)?;
+    for r in &found.removed_temporaries {
+        eprintln!("removed {r}: a temporary its writer left when it was killed");
     }
-    for q in quarantined {
+    for a in &found.adopted {
+        eprintln!("adopted {a}: a complete snapshot whose row its writer did not live to add");
+    }
+    for (u, why) in &found.unrecorded {
+        eprintln!("left {u} in place, out of the pool: no row names it and it cannot be adopted ({why})");
+    }
+    for q in &found.quarantined {
         eprintln!("quarantined {q}: its checkpoint files are missing or corrupt");
     }
     let mut seats = vec![Seat::main(Side::Captors), Seat::main(Side::Target)];
@@ -261,7 +324,7 @@ pub fn run(
             b
         })
         .collect();
-    let mut learners: Vec<Supervised> = roles
+    let mut procs: Vec<Supervised> = roles
         .into_iter()
         .map(|role| Supervised {
             role,
@@ -270,21 +333,28 @@ pub fn run(
             restart_at: Some(Instant::now()),
             failures: 0,
             started: Instant::now(),
+            log_offset: 0,
+            crashes: Vec::new(),
         })
         .collect();
+    let budget = CrashBudget::default();
     let deadline = run_for.map(|d| Instant::now() + d);
     let mut stopping = false;
+    let mut failure: Option<String> = None;
     let mut last_status = Instant::now() - Duration::from_secs(60);
     loop {
         if !stopping
-            && (stop.load(Ordering::SeqCst) || deadline.is_some_and(|d| Instant::now() >= d))
+            && (stop.load(Ordering::SeqCst)
+                || failure.is_some()
+                || deadline.is_some_and(|d| Instant::now() >= d))
         {
             stopping = true;
-            multi
-                .println("stopping: each learner finishes its iteration and checkpoints")
-                .ok();
-            for l in &learners {
-                if let Some(c) = &l.child {
+            say(
+                &multi,
+                "stopping: each learner finishes its iteration and checkpoints",
+            );
+            for p in &procs {
+                if let Some(c) = &p.child {
                     // SAFETY: signalling our own child by pid.
                     unsafe {
                         libc::kill(c.id() as i32, libc::SIGINT);
@@ -292,69 +362,92 @@ pub fn run(
                 }
             }
         }
-        for l in &mut learners {
-            if let Some(child) = &mut l.child {
+        for p in &mut procs {
+            if let Some(child) = &mut p.child {
                 if let Some(status) = child.try_wait()? {
-                    l.child = None;
-                    if status.success() {
-                        l.finished = true;
-                    } else if stopping {
-                        l.finished = true;
-                    } else {
-                        let why = match status.code() {
-                            Some(code) => format!("exit code {code}"),
-                            None => {
-                                use std::os::unix::process::ExitStatusExt;
-                                format!("signal {}", status.signal().unwrap_or(0))
-                            }
-                        };
-                        let tail = log_tail(&l.role.log_path(dir));
-                        store.record_crash(&l.role.name(), &why, &tail)?;
-                        if l.started.elapsed() > Duration::from_secs(120) {
-                            l.failures = 0;
+                    p.child = None;
+                    use std::os::unix::process::ExitStatusExt;
+                    let exit = classify(status.code(), status.signal());
+                    let log = log_since(&p.role.log_path(dir), p.log_offset);
+                    let message = last_error_line(&log);
+                    if p.started.elapsed() > Duration::from_secs(120) {
+                        p.failures = 0;
+                    }
+                    p.failures += 1;
+                    let next = decide(
+                        &p.role.name(),
+                        &exit,
+                        message.as_deref(),
+                        stopping,
+                        &mut p.crashes,
+                        now_ms(),
+                        p.failures,
+                        budget,
+                    );
+                    match next {
+                        Next::Finished => p.finished = true,
+                        Next::Restart { after, cause } => {
+                            store.record_crash(&p.role.name(), &cause, &tail(&log, 5))?;
+                            say(
+                                &multi,
+                                format!(
+                                    "{} crashed ({cause}); restarting from its last checkpoint in {} s (log: {})",
+                                    p.role.name(),
+                                    after.as_secs(),
+                                    p.role.log_path(dir).display()
+                                ),
+                            );
+                            p.restart_at = Some(Instant::now() + after);
                         }
-                        l.failures += 1;
-                        let wait = Duration::from_secs((1u64 << l.failures.min(5)).min(30));
-                        multi
-                            .println(format!(
-                                "{} crashed ({why}); restarting from its last checkpoint in {} s (log: {})",
-                                l.role.name(),
-                                wait.as_secs(),
-                                l.role.log_path(dir).display()
-                            ))
-                            .ok();
-                        l.restart_at = Some(Instant::now() + wait);
+                        Next::StopLeague { why } => {
+                            if exit != Exit::CannotStart {
+                                let cause = why.clone();
+                                store.record_crash(&p.role.name(), &cause, &tail(&log, 5))?;
+                            }
+                            say(
+                                &multi,
+                                format!(
+                                    "{why} (log: {})",
+                                    p.role.log_path(dir).display()
+                                ),
+                            );
+                            p.finished = true;
+                            failure.get_or_insert(why);
+                        }
                     }
                 }
             }
-            if l.child.is_none() && !l.finished && !stopping {
-                if let Some(at) = l.restart_at {
+            if p.child.is_none() && !p.finished && !stopping {
+                if let Some(at) = p.restart_at {
                     if Instant::now() >= at {
-                        l.child = Some(spawn(dir, l.role)?);
-                        l.started = Instant::now();
-                        l.restart_at = None;
+                        p.log_offset = std::fs::metadata(p.role.log_path(dir))
+                            .map(|m| m.len())
+                            .unwrap_or(0);
+                        p.child = Some(spawn(dir, p.role)?);
+                        p.started = Instant::now();
+                        p.restart_at = None;
                     }
                 }
             }
-            if stopping && l.child.is_none() {
-                l.finished = true;
+            if stopping && p.child.is_none() {
+                p.finished = true;
             }
         }
         if last_status.elapsed() >= Duration::from_secs(2) {
             last_status = Instant::now();
             let beats = store.heartbeats()?;
             let matches = store.match_count()?;
-            for (bar, l) in bars.iter().zip(&learners) {
-                if let Some(b) = beats.iter().find(|b| b.0 == l.role.name()) {
-                    bar.set_position(b.3);
+            for (bar, p) in bars.iter().zip(&procs) {
+                if let Some(b) = beats.iter().find(|b| b.learner == p.role.name()) {
+                    bar.set_position(b.env_steps);
                     bar.set_message(format!(
                         "| {:.0} steps/s | {} | {matches} matches",
-                        b.4, b.2
+                        b.steps_per_s, b.state
                     ));
                 }
             }
         }
-        if learners.iter().all(|l| l.finished) {
+        if procs.iter().all(|p| p.finished) {
             break;
         }
         std::thread::sleep(Duration::from_millis(200));
@@ -369,7 +462,23 @@ pub fn run(
         store.match_count()?,
         dir.root.display()
     );
-    Ok(())
+    match failure {
+        Some(why) => bail!("{why}"),
+        None => Ok(()),
+    }
+}
+
+/// Takes the league's manager lock, or says who holds it.
+fn lock(dir: &LeagueDir) -> Result<File> {
+    let lock_path = dir.root.join("league.lock");
+    match try_lock(&lock_path)? {
+        Some(l) => Ok(l),
+        None => bail!(
+            "{}: a manager (pid {}) is already running this league; stop it first (Ctrl-C) or pick another --dir",
+            dir.root.display(),
+            lock_holder(&lock_path)
+        ),
+    }
 }
 
 #[cfg(test)]

@@ -4,6 +4,11 @@
 //!
 //! - `config`: the league's TOML.
 //! - `dir`: the league directory's layout.
+//! - `open`: opening a league directory, every check before any write
+//!   (identity, store, config).
+//! - `pool`: snapshot folders and their rows (written once, adopted,
+//!   quarantined, never deleted).
+//! - `supervision`: the one outcome of every process exit, the crash budget.
 //! - `store`: the SQLite store (players, matches, ratings, curriculum,
 //!   heartbeats, crashes, config), sqlx kept inside it.
 //! - `matchmaking`: PFSP opponent draws, pure and seeded.
@@ -23,6 +28,9 @@ pub mod evaluator;
 pub mod learner;
 pub mod manager;
 pub mod matchmaking;
+pub mod open;
+pub mod pool;
 pub mod ratings;
 pub mod status;
 pub mod store;
+pub mod supervision;

@@ -15,8 +15,11 @@
 //!   "curriculum": { "stage", "speed_ratio",
 //!                   "history": [{ "stage", "speed_ratio", "reason", "at_ms" }] },
 //!   "learners": [{ "name", "pid", "state", "env_steps", "steps_per_s",
-//!                  "heartbeat_age_s" }],   // the evaluator's env_steps
-//!                                          // counts its panel episodes
+//!                  "heartbeat_age_s" }],   // state "dead": it said it was
+//!                                          // working, but its process is gone
+//!                                          // (or silent for 10 min elsewhere);
+//!                                          // the evaluator's env_steps counts
+//!                                          // the league's panel episodes
 //!   "payoff": [{ "captor", "target", "captor_wins", "games" }],
 //!   "crashes": [{ "learner", "exit_status", "message", "at_ms" }] }
 //! ```
@@ -24,7 +27,7 @@
 use super::config::LeagueConfig;
 use super::dir::LeagueDir;
 use super::ratings::{bradley_terry, PairRecord};
-use super::store::{now_ms, Store};
+use super::store::{host_name, now_ms, Heartbeat, Store};
 use crate::env::Side;
 use anyhow::{bail, Context, Result};
 use serde::Serialize;
@@ -102,16 +105,48 @@ pub struct StatusReport {
     pub crashes: Vec<CrashRow>,
 }
 
-/// Opens a league directory for reading; refuses one that holds no league.
+/// Opens a league directory for reading only (see `open::open_read_only`).
 pub fn open(dir: &LeagueDir) -> Result<(LeagueConfig, Store)> {
-    if !dir.root.join("league.db").is_file() {
-        bail!(
-            "{}: holds no league (no league.db); start one with `t2e-league run --config configs/league-default.toml --dir {}`",
-            dir.root.display(),
-            dir.root.display()
-        );
+    super::open::open_read_only(dir)
+}
+
+/// Seconds without a heartbeat after which a process on another machine
+/// (whose pid cannot be checked from here) is taken for dead. Learners beat
+/// once per iteration and every half second while they wait.
+pub const STALE_HEARTBEAT_S: f64 = 600.0;
+
+/// Whether a process of this league still runs, as far as this machine can
+/// tell: a pid on this host must exist and be a t2e-league process; a
+/// heartbeat from elsewhere must be recent.
+pub fn alive(beat: &Heartbeat, age_s: f64) -> bool {
+    match &beat.host {
+        Some(h) if *h == host_name() => pid_is_league_process(beat.pid),
+        _ => age_s < STALE_HEARTBEAT_S,
     }
-    Ok((dir.config()?, Store::open(&dir.root)?))
+}
+
+fn pid_is_league_process(pid: i64) -> bool {
+    if pid <= 0 {
+        return false;
+    }
+    match std::fs::read(format!("/proc/{pid}/cmdline")) {
+        Ok(cmd) => {
+            let text = String::from_utf8_lossy(&cmd);
+            text.contains("league-learner") || text.contains("league-evaluator")
+        }
+        Err(_) => false,
+    }
+}
+
+/// The state `status` shows: a process that says it is working but is gone
+/// is `dead`.
+pub fn shown_state(beat: &Heartbeat, age_s: f64) -> String {
+    let working = matches!(beat.state.as_str(), "training" | "waiting" | "evaluating");
+    if working && !alive(beat, age_s) {
+        "dead".into()
+    } else {
+        beat.state.clone()
+    }
 }
 
 pub fn report(dir: &LeagueDir) -> Result<StatusReport> {
@@ -168,11 +203,11 @@ pub fn report(dir: &LeagueDir) -> Result<StatusReport> {
     let history: Vec<StageRow> = store
         .curriculum_history()?
         .into_iter()
-        .map(|(stage, speed_ratio, reason, at_ms)| StageRow {
-            stage,
-            speed_ratio,
-            reason,
-            at_ms,
+        .map(|c| StageRow {
+            stage: c.stage,
+            speed_ratio: c.speed_ratio,
+            reason: c.reason,
+            at_ms: c.at_ms,
         })
         .collect();
     let stage = history.last().map(|h| h.stage).unwrap_or(0);
@@ -190,16 +225,17 @@ pub fn report(dir: &LeagueDir) -> Result<StatusReport> {
         learners: store
             .heartbeats()?
             .into_iter()
-            .map(
-                |(name, pid, state, env_steps, steps_per_s, at)| LearnerRow {
-                    name,
-                    pid,
-                    state,
-                    env_steps,
-                    steps_per_s,
-                    heartbeat_age_s: (now - at) as f64 / 1000.0,
-                },
-            )
+            .map(|b| {
+                let age = (now - b.at_ms) as f64 / 1000.0;
+                LearnerRow {
+                    state: shown_state(&b, age),
+                    name: b.learner,
+                    pid: b.pid,
+                    env_steps: b.env_steps,
+                    steps_per_s: b.steps_per_s,
+                    heartbeat_age_s: age,
+                }
+            })
             .collect(),
         payoff: payoff
             .iter()
@@ -213,11 +249,11 @@ pub fn report(dir: &LeagueDir) -> Result<StatusReport> {
         crashes: store
             .crashes()?
             .into_iter()
-            .map(|(learner, exit_status, message, at_ms)| CrashRow {
-                learner,
-                exit_status,
-                message,
-                at_ms,
+            .map(|c| CrashRow {
+                learner: c.learner,
+                exit_status: c.exit_status,
+                message: c.message,
+                at_ms: c.at_ms,
             })
             .collect(),
     })
@@ -361,7 +397,7 @@ pub fn render(r: &StatusReport) -> String {
 /// league's config, its rating history and a SHA-256 manifest; `eval
 /// --captors ckpt:OUT` (or `--target`) plays it on another machine.
 pub fn export(dir: &LeagueDir, player: &str, out: &Path) -> Result<()> {
-    let (_, store) = open(dir)?;
+    let (cfg, store) = open(dir)?;
     let players = store.players()?;
     let p = players
         .iter()
@@ -394,6 +430,13 @@ pub fn export(dir: &LeagueDir, player: &str, out: &Path) -> Result<()> {
     if out.exists() {
         bail!("{}: already exists; pick a new --out", out.display());
     }
+    if dir.contains(out) {
+        bail!(
+            "--out {}: inside the league directory {}; the league owns what is there (players/ is reconciled at every start). Export outside it",
+            out.display(),
+            dir.root.display()
+        );
+    }
     crate::nn::checkpoint::write_dir_atomically(out, |tmp| {
         let mut manifest = String::new();
         for e in std::fs::read_dir(&src)? {
@@ -403,7 +446,10 @@ pub fn export(dir: &LeagueDir, player: &str, out: &Path) -> Result<()> {
                 std::fs::copy(&path, tmp.join(&name))?;
             }
         }
-        std::fs::copy(dir.config_path(), tmp.join("league-config.toml"))?;
+        std::fs::write(
+            tmp.join("league-config.toml"),
+            toml::to_string_pretty(&cfg).context("cannot write the league's config")?,
+        )?;
         let mut csv = String::from("match_id,mu,sigma,at_ms\n");
         for (m, mu, sigma, at) in store.rating_history(p.id)? {
             let _ = writeln!(

@@ -148,6 +148,69 @@ pub fn now_ms() -> i64 {
         .unwrap_or(0)
 }
 
+/// How a process opens the store.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Access {
+    Create,
+    Existing,
+    ReadOnly { immutable: bool },
+}
+
+/// A `league.db` that is missing or empty is not a store.
+fn check_present(path: &Path) -> Result<(), StoreError> {
+    match std::fs::metadata(path) {
+        Ok(m) if m.len() > 0 => Ok(()),
+        Ok(_) => Err(StoreError::Invalid(format!(
+            "{}: empty (0 bytes): the league's store was truncated",
+            path.display()
+        ))),
+        Err(_) => Err(StoreError::Invalid(format!(
+            "{}: missing: the directory holds no league store",
+            path.display()
+        ))),
+    }
+}
+
+/// A learner's (or the evaluator's) latest heartbeat.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Heartbeat {
+    pub learner: String,
+    pub pid: i64,
+    /// The machine it runs on (its pid means something only there).
+    pub host: Option<String>,
+    pub state: String,
+    pub env_steps: u64,
+    pub steps_per_s: f64,
+    pub at_ms: i64,
+}
+
+/// A learner process that exited unasked.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Crash {
+    pub learner: String,
+    pub exit_status: String,
+    pub message: String,
+    pub at_ms: i64,
+}
+
+/// A curriculum stage change.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StageChange {
+    pub stage: usize,
+    pub speed_ratio: f64,
+    pub reason: String,
+    pub at_ms: i64,
+}
+
+/// This machine's name, for heartbeats.
+pub fn host_name() -> String {
+    std::fs::read_to_string("/proc/sys/kernel/hostname")
+        .map(|s| s.trim().to_string())
+        .ok()
+        .filter(|s| !s.is_empty())
+        .unwrap_or_else(|| "localhost".into())
+}
+
 pub struct Store {
     rt: tokio::runtime::Runtime,
     pool: SqlitePool,
@@ -156,11 +219,70 @@ pub struct Store {
 
 impl Store {
     /// Opens (creating if needed) the store of a league directory and brings
-    /// its schema up to date.
+    /// its schema up to date. Only a league being started creates its store;
+    /// every other process opens it with `open_existing`.
     pub fn open(league_dir: &Path) -> Result<Store, StoreError> {
         std::fs::create_dir_all(league_dir).map_err(|e| {
             StoreError::Invalid(format!("cannot create {}: {e}", league_dir.display()))
         })?;
+        Store::connect(league_dir, Access::Create)
+    }
+
+    /// Opens the store a league directory already holds, refusing a missing
+    /// or empty `league.db` (SQLite would take either for a new database).
+    pub fn open_existing(league_dir: &Path) -> Result<Store, StoreError> {
+        let path = league_dir.join("league.db");
+        check_present(&path)?;
+        Store::connect(league_dir, Access::Existing)
+    }
+
+    /// Opens a league's store for reading only (`status`, `export`): nothing
+    /// in the league directory is created or changed, so it works on a
+    /// read-only copy. The schema is not migrated; an older one is refused
+    /// with the command that migrates it.
+    pub fn open_read_only(league_dir: &Path) -> Result<Store, StoreError> {
+        let path = league_dir.join("league.db");
+        check_present(&path)?;
+        let store = match Store::connect(league_dir, Access::ReadOnly { immutable: false }) {
+            Ok(s) => s,
+            // A WAL database whose -shm file is absent and cannot be created
+            // (a read-only directory) opens only as immutable; no process can
+            // be writing it then, since a writer would have created the file.
+            Err(_) => Store::connect(league_dir, Access::ReadOnly { immutable: true })?,
+        };
+        let applied: Vec<i64> = store
+            .rt
+            .block_on(
+                sqlx::query("SELECT version FROM _sqlx_migrations WHERE success = TRUE")
+                    .fetch_all(&store.pool),
+            )
+            .map_err(|e| store.db(e))?
+            .iter()
+            .map(|r| r.get::<i64, _>(0))
+            .collect();
+        for m in MIGRATOR.iter() {
+            if !applied.contains(&m.version) {
+                return Err(StoreError::Invalid(format!(
+                    "{}: written by an older t2e-league (schema migration {} missing); `t2e-league run --dir {}` migrates it",
+                    path.display(),
+                    m.version,
+                    league_dir.display()
+                )));
+            }
+        }
+        if let Some(v) = applied
+            .iter()
+            .find(|v| !MIGRATOR.iter().any(|m| m.version == **v))
+        {
+            return Err(StoreError::NewerSchema {
+                path,
+                version: *v,
+            });
+        }
+        Ok(store)
+    }
+
+    fn connect(league_dir: &Path, access: Access) -> Result<Store, StoreError> {
         let path = league_dir.join("league.db");
         let rt = tokio::runtime::Builder::new_current_thread()
             .enable_time()
@@ -170,12 +292,16 @@ impl Store {
             path: path.clone(),
             source,
         };
-        let options = SqliteConnectOptions::from_str(&format!("sqlite://{}", path.display()))
+        let mut options = SqliteConnectOptions::from_str(&format!("sqlite://{}", path.display()))
             .map_err(db)?
-            .create_if_missing(true)
-            .journal_mode(SqliteJournalMode::Wal)
             .busy_timeout(Duration::from_secs(30))
             .foreign_keys(true);
+        options = match access {
+            Access::Create | Access::Existing => options
+                .create_if_missing(access == Access::Create)
+                .journal_mode(SqliteJournalMode::Wal),
+            Access::ReadOnly { immutable } => options.read_only(true).immutable(immutable),
+        };
         let pool = rt
             .block_on(
                 SqlitePoolOptions::new()
@@ -183,12 +309,14 @@ impl Store {
                     .connect_with(options),
             )
             .map_err(db)?;
-        match rt.block_on(MIGRATOR.run(&pool)) {
-            Ok(()) => {}
-            Err(sqlx::migrate::MigrateError::VersionMissing(version)) => {
-                return Err(StoreError::NewerSchema { path, version })
+        if matches!(access, Access::Create | Access::Existing) {
+            match rt.block_on(MIGRATOR.run(&pool)) {
+                Ok(()) => {}
+                Err(sqlx::migrate::MigrateError::VersionMissing(version)) => {
+                    return Err(StoreError::NewerSchema { path, version })
+                }
+                Err(source) => return Err(StoreError::Migrate { path, source }),
             }
-            Err(source) => return Err(StoreError::Migrate { path, source }),
         }
         Ok(Store { rt, pool, path })
     }
@@ -223,14 +351,72 @@ impl Store {
         .map_err(|e| self.db(e))
     }
 
+    /// The config the league was started with, if the store holds one (an
+    /// empty store does not).
+    pub fn stored_config(&self) -> Result<Option<String>, StoreError> {
+        self.rt
+            .block_on(
+                sqlx::query("SELECT config_toml FROM league_config WHERE id = 1")
+                    .fetch_optional(&self.pool),
+            )
+            .map(|r| r.map(|r| r.get::<String, _>(0)))
+            .map_err(|e| self.db(e))
+    }
+
+    /// The league's identity, if one was written.
+    pub fn league_id(&self) -> Result<Option<String>, StoreError> {
+        self.rt
+            .block_on(
+                sqlx::query("SELECT league_id FROM league_config WHERE id = 1")
+                    .fetch_optional(&self.pool),
+            )
+            .map(|r| r.and_then(|r| r.get::<Option<String>, _>(0)))
+            .map_err(|e| self.db(e))
+    }
+
+    /// Writes the league's identity once (the config row must exist);
+    /// returns the identity stored, which is `id` unless one was there.
+    pub fn set_league_id_once(&self, id: &str) -> Result<String, StoreError> {
+        self.rt
+            .block_on(
+                sqlx::query(
+                    "UPDATE league_config SET league_id = $1 WHERE id = 1 AND league_id IS NULL",
+                )
+                .bind(id)
+                .execute(&self.pool),
+            )
+            .map_err(|e| self.db(e))?;
+        self.league_id()?.ok_or_else(|| {
+            StoreError::Invalid(format!(
+                "{}: holds no league config to attach an identity to",
+                self.path.display()
+            ))
+        })
+    }
+
+    /// Matches a recorder (a learner's name, or "evaluator") wrote.
+    pub fn matches_recorded_by(&self, recorder: &str) -> Result<u64, StoreError> {
+        self.rt
+            .block_on(
+                sqlx::query("SELECT COUNT(*) FROM matches WHERE recorded_by = $1")
+                    .bind(recorder)
+                    .fetch_one(&self.pool),
+            )
+            .map(|r| r.get::<i64, _>(0) as u64)
+            .map_err(|e| self.db(e))
+    }
+
     /// Adds a player; a player of the same name already there is returned
     /// as it is (adding is idempotent, so a killed writer cannot duplicate).
+    /// A recorded member never changes: adding a name that is recorded with
+    /// other checkpoint files is an error, not a silent no-op.
     pub fn add_player(&self, p: &NewPlayer) -> Result<i64, StoreError> {
         let (path, sha) = match &p.checkpoint {
             Some((a, b)) => (Some(a.clone()), Some(b.clone())),
             None => (None, None),
         };
-        self.rt
+        let (id, stored_path, stored_sha) = self
+            .rt
             .block_on(async {
                 sqlx::query(
                     "INSERT INTO players (name, side, kind, parent, created_at_ms, env_steps, curriculum_stage, checkpoint_path, checkpoint_sha256) \
@@ -243,17 +429,33 @@ impl Store {
                 .bind(now_ms())
                 .bind(p.env_steps as i64)
                 .bind(p.curriculum_stage as i64)
-                .bind(path)
-                .bind(sha)
+                .bind(&path)
+                .bind(&sha)
                 .execute(&self.pool)
                 .await?;
-                let row = sqlx::query("SELECT id FROM players WHERE name = $1")
-                    .bind(&p.name)
-                    .fetch_one(&self.pool)
-                    .await?;
-                Ok::<_, sqlx::Error>(row.get::<i64, _>(0))
+                let row = sqlx::query(
+                    "SELECT id, checkpoint_path, checkpoint_sha256 FROM players WHERE name = $1",
+                )
+                .bind(&p.name)
+                .fetch_one(&self.pool)
+                .await?;
+                Ok::<_, sqlx::Error>((
+                    row.get::<i64, _>("id"),
+                    row.get::<Option<String>, _>("checkpoint_path"),
+                    row.get::<Option<String>, _>("checkpoint_sha256"),
+                ))
             })
-            .map_err(|e| self.db(e))
+            .map_err(|e| self.db(e))?;
+        if p.checkpoint.is_some() && (stored_path != path || stored_sha != sha) {
+            return Err(StoreError::Invalid(format!(
+                "{}: player {} is already recorded with other checkpoint files ({} sha256 {}); a recorded member never changes",
+                self.path.display(),
+                p.name,
+                stored_path.as_deref().unwrap_or("none"),
+                stored_sha.as_deref().unwrap_or("none"),
+            )));
+        }
+        Ok(id)
     }
 
     /// Points a learner's row at its newest checkpoint.
@@ -305,23 +507,23 @@ impl Store {
         Ok(rows
             .iter()
             .map(|r| {
-                let path: Option<String> = r.get(8);
-                let sha: Option<String> = r.get(9);
+                let path: Option<String> = r.get("checkpoint_path");
+                let sha: Option<String> = r.get("checkpoint_sha256");
                 Player {
-                    id: r.get(0),
-                    name: r.get(1),
-                    side: if r.get::<String, _>(2) == "captors" {
+                    id: r.get("id"),
+                    name: r.get("name"),
+                    side: if r.get::<String, _>("side") == "captors" {
                         Side::Captors
                     } else {
                         Side::Target
                     },
-                    kind: Kind::parse(&r.get::<String, _>(3)),
-                    parent: r.get(4),
-                    created_at_ms: r.get(5),
-                    env_steps: r.get::<i64, _>(6) as u64,
-                    curriculum_stage: r.get::<i64, _>(7) as usize,
+                    kind: Kind::parse(&r.get::<String, _>("kind")),
+                    parent: r.get("parent"),
+                    created_at_ms: r.get("created_at_ms"),
+                    env_steps: r.get::<i64, _>("env_steps") as u64,
+                    curriculum_stage: r.get::<i64, _>("curriculum_stage") as usize,
                     checkpoint: path.zip(sha),
-                    quarantined: r.get(10),
+                    quarantined: r.get("quarantined"),
                 }
             })
             .collect())
@@ -540,8 +742,8 @@ impl Store {
         Ok(rows.iter().rev().map(|r| r.get::<i64, _>(0) != 0).collect())
     }
 
-    /// (stage, speed ratio, reason, at ms), oldest first.
-    pub fn curriculum_history(&self) -> Result<Vec<(usize, f64, String, i64)>, StoreError> {
+    /// Curriculum stage changes, oldest first.
+    pub fn curriculum_history(&self) -> Result<Vec<StageChange>, StoreError> {
         let rows = self
             .rt
             .block_on(
@@ -551,30 +753,38 @@ impl Store {
             .map_err(|e| self.db(e))?;
         Ok(rows
             .iter()
-            .map(|r| (r.get::<i64, _>(0) as usize, r.get(1), r.get(2), r.get(3)))
+            .map(|r| StageChange {
+                stage: r.get::<i64, _>("stage") as usize,
+                speed_ratio: r.get("speed_ratio"),
+                reason: r.get("reason"),
+                at_ms: r.get("at_ms"),
+            })
             .collect())
     }
 
-    /// A learner's latest state and throughput.
+    /// A learner's latest state and throughput; `steps_per_s` None keeps
+    /// the rate last reported (a run that trained no step measured none).
     pub fn heartbeat(
         &self,
         learner: &str,
         state: &str,
         env_steps: u64,
-        steps_per_s: f64,
+        steps_per_s: Option<f64>,
     ) -> Result<(), StoreError> {
+        let rate = steps_per_s.map(|r| if r.is_finite() { r } else { 0.0 });
         self.rt
             .block_on(
                 sqlx::query(
-                    "INSERT INTO heartbeats (learner, pid, state, env_steps, steps_per_s, at_ms) VALUES ($1, $2, $3, $4, $5, $6) \
-                     ON CONFLICT (learner) DO UPDATE SET pid = excluded.pid, state = excluded.state, env_steps = excluded.env_steps, \
-                     steps_per_s = excluded.steps_per_s, at_ms = excluded.at_ms",
+                    "INSERT INTO heartbeats (learner, pid, host, state, env_steps, steps_per_s, at_ms) VALUES ($1, $2, $3, $4, $5, COALESCE($6, 0.0), $7) \
+                     ON CONFLICT (learner) DO UPDATE SET pid = excluded.pid, host = excluded.host, state = excluded.state, env_steps = excluded.env_steps, \
+                     steps_per_s = COALESCE($6, heartbeats.steps_per_s), at_ms = excluded.at_ms",
                 )
                 .bind(learner)
                 .bind(std::process::id() as i64)
+                .bind(host_name())
                 .bind(state)
                 .bind(env_steps as i64)
-                .bind(if steps_per_s.is_finite() { steps_per_s } else { 0.0 })
+                .bind(rate)
                 .bind(now_ms())
                 .execute(&self.pool),
             )
@@ -582,28 +792,26 @@ impl Store {
             .map_err(|e| self.db(e))
     }
 
-    /// (learner, pid, state, env steps, steps/s, at ms).
-    pub fn heartbeats(&self) -> Result<Vec<(String, i64, String, u64, f64, i64)>, StoreError> {
+    pub fn heartbeats(&self) -> Result<Vec<Heartbeat>, StoreError> {
         let rows = self
             .rt
             .block_on(
                 sqlx::query(
-                    "SELECT learner, pid, state, env_steps, steps_per_s, at_ms FROM heartbeats ORDER BY learner",
+                    "SELECT learner, pid, host, state, env_steps, steps_per_s, at_ms FROM heartbeats ORDER BY learner",
                 )
                 .fetch_all(&self.pool),
             )
             .map_err(|e| self.db(e))?;
         Ok(rows
             .iter()
-            .map(|r| {
-                (
-                    r.get(0),
-                    r.get(1),
-                    r.get(2),
-                    r.get::<i64, _>(3) as u64,
-                    r.get(4),
-                    r.get(5),
-                )
+            .map(|r| Heartbeat {
+                learner: r.get("learner"),
+                pid: r.get("pid"),
+                host: r.get("host"),
+                state: r.get("state"),
+                env_steps: r.get::<i64, _>("env_steps") as u64,
+                steps_per_s: r.get("steps_per_s"),
+                at_ms: r.get("at_ms"),
             })
             .collect())
     }
@@ -629,8 +837,8 @@ impl Store {
             .map_err(|e| self.db(e))
     }
 
-    /// (learner, exit status, message, at ms), oldest first.
-    pub fn crashes(&self) -> Result<Vec<(String, String, String, i64)>, StoreError> {
+    /// Crashes, oldest first.
+    pub fn crashes(&self) -> Result<Vec<Crash>, StoreError> {
         let rows = self
             .rt
             .block_on(
@@ -640,7 +848,12 @@ impl Store {
             .map_err(|e| self.db(e))?;
         Ok(rows
             .iter()
-            .map(|r| (r.get(0), r.get(1), r.get(2), r.get(3)))
+            .map(|r| Crash {
+                learner: r.get("learner"),
+                exit_status: r.get("exit_status"),
+                message: r.get("message"),
+                at_ms: r.get("at_ms"),
+            })
             .collect())
     }
 }
@@ -726,14 +939,23 @@ mod tests {
         store
             .push_curriculum(1, 1.2, "captors won 61% at 1.0")
             .unwrap();
-        assert_eq!(store.curriculum_history().unwrap()[0].1, 1.2);
+        assert_eq!(store.curriculum_history().unwrap()[0].speed_ratio, 1.2);
         store
-            .heartbeat("captors-main", "training", 640, 512.0)
+            .heartbeat("captors-main", "training", 640, Some(512.0))
             .unwrap();
         store
-            .heartbeat("captors-main", "training", 1280, 530.0)
+            .heartbeat("captors-main", "training", 1280, Some(530.0))
             .unwrap();
         assert_eq!(store.heartbeats().unwrap().len(), 1);
+        store
+            .heartbeat("captors-main", "done", 1280, None)
+            .unwrap();
+        let beat = &store.heartbeats().unwrap()[0];
+        assert_eq!(
+            (beat.state.as_str(), beat.steps_per_s),
+            ("done", 530.0),
+            "a run that trained nothing keeps the last rate"
+        );
         store
             .record_crash("target-main", "signal 9", "killed")
             .unwrap();

@@ -6,7 +6,8 @@
 use super::learner::Learner;
 use crate::env::Side;
 use crate::nn::checkpoint::{
-    read_checked, read_meta, write_checkpoint, write_file_atomically, CheckpointMeta, Written,
+    read_checked, read_meta, write_checkpoint, write_file_atomically, write_new_checkpoint,
+    CheckpointMeta, Written,
 };
 use anyhow::{bail, Context, Result};
 use serde::{Deserialize, Serialize};
@@ -48,6 +49,16 @@ pub fn save_learner(
 ) -> Result<Written> {
     meta.learner_state = Some(learner.learner_state());
     write_checkpoint(dir, meta, &learner.checkpoint_files())
+}
+
+/// As `save_learner`, into a folder that must not exist yet.
+pub fn save_new_learner(
+    dir: &Path,
+    learner: &dyn Learner,
+    mut meta: CheckpointMeta,
+) -> Result<Written> {
+    meta.learner_state = Some(learner.learner_state());
+    write_new_checkpoint(dir, meta, &learner.checkpoint_files())
 }
 
 /// Loads the checkpoint folder `dir` into `learner`: every file the learner

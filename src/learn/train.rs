@@ -844,6 +844,7 @@ impl Trainer {
             code_version: code_version(),
             learner_state: None,
             files: Default::default(),
+            league: None,
         }
     }
 
@@ -879,6 +880,31 @@ impl Trainer {
             .with_context(|| format!("no {} learner in this run", side.name()))?;
         persist::save_learner(dir, ls.learner.as_ref(), self.meta(ls))?;
         Ok(())
+    }
+
+    /// Writes `side`'s learner as a new league pool member at `dir`, which
+    /// must not exist (a recorded member never changes), its sidecar naming
+    /// the pool it belongs to.
+    pub fn save_pool_member(
+        &self,
+        side: Side,
+        dir: &Path,
+        membership: crate::nn::checkpoint::PoolMembership,
+    ) -> Result<()> {
+        let ls = self
+            .learners
+            .iter()
+            .find(|l| l.side == side)
+            .with_context(|| format!("no {} learner in this run", side.name()))?;
+        let mut meta = self.meta(ls);
+        meta.league = Some(membership);
+        persist::save_new_learner(dir, ls.learner.as_ref(), meta)?;
+        Ok(())
+    }
+
+    /// Steps of one iteration (all worlds).
+    pub fn steps_per_iteration(&self) -> u64 {
+        (self.cfg.num_envs * self.cfg.rollout_steps) as u64
     }
 
     /// Puts `side`'s learner back to the checkpoint folder `dir` (weights,

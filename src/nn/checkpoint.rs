@@ -68,6 +68,23 @@ pub struct CheckpointMeta {
     pub learner_state: Option<serde_json::Value>,
     /// SHA-256 (hex) of every file of the folder but this one, by file name.
     pub files: BTreeMap<String, String>,
+    /// Set on a league snapshot: the pool it belongs to, so the folder can
+    /// be matched to its store row (or the row rebuilt) from its own files.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub league: Option<PoolMembership>,
+}
+
+/// Which league pool a snapshot belongs to, and as whom.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PoolMembership {
+    /// The league's identity (`league.json`).
+    pub league_id: String,
+    /// The snapshot's player name.
+    pub player: String,
+    /// The player name of the learner it is a snapshot of.
+    pub parent: String,
+    pub curriculum_stage: usize,
 }
 
 impl CheckpointMeta {
@@ -176,6 +193,41 @@ fn exchange(a: &Path, b: &Path) -> std::io::Result<()> {
     }
 }
 
+/// Renames `a` to `b` unless `b` exists (Linux `RENAME_NOREPLACE`; elsewhere
+/// a check, then the rename, which is enough for a writer holding its
+/// learner's lock).
+fn rename_no_replace(a: &Path, b: &Path) -> std::io::Result<()> {
+    #[cfg(target_os = "linux")]
+    {
+        use std::ffi::CString;
+        use std::os::unix::ffi::OsStrExt;
+        let ca = CString::new(a.as_os_str().as_bytes())?;
+        let cb = CString::new(b.as_os_str().as_bytes())?;
+        // SAFETY: both paths are valid NUL-terminated strings for the call's duration.
+        let rc = unsafe {
+            libc::syscall(
+                libc::SYS_renameat2,
+                libc::AT_FDCWD,
+                ca.as_ptr(),
+                libc::AT_FDCWD,
+                cb.as_ptr(),
+                libc::RENAME_NOREPLACE,
+            )
+        };
+        if rc == 0 {
+            return Ok(());
+        }
+        let err = std::io::Error::last_os_error();
+        if err.raw_os_error() != Some(libc::EINVAL) && err.raw_os_error() != Some(libc::ENOSYS) {
+            return Err(err);
+        }
+    }
+    if b.exists() {
+        return Err(std::io::Error::from(std::io::ErrorKind::AlreadyExists));
+    }
+    std::fs::rename(a, b)
+}
+
 #[cfg(not(target_os = "linux"))]
 fn exchange(_a: &Path, _b: &Path) -> std::io::Result<()> {
     Err(std::io::Error::from(std::io::ErrorKind::Unsupported))
@@ -189,6 +241,31 @@ fn exchange(_a: &Path, _b: &Path) -> std::io::Result<()> {
 /// `.NAME.old-PID`, which `clean_stale_temporaries` puts back if the process
 /// dies before the new one is in place.)
 pub fn write_dir_atomically(dir: &Path, fill: impl FnOnce(&Path) -> Result<()>) -> Result<Written> {
+    write_dir(dir, fill, true)
+}
+
+/// Writes a folder that must not exist yet (a pool member, which never
+/// changes once written): as `write_dir_atomically`, but an existing `dir`
+/// is an error and is left untouched, checked before writing and again by
+/// the rename itself (`RENAME_NOREPLACE`).
+pub fn write_new_dir_atomically(
+    dir: &Path,
+    fill: impl FnOnce(&Path) -> Result<()>,
+) -> Result<Written> {
+    write_dir(dir, fill, false)
+}
+
+fn write_dir(
+    dir: &Path,
+    fill: impl FnOnce(&Path) -> Result<()>,
+    replace: bool,
+) -> Result<Written> {
+    if !replace && dir.exists() {
+        bail!(
+            "{}: already exists; refusing to replace it",
+            dir.display()
+        );
+    }
     let parent = dir.parent().unwrap_or(Path::new("."));
     std::fs::create_dir_all(parent)
         .with_context(|| format!("cannot create {}", parent.display()))?;
@@ -206,6 +283,19 @@ pub fn write_dir_atomically(dir: &Path, fill: impl FnOnce(&Path) -> Result<()>) 
         sync_path(&e?.path())?;
     }
     sync_path(&tmp)?;
+    if !replace {
+        if let Err(e) = rename_no_replace(&tmp, dir) {
+            let _ = std::fs::remove_dir_all(&tmp);
+            return Err(e).with_context(|| {
+                format!(
+                    "cannot move {} into place (refusing to replace an existing folder)",
+                    dir.display()
+                )
+            });
+        }
+        sync_path(parent)?;
+        return Ok(Written::Created);
+    }
     let outcome = if !dir.exists() {
         std::fs::rename(&tmp, dir)
             .with_context(|| format!("cannot move {} into place", dir.display()))?;
@@ -403,21 +493,37 @@ pub fn read_checked(
 /// then `meta.json`, all atomically (see `write_dir_atomically`).
 pub fn write_checkpoint(
     dir: &Path,
-    mut meta: CheckpointMeta,
+    meta: CheckpointMeta,
     files: &[(&str, Vec<(String, Tensor)>)],
 ) -> Result<Written> {
-    write_dir_atomically(dir, |tmp| {
-        meta.files.clear();
-        for (file, tensors) in files {
-            check_finite(tensors, &dir.join(file))
-                .context("refusing to write a checkpoint with non-finite weights")?;
-            let path = tmp.join(file);
-            save_tensors(&path, tensors)?;
-            meta.files.insert(file.to_string(), sha256_file(&path)?);
-        }
-        std::fs::write(tmp.join("meta.json"), serde_json::to_string_pretty(&meta)?)?;
-        Ok(())
-    })
+    write_dir_atomically(dir, |tmp| fill_checkpoint(tmp, dir, meta, files))
+}
+
+/// Writes a checkpoint folder that must not exist yet (a league snapshot).
+pub fn write_new_checkpoint(
+    dir: &Path,
+    meta: CheckpointMeta,
+    files: &[(&str, Vec<(String, Tensor)>)],
+) -> Result<Written> {
+    write_new_dir_atomically(dir, |tmp| fill_checkpoint(tmp, dir, meta, files))
+}
+
+fn fill_checkpoint(
+    tmp: &Path,
+    dir: &Path,
+    mut meta: CheckpointMeta,
+    files: &[(&str, Vec<(String, Tensor)>)],
+) -> Result<()> {
+    meta.files.clear();
+    for (file, tensors) in files {
+        check_finite(tensors, &dir.join(file))
+            .context("refusing to write a checkpoint with non-finite weights")?;
+        let path = tmp.join(file);
+        save_tensors(&path, tensors)?;
+        meta.files.insert(file.to_string(), sha256_file(&path)?);
+    }
+    std::fs::write(tmp.join("meta.json"), serde_json::to_string_pretty(&meta)?)?;
+    Ok(())
 }
 
 pub fn read_meta(dir: &Path) -> Result<CheckpointMeta> {

@@ -1,0 +1,247 @@
+//! Opening a league directory: every check before any write.
+//!
+//! A league is its directory: `config.toml`, `league.json` (its identity),
+//! `league.db` (the store) and the files the store names. They must agree
+//! before anything runs, because SQLite opens a missing or truncated
+//! database as a new, empty one, and a store copied from another league
+//! opens as well as this league's own. So:
+//! - `plan_start` (the manager) reads everything and writes nothing; it
+//!   refuses a store that is missing, empty or another league's beside a
+//!   league's files, and a config that differs from the store's. Only
+//!   then does the manager write (`config.toml` restored from the store,
+//!   the identity of a league from before identities existed).
+//! - `open_process` (learners, the evaluator) opens the existing store and
+//!   checks its identity against `league.json`.
+//! - `open_read_only` (`status`, `export`) changes nothing on disk.
+
+use super::config::LeagueConfig;
+use super::dir::{LeagueDir, LeagueIdentity};
+use super::store::Store;
+use anyhow::{bail, Context, Result};
+use std::path::Path;
+
+/// A league directory opened by a process of the league.
+pub struct Opened {
+    pub cfg: LeagueConfig,
+    pub store: Store,
+    pub league_id: String,
+}
+
+/// What the manager does with its directory, decided before any write.
+#[derive(Debug)]
+pub enum StartPlan {
+    /// Nothing of a league is there: start one with this config.
+    New(LeagueConfig),
+    /// Resume the league the directory holds.
+    Resume {
+        cfg: LeagueConfig,
+        /// config.toml is missing: write it back from the store.
+        restore_config: bool,
+        identity: LeagueIdentity,
+        /// league.json is missing (or the store has no identity: a league
+        /// from before identities): write what is missing.
+        write_identity: bool,
+        set_store_identity: bool,
+    },
+}
+
+/// Decides how `run` starts in `dir` (with `--config given`, if any),
+/// reading only.
+pub fn plan_start(dir: &LeagueDir, given: Option<&Path>) -> Result<StartPlan> {
+    let root = dir.root.display().to_string();
+    let db = dir.root.join("league.db");
+    let files = dir.league_files();
+    let db_len = std::fs::metadata(&db).ok().map(|m| m.len());
+    let given_cfg = given.map(LeagueConfig::load).transpose()?;
+    let lost = |what: &str| -> anyhow::Error {
+        anyhow::anyhow!(
+            "{}: {what}, but {root} holds a league ({}). Refusing to start: a new store would not know its pool, matches or learners. \
+             Restore league.db (with league.db-wal beside it, if there was one) from a backup, or move {root} aside and start a new league in an empty directory",
+            db.display(),
+            files.join(", ")
+        )
+    };
+    let held = match db_len {
+        None => Err("missing"),
+        Some(0) => Err("empty (0 bytes)"),
+        Some(_) => {
+            let store = Store::open_existing(&dir.root)?;
+            match store.stored_config()? {
+                Some(toml) => Ok((store, toml)),
+                None => Err("holds no league (its tables are empty: truncated, or its write-ahead log league.db-wal was lost)"),
+            }
+        }
+    };
+    let (store, stored_toml) = match held {
+        Ok(held) => held,
+        Err(what) if !files.is_empty() => return Err(lost(what)),
+        Err(_) => {
+            // No store and nothing of a league: a new league, or a start
+            // that was interrupted before anything but its config existed.
+            let cfg = match (given_cfg, dir.config_path().is_file()) {
+                (Some(cfg), _) => cfg,
+                (None, true) => dir.config()?,
+                (None, false) => bail!(
+                    "{root} holds no league: give --config configs/league-*.toml to start one"
+                ),
+            };
+            return Ok(StartPlan::New(cfg));
+        }
+    };
+    let stored_cfg = LeagueConfig::parse(&stored_toml)
+        .map_err(|e| anyhow::anyhow!("{}: the config it holds is invalid: {e}", db.display()))?;
+    let on_disk = if dir.config_path().is_file() {
+        Some(dir.config()?)
+    } else {
+        None
+    };
+    if let Some(cfg) = &on_disk {
+        if *cfg != stored_cfg {
+            bail!(
+                "{}: differs from the config the league's store ({}) was started with; put the league's config back, or pick another --dir",
+                dir.config_path().display(),
+                db.display()
+            );
+        }
+    }
+    if let Some(cfg) = &given_cfg {
+        if *cfg != stored_cfg {
+            bail!(
+                "{root} already holds a league started with another config ({}); resume it without --config, or pick another --dir",
+                if on_disk.is_some() {
+                    dir.config_path().display().to_string()
+                } else {
+                    format!("the one in {}", db.display())
+                }
+            );
+        }
+    }
+    let file_identity = dir.identity()?;
+    let store_identity = store.league_id()?;
+    let identity = match (&store_identity, &file_identity) {
+        (Some(s), Some(f)) if *s != f.league_id => bail!(
+            "{}: belongs to another league (id {s}) than {} (id {}, league {}); put this league's own league.db back, or pick another --dir",
+            db.display(),
+            dir.identity_path().display(),
+            f.league_id,
+            f.name
+        ),
+        (None, Some(f)) => bail!(
+            "{}: has no league identity, but {} names league {} (id {}): the store is not this league's; put its own league.db back",
+            db.display(),
+            dir.identity_path().display(),
+            f.name,
+            f.league_id
+        ),
+        (Some(s), _) => LeagueIdentity {
+            league_id: s.clone(),
+            name: stored_cfg.name.clone(),
+        },
+        (None, None) => LeagueIdentity {
+            league_id: super::dir::new_league_id(),
+            name: stored_cfg.name.clone(),
+        },
+    };
+    // Snapshots name their league: a pool of another league beside this
+    // store means the store (or the pool) is not this league's.
+    if let Ok(entries) = std::fs::read_dir(dir.players_dir()) {
+        for e in entries.flatten() {
+            let name = e.file_name().to_string_lossy().into_owned();
+            if name.starts_with('.') {
+                continue;
+            }
+            if let Ok(meta) = crate::nn::checkpoint::read_meta(&e.path()) {
+                if let Some(m) = meta.league {
+                    if m.league_id != identity.league_id {
+                        bail!(
+                            "{}: belongs to league {}, but {} is league {}: the store and the pool are from different leagues",
+                            e.path().display(),
+                            m.league_id,
+                            db.display(),
+                            identity.league_id
+                        );
+                    }
+                }
+            }
+        }
+    }
+    Ok(StartPlan::Resume {
+        cfg: stored_cfg,
+        restore_config: on_disk.is_none(),
+        write_identity: file_identity.is_none(),
+        set_store_identity: store_identity.is_none(),
+        identity,
+    })
+}
+
+/// Opens the league for one of its processes (a learner, the evaluator),
+/// which the manager starts only after `plan_start`'s checks.
+pub fn open_process(dir: &LeagueDir) -> Result<Opened> {
+    let store = Store::open_existing(&dir.root)?;
+    let league_id = check_identity(dir, &store)?.with_context(|| {
+        format!(
+            "{}: has no league identity; start the league with `t2e-league run --dir {}`",
+            store.path().display(),
+            dir.root.display()
+        )
+    })?;
+    Ok(Opened {
+        cfg: dir.config()?,
+        store,
+        league_id,
+    })
+}
+
+/// Opens a league to read it (`status`, `export`): nothing in the directory
+/// is created or changed. A missing config.toml is read from the store.
+pub fn open_read_only(dir: &LeagueDir) -> Result<(LeagueConfig, Store)> {
+    let db = dir.root.join("league.db");
+    if !db.is_file() {
+        bail!(
+            "{}: holds no league (no league.db); start one with `t2e-league run --config configs/league-default.toml --dir {}`",
+            dir.root.display(),
+            dir.root.display()
+        );
+    }
+    let store = Store::open_read_only(&dir.root)?;
+    let Some(stored) = store.stored_config()? else {
+        bail!(
+            "{}: holds no league (its tables are empty: truncated, or its write-ahead log was lost)",
+            db.display()
+        );
+    };
+    check_identity(dir, &store)?;
+    let cfg = if dir.config_path().is_file() {
+        dir.config()?
+    } else {
+        LeagueConfig::parse(&stored)
+            .map_err(|e| anyhow::anyhow!("{}: the config it holds is invalid: {e}", db.display()))?
+    };
+    Ok((cfg, store))
+}
+
+/// The store's identity, checked against `league.json`; None for a league
+/// from before identities (neither has one).
+fn check_identity(dir: &LeagueDir, store: &Store) -> Result<Option<String>> {
+    let file = dir.identity()?;
+    let stored = store.league_id()?;
+    match (stored, file) {
+        (Some(s), Some(f)) if s == f.league_id => Ok(Some(s)),
+        (Some(s), Some(f)) => bail!(
+            "{}: belongs to another league (id {s}) than {} (id {}, league {})",
+            store.path().display(),
+            dir.identity_path().display(),
+            f.league_id,
+            f.name
+        ),
+        (None, Some(f)) => bail!(
+            "{}: has no league identity, but {} names league {} (id {}): the store is not this league's",
+            store.path().display(),
+            dir.identity_path().display(),
+            f.name,
+            f.league_id
+        ),
+        (Some(s), None) => Ok(Some(s)),
+        (None, None) => Ok(None),
+    }
+}

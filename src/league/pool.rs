@@ -1,0 +1,211 @@
+//! The pool on disk: snapshot folders in `players/` and the store rows that
+//! name them.
+//!
+//! Invariants (each has a test in tests/league_faults.rs):
+//! - A recorded member never changes: a snapshot folder is written under a
+//!   new name only (`write_new_checkpoint`), never over an existing folder,
+//!   and a name the store already records is never written again.
+//! - Nothing that verifies is ever deleted: at start, only temporaries of
+//!   dead processes (`.NAME.tmp-PID`) are removed. A complete folder without
+//!   a row (its writer died between the rename and the insert) is adopted
+//!   from its own sidecar when it verifies and names this league; any other
+//!   unrecorded folder is left where it is, with a warning.
+//! - Rows whose files are missing or fail their hashes are quarantined: the
+//!   league goes on without them.
+
+use super::dir::LeagueDir;
+use super::learner::{heuristic_name, Seat};
+use super::store::{Kind, NewPlayer, Store};
+use crate::env::Side;
+use crate::learn::train::Trainer;
+use crate::nn::checkpoint::{read_meta, PoolMembership};
+use crate::nn::PolicySnapshot;
+use anyhow::{Context, Result};
+
+/// The player name of `seat`'s snapshot at `env_steps`.
+pub fn snapshot_name(seat: Seat, env_steps: u64) -> String {
+    let owner = if seat.exploiter {
+        seat.name()
+    } else {
+        seat.side.name().to_string()
+    };
+    format!("{owner}-snap-{env_steps:012}")
+}
+
+/// What `add_snapshot` did.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum SnapshotOutcome {
+    Added(String),
+    /// The name is already recorded (or its folder exists): nothing written.
+    AlreadyInPool(String),
+}
+
+/// A frozen copy of the learner joins the pool: files written (synced,
+/// renamed into place, never over an existing folder) before the row that
+/// names them. A name the pool already holds is left as it is.
+pub fn add_snapshot(
+    trainer: &Trainer,
+    store: &Store,
+    dir: &LeagueDir,
+    league_id: &str,
+    seat: Seat,
+    learner_id: i64,
+    stage: usize,
+) -> Result<SnapshotOutcome> {
+    let name = snapshot_name(seat, trainer.env_steps);
+    let folder = dir.players_dir().join(&name);
+    if folder.exists() || store.players()?.iter().any(|p| p.name == name) {
+        return Ok(SnapshotOutcome::AlreadyInPool(name));
+    }
+    trainer.save_pool_member(
+        seat.side,
+        &folder,
+        PoolMembership {
+            league_id: league_id.to_string(),
+            player: name.clone(),
+            parent: seat.name(),
+            curriculum_stage: stage,
+        },
+    )?;
+    let sha = crate::util::sha256_file(&folder.join("meta.json"))?;
+    store.add_player(&NewPlayer {
+        name: name.clone(),
+        side: seat.side,
+        kind: Kind::Snapshot,
+        parent: Some(learner_id),
+        env_steps: trainer.env_steps,
+        curriculum_stage: stage,
+        checkpoint: Some((dir.relative(&folder), sha)),
+    })?;
+    Ok(SnapshotOutcome::Added(name))
+}
+
+/// What `reconcile` found.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Reconciled {
+    /// Temporaries of dead writers, removed.
+    pub removed_temporaries: Vec<String>,
+    /// Complete folders whose row was missing, added to the pool.
+    pub adopted: Vec<String>,
+    /// Folders without a row that could not be adopted (and why): left in place.
+    pub unrecorded: Vec<(String, String)>,
+    /// Rows whose files are missing or corrupt.
+    pub quarantined: Vec<String>,
+}
+
+/// Checks a league directory's pool against its files at start (see the
+/// module's invariants).
+pub fn reconcile(dir: &LeagueDir, store: &Store, league_id: &str) -> Result<Reconciled> {
+    let mut out = Reconciled::default();
+    let players_dir = dir.players_dir();
+    for p in crate::nn::checkpoint::clean_stale_temporaries(&players_dir)? {
+        out.removed_temporaries.push(dir.relative(&p));
+    }
+    let mut entries: Vec<_> = match std::fs::read_dir(&players_dir) {
+        Ok(it) => it.flatten().map(|e| e.path()).collect(),
+        Err(_) => Vec::new(),
+    };
+    entries.sort();
+    for path in entries {
+        let name = path
+            .file_name()
+            .unwrap_or_default()
+            .to_string_lossy()
+            .into_owned();
+        if name.starts_with('.') {
+            continue; // a live writer's temporary
+        }
+        let rel = dir.relative(&path);
+        let players = store.players()?;
+        if players
+            .iter()
+            .any(|p| p.checkpoint.as_ref().is_some_and(|(r, _)| *r == rel))
+        {
+            continue;
+        }
+        match adopt(dir, store, league_id, &path, &name, &players) {
+            Ok(()) => out.adopted.push(rel),
+            Err(why) => out.unrecorded.push((rel, format!("{why:#}"))),
+        }
+    }
+    for p in store
+        .players()?
+        .iter()
+        .filter(|p| p.kind == Kind::Snapshot && p.quarantined.is_none())
+    {
+        let Some((rel, sha)) = &p.checkpoint else {
+            continue;
+        };
+        let meta = dir.root.join(rel).join("meta.json");
+        let ok = crate::util::sha256_file(&meta).is_ok_and(|got| &got == sha)
+            && PolicySnapshot::load(&dir.root.join(rel), p.side).is_ok();
+        if !ok {
+            store.quarantine(p.id, "checkpoint files missing or corrupt at league start")?;
+            out.quarantined.push(p.name.clone());
+        }
+    }
+    Ok(out)
+}
+
+/// Adds the row of a complete snapshot folder from its own sidecar, if it
+/// verifies and belongs to this league under its folder's name.
+fn adopt(
+    dir: &LeagueDir,
+    store: &Store,
+    league_id: &str,
+    path: &std::path::Path,
+    name: &str,
+    players: &[super::store::Player],
+) -> Result<()> {
+    let meta = read_meta(path)?;
+    let member = meta
+        .league
+        .clone()
+        .context("its meta.json names no league pool (not a snapshot this league wrote)")?;
+    if member.league_id != league_id {
+        anyhow::bail!(
+            "it belongs to league {}, not this one ({league_id})",
+            member.league_id
+        );
+    }
+    if member.player != name {
+        anyhow::bail!("its meta.json names it {}", member.player);
+    }
+    if players.iter().any(|p| p.name == name) {
+        anyhow::bail!("the store records {name} with other files");
+    }
+    // Every weight file against its hash, and finite.
+    PolicySnapshot::load(path, meta.side)?;
+    let parent = players
+        .iter()
+        .find(|p| p.name == member.parent)
+        .with_context(|| format!("its learner {} is not in the store", member.parent))?;
+    store.add_player(&NewPlayer {
+        name: name.to_string(),
+        side: meta.side,
+        kind: Kind::Snapshot,
+        parent: Some(parent.id),
+        env_steps: meta.env_steps,
+        curriculum_stage: member.curriculum_stage,
+        checkpoint: Some((
+            dir.relative(path),
+            crate::util::sha256_file(&path.join("meta.json"))?,
+        )),
+    })?;
+    Ok(())
+}
+
+pub fn ensure_heuristic_members(store: &Store) -> Result<()> {
+    for side in [Side::Captors, Side::Target] {
+        store.add_player(&NewPlayer {
+            name: heuristic_name(side),
+            side,
+            kind: Kind::Heuristic,
+            parent: None,
+            env_steps: 0,
+            curriculum_stage: 0,
+            checkpoint: None,
+        })?;
+    }
+    Ok(())
+}

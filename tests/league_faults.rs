@@ -1,0 +1,645 @@
+//! The league under faults a user (or a machine) inflicts, beside the random
+//! kill -9 test in tests/league.rs: each test puts the league at the moment a
+//! fault hurts most and checks its invariants (ARCHITECTURE.md, league):
+//! a recorded member is immutable, nothing that verifies is ever deleted,
+//! every process exit has one defined outcome, status never shows a process
+//! that is gone as alive, and nothing is written before every check passed.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Output, Stdio};
+use std::time::{Duration, Instant};
+use t2e::league::dir::LeagueDir;
+use t2e::league::store::{Kind, Store};
+
+/// A tiny league: 80 env steps per iteration, tiny networks, no pacing.
+fn config(name: &str, budget: u64, extra: &str) -> String {
+    format!(
+        r#"
+name = "{name}"
+protocol = "held-out"
+seed = 11
+env_steps_per_learner = {budget}
+maps = "shipped"
+num_captors = 2
+episode_length = 40
+threads_per_learner = 1
+num_envs = 4
+rollout_steps = 20
+checkpoint_every = 5
+opponent_cache = 2
+pace_env_steps = 0
+[captors.net]
+hidden = 16
+conv_channels = [2, 4]
+patch_pool = 4
+[target.net]
+hidden = 16
+conv_channels = [2, 4]
+patch_pool = 4
+[snapshots]
+every_env_steps = 160
+win_rate = 0.0
+timeout_env_steps = 160
+[evaluator]
+enabled = false
+{extra}
+"#
+    )
+}
+
+fn bin() -> &'static str {
+    env!("CARGO_BIN_EXE_t2e-league")
+}
+
+struct League {
+    _tmp: tempfile::TempDir,
+    tmp: PathBuf,
+    dir: LeagueDir,
+    config: PathBuf,
+}
+
+fn league(name: &str, budget: u64, extra: &str) -> League {
+    let tmp = tempfile::tempdir().unwrap();
+    let path = tmp.path().to_path_buf();
+    let config = path.join("league.toml");
+    std::fs::write(&config, config_text(name, budget, extra)).unwrap();
+    League {
+        dir: LeagueDir::new(path.join("league")),
+        tmp: path,
+        _tmp: tmp,
+        config,
+    }
+}
+
+fn config_text(name: &str, budget: u64, extra: &str) -> String {
+    config(name, budget, extra)
+}
+
+fn t2e(args: &[&str]) -> Output {
+    Command::new(bin()).args(args).output().unwrap()
+}
+
+fn run_to_end(l: &League) -> Output {
+    let out = Command::new(bin())
+        .args(["run", "--config"])
+        .arg(&l.config)
+        .arg("--dir")
+        .arg(&l.dir.root)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "the league should finish: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
+fn spawn_run(l: &League, stderr: Stdio) -> Child {
+    Command::new(bin())
+        .args(["run", "--dir"])
+        .arg(&l.dir.root)
+        .arg("--config")
+        .arg(&l.config)
+        .stdout(Stdio::null())
+        .stderr(stderr)
+        .spawn()
+        .unwrap()
+}
+
+fn signal(pid: i64, sig: i32) {
+    // SAFETY: signalling a process this test started (or its child).
+    unsafe {
+        libc::kill(pid as i32, sig);
+    }
+}
+
+/// The child of `manager` whose command line holds `needle`.
+fn child_pid(manager: u32, needle: &str) -> Option<i64> {
+    for e in std::fs::read_dir("/proc").unwrap().flatten() {
+        let Ok(pid) = e.file_name().to_string_lossy().parse::<i64>() else {
+            continue;
+        };
+        let Ok(stat) = std::fs::read_to_string(e.path().join("stat")) else {
+            continue;
+        };
+        let Some(rest) = stat.rsplit_once(')').map(|(_, r)| r) else {
+            continue;
+        };
+        let ppid: u32 = rest
+            .split_whitespace()
+            .nth(1)
+            .and_then(|x| x.parse().ok())
+            .unwrap_or(0);
+        let cmd = std::fs::read(e.path().join("cmdline"))
+            .map(|c| String::from_utf8_lossy(&c).replace('\0', " "))
+            .unwrap_or_default();
+        if ppid == manager && cmd.contains(needle) {
+            return Some(pid);
+        }
+    }
+    None
+}
+
+fn wait_for(what: &str, limit: Duration, mut ready: impl FnMut() -> bool) {
+    let deadline = Instant::now() + limit;
+    while !ready() {
+        assert!(Instant::now() < deadline, "timed out waiting for {what}");
+        std::thread::sleep(Duration::from_millis(10));
+    }
+}
+
+fn wait_exit(child: &mut Child, limit: Duration) -> std::process::ExitStatus {
+    let deadline = Instant::now() + limit;
+    loop {
+        if let Some(s) = child.try_wait().unwrap() {
+            return s;
+        }
+        if Instant::now() > deadline {
+            let _ = child.kill();
+            panic!("the manager did not end within {limit:?}");
+        }
+        std::thread::sleep(Duration::from_millis(100));
+    }
+}
+
+/// Every snapshot folder in players/: name -> SHA-256 of its meta.json.
+fn pool_files(dir: &LeagueDir) -> BTreeMap<String, String> {
+    let mut out = BTreeMap::new();
+    for e in std::fs::read_dir(dir.players_dir()).unwrap().flatten() {
+        let name = e.file_name().to_string_lossy().into_owned();
+        if !name.starts_with('.') {
+            if let Ok(sha) = t2e::util::sha256_file(&e.path().join("meta.json")) {
+                out.insert(name, sha);
+            }
+        }
+    }
+    out
+}
+
+#[test]
+fn a_learner_killed_between_checkpoints_never_rewrites_a_pool_member() {
+    // Snapshots every iteration (80 steps), the learner's own checkpoint
+    // every 5: before the fix, a learner killed after snapshot 720 resumed
+    // at 400 and wrote 480..720 again over the recorded members.
+    let l = league(
+        "overwrite",
+        1_600,
+        "[snapshots]\nevery_env_steps = 80\nwin_rate = 0.0\ntimeout_env_steps = 80\n",
+    );
+    let text = std::fs::read_to_string(&l.config)
+        .unwrap()
+        .replace("[snapshots]\nevery_env_steps = 160\nwin_rate = 0.0\ntimeout_env_steps = 160\n", "");
+    std::fs::write(&l.config, text).unwrap();
+    let mut manager = spawn_run(&l, Stdio::null());
+    let watched = l.dir.players_dir().join("captors-snap-000000000720");
+    let mut seen: BTreeMap<String, String> = BTreeMap::new();
+    wait_for("snapshot 720", Duration::from_secs(120), || {
+        if l.dir.players_dir().is_dir() {
+            for (k, v) in pool_files(&l.dir) {
+                seen.entry(k).or_insert(v);
+            }
+        }
+        watched.join("meta.json").is_file()
+    });
+    let pid = child_pid(manager.id(), "--side captors").expect("the captors learner runs");
+    signal(pid, libc::SIGKILL);
+    for (k, v) in pool_files(&l.dir) {
+        seen.entry(k).or_insert(v);
+    }
+    // The manager restarts it; the league runs to its budget.
+    let status = wait_exit(&mut manager, Duration::from_secs(240));
+    assert!(status.success(), "{status:?}");
+    let store = Store::open(&l.dir.root).unwrap();
+    let players = store.players().unwrap();
+    for (name, first_sha) in &seen {
+        let now = t2e::util::sha256_file(&l.dir.players_dir().join(name).join("meta.json")).unwrap();
+        assert_eq!(&now, first_sha, "{name} was rewritten after it was first written");
+        let row = players.iter().find(|p| &p.name == name).unwrap_or_else(|| panic!("{name} has no row"));
+        assert_eq!(&row.checkpoint.as_ref().unwrap().1, first_sha, "{name}");
+        assert!(row.quarantined.is_none(), "{name}: {:?}", row.quarantined);
+    }
+    assert!(seen.contains_key("captors-snap-000000000480"), "{seen:?}");
+    let out = l.tmp.join("export-480");
+    let o = t2e(&[
+        "export",
+        "captors-snap-000000000480",
+        "--dir",
+        l.dir.root.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(
+        !store.crashes().unwrap().is_empty(),
+        "the kill is recorded as a crash"
+    );
+}
+
+/// A finished tiny league, its pool's files, and its store's match count.
+fn finished(name: &str) -> (League, BTreeMap<String, String>, u64) {
+    let l = league(name, 640, "");
+    run_to_end(&l);
+    let pool = pool_files(&l.dir);
+    assert!(pool.len() >= 4, "{pool:?}");
+    let matches = Store::open_existing(&l.dir.root).unwrap().match_count().unwrap();
+    assert!(matches > 0);
+    (l, pool, matches)
+}
+
+fn run_dir(l: &League) -> Output {
+    t2e(&["run", "--dir", l.dir.root.to_str().unwrap()])
+}
+
+fn status(l: &League) -> Output {
+    t2e(&["status", "--dir", l.dir.root.to_str().unwrap()])
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+#[test]
+fn a_lost_empty_or_foreign_store_is_refused_and_the_pool_kept() {
+    let (l, pool, _) = finished("store-faults");
+    let db = l.dir.root.join("league.db");
+    let saved = l.tmp.join("league.db.saved");
+    std::fs::copy(&db, &saved).unwrap();
+    let restore = || {
+        std::fs::copy(&saved, &db).unwrap();
+    };
+
+    // Truncated to 0 bytes.
+    std::fs::write(&db, b"").unwrap();
+    let o = run_dir(&l);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("empty (0 bytes)"), "{}", stderr(&o));
+    assert!(stderr(&o).contains("snapshot folders in players/"), "{}", stderr(&o));
+    assert_eq!(pool_files(&l.dir), pool, "no snapshot folder removed");
+    let o = status(&l);
+    assert!(!o.status.success(), "status must not report an empty store as a league");
+    assert_eq!(std::fs::metadata(&db).unwrap().len(), 0, "nothing written into it");
+
+    // Deleted.
+    std::fs::remove_file(&db).unwrap();
+    let o = run_dir(&l);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("missing"), "{}", stderr(&o));
+    assert!(!db.exists(), "no new store created");
+    assert_eq!(pool_files(&l.dir), pool);
+
+    // Its write-ahead log lost: the tables exist, their rows do not.
+    let blank = tempfile::tempdir().unwrap();
+    drop(Store::open(blank.path()).unwrap());
+    std::fs::copy(blank.path().join("league.db"), &db).unwrap();
+    let o = run_dir(&l);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("holds no league"), "{}", stderr(&o));
+    assert_eq!(pool_files(&l.dir), pool);
+    let o = status(&l);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("holds no league"), "{}", stderr(&o));
+
+    // Another league's store (same config, other identity).
+    let (other, _, _) = finished("store-faults");
+    std::fs::copy(other.dir.root.join("league.db"), &db).unwrap();
+    let o = run_dir(&l);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("another league"), "{}", stderr(&o));
+    let o = status(&l);
+    assert!(!o.status.success(), "status must not show another league's store");
+    assert!(stderr(&o).contains("another league"), "{}", stderr(&o));
+    assert_eq!(pool_files(&l.dir), pool);
+
+    restore();
+    let o = run_dir(&l);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(pool_files(&l.dir), pool);
+}
+
+#[test]
+fn unrecorded_snapshot_folders_are_adopted_or_kept_never_deleted() {
+    let (l, pool, _) = finished("adopt");
+    let (name, _) = pool.iter().find(|(n, _)| n.starts_with("captors-snap-")).unwrap();
+    let src = l.dir.players_dir().join(name);
+    // A complete snapshot whose writer died before adding its row: adopted.
+    let adoptable = l.dir.players_dir().join("captors-snap-000000999999");
+    copy_dir(&src, &adoptable);
+    let meta_path = adoptable.join("meta.json");
+    let mut meta: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&meta_path).unwrap()).unwrap();
+    meta["league"]["player"] = "captors-snap-000000999999".into();
+    meta["env_steps"] = 999_999.into();
+    std::fs::write(&meta_path, serde_json::to_string_pretty(&meta).unwrap()).unwrap();
+    // A folder that verifies but names no league pool (copied by hand): kept.
+    let foreign = l.dir.players_dir().join("hand-copied");
+    copy_dir(&src, &foreign);
+    let m = foreign.join("meta.json");
+    let mut meta: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&m).unwrap()).unwrap();
+    meta.as_object_mut().unwrap().remove("league");
+    std::fs::write(&m, serde_json::to_string_pretty(&meta).unwrap()).unwrap();
+    // A temporary of a dead writer: removed.
+    let temporary = l.dir.players_dir().join(".captors-snap-000000001000.tmp-999999999");
+    copy_dir(&src, &temporary);
+
+    let o = run_dir(&l);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(err.contains("adopted players/captors-snap-000000999999"), "{err}");
+    assert!(err.contains("left players/hand-copied in place"), "{err}");
+    assert!(foreign.join("meta.json").is_file(), "a folder that verifies is never deleted");
+    assert!(!temporary.exists(), "a dead writer's temporary is removed");
+    let store = Store::open_existing(&l.dir.root).unwrap();
+    let players = store.players().unwrap();
+    let adopted = players
+        .iter()
+        .find(|p| p.name == "captors-snap-000000999999")
+        .expect("adopted into the pool");
+    assert_eq!(adopted.kind, Kind::Snapshot);
+    assert_eq!(adopted.env_steps, 999_999);
+    let parent = players.iter().find(|p| Some(p.id) == adopted.parent).unwrap();
+    assert_eq!(parent.name, "captors-main");
+    for name in pool.keys() {
+        assert!(l.dir.players_dir().join(name).is_dir(), "{name}");
+    }
+}
+
+fn copy_dir(src: &Path, dst: &Path) {
+    std::fs::create_dir_all(dst).unwrap();
+    for e in std::fs::read_dir(src).unwrap().flatten() {
+        std::fs::copy(e.path(), dst.join(e.file_name())).unwrap();
+    }
+}
+
+#[test]
+fn a_learner_never_starts_over_silently_and_a_broken_one_stops_the_league() {
+    let (l, _, _) = finished("resume");
+    let store = Store::open_existing(&l.dir.root).unwrap();
+    let row_steps = |store: &Store| {
+        store
+            .players()
+            .unwrap()
+            .into_iter()
+            .find(|p| p.name == "captors-main")
+            .unwrap()
+            .env_steps
+    };
+    let before = row_steps(&store);
+    assert_eq!(before, 640);
+    // state.json deleted: resumed from the checkpoint the store names.
+    let state = l.dir.learner_dir(t2e::env::Side::Captors).join("state.json");
+    std::fs::remove_file(&state).unwrap();
+    let o = run_dir(&l);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let log = std::fs::read_to_string(l.dir.root.join("logs/captors-main.log")).unwrap();
+    assert!(log.contains("was missing; rebuilt from"), "{log}");
+    assert!(state.is_file());
+    assert_eq!(row_steps(&store), before, "the row never moves back");
+
+    // The checkpoint state.json names is corrupt: the league stops at once
+    // with an error naming the learner and the cause (no restart loop).
+    let named: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&state).unwrap()).unwrap();
+    let ckpt = l
+        .dir
+        .learner_dir(t2e::env::Side::Captors)
+        .join("checkpoints")
+        .join(named["checkpoints"][0][1].as_str().unwrap());
+    let actor = ckpt.join("actor.safetensors");
+    let mut bytes = std::fs::read(&actor).unwrap();
+    let n = bytes.len();
+    bytes[n - 3] ^= 0xff;
+    std::fs::write(&actor, bytes).unwrap();
+    let started = Instant::now();
+    let o = run_dir(&l);
+    let err = stderr(&o);
+    assert!(!o.status.success(), "{err}");
+    assert!(err.contains("captors-main cannot start"), "{err}");
+    assert!(
+        started.elapsed() < Duration::from_secs(60),
+        "stopped at once, not restarted forever"
+    );
+}
+
+#[test]
+fn every_learner_exit_has_an_outcome_and_every_line_reaches_a_redirected_log() {
+    let l = league("exits", 2_400, "");
+    let log_path = l.tmp.join("manager.log");
+    let log = std::fs::File::create(&log_path).unwrap();
+    let mut manager = spawn_run(&l, Stdio::from(log));
+    // A SIGINT sent to the target learner alone: it checkpoints and exits;
+    // the manager starts it again rather than waiting for it forever.
+    let mut target = None;
+    wait_for("the target learner", Duration::from_secs(60), || {
+        target = child_pid(manager.id(), "--side target");
+        target.is_some()
+    });
+    std::thread::sleep(Duration::from_millis(1500));
+    signal(target.unwrap(), libc::SIGINT);
+    // A SIGKILL to the captors learner: a crash, restarted.
+    std::thread::sleep(Duration::from_millis(1000));
+    if let Some(pid) = child_pid(manager.id(), "--side captors") {
+        signal(pid, libc::SIGKILL);
+    }
+    let status = wait_exit(&mut manager, Duration::from_secs(240));
+    assert!(status.success(), "{status:?}");
+    let text = std::fs::read_to_string(&log_path).unwrap();
+    assert!(
+        text.contains("target-main crashed (stopped by a signal the manager did not send"),
+        "{text}"
+    );
+    assert!(text.contains("captors-main crashed (signal 9)"), "{text}");
+    let store = Store::open_existing(&l.dir.root).unwrap();
+    let beats = store.heartbeats().unwrap();
+    for b in beats.iter().filter(|b| b.learner.ends_with("-main")) {
+        assert_eq!(b.state, "done", "{b:?}");
+        assert_eq!(b.env_steps, 2_400);
+    }
+}
+
+#[test]
+fn status_reports_the_dead_as_dead_and_the_finished_as_they_were() {
+    let l = league("status", 200_000, "[evaluator]\nenabled = true\nepisodes = 2\ncpu_share = 1.0\n");
+    let text = std::fs::read_to_string(&l.config)
+        .unwrap()
+        .replace("[evaluator]\nenabled = false\n", "");
+    std::fs::write(&l.config, text).unwrap();
+    let mut manager = spawn_run(&l, Stdio::null());
+    wait_for("both learners training", Duration::from_secs(60), || {
+        Store::open_existing(&l.dir.root)
+            .and_then(|s| s.heartbeats())
+            .map(|b| b.iter().filter(|b| b.state == "training" && b.env_steps > 0).count() == 2)
+            .unwrap_or(false)
+    });
+    signal(manager.id() as i64, libc::SIGKILL);
+    let _ = manager.wait();
+    std::thread::sleep(Duration::from_millis(800));
+    let report = t2e::league::status::report(&l.dir).unwrap();
+    for r in &report.learners {
+        assert_ne!(r.state, "training", "{r:?}");
+        assert_ne!(r.state, "evaluating", "{r:?}");
+    }
+    assert!(report.learners.iter().any(|r| r.state == "dead"));
+    let text = t2e::league::status::render(&report);
+    assert!(text.contains("dead"), "{text}");
+}
+
+#[test]
+fn a_finished_league_keeps_its_rate_and_its_evaluator_count() {
+    let l = league("finished", 640, "[evaluator]\nenabled = true\nepisodes = 1\ncpu_share = 1.0\n");
+    let text = std::fs::read_to_string(&l.config)
+        .unwrap()
+        .replace("[evaluator]\nenabled = false\n", "");
+    std::fs::write(&l.config, text).unwrap();
+    run_to_end(&l);
+    let first = t2e::league::status::report(&l.dir).unwrap();
+    // Run the finished league again: nothing trains.
+    let o = run_dir(&l);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let again = t2e::league::status::report(&l.dir).unwrap();
+    let store = Store::open_existing(&l.dir.root).unwrap();
+    let panel = store.matches_recorded_by("evaluator").unwrap();
+    assert!(panel > 0);
+    for r in &again.learners {
+        if r.name == "evaluator" {
+            assert_eq!(r.env_steps, panel, "the evaluator counts every panel episode");
+        } else {
+            assert!(r.steps_per_s > 0.0, "{r:?}");
+            let before = first.learners.iter().find(|x| x.name == r.name).unwrap();
+            assert_eq!(r.steps_per_s, before.steps_per_s, "{}", r.name);
+        }
+    }
+}
+
+#[test]
+fn bad_arguments_and_a_missing_config_toml_change_nothing() {
+    let (l, pool, matches) = finished("inputs");
+    let root = l.dir.root.to_str().unwrap();
+    // A hidden exploiter the league does not have.
+    let o = t2e(&["league-learner", "--dir", root, "--side", "captors", "--exploiter"]);
+    assert_eq!(o.status.code(), Some(78), "{}", stderr(&o));
+    assert!(stderr(&o).contains("no captors-exploiter"), "{}", stderr(&o));
+    let store = Store::open_existing(&l.dir.root).unwrap();
+    assert!(
+        !store.players().unwrap().iter().any(|p| p.name == "captors-exploiter"),
+        "it did not join the league"
+    );
+    // Negative durations get our own error, not clap's.
+    let o = t2e(&["run", "--dir", root, "--for", "-5m"]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("must be more than 0"), "{}", stderr(&o));
+    // export --out inside the league directory.
+    let inside = l.dir.players_dir().join("my-export");
+    let o = t2e(&["export", "rule-based-target", "--dir", root, "--out", inside.to_str().unwrap()]);
+    assert!(!o.status.success());
+    let name = pool.keys().next().unwrap();
+    let o = t2e(&["export", name, "--dir", root, "--out", inside.to_str().unwrap()]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("inside the league directory"), "{}", stderr(&o));
+    assert!(!inside.exists());
+
+    // config.toml deleted: another config is refused without writing it...
+    let saved = std::fs::read_to_string(l.dir.config_path()).unwrap();
+    std::fs::remove_file(l.dir.config_path()).unwrap();
+    let other = l.tmp.join("other.toml");
+    std::fs::write(&other, config_text("inputs", 960, "")).unwrap();
+    let o = t2e(&["run", "--dir", root, "--config", other.to_str().unwrap()]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("another config"), "{}", stderr(&o));
+    assert!(!l.dir.config_path().exists(), "nothing written before the checks passed");
+    // ...status still reads the league (its config from the store)...
+    let o = status(&l);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        String::from_utf8_lossy(&o.stdout).contains(&format!("{matches} matches")),
+        "{}",
+        String::from_utf8_lossy(&o.stdout)
+    );
+    // ...and run restores it from the store.
+    let o = run_dir(&l);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("restored from the league's store"), "{}", stderr(&o));
+    assert_eq!(std::fs::read_to_string(l.dir.config_path()).unwrap(), saved);
+}
+
+/// Every file under `dir` with its length and modification time (SQLite's
+/// shared-memory index, which readers touch by design, by name only).
+fn listing(dir: &Path) -> BTreeMap<PathBuf, (u64, Option<std::time::SystemTime>)> {
+    let mut out = BTreeMap::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).unwrap().flatten() {
+            let m = e.metadata().unwrap();
+            if m.is_dir() {
+                stack.push(e.path());
+            } else {
+                let name = e.file_name().to_string_lossy().into_owned();
+                let shared_index = name.ends_with("-shm") || name.ends_with("-wal");
+                out.insert(
+                    e.path(),
+                    if shared_index {
+                        (0, None)
+                    } else {
+                        (m.len(), Some(m.modified().unwrap()))
+                    },
+                );
+            }
+        }
+    }
+    out
+}
+
+#[test]
+fn status_and_export_read_a_league_without_writing_to_it() {
+    let (l, pool, _) = finished("read-only");
+    let root = l.dir.root.to_str().unwrap();
+    let before = listing(&l.dir.root);
+    let o = status(&l);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let name = pool.keys().next().unwrap();
+    let out = l.tmp.join("exported");
+    let o = t2e(&["export", name, "--dir", root, "--out", out.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(listing(&l.dir.root), before, "status and export changed the league directory");
+
+    // And as a user without write access (root ignores file modes: drop to nobody).
+    let uid = unsafe { libc::geteuid() };
+    std::fs::set_permissions(&l.tmp, std::os::unix::fs::PermissionsExt::from_mode(0o755)).unwrap();
+    let mut stack = vec![l.dir.root.clone()];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).unwrap().flatten() {
+            if e.path().is_dir() {
+                stack.push(e.path());
+            } else {
+                std::fs::set_permissions(e.path(), std::os::unix::fs::PermissionsExt::from_mode(0o444)).unwrap();
+            }
+        }
+        std::fs::set_permissions(&d, std::os::unix::fs::PermissionsExt::from_mode(0o555)).unwrap();
+    }
+    let as_reader = |args: &[&str]| -> Output {
+        if uid == 0 {
+            Command::new("setpriv")
+                .args(["--reuid=65534", "--regid=65534", "--clear-groups", bin()])
+                .args(args)
+                .current_dir("/")
+                .output()
+                .unwrap()
+        } else {
+            Command::new(bin()).args(args).output().unwrap()
+        }
+    };
+    let probe = as_reader(&["--version"]);
+    if !probe.status.success() {
+        eprintln!("skipping the unprivileged half: cannot run as nobody here ({})", stderr(&probe));
+        return;
+    }
+    let o = as_reader(&["status", "--dir", root]);
+    assert!(o.status.success(), "status on a read-only league: {}", stderr(&o));
+    let out2 = l.tmp.join("out-nobody");
+    std::fs::create_dir_all(&out2).unwrap();
+    std::fs::set_permissions(&out2, std::os::unix::fs::PermissionsExt::from_mode(0o777)).unwrap();
+    let o = as_reader(&["export", name, "--dir", root, "--out", out2.join("x").to_str().unwrap()]);
+    assert!(o.status.success(), "export from a read-only league: {}", stderr(&o));
+}
