@@ -246,10 +246,7 @@ fn killed_at_random_moments_the_league_loses_and_duplicates_nothing() {
     assert_eq!(r, vec![9_600, 9_600], "both learners reach their budget");
     let store = Store::open(&dir.root).unwrap();
     let beats = store.heartbeats().unwrap();
-    assert!(
-        beats.iter().all(|b| b.state == "done"),
-        "{beats:?}"
-    );
+    assert!(beats.iter().all(|b| b.state == "done"), "{beats:?}");
     if killed_once {
         assert!(
             !store.crashes().unwrap().is_empty(),

@@ -188,9 +188,10 @@ fn a_learner_killed_between_checkpoints_never_rewrites_a_pool_member() {
         1_600,
         "[snapshots]\nevery_env_steps = 80\nwin_rate = 0.0\ntimeout_env_steps = 80\n",
     );
-    let text = std::fs::read_to_string(&l.config)
-        .unwrap()
-        .replace("[snapshots]\nevery_env_steps = 160\nwin_rate = 0.0\ntimeout_env_steps = 160\n", "");
+    let text = std::fs::read_to_string(&l.config).unwrap().replace(
+        "[snapshots]\nevery_env_steps = 160\nwin_rate = 0.0\ntimeout_env_steps = 160\n",
+        "",
+    );
     std::fs::write(&l.config, text).unwrap();
     let mut manager = spawn_run(&l, Stdio::null());
     let watched = l.dir.players_dir().join("captors-snap-000000000720");
@@ -214,9 +215,16 @@ fn a_learner_killed_between_checkpoints_never_rewrites_a_pool_member() {
     let store = Store::open(&l.dir.root).unwrap();
     let players = store.players().unwrap();
     for (name, first_sha) in &seen {
-        let now = t2e::util::sha256_file(&l.dir.players_dir().join(name).join("meta.json")).unwrap();
-        assert_eq!(&now, first_sha, "{name} was rewritten after it was first written");
-        let row = players.iter().find(|p| &p.name == name).unwrap_or_else(|| panic!("{name} has no row"));
+        let now =
+            t2e::util::sha256_file(&l.dir.players_dir().join(name).join("meta.json")).unwrap();
+        assert_eq!(
+            &now, first_sha,
+            "{name} was rewritten after it was first written"
+        );
+        let row = players
+            .iter()
+            .find(|p| &p.name == name)
+            .unwrap_or_else(|| panic!("{name} has no row"));
         assert_eq!(&row.checkpoint.as_ref().unwrap().1, first_sha, "{name}");
         assert!(row.quarantined.is_none(), "{name}: {:?}", row.quarantined);
     }
@@ -243,7 +251,10 @@ fn finished(name: &str) -> (League, BTreeMap<String, String>, u64) {
     run_to_end(&l);
     let pool = pool_files(&l.dir);
     assert!(pool.len() >= 4, "{pool:?}");
-    let matches = Store::open_existing(&l.dir.root).unwrap().match_count().unwrap();
+    let matches = Store::open_existing(&l.dir.root)
+        .unwrap()
+        .match_count()
+        .unwrap();
     assert!(matches > 0);
     (l, pool, matches)
 }
@@ -275,11 +286,22 @@ fn a_lost_empty_or_foreign_store_is_refused_and_the_pool_kept() {
     let o = run_dir(&l);
     assert!(!o.status.success());
     assert!(stderr(&o).contains("empty (0 bytes)"), "{}", stderr(&o));
-    assert!(stderr(&o).contains("snapshot folders in players/"), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("snapshot folders in players/"),
+        "{}",
+        stderr(&o)
+    );
     assert_eq!(pool_files(&l.dir), pool, "no snapshot folder removed");
     let o = status(&l);
-    assert!(!o.status.success(), "status must not report an empty store as a league");
-    assert_eq!(std::fs::metadata(&db).unwrap().len(), 0, "nothing written into it");
+    assert!(
+        !o.status.success(),
+        "status must not report an empty store as a league"
+    );
+    assert_eq!(
+        std::fs::metadata(&db).unwrap().len(),
+        0,
+        "nothing written into it"
+    );
 
     // Deleted.
     std::fs::remove_file(&db).unwrap();
@@ -308,9 +330,30 @@ fn a_lost_empty_or_foreign_store_is_refused_and_the_pool_kept() {
     assert!(!o.status.success());
     assert!(stderr(&o).contains("another league"), "{}", stderr(&o));
     let o = status(&l);
-    assert!(!o.status.success(), "status must not show another league's store");
+    assert!(
+        !o.status.success(),
+        "status must not show another league's store"
+    );
     assert!(stderr(&o).contains("another league"), "{}", stderr(&o));
     assert_eq!(pool_files(&l.dir), pool);
+    // Even without league.json, the snapshots name their league.
+    let identity = l.dir.identity_path();
+    let saved_identity = std::fs::read(&identity).unwrap();
+    std::fs::remove_file(&identity).unwrap();
+    let o = status(&l);
+    assert!(
+        !o.status.success(),
+        "status must not show another league's store"
+    );
+    assert!(stderr(&o).contains("different leagues"), "{}", stderr(&o));
+    let o = run_dir(&l);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("different leagues"), "{}", stderr(&o));
+    assert!(
+        !identity.exists(),
+        "nothing written before the checks passed"
+    );
+    std::fs::write(&identity, saved_identity).unwrap();
 
     restore();
     let o = run_dir(&l);
@@ -321,7 +364,10 @@ fn a_lost_empty_or_foreign_store_is_refused_and_the_pool_kept() {
 #[test]
 fn unrecorded_snapshot_folders_are_adopted_or_kept_never_deleted() {
     let (l, pool, _) = finished("adopt");
-    let (name, _) = pool.iter().find(|(n, _)| n.starts_with("captors-snap-")).unwrap();
+    let (name, _) = pool
+        .iter()
+        .find(|(n, _)| n.starts_with("captors-snap-"))
+        .unwrap();
     let src = l.dir.players_dir().join(name);
     // A complete snapshot whose writer died before adding its row: adopted.
     let adoptable = l.dir.players_dir().join("captors-snap-000000999999");
@@ -341,15 +387,24 @@ fn unrecorded_snapshot_folders_are_adopted_or_kept_never_deleted() {
     meta.as_object_mut().unwrap().remove("league");
     std::fs::write(&m, serde_json::to_string_pretty(&meta).unwrap()).unwrap();
     // A temporary of a dead writer: removed.
-    let temporary = l.dir.players_dir().join(".captors-snap-000000001000.tmp-999999999");
+    let temporary = l
+        .dir
+        .players_dir()
+        .join(".captors-snap-000000001000.tmp-999999999");
     copy_dir(&src, &temporary);
 
     let o = run_dir(&l);
     assert!(o.status.success(), "{}", stderr(&o));
     let err = stderr(&o);
-    assert!(err.contains("adopted players/captors-snap-000000999999"), "{err}");
+    assert!(
+        err.contains("adopted players/captors-snap-000000999999"),
+        "{err}"
+    );
     assert!(err.contains("left players/hand-copied in place"), "{err}");
-    assert!(foreign.join("meta.json").is_file(), "a folder that verifies is never deleted");
+    assert!(
+        foreign.join("meta.json").is_file(),
+        "a folder that verifies is never deleted"
+    );
     assert!(!temporary.exists(), "a dead writer's temporary is removed");
     let store = Store::open_existing(&l.dir.root).unwrap();
     let players = store.players().unwrap();
@@ -359,11 +414,47 @@ fn unrecorded_snapshot_folders_are_adopted_or_kept_never_deleted() {
         .expect("adopted into the pool");
     assert_eq!(adopted.kind, Kind::Snapshot);
     assert_eq!(adopted.env_steps, 999_999);
-    let parent = players.iter().find(|p| Some(p.id) == adopted.parent).unwrap();
+    let parent = players
+        .iter()
+        .find(|p| Some(p.id) == adopted.parent)
+        .unwrap();
     assert_eq!(parent.name, "captors-main");
     for name in pool.keys() {
         assert!(l.dir.players_dir().join(name).is_dir(), "{name}");
     }
+    drop(store);
+
+    // A member whose folder went missing is quarantined; back, it plays again.
+    let (name, _) = pool
+        .iter()
+        .find(|(n, _)| n.starts_with("target-snap-"))
+        .unwrap();
+    let folder = l.dir.players_dir().join(name);
+    let aside = l.tmp.join("aside");
+    std::fs::rename(&folder, &aside).unwrap();
+    let o = run_dir(&l);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains(&format!("quarantined {name}")),
+        "{}",
+        stderr(&o)
+    );
+    std::fs::rename(&aside, &folder).unwrap();
+    let o = run_dir(&l);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains(&format!("reinstated {name}")),
+        "{}",
+        stderr(&o)
+    );
+    let store = Store::open_existing(&l.dir.root).unwrap();
+    let row = store
+        .players()
+        .unwrap()
+        .into_iter()
+        .find(|p| &p.name == name)
+        .unwrap();
+    assert!(row.quarantined.is_none());
 }
 
 fn copy_dir(src: &Path, dst: &Path) {
@@ -389,7 +480,10 @@ fn a_learner_never_starts_over_silently_and_a_broken_one_stops_the_league() {
     let before = row_steps(&store);
     assert_eq!(before, 640);
     // state.json deleted: resumed from the checkpoint the store names.
-    let state = l.dir.learner_dir(t2e::env::Side::Captors).join("state.json");
+    let state = l
+        .dir
+        .learner_dir(t2e::env::Side::Captors)
+        .join("state.json");
     std::fs::remove_file(&state).unwrap();
     let o = run_dir(&l);
     assert!(o.status.success(), "{}", stderr(&o));
@@ -432,11 +526,23 @@ fn every_learner_exit_has_an_outcome_and_every_line_reaches_a_redirected_log() {
     // A SIGINT sent to the target learner alone: it checkpoints and exits;
     // the manager starts it again rather than waiting for it forever.
     let mut target = None;
-    wait_for("the target learner", Duration::from_secs(60), || {
-        target = child_pid(manager.id(), "--side target");
-        target.is_some()
-    });
-    std::thread::sleep(Duration::from_millis(1500));
+    wait_for(
+        "the target learner training",
+        Duration::from_secs(120),
+        || {
+            target = child_pid(manager.id(), "--side target");
+            let beats = Store::open_existing(&l.dir.root).and_then(|s| s.heartbeats());
+            target.is_some()
+                && beats.is_ok_and(|b| {
+                    b.iter().any(|b| {
+                        b.learner == "target-main"
+                            && b.state == "training"
+                            && b.env_steps > 0
+                            && Some(b.pid) == target
+                    })
+                })
+        },
+    );
     signal(target.unwrap(), libc::SIGINT);
     // A SIGKILL to the captors learner: a crash, restarted.
     std::thread::sleep(Duration::from_millis(1000));
@@ -461,7 +567,11 @@ fn every_learner_exit_has_an_outcome_and_every_line_reaches_a_redirected_log() {
 
 #[test]
 fn status_reports_the_dead_as_dead_and_the_finished_as_they_were() {
-    let l = league("status", 200_000, "[evaluator]\nenabled = true\nepisodes = 2\ncpu_share = 1.0\n");
+    let l = league(
+        "status",
+        200_000,
+        "[evaluator]\nenabled = true\nepisodes = 2\ncpu_share = 1.0\n",
+    );
     let text = std::fs::read_to_string(&l.config)
         .unwrap()
         .replace("[evaluator]\nenabled = false\n", "");
@@ -470,7 +580,12 @@ fn status_reports_the_dead_as_dead_and_the_finished_as_they_were() {
     wait_for("both learners training", Duration::from_secs(60), || {
         Store::open_existing(&l.dir.root)
             .and_then(|s| s.heartbeats())
-            .map(|b| b.iter().filter(|b| b.state == "training" && b.env_steps > 0).count() == 2)
+            .map(|b| {
+                b.iter()
+                    .filter(|b| b.state == "training" && b.env_steps > 0)
+                    .count()
+                    == 2
+            })
             .unwrap_or(false)
     });
     signal(manager.id() as i64, libc::SIGKILL);
@@ -488,7 +603,11 @@ fn status_reports_the_dead_as_dead_and_the_finished_as_they_were() {
 
 #[test]
 fn a_finished_league_keeps_its_rate_and_its_evaluator_count() {
-    let l = league("finished", 640, "[evaluator]\nenabled = true\nepisodes = 1\ncpu_share = 1.0\n");
+    let l = league(
+        "finished",
+        640,
+        "[evaluator]\nenabled = true\nepisodes = 1\ncpu_share = 1.0\n",
+    );
     let text = std::fs::read_to_string(&l.config)
         .unwrap()
         .replace("[evaluator]\nenabled = false\n", "");
@@ -504,7 +623,10 @@ fn a_finished_league_keeps_its_rate_and_its_evaluator_count() {
     assert!(panel > 0);
     for r in &again.learners {
         if r.name == "evaluator" {
-            assert_eq!(r.env_steps, panel, "the evaluator counts every panel episode");
+            assert_eq!(
+                r.env_steps, panel,
+                "the evaluator counts every panel episode"
+            );
         } else {
             assert!(r.steps_per_s > 0.0, "{r:?}");
             let before = first.learners.iter().find(|x| x.name == r.name).unwrap();
@@ -518,26 +640,64 @@ fn bad_arguments_and_a_missing_config_toml_change_nothing() {
     let (l, pool, matches) = finished("inputs");
     let root = l.dir.root.to_str().unwrap();
     // A hidden exploiter the league does not have.
-    let o = t2e(&["league-learner", "--dir", root, "--side", "captors", "--exploiter"]);
+    let o = t2e(&[
+        "league-learner",
+        "--dir",
+        root,
+        "--side",
+        "captors",
+        "--exploiter",
+    ]);
     assert_eq!(o.status.code(), Some(78), "{}", stderr(&o));
-    assert!(stderr(&o).contains("no captors-exploiter"), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("no captors-exploiter"),
+        "{}",
+        stderr(&o)
+    );
     let store = Store::open_existing(&l.dir.root).unwrap();
     assert!(
-        !store.players().unwrap().iter().any(|p| p.name == "captors-exploiter"),
+        !store
+            .players()
+            .unwrap()
+            .iter()
+            .any(|p| p.name == "captors-exploiter"),
         "it did not join the league"
     );
+    // An evaluator the league does not have.
+    let o = t2e(&["league-evaluator", "--dir", root]);
+    assert_eq!(o.status.code(), Some(78), "{}", stderr(&o));
+    assert!(stderr(&o).contains("no evaluator"), "{}", stderr(&o));
+    assert_eq!(store.matches_recorded_by("evaluator").unwrap(), 0);
     // Negative durations get our own error, not clap's.
     let o = t2e(&["run", "--dir", root, "--for", "-5m"]);
     assert!(!o.status.success());
     assert!(stderr(&o).contains("must be more than 0"), "{}", stderr(&o));
     // export --out inside the league directory.
     let inside = l.dir.players_dir().join("my-export");
-    let o = t2e(&["export", "rule-based-target", "--dir", root, "--out", inside.to_str().unwrap()]);
+    let o = t2e(&[
+        "export",
+        "rule-based-target",
+        "--dir",
+        root,
+        "--out",
+        inside.to_str().unwrap(),
+    ]);
     assert!(!o.status.success());
     let name = pool.keys().next().unwrap();
-    let o = t2e(&["export", name, "--dir", root, "--out", inside.to_str().unwrap()]);
+    let o = t2e(&[
+        "export",
+        name,
+        "--dir",
+        root,
+        "--out",
+        inside.to_str().unwrap(),
+    ]);
     assert!(!o.status.success());
-    assert!(stderr(&o).contains("inside the league directory"), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("inside the league directory"),
+        "{}",
+        stderr(&o)
+    );
     assert!(!inside.exists());
 
     // config.toml deleted: another config is refused without writing it...
@@ -548,7 +708,10 @@ fn bad_arguments_and_a_missing_config_toml_change_nothing() {
     let o = t2e(&["run", "--dir", root, "--config", other.to_str().unwrap()]);
     assert!(!o.status.success());
     assert!(stderr(&o).contains("another config"), "{}", stderr(&o));
-    assert!(!l.dir.config_path().exists(), "nothing written before the checks passed");
+    assert!(
+        !l.dir.config_path().exists(),
+        "nothing written before the checks passed"
+    );
     // ...status still reads the league (its config from the store)...
     let o = status(&l);
     assert!(o.status.success(), "{}", stderr(&o));
@@ -560,64 +723,78 @@ fn bad_arguments_and_a_missing_config_toml_change_nothing() {
     // ...and run restores it from the store.
     let o = run_dir(&l);
     assert!(o.status.success(), "{}", stderr(&o));
-    assert!(stderr(&o).contains("restored from the league's store"), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("restored from the league's store"),
+        "{}",
+        stderr(&o)
+    );
     assert_eq!(std::fs::read_to_string(l.dir.config_path()).unwrap(), saved);
 }
 
-/// Every file under `dir` with its length and modification time (SQLite's
-/// shared-memory index, which readers touch by design, by name only).
-fn listing(dir: &Path) -> BTreeMap<PathBuf, (u64, Option<std::time::SystemTime>)> {
+/// Every file under `dir` with its length and modification time, but
+/// SQLite's reader files (-shm, and the -wal a reader of a WAL database
+/// opens), which readers create by design and which hold no data then.
+fn listing(dir: &Path) -> BTreeMap<PathBuf, (u64, std::time::SystemTime)> {
     let mut out = BTreeMap::new();
     let mut stack = vec![dir.to_path_buf()];
     while let Some(d) = stack.pop() {
         for e in std::fs::read_dir(&d).unwrap().flatten() {
             let m = e.metadata().unwrap();
+            let name = e.file_name().to_string_lossy().into_owned();
             if m.is_dir() {
                 stack.push(e.path());
+            } else if name.ends_with("-shm") || (name.ends_with("-wal") && m.len() == 0) {
+                continue;
             } else {
-                let name = e.file_name().to_string_lossy().into_owned();
-                let shared_index = name.ends_with("-shm") || name.ends_with("-wal");
-                out.insert(
-                    e.path(),
-                    if shared_index {
-                        (0, None)
-                    } else {
-                        (m.len(), Some(m.modified().unwrap()))
-                    },
-                );
+                out.insert(e.path(), (m.len(), m.modified().unwrap()));
             }
         }
     }
     out
 }
 
+/// The entries of two listings that differ, for a short message.
+fn changed(
+    a: &BTreeMap<PathBuf, (u64, std::time::SystemTime)>,
+    b: &BTreeMap<PathBuf, (u64, std::time::SystemTime)>,
+) -> Vec<PathBuf> {
+    a.keys()
+        .chain(b.keys())
+        .filter(|k| a.get(*k) != b.get(*k))
+        .cloned()
+        .collect()
+}
+
 #[test]
 fn status_and_export_read_a_league_without_writing_to_it() {
     let (l, pool, _) = finished("read-only");
     let root = l.dir.root.to_str().unwrap();
-    let before = listing(&l.dir.root);
-    let o = status(&l);
-    assert!(o.status.success(), "{}", stderr(&o));
-    let name = pool.keys().next().unwrap();
-    let out = l.tmp.join("exported");
-    let o = t2e(&["export", name, "--dir", root, "--out", out.to_str().unwrap()]);
-    assert!(o.status.success(), "{}", stderr(&o));
-    assert_eq!(listing(&l.dir.root), before, "status and export changed the league directory");
+    let name = pool.keys().next().unwrap().clone();
+    assert!(
+        !l.dir.root.join("league.db-wal").exists(),
+        "a league left alone is one file: its write-ahead log folded in"
+    );
 
-    // And as a user without write access (root ignores file modes: drop to nobody).
+    // As a user without write access (root ignores file modes: drop to nobody).
     let uid = unsafe { libc::geteuid() };
-    std::fs::set_permissions(&l.tmp, std::os::unix::fs::PermissionsExt::from_mode(0o755)).unwrap();
-    let mut stack = vec![l.dir.root.clone()];
-    while let Some(d) = stack.pop() {
-        for e in std::fs::read_dir(&d).unwrap().flatten() {
-            if e.path().is_dir() {
-                stack.push(e.path());
-            } else {
-                std::fs::set_permissions(e.path(), std::os::unix::fs::PermissionsExt::from_mode(0o444)).unwrap();
+    let mode = |p: &Path, m: u32| {
+        std::fs::set_permissions(p, std::os::unix::fs::PermissionsExt::from_mode(m)).unwrap()
+    };
+    let set_modes = |file: u32, dir: u32| {
+        let mut stack = vec![l.dir.root.clone()];
+        while let Some(d) = stack.pop() {
+            for e in std::fs::read_dir(&d).unwrap().flatten() {
+                if e.path().is_dir() {
+                    stack.push(e.path());
+                } else {
+                    mode(&e.path(), file);
+                }
             }
+            mode(&d, dir);
         }
-        std::fs::set_permissions(&d, std::os::unix::fs::PermissionsExt::from_mode(0o555)).unwrap();
-    }
+    };
+    mode(&l.tmp, 0o755);
+    set_modes(0o444, 0o555);
     let as_reader = |args: &[&str]| -> Output {
         if uid == 0 {
             Command::new("setpriv")
@@ -631,15 +808,123 @@ fn status_and_export_read_a_league_without_writing_to_it() {
         }
     };
     let probe = as_reader(&["--version"]);
-    if !probe.status.success() {
-        eprintln!("skipping the unprivileged half: cannot run as nobody here ({})", stderr(&probe));
-        return;
+    if probe.status.success() {
+        let o = as_reader(&["status", "--dir", root]);
+        assert!(
+            o.status.success(),
+            "status on a read-only league: {}",
+            stderr(&o)
+        );
+        assert!(String::from_utf8_lossy(&o.stdout).contains("matches"));
+        let out = l.tmp.join("out-nobody");
+        std::fs::create_dir_all(&out).unwrap();
+        mode(&out, 0o777);
+        let o = as_reader(&[
+            "export",
+            &name,
+            "--dir",
+            root,
+            "--out",
+            out.join("x").to_str().unwrap(),
+        ]);
+        assert!(
+            o.status.success(),
+            "export from a read-only league: {}",
+            stderr(&o)
+        );
+    } else {
+        eprintln!(
+            "skipping the unprivileged half: cannot run as nobody here ({})",
+            stderr(&probe)
+        );
     }
-    let o = as_reader(&["status", "--dir", root]);
-    assert!(o.status.success(), "status on a read-only league: {}", stderr(&o));
-    let out2 = l.tmp.join("out-nobody");
-    std::fs::create_dir_all(&out2).unwrap();
-    std::fs::set_permissions(&out2, std::os::unix::fs::PermissionsExt::from_mode(0o777)).unwrap();
-    let o = as_reader(&["export", name, "--dir", root, "--out", out2.join("x").to_str().unwrap()]);
-    assert!(o.status.success(), "export from a read-only league: {}", stderr(&o));
+    set_modes(0o644, 0o755);
+
+    // And with write access, still nothing in the directory changes.
+    let before = listing(&l.dir.root);
+    let o = status(&l);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = l.tmp.join("exported");
+    let o = t2e(&[
+        "export",
+        &name,
+        "--dir",
+        root,
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let after = listing(&l.dir.root);
+    assert!(
+        changed(&before, &after).is_empty(),
+        "status and export changed {:?}",
+        changed(&before, &after)
+    );
+}
+
+#[test]
+fn a_file_that_is_not_this_leagues_store_is_refused_untouched() {
+    let (l, pool, _) = finished("foreign-file");
+    let db = l.dir.root.join("league.db");
+    std::fs::remove_file(&db).unwrap();
+    let rt = tokio::runtime::Builder::new_current_thread()
+        .enable_time()
+        .build()
+        .unwrap();
+    rt.block_on(async {
+        let pool = sqlx::SqlitePool::connect(&format!("sqlite://{}?mode=rwc", db.display()))
+            .await
+            .unwrap();
+        sqlx::query("CREATE TABLE notes (x TEXT)")
+            .execute(&pool)
+            .await
+            .unwrap();
+        pool.close().await;
+    });
+    let sha = t2e::util::sha256_file(&db).unwrap();
+    let o = run_dir(&l);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("not a league store"), "{}", stderr(&o));
+    assert_eq!(
+        t2e::util::sha256_file(&db).unwrap(),
+        sha,
+        "the file was changed"
+    );
+    std::fs::write(
+        &db,
+        b"random bytes, not a database at all......................................",
+    )
+    .unwrap();
+    let o = run_dir(&l);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains("restore it from a backup"),
+        "{}",
+        stderr(&o)
+    );
+    assert_eq!(pool_files(&l.dir), pool);
+}
+
+#[test]
+fn sigterm_stops_the_league_as_ctrl_c_does() {
+    let l = league("sigterm", 200_000, "");
+    let mut manager = spawn_run(&l, Stdio::null());
+    wait_for("both learners training", Duration::from_secs(120), || {
+        Store::open_existing(&l.dir.root)
+            .and_then(|s| s.heartbeats())
+            .map(|b| {
+                b.iter()
+                    .filter(|b| b.state == "training" && b.env_steps > 0)
+                    .count()
+                    == 2
+            })
+            .unwrap_or(false)
+    });
+    signal(manager.id() as i64, libc::SIGTERM);
+    let status = wait_exit(&mut manager, Duration::from_secs(60));
+    assert!(status.success(), "{status:?}");
+    let store = Store::open_existing(&l.dir.root).unwrap();
+    for b in store.heartbeats().unwrap() {
+        assert_eq!(b.state, "stopped", "{b:?}");
+    }
 }

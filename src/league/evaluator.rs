@@ -155,6 +155,23 @@ pub fn run_evaluator(dir: &LeagueDir, stop: &AtomicBool) -> Result<Outcome> {
     let opened = super::open::open_process(dir)
         .map_err(|e| anyhow::Error::new(CannotStart(format!("{e:#}"))))?;
     let (cfg, store) = (opened.cfg, opened.store);
+    if !cfg.evaluator.enabled {
+        return Err(anyhow::Error::new(CannotStart(format!(
+            "{}: this league has no evaluator ([evaluator] enabled = false)",
+            dir.config_path().display()
+        ))));
+    }
+    // Done when every learner of the league is: the main learners and any
+    // exploiters, whose snapshots need their panel games as much.
+    let mut learners: Vec<String> = [Side::Captors, Side::Target]
+        .iter()
+        .map(|s| learner_name(*s))
+        .collect();
+    for side in [Side::Captors, Side::Target] {
+        if cfg.exploiters.enabled(side) {
+            learners.push(super::learner::Seat::exploiter(side).name());
+        }
+    }
     tch::set_num_threads(1);
     let _ = rayon::ThreadPoolBuilder::new()
         .num_threads(1)
@@ -170,10 +187,10 @@ pub fn run_evaluator(dir: &LeagueDir, stop: &AtomicBool) -> Result<Outcome> {
         total += played as u64;
         if played == 0 {
             let beats = store.heartbeats()?;
-            let done = [Side::Captors, Side::Target].iter().all(|s| {
+            let done = learners.iter().all(|name| {
                 beats
                     .iter()
-                    .any(|b| b.learner == learner_name(*s) && b.state == "done")
+                    .any(|b| b.learner == *name && b.state == "done")
             });
             if done {
                 // One more pass: a last snapshot may have landed since.

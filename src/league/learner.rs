@@ -685,7 +685,12 @@ struct Started {
     learner_id: i64,
 }
 
-fn start_learner(dir: &LeagueDir, cfg: &LeagueConfig, store: &Store, seat: Seat) -> Result<Started> {
+fn start_learner(
+    dir: &LeagueDir,
+    cfg: &LeagueConfig,
+    store: &Store,
+    seat: Seat,
+) -> Result<Started> {
     let name = seat.name();
     let learner_id = store.add_player(&NewPlayer {
         name: name.clone(),
@@ -856,6 +861,16 @@ fn train_learner(
         // What every reset returns to (written once, before any training).
         trainer.save_side(side, &initial)?;
     }
+    // A snapshot of its own whose row it did not live to add (killed between
+    // the folder and the row): into the pool before anything counts snapshots.
+    for (rel, adopted) in super::pool::adopt_unrecorded(dir, store, league_id, Some(&name))? {
+        match adopted {
+            Ok(()) => {
+                eprintln!("{name}: adopted {rel}, a snapshot whose row it did not live to add")
+            }
+            Err(e) => eprintln!("{name}: left {rel} out of the pool ({e:#})"),
+        }
+    }
     let mut hooks = LeagueHooks::new(store, dir, cfg, seat, learner_id)?;
     hooks.vector_steps = trainer.env_steps / cfg.num_envs as u64;
     let mut last_snapshot = store
@@ -920,6 +935,10 @@ fn train_learner(
                 SnapshotOutcome::AlreadyInPool(snap) => eprintln!(
                     "{name}: {snap} is already in the pool (recorded before a restart); it stays as recorded"
                 ),
+                SnapshotOutcome::Blocked(snap) => eprintln!(
+                    "{name}: cannot add the snapshot {snap}: {} exists and is not a recorded member (put there by hand?); left alone, this snapshot is skipped",
+                    dir.players_dir().join(&snap).display()
+                ),
             }
             last_snapshot = trainer.env_steps;
             wins_at_snapshot = hooks.wins;
@@ -958,7 +977,12 @@ fn train_learner(
     let rate = trained as f64 / secs.max(1e-9);
     // A run that trained no step (a finished league started again) keeps
     // the rate it reported last.
-    store.heartbeat(&name, state, trainer.env_steps, (trained > 0).then_some(rate))?;
+    store.heartbeat(
+        &name,
+        state,
+        trainer.env_steps,
+        (trained > 0).then_some(rate),
+    )?;
     eprintln!(
         "{name}: {state} at {} env steps, {} matches recorded; this run {:.1} s training ({waited:.1} s waiting for the other side), {rate:.0} env steps/s",
         trainer.env_steps, hooks.matches_recorded, secs

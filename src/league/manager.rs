@@ -22,8 +22,8 @@ use super::open::{plan_start, StartPlan};
 use super::pool::{ensure_heuristic_members, reconcile};
 use super::store::{now_ms, Store};
 use super::supervision::{classify, decide, last_error_line, CrashBudget, Exit, Next};
-use crate::nn::checkpoint::write_file_atomically;
 use crate::env::Side;
+use crate::nn::checkpoint::write_file_atomically;
 use anyhow::{bail, Context, Result};
 use indicatif::{MultiProgress, ProgressBar, ProgressStyle};
 use std::fs::File;
@@ -232,7 +232,10 @@ pub fn run(
             set_store_identity,
         } => {
             if restore_config {
-                write_file_atomically(&dir.config_path(), toml::to_string_pretty(&cfg)?.as_bytes())?;
+                write_file_atomically(
+                    &dir.config_path(),
+                    toml::to_string_pretty(&cfg)?.as_bytes(),
+                )?;
                 eprintln!(
                     "{}: was missing; restored from the league's store",
                     dir.config_path().display()
@@ -287,10 +290,15 @@ pub fn run(
         eprintln!("adopted {a}: a complete snapshot whose row its writer did not live to add");
     }
     for (u, why) in &found.unrecorded {
-        eprintln!("left {u} in place, out of the pool: no row names it and it cannot be adopted ({why})");
+        eprintln!(
+            "left {u} in place, out of the pool: no row names it and it cannot be adopted ({why})"
+        );
     }
     for q in &found.quarantined {
         eprintln!("quarantined {q}: its checkpoint files are missing or corrupt");
+    }
+    for r in &found.reinstated {
+        eprintln!("reinstated {r}: its files are back and verify against its recorded hash");
     }
     let mut seats = vec![Seat::main(Side::Captors), Seat::main(Side::Target)];
     for side in [Side::Captors, Side::Target] {
@@ -374,11 +382,14 @@ pub fn run(
                         p.failures = 0;
                     }
                     p.failures += 1;
+                    // Ctrl-C reaches the learners and the manager at once:
+                    // a learner that stopped on it was asked to.
+                    let asked = stopping || stop.load(Ordering::SeqCst);
                     let next = decide(
                         &p.role.name(),
                         &exit,
                         message.as_deref(),
-                        stopping,
+                        asked,
                         &mut p.crashes,
                         now_ms(),
                         p.failures,
@@ -387,7 +398,7 @@ pub fn run(
                     match next {
                         Next::Finished => p.finished = true,
                         Next::Restart { after, cause } => {
-                            store.record_crash(&p.role.name(), &cause, &tail(&log, 5))?;
+                            record_crash(&multi, &store, &p.role.name(), &cause, &tail(&log, 5));
                             say(
                                 &multi,
                                 format!(
@@ -401,15 +412,11 @@ pub fn run(
                         }
                         Next::StopLeague { why } => {
                             if exit != Exit::CannotStart {
-                                let cause = why.clone();
-                                store.record_crash(&p.role.name(), &cause, &tail(&log, 5))?;
+                                record_crash(&multi, &store, &p.role.name(), &why, &tail(&log, 5));
                             }
                             say(
                                 &multi,
-                                format!(
-                                    "{why} (log: {})",
-                                    p.role.log_path(dir).display()
-                                ),
+                                format!("{why} (log: {})", p.role.log_path(dir).display()),
                             );
                             p.finished = true;
                             failure.get_or_insert(why);
@@ -435,15 +442,17 @@ pub fn run(
         }
         if last_status.elapsed() >= Duration::from_secs(2) {
             last_status = Instant::now();
-            let beats = store.heartbeats()?;
-            let matches = store.match_count()?;
-            for (bar, p) in bars.iter().zip(&procs) {
-                if let Some(b) = beats.iter().find(|b| b.learner == p.role.name()) {
-                    bar.set_position(b.env_steps);
-                    bar.set_message(format!(
-                        "| {:.0} steps/s | {} | {matches} matches",
-                        b.steps_per_s, b.state
-                    ));
+            // The bars are a view: a store that cannot be read for a moment
+            // (busy, disk full) must not end the league.
+            if let (Ok(beats), Ok(matches)) = (store.heartbeats(), store.match_count()) {
+                for (bar, p) in bars.iter().zip(&procs) {
+                    if let Some(b) = beats.iter().find(|b| b.learner == p.role.name()) {
+                        bar.set_position(b.env_steps);
+                        bar.set_message(format!(
+                            "| {:.0} steps/s | {} | {matches} matches",
+                            b.steps_per_s, b.state
+                        ));
+                    }
                 }
             }
         }
@@ -465,6 +474,17 @@ pub fn run(
     match failure {
         Some(why) => bail!("{why}"),
         None => Ok(()),
+    }
+}
+
+/// Records a crash in the store; a store that cannot take it (disk full)
+/// is reported, and the league goes on.
+fn record_crash(multi: &MultiProgress, store: &Store, name: &str, cause: &str, tail: &str) {
+    if let Err(e) = store.record_crash(name, cause, tail) {
+        say(
+            multi,
+            format!("could not record the crash of {name} in the store: {e}"),
+        );
     }
 }
 

@@ -65,7 +65,13 @@ pub fn plan_start(dir: &LeagueDir, given: Option<&Path>) -> Result<StartPlan> {
         None => Err("missing"),
         Some(0) => Err("empty (0 bytes)"),
         Some(_) => {
-            let store = Store::open_existing(&dir.root)?;
+            // Read-only: a file that is not this league's store (another
+            // program's database, a corrupt one) is refused untouched.
+            let store = Store::inspect(&dir.root).map_err(|e| {
+                anyhow::anyhow!(
+                    "{e}. Nothing was changed; restore league.db from a backup, or move {root} aside"
+                )
+            })?;
             match store.stored_config()? {
                 Some(toml) => Ok((store, toml)),
                 None => Err("holds no league (its tables are empty: truncated, or its write-ahead log league.db-wal was lost)"),
@@ -142,29 +148,7 @@ pub fn plan_start(dir: &LeagueDir, given: Option<&Path>) -> Result<StartPlan> {
             name: stored_cfg.name.clone(),
         },
     };
-    // Snapshots name their league: a pool of another league beside this
-    // store means the store (or the pool) is not this league's.
-    if let Ok(entries) = std::fs::read_dir(dir.players_dir()) {
-        for e in entries.flatten() {
-            let name = e.file_name().to_string_lossy().into_owned();
-            if name.starts_with('.') {
-                continue;
-            }
-            if let Ok(meta) = crate::nn::checkpoint::read_meta(&e.path()) {
-                if let Some(m) = meta.league {
-                    if m.league_id != identity.league_id {
-                        bail!(
-                            "{}: belongs to league {}, but {} is league {}: the store and the pool are from different leagues",
-                            e.path().display(),
-                            m.league_id,
-                            db.display(),
-                            identity.league_id
-                        );
-                    }
-                }
-            }
-        }
-    }
+    check_pool_identity(dir, &identity.league_id, &db)?;
     Ok(StartPlan::Resume {
         cfg: stored_cfg,
         restore_config: on_disk.is_none(),
@@ -210,14 +194,45 @@ pub fn open_read_only(dir: &LeagueDir) -> Result<(LeagueConfig, Store)> {
             db.display()
         );
     };
-    check_identity(dir, &store)?;
-    let cfg = if dir.config_path().is_file() {
-        dir.config()?
-    } else {
-        LeagueConfig::parse(&stored)
-            .map_err(|e| anyhow::anyhow!("{}: the config it holds is invalid: {e}", db.display()))?
+    let stored_cfg = LeagueConfig::parse(&stored)
+        .map_err(|e| anyhow::anyhow!("{}: the config it holds is invalid: {e}", db.display()))?;
+    if let Some(id) = check_identity(dir, &store)? {
+        check_pool_identity(dir, &id, &db)?;
+    }
+    if dir.config_path().is_file() && dir.config()? != stored_cfg {
+        bail!(
+            "{}: differs from the config {} holds: the store is another league's, or config.toml was edited",
+            dir.config_path().display(),
+            db.display()
+        );
+    }
+    Ok((stored_cfg, store))
+}
+
+/// Snapshots name their league: a pool of another league beside this store
+/// means the store (or the pool) is not this league's.
+fn check_pool_identity(dir: &LeagueDir, league_id: &str, db: &Path) -> Result<()> {
+    let Ok(entries) = std::fs::read_dir(dir.players_dir()) else {
+        return Ok(());
     };
-    Ok((cfg, store))
+    for e in entries.flatten() {
+        if e.file_name().to_string_lossy().starts_with('.') {
+            continue;
+        }
+        if let Ok(meta) = crate::nn::checkpoint::read_meta(&e.path()) {
+            if let Some(m) = meta.league {
+                if m.league_id != league_id {
+                    bail!(
+                        "{}: belongs to league {}, but {} is league {league_id}: the store and the pool are from different leagues",
+                        e.path().display(),
+                        m.league_id,
+                        db.display(),
+                    );
+                }
+            }
+        }
+    }
+    Ok(())
 }
 
 /// The store's identity, checked against `league.json`; None for a league

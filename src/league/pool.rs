@@ -36,8 +36,11 @@ pub fn snapshot_name(seat: Seat, env_steps: u64) -> String {
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum SnapshotOutcome {
     Added(String),
-    /// The name is already recorded (or its folder exists): nothing written.
+    /// The name is already recorded: nothing written.
     AlreadyInPool(String),
+    /// Something the store does not record sits at the snapshot's path (put
+    /// there by hand): it is left alone and this snapshot is skipped.
+    Blocked(String),
 }
 
 /// A frozen copy of the learner joins the pool: files written (synced,
@@ -54,8 +57,11 @@ pub fn add_snapshot(
 ) -> Result<SnapshotOutcome> {
     let name = snapshot_name(seat, trainer.env_steps);
     let folder = dir.players_dir().join(&name);
-    if folder.exists() || store.players()?.iter().any(|p| p.name == name) {
+    if store.players()?.iter().any(|p| p.name == name) {
         return Ok(SnapshotOutcome::AlreadyInPool(name));
+    }
+    if folder.symlink_metadata().is_ok() {
+        return Ok(SnapshotOutcome::Blocked(name));
     }
     trainer.save_pool_member(
         seat.side,
@@ -91,6 +97,8 @@ pub struct Reconciled {
     pub unrecorded: Vec<(String, String)>,
     /// Rows whose files are missing or corrupt.
     pub quarantined: Vec<String>,
+    /// Quarantined rows whose files verify again.
+    pub reinstated: Vec<String>,
 }
 
 /// Checks a league directory's pool against its files at start (see the
@@ -101,29 +109,8 @@ pub fn reconcile(dir: &LeagueDir, store: &Store, league_id: &str) -> Result<Reco
     for p in crate::nn::checkpoint::clean_stale_temporaries(&players_dir)? {
         out.removed_temporaries.push(dir.relative(&p));
     }
-    let mut entries: Vec<_> = match std::fs::read_dir(&players_dir) {
-        Ok(it) => it.flatten().map(|e| e.path()).collect(),
-        Err(_) => Vec::new(),
-    };
-    entries.sort();
-    for path in entries {
-        let name = path
-            .file_name()
-            .unwrap_or_default()
-            .to_string_lossy()
-            .into_owned();
-        if name.starts_with('.') {
-            continue; // a live writer's temporary
-        }
-        let rel = dir.relative(&path);
-        let players = store.players()?;
-        if players
-            .iter()
-            .any(|p| p.checkpoint.as_ref().is_some_and(|(r, _)| *r == rel))
-        {
-            continue;
-        }
-        match adopt(dir, store, league_id, &path, &name, &players) {
+    for (rel, adopted) in adopt_unrecorded(dir, store, league_id, None)? {
+        match adopted {
             Ok(()) => out.adopted.push(rel),
             Err(why) => out.unrecorded.push((rel, format!("{why:#}"))),
         }
@@ -143,6 +130,71 @@ pub fn reconcile(dir: &LeagueDir, store: &Store, league_id: &str) -> Result<Reco
             store.quarantine(p.id, "checkpoint files missing or corrupt at league start")?;
             out.quarantined.push(p.name.clone());
         }
+    }
+    // A member quarantined because its files were missing, whose files are
+    // back and verify against the hash recorded with it, plays again: they
+    // are the very weights that played its recorded matches.
+    for p in store
+        .players()?
+        .iter()
+        .filter(|p| p.kind == Kind::Snapshot && p.quarantined.is_some())
+    {
+        let Some((rel, sha)) = &p.checkpoint else {
+            continue;
+        };
+        let meta = dir.root.join(rel).join("meta.json");
+        if crate::util::sha256_file(&meta).is_ok_and(|got| &got == sha)
+            && PolicySnapshot::load(&dir.root.join(rel), p.side).is_ok()
+        {
+            store.reinstate(p.id)?;
+            out.reinstated.push(p.name.clone());
+        }
+    }
+    Ok(out)
+}
+
+/// Snapshot folders in `players/` that no row names (of the learner
+/// `parent` only, if given), each with the result of adopting it.
+pub fn adopt_unrecorded(
+    dir: &LeagueDir,
+    store: &Store,
+    league_id: &str,
+    parent: Option<&str>,
+) -> Result<Vec<(String, Result<()>)>> {
+    let mut out = Vec::new();
+    let mut entries: Vec<_> = match std::fs::read_dir(dir.players_dir()) {
+        Ok(it) => it.flatten().map(|e| e.path()).collect(),
+        Err(_) => Vec::new(),
+    };
+    entries.sort();
+    for path in entries {
+        let name = path
+            .file_name()
+            .unwrap_or_default()
+            .to_string_lossy()
+            .into_owned();
+        if name.starts_with('.') {
+            continue; // a live writer's temporary
+        }
+        if let Some(parent) = parent {
+            let mine = read_meta(&path)
+                .ok()
+                .and_then(|m| m.league)
+                .is_some_and(|m| m.parent == parent);
+            if !mine {
+                continue;
+            }
+        }
+        let rel = dir.relative(&path);
+        let players = store.players()?;
+        if players
+            .iter()
+            .any(|p| p.checkpoint.as_ref().is_some_and(|(r, _)| *r == rel))
+        {
+            continue;
+        }
+        let adopted = adopt(dir, store, league_id, &path, &name, &players);
+        out.push((rel, adopted));
     }
     Ok(out)
 }

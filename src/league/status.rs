@@ -212,6 +212,7 @@ pub fn report(dir: &LeagueDir) -> Result<StatusReport> {
         .collect();
     let stage = history.last().map(|h| h.stage).unwrap_or(0);
     let now = now_ms();
+    let panel_episodes = store.matches_recorded_by("evaluator")?;
     Ok(StatusReport {
         league: cfg.name.clone(),
         dir: dir.root.display().to_string(),
@@ -227,11 +228,18 @@ pub fn report(dir: &LeagueDir) -> Result<StatusReport> {
             .into_iter()
             .map(|b| {
                 let age = (now - b.at_ms) as f64 / 1000.0;
+                // The evaluator beats after each pass; the store counts
+                // every panel episode the moment it is recorded.
+                let env_steps = if b.learner == "evaluator" {
+                    panel_episodes
+                } else {
+                    b.env_steps
+                };
                 LearnerRow {
                     state: shown_state(&b, age),
                     name: b.learner,
                     pid: b.pid,
-                    env_steps: b.env_steps,
+                    env_steps,
                     steps_per_s: b.steps_per_s,
                     heartbeat_age_s: age,
                 }
@@ -427,6 +435,12 @@ pub fn export(dir: &LeagueDir, player: &str, out: &Path) -> Result<()> {
     }
     // Loading verifies every weight file against meta.json and refuses NaN.
     crate::nn::PolicySnapshot::load(&src, p.side)?;
+    if let Some(why) = &p.quarantined {
+        eprintln!(
+            "note: {} is quarantined ({why}); its files verify against the hashes recorded with it, so they are exported",
+            p.name
+        );
+    }
     if out.exists() {
         bail!("{}: already exists; pick a new --out", out.display());
     }

@@ -241,15 +241,8 @@ impl Store {
     /// read-only copy. The schema is not migrated; an older one is refused
     /// with the command that migrates it.
     pub fn open_read_only(league_dir: &Path) -> Result<Store, StoreError> {
-        let path = league_dir.join("league.db");
-        check_present(&path)?;
-        let store = match Store::connect(league_dir, Access::ReadOnly { immutable: false }) {
-            Ok(s) => s,
-            // A WAL database whose -shm file is absent and cannot be created
-            // (a read-only directory) opens only as immutable; no process can
-            // be writing it then, since a writer would have created the file.
-            Err(_) => Store::connect(league_dir, Access::ReadOnly { immutable: true })?,
-        };
+        let store = Store::inspect(league_dir)?;
+        let path = store.path.clone();
         let applied: Vec<i64> = store
             .rt
             .block_on(
@@ -274,11 +267,51 @@ impl Store {
             .iter()
             .find(|v| !MIGRATOR.iter().any(|m| m.version == **v))
         {
-            return Err(StoreError::NewerSchema {
-                path,
-                version: *v,
-            });
+            return Err(StoreError::NewerSchema { path, version: *v });
         }
+        Ok(store)
+    }
+
+    /// Opens a store read-only whatever its schema version, to check what
+    /// it holds before anything is written (a file that is not a league's
+    /// store is refused untouched).
+    pub fn inspect(league_dir: &Path) -> Result<Store, StoreError> {
+        let path = league_dir.join("league.db");
+        check_present(&path)?;
+        let probe = |store: &Store| {
+            store
+                .rt
+                .block_on(sqlx::query("SELECT COUNT(*) FROM league_config").fetch_one(&store.pool))
+                .map(|_| ())
+                .map_err(|e| store.db(e))
+        };
+        let normal = Store::connect(league_dir, Access::ReadOnly { immutable: false })
+            .and_then(|s| probe(&s).map(|()| s));
+        let store = match normal {
+            Ok(s) => s,
+            Err(first) => {
+                // A WAL database whose -shm file is absent and cannot be
+                // created (a read-only directory) opens only as immutable,
+                // which ignores the write-ahead log: refuse rather than read
+                // a stale store when the log holds changes.
+                let wal = league_dir.join("league.db-wal");
+                if std::fs::metadata(&wal).is_ok_and(|m| m.len() > 0) {
+                    return Err(StoreError::Invalid(format!(
+                        "{}: cannot be read here ({first}); its write-ahead log {} holds changes not yet in it, which only a process that can write the directory can read",
+                        path.display(),
+                        wal.display()
+                    )));
+                }
+                let s = Store::connect(league_dir, Access::ReadOnly { immutable: true })?;
+                probe(&s).map_err(|e| {
+                    StoreError::Invalid(format!(
+                        "{}: not a league store, or not readable as one ({e}); restore it from a backup",
+                        path.display()
+                    ))
+                })?;
+                s
+            }
+        };
         Ok(store)
     }
 
@@ -363,14 +396,27 @@ impl Store {
             .map_err(|e| self.db(e))
     }
 
-    /// The league's identity, if one was written.
+    /// The league's identity, if one was written (a store from before
+    /// identities has no such column until it is migrated).
     pub fn league_id(&self) -> Result<Option<String>, StoreError> {
+        let row = self
+            .rt
+            .block_on(
+                sqlx::query("SELECT * FROM league_config WHERE id = 1").fetch_optional(&self.pool),
+            )
+            .map_err(|e| self.db(e))?;
+        Ok(row.and_then(|r| r.try_get::<Option<String>, _>("league_id").ok().flatten()))
+    }
+
+    /// Takes a member back into play: its files verify again.
+    pub fn reinstate(&self, id: i64) -> Result<(), StoreError> {
         self.rt
             .block_on(
-                sqlx::query("SELECT league_id FROM league_config WHERE id = 1")
-                    .fetch_optional(&self.pool),
+                sqlx::query("UPDATE players SET quarantined = NULL WHERE id = $1")
+                    .bind(id)
+                    .execute(&self.pool),
             )
-            .map(|r| r.and_then(|r| r.get::<Option<String>, _>(0)))
+            .map(|_| ())
             .map_err(|e| self.db(e))
     }
 
@@ -858,6 +904,15 @@ impl Store {
     }
 }
 
+impl Drop for Store {
+    /// Closes the connection, so the last one to close folds the
+    /// write-ahead log into league.db and removes it: a league left alone
+    /// is a single file that a reader without write access can open.
+    fn drop(&mut self) {
+        self.rt.block_on(self.pool.close());
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -947,9 +1002,7 @@ mod tests {
             .heartbeat("captors-main", "training", 1280, Some(530.0))
             .unwrap();
         assert_eq!(store.heartbeats().unwrap().len(), 1);
-        store
-            .heartbeat("captors-main", "done", 1280, None)
-            .unwrap();
+        store.heartbeat("captors-main", "done", 1280, None).unwrap();
         let beat = &store.heartbeats().unwrap()[0];
         assert_eq!(
             (beat.state.as_str(), beat.steps_per_s),

@@ -80,9 +80,14 @@ impl CrashBudget {
 pub enum Next {
     Finished,
     /// Restart after this wait; the crash (with its cause) is recorded.
-    Restart { after: Duration, cause: String },
+    Restart {
+        after: Duration,
+        cause: String,
+    },
     /// Stop every process and end `run` with this error.
-    StopLeague { why: String },
+    StopLeague {
+        why: String,
+    },
 }
 
 /// Back-off before restart number `failures` (1, 2, ...): 2, 4, 8, 16, 30 s.
@@ -171,12 +176,24 @@ mod tests {
         assert_eq!(classify(None, Some(9)), Exit::Crashed("signal 9".into()));
         let mut h = Vec::new();
         let d = |exit: Exit, stopping: bool, h: &mut Vec<(i64, String)>| {
-            decide("captors-main", &exit, Some("boom"), stopping, h, 1_000, 1, B)
+            decide(
+                "captors-main",
+                &exit,
+                Some("boom"),
+                stopping,
+                h,
+                1_000,
+                1,
+                B,
+            )
         };
         assert_eq!(d(Exit::Done, false, &mut h), Next::Finished);
         assert_eq!(d(Exit::Done, true, &mut h), Next::Finished);
         assert_eq!(d(Exit::Stopped, true, &mut h), Next::Finished);
-        assert_eq!(d(Exit::Crashed("signal 9".into()), true, &mut h), Next::Finished);
+        assert_eq!(
+            d(Exit::Crashed("signal 9".into()), true, &mut h),
+            Next::Finished
+        );
         assert!(h.is_empty(), "nothing above is a crash");
         assert_eq!(
             d(Exit::CannotStart, false, &mut h),
@@ -201,19 +218,34 @@ mod tests {
         let at = |h: &mut Vec<(i64, String)>, t: i64, msg: &str| {
             decide("target-main", &crash, Some(msg), false, h, t, 1, B)
         };
-        assert!(matches!(at(&mut h, 0, "checkpoint corrupt"), Next::Restart { .. }));
+        assert!(matches!(
+            at(&mut h, 0, "checkpoint corrupt"),
+            Next::Restart { .. }
+        ));
         // Another cause between does not add up with it.
-        assert!(matches!(at(&mut h, 1_000, "disk full"), Next::Restart { .. }));
-        assert!(matches!(at(&mut h, 2_000, "checkpoint corrupt"), Next::Restart { .. }));
+        assert!(matches!(
+            at(&mut h, 1_000, "disk full"),
+            Next::Restart { .. }
+        ));
+        assert!(matches!(
+            at(&mut h, 2_000, "checkpoint corrupt"),
+            Next::Restart { .. }
+        ));
         match at(&mut h, 3_000, "checkpoint corrupt") {
             Next::StopLeague { why } => {
-                assert!(why.starts_with("target-main crashed 3 times within 10 min"), "{why}");
+                assert!(
+                    why.starts_with("target-main crashed 3 times within 10 min"),
+                    "{why}"
+                );
                 assert!(why.contains("exit code 1: checkpoint corrupt"), "{why}");
             }
             other => panic!("{other:?}"),
         }
         // Outside the window, old crashes no longer count.
-        let mut h = vec![(0, "exit code 1: x".to_string()), (1, "exit code 1: x".to_string())];
+        let mut h = vec![
+            (0, "exit code 1: x".to_string()),
+            (1, "exit code 1: x".to_string()),
+        ];
         assert!(matches!(
             decide("c", &crash, Some("x"), false, &mut h, 600_001, 1, B),
             Next::Restart { .. }
@@ -231,7 +263,9 @@ mod tests {
             Some("checkpoints/x: meta.json missing")
         );
         let panic = "thread 'main' panicked at src/x.rs:3:5:\nindex out of bounds\n";
-        assert!(last_error_line(panic).unwrap().contains("panicked at src/x.rs"));
+        assert!(last_error_line(panic)
+            .unwrap()
+            .contains("panicked at src/x.rs"));
         assert_eq!(last_error_line("all fine\n"), None);
     }
 }

@@ -255,16 +255,9 @@ pub fn write_new_dir_atomically(
     write_dir(dir, fill, false)
 }
 
-fn write_dir(
-    dir: &Path,
-    fill: impl FnOnce(&Path) -> Result<()>,
-    replace: bool,
-) -> Result<Written> {
+fn write_dir(dir: &Path, fill: impl FnOnce(&Path) -> Result<()>, replace: bool) -> Result<Written> {
     if !replace && dir.exists() {
-        bail!(
-            "{}: already exists; refusing to replace it",
-            dir.display()
-        );
+        bail!("{}: already exists; refusing to replace it", dir.display());
     }
     let parent = dir.parent().unwrap_or(Path::new("."));
     std::fs::create_dir_all(parent)
