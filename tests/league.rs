@@ -5,6 +5,8 @@
 //! none lost from what was recorded, no duplicate member, no orphan file,
 //! and learners that continue from their last checkpoints.
 
+mod common;
+
 use std::collections::BTreeSet;
 use std::path::Path;
 use std::process::{Child, Command, Stdio};
@@ -146,30 +148,9 @@ fn check(dir: &LeagueDir) -> (u64, Vec<u64>) {
     (store.match_count().unwrap(), resume)
 }
 
-/// The learner processes the manager `manager` spawned (from /proc).
+/// The learner processes the manager `manager` spawned.
 fn learner_pids(manager: u32) -> Vec<i64> {
-    let mut pids = Vec::new();
-    for e in std::fs::read_dir("/proc").unwrap().flatten() {
-        let Ok(pid) = e.file_name().to_string_lossy().parse::<i64>() else {
-            continue;
-        };
-        let Ok(stat) = std::fs::read_to_string(e.path().join("stat")) else {
-            continue;
-        };
-        // Fields after the command name (which may hold spaces): state, ppid, ...
-        let Some(rest) = stat.rsplit_once(')').map(|(_, r)| r) else {
-            continue;
-        };
-        let ppid: u32 = rest
-            .split_whitespace()
-            .nth(1)
-            .and_then(|x| x.parse().ok())
-            .unwrap_or(0);
-        if ppid == manager {
-            pids.push(pid);
-        }
-    }
-    pids
+    common::children_of(manager, "league-learner")
 }
 
 #[test]

@@ -5,6 +5,8 @@
 //! every process exit has one defined outcome, status never shows a process
 //! that is gone as alive, and nothing is written before every check passed.
 
+mod common;
+
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Output, Stdio};
@@ -117,29 +119,22 @@ fn signal(pid: i64, sig: i32) {
 
 /// The child of `manager` whose command line holds `needle`.
 fn child_pid(manager: u32, needle: &str) -> Option<i64> {
-    for e in std::fs::read_dir("/proc").unwrap().flatten() {
-        let Ok(pid) = e.file_name().to_string_lossy().parse::<i64>() else {
-            continue;
-        };
-        let Ok(stat) = std::fs::read_to_string(e.path().join("stat")) else {
-            continue;
-        };
-        let Some(rest) = stat.rsplit_once(')').map(|(_, r)| r) else {
-            continue;
-        };
-        let ppid: u32 = rest
-            .split_whitespace()
-            .nth(1)
-            .and_then(|x| x.parse().ok())
-            .unwrap_or(0);
-        let cmd = std::fs::read(e.path().join("cmdline"))
-            .map(|c| String::from_utf8_lossy(&c).replace('\0', " "))
-            .unwrap_or_default();
-        if ppid == manager && cmd.contains(needle) {
-            return Some(pid);
-        }
-    }
-    None
+    common::children_of(manager, needle).first().copied()
+}
+
+/// Waits until both main learners have trained a step.
+fn wait_both_training(l: &League, limit: Duration) {
+    wait_for("both learners training", limit, || {
+        Store::open_existing(&l.dir.root)
+            .and_then(|s| s.heartbeats())
+            .map(|b| {
+                b.iter()
+                    .filter(|b| b.state == "training" && b.env_steps > 0)
+                    .count()
+                    == 2
+            })
+            .unwrap_or(false)
+    });
 }
 
 fn wait_for(what: &str, limit: Duration, mut ready: impl FnMut() -> bool) {
@@ -577,17 +572,7 @@ fn status_reports_the_dead_as_dead_and_the_finished_as_they_were() {
         .replace("[evaluator]\nenabled = false\n", "");
     std::fs::write(&l.config, text).unwrap();
     let mut manager = spawn_run(&l, Stdio::null());
-    wait_for("both learners training", Duration::from_secs(60), || {
-        Store::open_existing(&l.dir.root)
-            .and_then(|s| s.heartbeats())
-            .map(|b| {
-                b.iter()
-                    .filter(|b| b.state == "training" && b.env_steps > 0)
-                    .count()
-                    == 2
-            })
-            .unwrap_or(false)
-    });
+    wait_both_training(&l, Duration::from_secs(60));
     signal(manager.id() as i64, libc::SIGKILL);
     let _ = manager.wait();
     std::thread::sleep(Duration::from_millis(800));
@@ -909,17 +894,7 @@ fn a_file_that_is_not_this_leagues_store_is_refused_untouched() {
 fn sigterm_stops_the_league_as_ctrl_c_does() {
     let l = league("sigterm", 200_000, "");
     let mut manager = spawn_run(&l, Stdio::null());
-    wait_for("both learners training", Duration::from_secs(120), || {
-        Store::open_existing(&l.dir.root)
-            .and_then(|s| s.heartbeats())
-            .map(|b| {
-                b.iter()
-                    .filter(|b| b.state == "training" && b.env_steps > 0)
-                    .count()
-                    == 2
-            })
-            .unwrap_or(false)
-    });
+    wait_both_training(&l, Duration::from_secs(120));
     signal(manager.id() as i64, libc::SIGTERM);
     let status = wait_exit(&mut manager, Duration::from_secs(60));
     assert!(status.success(), "{status:?}");

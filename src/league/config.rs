@@ -317,24 +317,7 @@ impl LeagueConfig {
         }
         // The worlds and the rollout first: the budget check below divides
         // by them, and must not blame the budget for an impossible rollout.
-        if !(1..=4096).contains(&self.num_envs) {
-            return Err(format!(
-                "num_envs = {}: must be in 1..=4096 (worlds per learner)",
-                self.num_envs
-            ));
-        }
-        if !(1..=100_000).contains(&self.rollout_steps) {
-            return Err(format!(
-                "rollout_steps = {}: must be in 1..=100000",
-                self.rollout_steps
-            ));
-        }
-        if self.num_envs * self.rollout_steps > 4_000_000 {
-            return Err(format!(
-                "num_envs x rollout_steps = {} x {}: a rollout of more than 4,000,000 steps does not fit in memory",
-                self.num_envs, self.rollout_steps
-            ));
-        }
+        crate::learn::train::check_rollout(self.num_envs, self.rollout_steps)?;
         let per_iteration = (self.num_envs * self.rollout_steps) as u64;
         if self.env_steps_per_learner < per_iteration.max(1) {
             return Err(format!(

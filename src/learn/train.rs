@@ -167,6 +167,28 @@ impl SideConfig {
     }
 }
 
+/// Worlds and steps per world of one rollout: each in range, and the
+/// rollout small enough to hold (checked before anything divides by them).
+pub fn check_rollout(num_envs: usize, rollout_steps: usize) -> Result<(), String> {
+    if !(1..=4096).contains(&num_envs) {
+        return Err(format!(
+            "num_envs = {num_envs}: must be in 1..=4096 (the paper uses 16 to 32)"
+        ));
+    }
+    if !(1..=100_000).contains(&rollout_steps) {
+        return Err(format!(
+            "rollout_steps = {rollout_steps}: must be in 1..=100000"
+        ));
+    }
+    if num_envs * rollout_steps > 4_000_000 {
+        return Err(format!(
+            "num_envs x rollout_steps = {}: a rollout of more than 4,000,000 steps does not fit in memory",
+            num_envs * rollout_steps
+        ));
+    }
+    Ok(())
+}
+
 impl TrainConfig {
     /// Reads a TOML config; errors name the file and the field.
     /// A config file as a user wrote it: it must name its protocol.
@@ -201,24 +223,7 @@ impl TrainConfig {
         env.observations = true;
         env.validate().map_err(|e| format!("env.{e}"))?;
         validate_name(&self.name)?;
-        if !(1..=4096).contains(&self.num_envs) {
-            return Err(format!(
-                "num_envs = {}: must be in 1..=4096 (the paper uses 16 to 32)",
-                self.num_envs
-            ));
-        }
-        if !(1..=100_000).contains(&self.rollout_steps) {
-            return Err(format!(
-                "rollout_steps = {}: must be in 1..=100000",
-                self.rollout_steps
-            ));
-        }
-        if self.num_envs * self.rollout_steps > 4_000_000 {
-            return Err(format!(
-                "num_envs x rollout_steps = {}: a rollout of more than 4,000,000 steps does not fit in memory",
-                self.num_envs * self.rollout_steps
-            ));
-        }
+        check_rollout(self.num_envs, self.rollout_steps)?;
         let per_iteration = (self.num_envs * self.rollout_steps) as u64;
         if self.total_env_steps < per_iteration {
             return Err(format!(

@@ -168,9 +168,9 @@ fn same_files(a: &Path, b: &Path) -> bool {
         })
 }
 
-/// Swaps two paths in one step (Linux `renameat2(RENAME_EXCHANGE)`).
+/// Linux `renameat2(a, b, flags)`.
 #[cfg(target_os = "linux")]
-fn exchange(a: &Path, b: &Path) -> std::io::Result<()> {
+fn renameat2(a: &Path, b: &Path, flags: libc::c_uint) -> std::io::Result<()> {
     use std::ffi::CString;
     use std::os::unix::ffi::OsStrExt;
     let ca = CString::new(a.as_os_str().as_bytes())?;
@@ -183,7 +183,7 @@ fn exchange(a: &Path, b: &Path) -> std::io::Result<()> {
             ca.as_ptr(),
             libc::AT_FDCWD,
             cb.as_ptr(),
-            libc::RENAME_EXCHANGE,
+            flags,
         )
     };
     if rc == 0 {
@@ -193,34 +193,23 @@ fn exchange(a: &Path, b: &Path) -> std::io::Result<()> {
     }
 }
 
+/// Swaps two paths in one step (Linux `renameat2(RENAME_EXCHANGE)`).
+#[cfg(target_os = "linux")]
+fn exchange(a: &Path, b: &Path) -> std::io::Result<()> {
+    renameat2(a, b, libc::RENAME_EXCHANGE)
+}
+
 /// Renames `a` to `b` unless `b` exists (Linux `RENAME_NOREPLACE`; elsewhere
 /// a check, then the rename, which is enough for a writer holding its
 /// learner's lock).
 fn rename_no_replace(a: &Path, b: &Path) -> std::io::Result<()> {
     #[cfg(target_os = "linux")]
-    {
-        use std::ffi::CString;
-        use std::os::unix::ffi::OsStrExt;
-        let ca = CString::new(a.as_os_str().as_bytes())?;
-        let cb = CString::new(b.as_os_str().as_bytes())?;
-        // SAFETY: both paths are valid NUL-terminated strings for the call's duration.
-        let rc = unsafe {
-            libc::syscall(
-                libc::SYS_renameat2,
-                libc::AT_FDCWD,
-                ca.as_ptr(),
-                libc::AT_FDCWD,
-                cb.as_ptr(),
-                libc::RENAME_NOREPLACE,
-            )
-        };
-        if rc == 0 {
-            return Ok(());
+    match renameat2(a, b, libc::RENAME_NOREPLACE) {
+        Ok(()) => return Ok(()),
+        Err(e) if !matches!(e.raw_os_error(), Some(libc::EINVAL) | Some(libc::ENOSYS)) => {
+            return Err(e)
         }
-        let err = std::io::Error::last_os_error();
-        if err.raw_os_error() != Some(libc::EINVAL) && err.raw_os_error() != Some(libc::ENOSYS) {
-            return Err(err);
-        }
+        Err(_) => {}
     }
     if b.exists() {
         return Err(std::io::Error::from(std::io::ErrorKind::AlreadyExists));

@@ -32,3 +32,33 @@ pub fn env_with(cfg: EnvConfig, m: Arc<Vec<Arc<PreparedMap>>>, robots: Vec<Robot
     env.set_robots(0, robots);
     env
 }
+
+/// The children of process `parent` whose command line holds `needle`
+/// (from /proc), with their pids.
+pub fn children_of(parent: u32, needle: &str) -> Vec<i64> {
+    let mut pids = Vec::new();
+    for e in std::fs::read_dir("/proc").unwrap().flatten() {
+        let Ok(pid) = e.file_name().to_string_lossy().parse::<i64>() else {
+            continue;
+        };
+        let Ok(stat) = std::fs::read_to_string(e.path().join("stat")) else {
+            continue;
+        };
+        // Fields after the command name (which may hold spaces): state, ppid, ...
+        let Some(rest) = stat.rsplit_once(')').map(|(_, r)| r) else {
+            continue;
+        };
+        let ppid: u32 = rest
+            .split_whitespace()
+            .nth(1)
+            .and_then(|x| x.parse().ok())
+            .unwrap_or(0);
+        let cmd = std::fs::read(e.path().join("cmdline"))
+            .map(|c| String::from_utf8_lossy(&c).replace('\0', " "))
+            .unwrap_or_default();
+        if ppid == parent && cmd.contains(needle) {
+            pids.push(pid);
+        }
+    }
+    pids
+}
