@@ -92,8 +92,14 @@ pub struct SettingIdentity {
     pub captors: String,
     /// SHA-256 of the captor checkpoint's actor weights (None for heuristics).
     pub captors_sha256: Option<String>,
+    /// SHA-256 of the captor checkpoint's `meta.json`: the sidecar names the
+    /// protocol and learner the table rows show, so an edited sidecar is
+    /// another setting. (Missing in identities written before it existed,
+    /// which therefore match no setting of this build.)
+    pub captors_meta_sha256: Option<String>,
     pub target: String,
     pub target_sha256: Option<String>,
+    pub target_meta_sha256: Option<String>,
     pub num_captors: usize,
     /// Exact v_e / v_p.
     pub speed_ratio: f64,
@@ -115,20 +121,28 @@ impl SettingIdentity {
         maps_label: &str,
         maps: &[Arc<PreparedMap>],
     ) -> Result<SettingIdentity, String> {
-        let weights = |spec: &ControllerSpec, side: Side| -> Result<Option<String>, String> {
+        type Hashes = (Option<String>, Option<String>);
+        let hashes = |spec: &ControllerSpec, side: Side| -> Result<Hashes, String> {
             match spec {
                 ControllerSpec::Checkpoint(c) => {
                     let snap = c.snapshot(side)?;
-                    Ok(snap.meta.files.get("actor.safetensors").cloned())
+                    Ok((
+                        snap.meta.files.get("actor.safetensors").cloned(),
+                        Some(snap.meta_sha256.clone()),
+                    ))
                 }
-                _ => Ok(None),
+                _ => Ok((None, None)),
             }
         };
+        let (captors_sha256, captors_meta_sha256) = hashes(&setting.captors, Side::Captors)?;
+        let (target_sha256, target_meta_sha256) = hashes(&setting.target, Side::Target)?;
         Ok(SettingIdentity {
             captors: setting.captors.to_string(),
-            captors_sha256: weights(&setting.captors, Side::Captors)?,
+            captors_sha256,
+            captors_meta_sha256,
             target: setting.target.to_string(),
-            target_sha256: weights(&setting.target, Side::Target)?,
+            target_sha256,
+            target_meta_sha256,
             num_captors: setting.num_captors,
             speed_ratio: setting.speed_ratio,
             capture_rule: setting.capture_rule,
