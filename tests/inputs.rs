@@ -102,6 +102,20 @@ fn a_map_listed_with_two_classes_is_refused_naming_the_file_map_classes_and_line
         1
     );
 
+    // A map file in capitals is a map of the folder too (it was skipped),
+    // and two files of one name are refused.
+    let dir = map_folder(&[]);
+    std::fs::copy(dir.path().join("a.png"), dir.path().join("C.PNG")).unwrap();
+    let names: Vec<String> = catalog::list_dir(dir.path())
+        .unwrap()
+        .into_iter()
+        .map(|e| e.name)
+        .collect();
+    assert_eq!(names, ["C", "a", "b"]);
+    std::fs::copy(dir.path().join("a.png"), dir.path().join("a.PNG")).unwrap();
+    let err = err_of(catalog::list_dir(dir.path()));
+    assert!(err.contains("are both map 'a'"), "{err}");
+
     // `maps generate` merges into a manifest: a contradictory one is
     // refused before any map is written.
     let dir = map_folder(&[("manifest.csv", "map,split\nx,small\nx,large\n")]);
@@ -163,6 +177,7 @@ fn summary(maps: &str, episodes: usize, episode_length: u32, sr: f64) -> Summary
     Summary {
         captors: "ckpt:runs/mappo".into(),
         captors_learner: "MAPPO".into(),
+        captors_sha256: None,
         target: "heuristic".into(),
         num_captors: 3,
         speed_ratio: 1.0,

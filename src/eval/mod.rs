@@ -200,6 +200,12 @@ pub struct Summary {
     /// the controller (`captors_learner`).
     #[serde(default = "unknown_protocol")]
     pub captors_learner: String,
+    /// SHA-256 of the captor checkpoint's actor weights (None for
+    /// heuristics, and in summaries written before the field): `ckpt:RUN`
+    /// names the run's newest checkpoint, so two summaries under one name
+    /// can hold other weights, and a table must not join them in one row.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub captors_sha256: Option<String>,
     pub target: String,
     pub num_captors: usize,
     pub speed_ratio: f64,
@@ -378,6 +384,17 @@ pub fn training_protocol(setting: &EvalSetting) -> String {
     }
 }
 
+/// SHA-256 of the captors' actor weights, for a checkpoint.
+pub fn captors_weights(spec: &ControllerSpec) -> Option<String> {
+    match spec {
+        ControllerSpec::Checkpoint(c) => c
+            .snapshot(Side::Captors)
+            .ok()
+            .and_then(|s| s.meta.files.get("actor.safetensors").cloned()),
+        _ => None,
+    }
+}
+
 /// The learner (checkpoint algorithm) or controller behind the captors.
 pub fn captors_learner(spec: &ControllerSpec) -> String {
     match spec {
@@ -414,6 +431,7 @@ pub fn summarise(setting: &EvalSetting, maps_label: &str, records: &[EpisodeReco
     Summary {
         captors: setting.captors.to_string(),
         captors_learner: captors_learner(&setting.captors),
+        captors_sha256: captors_weights(&setting.captors),
         target: setting.target.to_string(),
         num_captors: setting.num_captors,
         speed_ratio: setting.speed_ratio,

@@ -89,6 +89,13 @@ fn differences(a: &Summary, b: &Summary) -> String {
         a.captors_learner.clone(),
         b.captors_learner.clone(),
     );
+    if let (Some(x), Some(y)) = (&a.captors_sha256, &b.captors_sha256) {
+        field(
+            "captor weights (actor sha256)",
+            x[..12.min(x.len())].to_string(),
+            y[..12.min(y.len())].to_string(),
+        );
+    }
     if d.is_empty() {
         d.push(format!(
             "the same options but other results (SR {:.1} vs {:.1}, Time {:.1} vs {:.1}): other weights, maps or code behind the same names (compare setting.json in their setting folders)",
@@ -108,7 +115,9 @@ fn differences(a: &Summary, b: &Summary) -> String {
 /// shown as one: two different summaries for one cell (keeping either would
 /// hide the other), and cells of one row with different episode counts,
 /// episode lengths or capture rules (SR and Time would not compare across
-/// the row). The same summary given twice (the same folder named twice) is
+/// the row), or of other captors behind one name (another learner, other
+/// weights: `ckpt:RUN` is the run's newest checkpoint, which moves on while
+/// the run trains). The same summary given twice (the same folder named twice) is
 /// one result and is shown once. Rows may differ from each other in episode
 /// count and length: the last column says it for each row.
 fn rows(summaries: &[Sourced]) -> Result<(BTreeMap<usize, Vec<Row<'_>>>, usize), String> {
@@ -158,9 +167,15 @@ fn rows(summaries: &[Sourced]) -> Result<(BTreeMap<usize, Vec<Row<'_>>>, usize),
             ));
         }
         for (other_source, other) in rows[i].cells.iter().flatten() {
+            let other_weights = matches!(
+                (&other.captors_sha256, &s.captors_sha256),
+                (Some(x), Some(y)) if x != y
+            );
             if other.episodes != s.episodes
                 || other.episode_length != s.episode_length
                 || other.capture_rule != s.capture_rule
+                || other.captors_learner != s.captors_learner
+                || other_weights
             {
                 return Err(format!(
                     "one table row ({}:1 at v_p:v_e 1.0:{}, captors {} ({})) would join {} from {other_source} and {} from {source}, which differ in {}: a row is one setting over the three classes; evaluate the classes alike",
@@ -303,6 +318,7 @@ mod tests {
         Summary {
             captors: format!("ckpt:runs/{learner}"),
             captors_learner: learner.into(),
+            captors_sha256: None,
             target: target.into(),
             num_captors: k,
             speed_ratio: ratio,
@@ -411,6 +427,18 @@ mod tests {
                 "{err}"
             );
         }
+        // Other weights behind the same checkpoint name, in one row: refused.
+        let weights = |maps: &str, sha: &str| Summary {
+            maps: maps.into(),
+            captors_sha256: Some(sha.repeat(64)),
+            ..base.clone()
+        };
+        let err =
+            markdown(&sourced(vec![weights("small", "a"), weights("large", "b")])).unwrap_err();
+        assert!(
+            err.contains("captor weights (actor sha256) aaaaaaaaaaaa vs bbbbbbbbbbbb"),
+            "{err}"
+        );
         // Rows may differ from each other; each says its episodes and length.
         let strict = Summary {
             captors: "ckpt:runs/strict".into(),

@@ -145,10 +145,27 @@ pub fn list_dir(dir: &Path) -> Result<Vec<MapEntry>> {
     let mut entries = Vec::new();
     for e in std::fs::read_dir(dir).with_context(|| format!("cannot list {}", dir.display()))? {
         let path = e?.path();
-        if path.extension().and_then(|x| x.to_str()) != Some("png") {
+        // Any case: a folder of .PNG files (or a mix) is not silently
+        // smaller than it looks.
+        if !path
+            .extension()
+            .and_then(|x| x.to_str())
+            .is_some_and(|x| x.eq_ignore_ascii_case("png"))
+            || !path.is_file()
+        {
             continue;
         }
         let name = path.file_stem().unwrap().to_string_lossy().into_owned();
+        // Maps are known by name (class lists, episode records): two files
+        // of one name would be two maps nobody can tell apart.
+        if let Some(other) = entries.iter().find(|e: &&MapEntry| e.name == name) {
+            bail!(
+                "map folder {}: {} and {} are both map '{name}'; keep one",
+                dir.display(),
+                other.path.display(),
+                path.display()
+            );
+        }
         entries.push(MapEntry {
             listed_class: classes.get(&name).map(|l| l.class),
             name,
