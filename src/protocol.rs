@@ -42,32 +42,54 @@ impl Protocol {
     }
 
     /// Checks that the training maps fit the protocol: none of the Gibson
-    /// test maps under held-out, only Gibson maps under paper. `spec` is the
-    /// config's `maps` value, for the message.
+    /// test maps under held-out, neither as they are (recognised by content)
+    /// nor as near-copies (mirrored, turned, padded, shifted or a few pixels
+    /// changed: `map::testset::resembled_test_map`); only the 26 Gibson maps
+    /// themselves, unmodified, under paper. `spec` is the config's `maps`
+    /// value, for the message. The maps are compared in parallel; the error
+    /// names the first offending map in order (and how many more there are).
     pub fn check_training_maps(
         self,
         spec: &str,
         maps: &[std::sync::Arc<PreparedMap>],
     ) -> Result<(), String> {
-        for m in maps {
-            let gibson = crate::map::testset::gibson_name(&m.grid);
-            match (self, gibson) {
-                (Protocol::HeldOut, Some(name)) => {
-                    return Err(format!(
-                        "maps = \"{spec}\": map '{}' is the Gibson test map {name} (recognised by its content), in the test set of protocol = \"held-out\"; train on generated maps (generated:N, shipped or a folder of your own), or set protocol = \"paper\" to train on the test maps as the paper did",
-                        m.grid.name
-                    ))
+        use crate::map::testset::{
+            gibson_class, gibson_name, resembled_test_map, NEAR_COPY_THRESHOLD,
+        };
+        use rayon::prelude::*;
+        let errors: Vec<String> = maps
+            .par_iter()
+            .filter_map(|m| {
+                let name = &m.grid.name;
+                match (self, gibson_name(&m.grid)) {
+                    (Protocol::HeldOut, Some(test)) => Some(format!(
+                        "map '{name}' is the Gibson test map {test} ({}; recognised by its content), in the test set of protocol = \"held-out\"; train on generated maps (generated:N, shipped or a folder of your own), or set protocol = \"paper\" to train on the test maps as the paper did",
+                        gibson_class(test).map_or("no class", |c| c.name())
+                    )),
+                    (Protocol::HeldOut, None) => resembled_test_map(&m.grid, NEAR_COPY_THRESHOLD).map(|r| format!(
+                        "map '{name}' is a near-copy of {r}: an edited copy of a test map (mirrored, turned, padded, shifted or a few pixels changed) is still the test set of protocol = \"held-out\"; train on generated maps (generated:N, shipped or a folder of your own), or set protocol = \"paper\" and maps = \"gibson\" to train on the test maps as the paper did"
+                    )),
+                    (Protocol::Paper, None) => Some(match resembled_test_map(&m.grid, NEAR_COPY_THRESHOLD) {
+                        Some(r) => format!(
+                            "map '{name}' is not one of the 26 Gibson maps but a near-copy of {r}; protocol = \"paper\" trains on exactly those maps, unmodified (maps = \"gibson\"); use protocol = \"held-out\" for other training maps (and no copies of the test maps)"
+                        ),
+                        None => format!(
+                            "map '{name}' is not one of the 26 Gibson maps, and protocol = \"paper\" trains on exactly those (maps = \"gibson\"); use protocol = \"held-out\" for other training maps"
+                        ),
+                    }),
+                    (Protocol::Paper, Some(_)) => None,
                 }
-                (Protocol::Paper, None) => {
-                    return Err(format!(
-                        "maps = \"{spec}\": map '{}' is not one of the 26 Gibson maps, and protocol = \"paper\" trains on exactly those (maps = \"gibson\"); use protocol = \"held-out\" for other training maps",
-                        m.grid.name
-                    ))
-                }
-                _ => {}
-            }
+            })
+            .collect();
+        match errors.split_first() {
+            None => Ok(()),
+            Some((first, [])) => Err(format!("maps = \"{spec}\": {first}")),
+            Some((first, rest)) => Err(format!(
+                "maps = \"{spec}\": {first} (and {} more of its maps do not fit protocol = \"{}\")",
+                rest.len(),
+                self.name()
+            )),
         }
-        Ok(())
     }
 }
 

@@ -150,3 +150,40 @@ fn the_test_set_is_recognised_by_content() {
     );
     assert_eq!(t2e::map::testset::gibson_name(&generated), None);
 }
+
+/// The fingerprints of the Gibson folder, as `map::testset` embeds them.
+fn fingerprint_file(dir: &std::path::Path) -> Vec<u8> {
+    use t2e::map::fingerprint::{encode, Fingerprint};
+    let maps: Vec<_> = list_dir(dir)
+        .unwrap()
+        .iter()
+        .map(|e| (Fingerprint::of(&e.load().unwrap()), e.listed_class))
+        .collect();
+    encode(&maps)
+}
+
+#[test]
+fn the_embedded_fingerprints_are_those_of_the_test_maps() {
+    let Some(dir) = gibson_or_skip() else { return };
+    let file = fingerprint_file(&dir);
+    assert!(
+        file == t2e::map::testset::FINGERPRINTS_FILE,
+        "src/map/gibson_fingerprints.bin is not the fingerprint of {}: regenerate it with cargo test --release --test gibson_maps -- --ignored write_test_map_fingerprints",
+        dir.display()
+    );
+    let probes = t2e::map::testset::test_probes();
+    assert_eq!(probes.len(), 26);
+    assert!(probes.iter().all(|(_, class)| class.is_some()));
+}
+
+/// Writes src/map/gibson_fingerprints.bin from the Gibson folder.
+#[test]
+#[ignore]
+fn write_test_map_fingerprints() {
+    let dir = gibson_or_skip().expect("the Gibson maps are needed");
+    let out =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("src/map/gibson_fingerprints.bin");
+    let bytes = fingerprint_file(&dir);
+    std::fs::write(&out, &bytes).unwrap();
+    eprintln!("wrote {} ({} bytes)", out.display(), bytes.len());
+}

@@ -20,13 +20,26 @@ pub struct EvalArgs {
     pub target: ControllerSpec,
     /// Map sets, comma-separated: small, medium, large (Gibson classes), gibson,
     /// shipped, a folder, FOLDER:CLASS, or a .png file. One table row per set.
-    #[arg(long, default_value = "shipped", value_delimiter = ',')]
+    #[arg(
+        long,
+        default_value = "shipped",
+        value_delimiter = ',',
+        allow_hyphen_values = true
+    )]
     pub maps: Vec<String>,
     /// Numbers of captors K, comma-separated (3,4 for the paper's 3:1 and 4:1).
-    #[arg(long, default_value = "3", value_delimiter = ',')]
+    // The list options take values that start with '-', so that `--k -1`
+    // reaches our own check (which says what K must be) instead of clap's
+    // "unexpected argument".
+    #[arg(long, default_value = "3", value_delimiter = ',', allow_hyphen_values = true, value_parser = parse_k)]
     pub k: Vec<usize>,
     /// Target speed over captor speed, comma-separated (1.0,1.2,1.4 in the paper).
-    #[arg(long, default_value = "1.0", value_delimiter = ',')]
+    #[arg(
+        long,
+        default_value = "1.0",
+        value_delimiter = ',',
+        allow_hyphen_values = true
+    )]
     pub speed_ratio: Vec<f64>,
     /// Test episodes per setting.
     #[arg(long, default_value_t = 500)]
@@ -54,6 +67,19 @@ pub struct EvalArgs {
     /// soon as it finishes.
     #[arg(long)]
     pub resume: bool,
+}
+
+/// One value of `--k`: a number of captors, 1 to 32.
+fn parse_k(text: &str) -> Result<usize, String> {
+    let k: i64 = text.trim().parse().map_err(|_| {
+        format!("K = '{text}': not a whole number (K is the number of captors, e.g. --k 3,4)")
+    })?;
+    if !(1..=32).contains(&k) {
+        return Err(format!(
+            "K = {k}: the number of captors must be at least 1 and at most 32"
+        ));
+    }
+    Ok(k as usize)
 }
 
 /// Loads and prepares the maps of every spec once.

@@ -171,7 +171,22 @@ fn find_map(map: &str) -> Result<PathBuf> {
 }
 
 fn show(map: &str, out: &Path, scale: u32) -> Result<()> {
+    let ext = out.extension().and_then(|e| e.to_str()).unwrap_or("");
+    if !ext.eq_ignore_ascii_case("png") {
+        bail!(
+            "--out {}: show writes a PNG picture, so the file must end in .png",
+            out.display()
+        );
+    }
     let path = find_map(map)?;
+    if let (Ok(a), Ok(b)) = (path.canonicalize(), out.canonicalize()) {
+        if a == b {
+            bail!(
+                "--out {}: is the map {map} itself; the picture would replace the map",
+                out.display()
+            );
+        }
+    }
     let grid = load_png(&path)?;
     let prepared = PreparedMap::new(grid);
     let img = map_image_prepared(&prepared, scale);
@@ -179,7 +194,11 @@ fn show(map: &str, out: &Path, scale: u32) -> Result<()> {
         std::fs::create_dir_all(dir)
             .with_context(|| format!("cannot create folder {}", dir.display()))?;
     }
-    img.save_with_format(out, image::ImageFormat::Png)
+    // Written whole and renamed into place (a killed run leaves the old file).
+    let mut bytes = std::io::Cursor::new(Vec::new());
+    img.write_to(&mut bytes, image::ImageFormat::Png)
+        .with_context(|| format!("cannot encode {}", out.display()))?;
+    crate::nn::checkpoint::write_file_atomically(out, bytes.get_ref())
         .with_context(|| format!("cannot write {}", out.display()))?;
     let g = &prepared.grid;
     println!(
@@ -216,10 +235,37 @@ pub fn read_manifest(path: &Path) -> Result<Vec<ManifestRow>> {
         .trim(csv::Trim::All)
         .from_path(path)
         .with_context(|| format!("cannot read {}", path.display()))?;
-    let mut rows = Vec::new();
-    for (i, row) in reader.deserialize::<ManifestRow>().enumerate() {
+    let headers = reader
+        .headers()
+        .with_context(|| format!("{}: cannot read its header", path.display()))?
+        .clone();
+    let mut rows: Vec<ManifestRow> = Vec::new();
+    let mut lines: BTreeMap<String, u64> = BTreeMap::new();
+    for (i, rec) in reader.records().enumerate() {
         // Row 1 is the header.
-        rows.push(row.with_context(|| format!("{}: row {}", path.display(), i + 2))?);
+        let rec = rec.with_context(|| format!("{}: row {}", path.display(), i + 2))?;
+        let line = rec.position().map_or(i as u64 + 2, |p| p.line());
+        let row: ManifestRow = rec
+            .deserialize(Some(&headers))
+            .with_context(|| format!("{}: row {} (line {line})", path.display(), i + 2))?;
+        // The same map twice with other classes: refused, as the catalog
+        // refuses it (`map::catalog::class_lists`); keeping either row
+        // would silently move the map to another class.
+        if let Some(&before) = lines.get(&row.map) {
+            let first = rows.iter().find(|r| r.map == row.map).unwrap();
+            if first.split != row.split {
+                bail!(
+                    "{}: map '{}' is listed as {} (line {before}) and as {} (line {line}); remove one of the rows",
+                    path.display(),
+                    row.map,
+                    first.split,
+                    row.split
+                );
+            }
+            continue;
+        }
+        lines.insert(row.map.clone(), line);
+        rows.push(row);
     }
     Ok(rows)
 }
@@ -261,6 +307,16 @@ pub fn generate_maps(class: SizeClass, seed: u64, count: u64, out: &Path) -> Res
     let last = seed.checked_add(count - 1).with_context(|| {
         format!("--seed {seed} with --count {count} runs past the largest seed")
     })?;
+    // A folder with a splits.csv is a test set (the Gibson maps): the
+    // manifest would add generated maps to its classes.
+    if out.join("splits.csv").is_file() {
+        bail!(
+            "--out {}: holds a splits.csv (a map set such as the Gibson test maps); generated maps and their manifest.csv would join its classes: write them to a folder of their own",
+            out.display()
+        );
+    }
+    // A manifest that cannot be merged is refused before any map is written.
+    read_manifest(&out.join("manifest.csv"))?;
     std::fs::create_dir_all(out)
         .with_context(|| format!("cannot create folder {}", out.display()))?;
     let cfg = GeneratorConfig::default();

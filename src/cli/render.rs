@@ -20,10 +20,10 @@ pub struct RenderArgs {
     #[arg(long, default_value = "heuristic")]
     pub target: ControllerSpec,
     /// Number of captors K.
-    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..=32))]
+    #[arg(long, default_value_t = 3, allow_negative_numbers = true, value_parser = clap::value_parser!(u32).range(1..=32))]
     pub k: u32,
     /// Target speed over captor speed (captors move at 1.0 m/s; 1.0, 1.2, 1.4 in the paper).
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
     pub speed_ratio: f64,
     /// Steps before the episode ends uncaptured (500 in evaluation).
     #[arg(long, default_value_t = 500)]

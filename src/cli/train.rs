@@ -76,7 +76,12 @@ pub fn run(args: TrainArgs) -> Result<()> {
         );
         t
     } else {
-        std::fs::write(run_dir.join("config.toml"), toml::to_string_pretty(&cfg)?)?;
+        // Written whole and renamed: a run killed here leaves no half config
+        // for --resume to read.
+        crate::nn::checkpoint::write_file_atomically(
+            &run_dir.join("config.toml"),
+            toml::to_string_pretty(&cfg)?.as_bytes(),
+        )?;
         let _ = std::fs::remove_file(run_dir.join("metrics.csv"));
         Trainer::new(cfg.clone(), maps)?
     };

@@ -92,8 +92,14 @@ pub struct SettingIdentity {
     pub captors: String,
     /// SHA-256 of the captor checkpoint's actor weights (None for heuristics).
     pub captors_sha256: Option<String>,
+    /// SHA-256 of the captor checkpoint's `meta.json`: the sidecar names the
+    /// protocol and learner the table rows show, so an edited sidecar is
+    /// another setting. (Missing in identities written before it existed,
+    /// which therefore match no setting of this build.)
+    pub captors_meta_sha256: Option<String>,
     pub target: String,
     pub target_sha256: Option<String>,
+    pub target_meta_sha256: Option<String>,
     pub num_captors: usize,
     /// Exact v_e / v_p.
     pub speed_ratio: f64,
@@ -115,20 +121,28 @@ impl SettingIdentity {
         maps_label: &str,
         maps: &[Arc<PreparedMap>],
     ) -> Result<SettingIdentity, String> {
-        let weights = |spec: &ControllerSpec, side: Side| -> Result<Option<String>, String> {
+        type Hashes = (Option<String>, Option<String>);
+        let hashes = |spec: &ControllerSpec, side: Side| -> Result<Hashes, String> {
             match spec {
                 ControllerSpec::Checkpoint(c) => {
                     let snap = c.snapshot(side)?;
-                    Ok(snap.meta.files.get("actor.safetensors").cloned())
+                    Ok((
+                        snap.meta.files.get("actor.safetensors").cloned(),
+                        Some(snap.meta_sha256.clone()),
+                    ))
                 }
-                _ => Ok(None),
+                _ => Ok((None, None)),
             }
         };
+        let (captors_sha256, captors_meta_sha256) = hashes(&setting.captors, Side::Captors)?;
+        let (target_sha256, target_meta_sha256) = hashes(&setting.target, Side::Target)?;
         Ok(SettingIdentity {
             captors: setting.captors.to_string(),
-            captors_sha256: weights(&setting.captors, Side::Captors)?,
+            captors_sha256,
+            captors_meta_sha256,
             target: setting.target.to_string(),
-            target_sha256: weights(&setting.target, Side::Target)?,
+            target_sha256,
+            target_meta_sha256,
             num_captors: setting.num_captors,
             speed_ratio: setting.speed_ratio,
             capture_rule: setting.capture_rule,
@@ -186,6 +200,12 @@ pub struct Summary {
     /// the controller (`captors_learner`).
     #[serde(default = "unknown_protocol")]
     pub captors_learner: String,
+    /// SHA-256 of the captor checkpoint's actor weights (None for
+    /// heuristics, and in summaries written before the field): `ckpt:RUN`
+    /// names the run's newest checkpoint, so two summaries under one name
+    /// can hold other weights, and a table must not join them in one row.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub captors_sha256: Option<String>,
     pub target: String,
     pub num_captors: usize,
     pub speed_ratio: f64,
@@ -364,6 +384,17 @@ pub fn training_protocol(setting: &EvalSetting) -> String {
     }
 }
 
+/// SHA-256 of the captors' actor weights, for a checkpoint.
+pub fn captors_weights(spec: &ControllerSpec) -> Option<String> {
+    match spec {
+        ControllerSpec::Checkpoint(c) => c
+            .snapshot(Side::Captors)
+            .ok()
+            .and_then(|s| s.meta.files.get("actor.safetensors").cloned()),
+        _ => None,
+    }
+}
+
 /// The learner (checkpoint algorithm) or controller behind the captors.
 pub fn captors_learner(spec: &ControllerSpec) -> String {
     match spec {
@@ -400,6 +431,7 @@ pub fn summarise(setting: &EvalSetting, maps_label: &str, records: &[EpisodeReco
     Summary {
         captors: setting.captors.to_string(),
         captors_learner: captors_learner(&setting.captors),
+        captors_sha256: captors_weights(&setting.captors),
         target: setting.target.to_string(),
         num_captors: setting.num_captors,
         speed_ratio: setting.speed_ratio,

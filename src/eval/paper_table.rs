@@ -5,6 +5,7 @@
 //! Markdown and LaTeX.
 
 use super::{ratio_label, Summary};
+use crate::env::CaptureRule;
 use std::collections::BTreeMap;
 use std::fmt::Write;
 
@@ -49,22 +50,81 @@ fn paper_cells(k: usize, ratio: f64, learner: &str) -> String {
         .join("; ")
 }
 
+/// A summary and where it was read (its eval folder's summary.json), so a
+/// conflict can name both files.
+pub type Sourced = (String, Summary);
+
 /// One row: a (speed ratio, captors) pair and its summaries per class.
 struct Row<'a> {
     ratio: f64,
     captors: String,
     learner: String,
     protocol: String,
-    cells: [Option<&'a Summary>; 3],
+    cells: [Option<&'a Sourced>; 3],
+}
+
+/// What differs between two summaries (the fields a reader cannot see in
+/// the table), for conflict messages.
+fn differences(a: &Summary, b: &Summary) -> String {
+    let mut d = Vec::new();
+    let mut field = |name: &str, x: String, y: String| {
+        if x != y {
+            d.push(format!("{name} {x} vs {y}"));
+        }
+    };
+    field("episodes", a.episodes.to_string(), b.episodes.to_string());
+    field(
+        "episode_length",
+        a.episode_length.to_string(),
+        b.episode_length.to_string(),
+    );
+    field(
+        "capture_rule",
+        format!("{:?}", a.capture_rule).to_lowercase(),
+        format!("{:?}", b.capture_rule).to_lowercase(),
+    );
+    field("seed", a.seed.to_string(), b.seed.to_string());
+    field(
+        "learner",
+        a.captors_learner.clone(),
+        b.captors_learner.clone(),
+    );
+    if let (Some(x), Some(y)) = (&a.captors_sha256, &b.captors_sha256) {
+        field(
+            "captor weights (actor sha256)",
+            x[..12.min(x.len())].to_string(),
+            y[..12.min(y.len())].to_string(),
+        );
+    }
+    if d.is_empty() {
+        d.push(format!(
+            "the same options but other results (SR {:.1} vs {:.1}, Time {:.1} vs {:.1}): other weights, maps or code behind the same names (compare setting.json in their setting folders)",
+            a.sr, b.sr, a.time, b.time
+        ));
+    }
+    d.join(", ")
 }
 
 /// Groups the summaries into the paper's rows. Summaries against anything
 /// but the rule-based target, or on maps other than the three classes, do
 /// not belong in these tables: they are counted in the second value.
-fn rows(summaries: &[Summary]) -> (BTreeMap<usize, Vec<Row<'_>>>, usize) {
+///
+/// A table cell holds one result and a row one setting over the three
+/// classes, so inputs that do not fit are refused, naming both files and
+/// what differs, rather than one of them being picked or two settings being
+/// shown as one: two different summaries for one cell (keeping either would
+/// hide the other), and cells of one row with different episode counts,
+/// episode lengths or capture rules (SR and Time would not compare across
+/// the row), or of other captors behind one name (another learner, other
+/// weights: `ckpt:RUN` is the run's newest checkpoint, which moves on while
+/// the run trains). The same summary given twice (the same folder named twice) is
+/// one result and is shown once. Rows may differ from each other in episode
+/// count and length: the last column says it for each row.
+fn rows(summaries: &[Sourced]) -> Result<(BTreeMap<usize, Vec<Row<'_>>>, usize), String> {
     let mut by_k: BTreeMap<usize, Vec<Row>> = BTreeMap::new();
     let mut left_out = 0;
-    for s in summaries {
+    for sourced in summaries {
+        let (source, s) = sourced;
         let class = CLASSES.iter().position(|c| *c == s.maps);
         let Some(class) = class.filter(|_| s.target == "heuristic") else {
             left_out += 1;
@@ -89,24 +149,82 @@ fn rows(summaries: &[Summary]) -> (BTreeMap<usize, Vec<Row<'_>>>, usize) {
                 rows.len() - 1
             }
         };
-        rows[i].cells[class] = Some(s);
+        let what = format!(
+            "{}:1 at v_p:v_e 1.0:{}, captors {} ({}), {}",
+            s.num_captors,
+            ratio_label(s.speed_ratio),
+            s.captors,
+            s.protocol,
+            CLASSES[class]
+        );
+        if let Some((other_source, other)) = rows[i].cells[class] {
+            if other == s {
+                continue;
+            }
+            return Err(format!(
+                "two results for one table cell ({what}): {other_source} and {source}, which differ in {}; give only the eval folder whose result belongs in the table",
+                differences(other, s)
+            ));
+        }
+        for (other_source, other) in rows[i].cells.iter().flatten() {
+            let other_weights = matches!(
+                (&other.captors_sha256, &s.captors_sha256),
+                (Some(x), Some(y)) if x != y
+            );
+            if other.episodes != s.episodes
+                || other.episode_length != s.episode_length
+                || other.capture_rule != s.capture_rule
+                || other.captors_learner != s.captors_learner
+                || other_weights
+            {
+                return Err(format!(
+                    "one table row ({}:1 at v_p:v_e 1.0:{}, captors {} ({})) would join {} from {other_source} and {} from {source}, which differ in {}: a row is one setting over the three classes; evaluate the classes alike",
+                    s.num_captors,
+                    ratio_label(s.speed_ratio),
+                    s.captors,
+                    s.protocol,
+                    other.maps,
+                    s.maps,
+                    differences(other, s)
+                ));
+            }
+        }
+        rows[i].cells[class] = Some(sourced);
     }
     for rows in by_k.values_mut() {
         rows.sort_by(|a, b| a.ratio.total_cmp(&b.ratio).then(a.captors.cmp(&b.captors)));
     }
-    (by_k, left_out)
+    Ok((by_k, left_out))
 }
 
-fn triple(cells: &[Option<&Summary>; 3], f: impl Fn(&Summary) -> String) -> Vec<String> {
+/// The row's episodes per class and their length, and the capture rule
+/// when it is not the paper's fast one (the same for every cell of a row).
+fn episodes_cell(cells: &[Option<&Sourced>; 3]) -> String {
+    let Some((_, s)) = cells.iter().flatten().next() else {
+        return "-".into();
+    };
+    format!(
+        "{} x {} steps{}",
+        s.episodes,
+        s.episode_length,
+        match s.capture_rule {
+            CaptureRule::Fast => "",
+            CaptureRule::Strict => ", strict capture",
+        }
+    )
+}
+
+fn triple(cells: &[Option<&Sourced>; 3], f: impl Fn(&Summary) -> String) -> Vec<String> {
     cells
         .iter()
-        .map(|c| c.map(&f).unwrap_or_else(|| "-".into()))
+        .map(|c| c.map(|(_, s)| f(s)).unwrap_or_else(|| "-".into()))
         .collect()
 }
 
 /// Markdown: one table per K, and a line per left-out summary count.
-pub fn markdown(summaries: &[Summary]) -> String {
-    let (by_k, left_out) = rows(summaries);
+/// Refuses summaries that do not lay out as the paper's tables (`rows`).
+pub fn markdown(summaries: &[Sourced]) -> Result<String, String> {
+    let (by_k, left_out) = rows(summaries)?;
     let mut out = String::new();
     for (k, rows) in &by_k {
         let _ = writeln!(
@@ -114,7 +232,7 @@ pub fn markdown(summaries: &[Summary]) -> String {
             "### {k}:1 against the rule-based target (paper Table {})\n",
             if *k == 3 { "II" } else { "III" }
         );
-        out.push_str("| v_p:v_e | captors | learner | protocol | SR % small | SR % medium | SR % large | paper SR % small / medium / large | Time (steps) s / m / l | Path Len (m) s / m / l | episodes |\n");
+        out.push_str("| v_p:v_e | captors | learner | protocol | SR % small | SR % medium | SR % large | paper SR % small / medium / large | Time (steps) s / m / l | Path Len (m) s / m / l | episodes per class |\n");
         out.push_str("|---|---|---|---|---|---|---|---|---|---|---|\n");
         for r in rows {
             let sr = triple(&r.cells, |s| {
@@ -123,13 +241,7 @@ pub fn markdown(summaries: &[Summary]) -> String {
             let time = triple(&r.cells, |s| format!("{:.0}", s.time)).join(" / ");
             let path = triple(&r.cells, |s| format!("{:.1}", s.path_len)).join(" / ");
             let paper = paper_cells(*k, r.ratio, &r.learner);
-            let episodes = r
-                .cells
-                .iter()
-                .flatten()
-                .map(|s| s.episodes)
-                .min()
-                .unwrap_or(0);
+            let episodes = episodes_cell(&r.cells);
             let _ = writeln!(
                 out,
                 "| 1.0:{} | {} | {} | {} | {} | {} | {} | {paper} | {time} | {path} | {episodes} |",
@@ -148,7 +260,7 @@ pub fn markdown(summaries: &[Summary]) -> String {
     if left_out > 0 {
         let _ = writeln!(out, "\n{left_out} summaries left out: against another target than the rule-based one, or on maps other than the three Gibson classes.");
     }
-    out
+    Ok(out)
 }
 
 fn latex_escape(s: &str) -> String {
@@ -160,12 +272,12 @@ fn latex_escape(s: &str) -> String {
 }
 
 /// LaTeX (booktabs): one tabular per K, SR with its interval, paper SR beside.
-pub fn latex(summaries: &[Summary]) -> String {
-    let (by_k, _) = rows(summaries);
+pub fn latex(summaries: &[Sourced]) -> Result<String, String> {
+    let (by_k, _) = rows(summaries)?;
     let mut out = String::from("% t2e-league table: captors against the rule-based target; requires \\usepackage{booktabs}\n");
     for (k, rows) in &by_k {
         let _ = writeln!(out, "\\begin{{table}}[t]\n\\centering\n\\caption{{{k}:1 against the rule-based target. SR \\% [95\\% CI] per map class; paper SR from its Table {} (paper protocol).}}", if *k == 3 { "II" } else { "III" });
-        out.push_str("\\begin{tabular}{llllllll}\n\\toprule\n$v_p{:}v_e$ & Learner & Protocol & Small & Medium & Large & Paper (S / M / L) & Time (S / M / L) \\\\\n\\midrule\n");
+        out.push_str("\\begin{tabular}{lllllllll}\n\\toprule\n$v_p{:}v_e$ & Learner & Protocol & Small & Medium & Large & Paper (S / M / L) & Time (S / M / L) & Episodes per class \\\\\n\\midrule\n");
         for r in rows {
             let sr = triple(&r.cells, |s| {
                 format!("{:.1} [{:.1}, {:.1}]", s.sr, s.sr_low, s.sr_high)
@@ -174,7 +286,7 @@ pub fn latex(summaries: &[Summary]) -> String {
             let paper = paper_cells(*k, r.ratio, &r.learner);
             let _ = writeln!(
                 out,
-                "1.0:{} & {} & {} & {} & {} & {} & {} & {} \\\\",
+                "1.0:{} & {} & {} & {} & {} & {} & {} & {} & {} \\\\",
                 ratio_label(r.ratio),
                 latex_escape(&r.learner),
                 latex_escape(&r.protocol),
@@ -182,23 +294,31 @@ pub fn latex(summaries: &[Summary]) -> String {
                 sr[1],
                 sr[2],
                 latex_escape(&paper),
-                time
+                time,
+                latex_escape(&episodes_cell(&r.cells))
             );
         }
         out.push_str("\\bottomrule\n\\end{tabular}\n\\end{table}\n\n");
     }
-    out
+    Ok(out)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::env::CaptureRule;
+
+    fn sourced(s: Vec<Summary>) -> Vec<Sourced> {
+        s.into_iter()
+            .enumerate()
+            .map(|(i, s)| (format!("eval{i}/summary.json"), s))
+            .collect()
+    }
 
     fn summary(k: usize, ratio: f64, maps: &str, target: &str, learner: &str, sr: f64) -> Summary {
         Summary {
             captors: format!("ckpt:runs/{learner}"),
             captors_learner: learner.into(),
+            captors_sha256: None,
             target: target.into(),
             num_captors: k,
             speed_ratio: ratio,
@@ -229,7 +349,8 @@ mod tests {
             summary(3, 1.0, "medium", "ckpt:runs/x", "MAPPO", 10.0),
             summary(4, 1.4, "small", "heuristic", "IPPO", 50.0),
         ];
-        let md = markdown(&s);
+        let s = sourced(s);
+        let md = markdown(&s).unwrap();
         assert!(md.contains("| 1.0:1.0 | ckpt:runs/MAPPO | MAPPO | held-out | 85.8 [81.8, 89.8] | 74.6 [70.6, 78.6] | 63.0 [59.0, 67.0] | 99.8 / 99.8 / 94.8 |"), "{md}");
         // No IPPO number at 3:1 1.2: the learners the paper quotes there.
         assert!(md.contains("| MAPPO 92.4 / 80.6 / 78.4 |"), "{md}");
@@ -238,16 +359,94 @@ mod tests {
             captors_learner: "expert heuristic".into(),
             ..summary(3, 1.0, "small", "heuristic", "x", 78.4)
         };
-        assert!(markdown(&[heuristic])
+        assert!(markdown(&sourced(vec![heuristic]))
+            .unwrap()
             .contains("| MAPPO 99.8 / 99.8 / 94.8; MAAC 100.0 / 99.8 / 91.2 |"));
         assert!(md.contains("| 1.0:1.4 | ckpt:runs/IPPO | IPPO | held-out | 50.0 [46.0, 54.0] | - | - | 94.0 / 86.2 / 87.6 |"), "{md}");
         assert!(md.contains("Table II") && md.contains("Table III"));
         assert!(md.contains("1 summaries left out"), "{md}");
-        let tex = latex(&s);
+        assert!(md.contains("| 500 x 500 steps |"), "{md}");
+        let tex = latex(&s).unwrap();
         assert!(
             tex.contains("1.0:1.0 & MAPPO & held-out & 85.8 [81.8, 89.8]"),
             "{tex}"
         );
         assert_eq!(tex.matches("\\begin{tabular}").count(), 2);
+    }
+
+    #[test]
+    fn a_cell_holds_one_result_and_a_row_one_setting() {
+        let base = summary(3, 1.0, "small", "heuristic", "MAPPO", 85.8);
+        // The same summary twice (one folder named twice): shown once.
+        let md = markdown(&sourced(vec![base.clone(), base.clone()])).unwrap();
+        assert_eq!(md.matches("| 85.8 [").count(), 1, "{md}");
+        // Two results for one cell: refused, naming both files and the difference.
+        let other = Summary {
+            episodes: 100,
+            seed: 3,
+            sr: 80.0,
+            ..base.clone()
+        };
+        let err = markdown(&sourced(vec![base.clone(), other])).unwrap_err();
+        assert!(
+            err.contains("two results for one table cell (3:1 at v_p:v_e 1.0:1.0, captors ckpt:runs/MAPPO (held-out), small)")
+                && err.contains("eval0/summary.json and eval1/summary.json")
+                && err.contains("episodes 500 vs 100, seed 0 vs 3"),
+            "{err}"
+        );
+        let same_options = Summary {
+            sr: 80.0,
+            ..base.clone()
+        };
+        let err = latex(&sourced(vec![base.clone(), same_options])).unwrap_err();
+        assert!(err.contains("SR 85.8 vs 80.0"), "{err}");
+        // Cells of one row from settings of other lengths or counts: refused.
+        for other in [
+            Summary {
+                maps: "large".into(),
+                episode_length: 300,
+                ..base.clone()
+            },
+            Summary {
+                maps: "large".into(),
+                episodes: 50,
+                ..base.clone()
+            },
+            Summary {
+                maps: "large".into(),
+                capture_rule: CaptureRule::Strict,
+                ..base.clone()
+            },
+        ] {
+            let err = markdown(&sourced(vec![base.clone(), other])).unwrap_err();
+            assert!(
+                err.contains("one table row")
+                    && err.contains(
+                        "small from eval0/summary.json and large from eval1/summary.json"
+                    ),
+                "{err}"
+            );
+        }
+        // Other weights behind the same checkpoint name, in one row: refused.
+        let weights = |maps: &str, sha: &str| Summary {
+            maps: maps.into(),
+            captors_sha256: Some(sha.repeat(64)),
+            ..base.clone()
+        };
+        let err =
+            markdown(&sourced(vec![weights("small", "a"), weights("large", "b")])).unwrap_err();
+        assert!(
+            err.contains("captor weights (actor sha256) aaaaaaaaaaaa vs bbbbbbbbbbbb"),
+            "{err}"
+        );
+        // Rows may differ from each other; each says its episodes and length.
+        let strict = Summary {
+            captors: "ckpt:runs/strict".into(),
+            capture_rule: CaptureRule::Strict,
+            episode_length: 300,
+            ..base.clone()
+        };
+        let md = markdown(&sourced(vec![base, strict])).unwrap();
+        assert!(md.contains("| 500 x 300 steps, strict capture |"), "{md}");
     }
 }

@@ -47,8 +47,26 @@ pub fn shipped_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("maps")
 }
 
-/// Reads `map,split[,...]` rows of a class list.
-fn read_class_list(path: &Path) -> Result<BTreeMap<String, SizeClass>> {
+/// Where a class list gave a map its class: the file and the line.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Listed {
+    pub class: SizeClass,
+    pub file: PathBuf,
+    pub line: u64,
+}
+
+impl Listed {
+    fn place(&self) -> String {
+        format!("{} line {}", self.file.display(), self.line)
+    }
+}
+
+/// Reads `map,split[,...]` rows of a class list into `out`. A map listed
+/// twice with different classes (in this file or in another list of the
+/// same folder) is refused, naming both places: taking either class would
+/// silently move the map to another table row. A repeat with the same
+/// class says nothing new and is accepted.
+fn read_class_list(path: &Path, out: &mut BTreeMap<String, Listed>) -> Result<()> {
     let mut reader =
         csv::Reader::from_path(path).with_context(|| format!("{}: cannot read", path.display()))?;
     let headers = reader
@@ -68,7 +86,6 @@ fn read_class_list(path: &Path) -> Result<BTreeMap<String, SizeClass>> {
             headers
         );
     };
-    let mut out = BTreeMap::new();
     for (i, rec) in reader.records().enumerate() {
         let rec = rec.with_context(|| {
             format!(
@@ -77,12 +94,46 @@ fn read_class_list(path: &Path) -> Result<BTreeMap<String, SizeClass>> {
                 i + 2
             )
         })?;
+        let line = rec.position().map_or(i as u64 + 2, |p| p.line());
         let class: SizeClass = rec[split_col].parse().map_err(|e: String| {
-            anyhow::anyhow!("{}: row {}, field 'split': {e}", path.display(), i + 2)
+            anyhow::anyhow!("{}: line {line}, field 'split': {e}", path.display())
         })?;
-        out.insert(rec[map_col].trim().to_string(), class);
+        let map = rec[map_col].trim().to_string();
+        if map.is_empty() {
+            bail!("{}: line {line}, field 'map': empty", path.display());
+        }
+        let here = Listed {
+            class,
+            file: path.to_path_buf(),
+            line,
+        };
+        match out.get(&map) {
+            Some(before) if before.class != class => bail!(
+                "{}: map '{map}' is listed as {} and as {} ({}): which class is it? Remove one of the rows",
+                path.display(),
+                before.class,
+                class,
+                [before.place(), here.place()].join(" and ")
+            ),
+            Some(_) => {}
+            None => {
+                out.insert(map, here);
+            }
+        }
     }
-    Ok(out)
+    Ok(())
+}
+
+/// The classes a folder's `splits.csv` and `manifest.csv` give its maps.
+pub fn class_lists(dir: &Path) -> Result<BTreeMap<String, Listed>> {
+    let mut classes = BTreeMap::new();
+    for list in ["splits.csv", "manifest.csv"] {
+        let p = dir.join(list);
+        if p.is_file() {
+            read_class_list(&p, &mut classes)?;
+        }
+    }
+    Ok(classes)
 }
 
 /// All PNG maps of a folder, sorted by name, with their listed classes.
@@ -90,22 +141,33 @@ pub fn list_dir(dir: &Path) -> Result<Vec<MapEntry>> {
     if !dir.is_dir() {
         bail!("map folder {}: not found", dir.display());
     }
-    let mut classes = BTreeMap::new();
-    for list in ["splits.csv", "manifest.csv"] {
-        let p = dir.join(list);
-        if p.is_file() {
-            classes.extend(read_class_list(&p)?);
-        }
-    }
+    let classes = class_lists(dir)?;
     let mut entries = Vec::new();
     for e in std::fs::read_dir(dir).with_context(|| format!("cannot list {}", dir.display()))? {
         let path = e?.path();
-        if path.extension().and_then(|x| x.to_str()) != Some("png") {
+        // Any case: a folder of .PNG files (or a mix) is not silently
+        // smaller than it looks.
+        if !path
+            .extension()
+            .and_then(|x| x.to_str())
+            .is_some_and(|x| x.eq_ignore_ascii_case("png"))
+            || !path.is_file()
+        {
             continue;
         }
         let name = path.file_stem().unwrap().to_string_lossy().into_owned();
+        // Maps are known by name (class lists, episode records): two files
+        // of one name would be two maps nobody can tell apart.
+        if let Some(other) = entries.iter().find(|e: &&MapEntry| e.name == name) {
+            bail!(
+                "map folder {}: {} and {} are both map '{name}'; keep one",
+                dir.display(),
+                other.path.display(),
+                path.display()
+            );
+        }
         entries.push(MapEntry {
-            listed_class: classes.get(&name).copied(),
+            listed_class: classes.get(&name).map(|l| l.class),
             name,
             path,
         });
@@ -168,6 +230,17 @@ pub fn resolve(spec: &str) -> Result<Vec<MapEntry>> {
     };
     let mut entries = list_dir(&dir)?;
     if let Some(c) = class {
+        // A class is the maps its list names: one listed but missing would
+        // silently leave the set smaller than the table says.
+        for (map, listed) in class_lists(&dir)? {
+            if listed.class == c && !entries.iter().any(|e| e.name == map) {
+                bail!(
+                    "--maps '{spec}': {} lists the {c} map '{map}', but {} holds no {map}.png",
+                    listed.place(),
+                    dir.display()
+                );
+            }
+        }
         entries.retain(|e| e.listed_class == Some(c));
         if entries.is_empty() {
             bail!("--maps '{spec}': {} lists no {c} map", dir.display());

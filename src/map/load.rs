@@ -117,8 +117,13 @@ pub fn save_png(grid: &Grid, path: &Path) -> Result<(), MapError> {
         std::fs::create_dir_all(dir)
             .map_err(|e| MapError::new(path, format!("cannot create folder: {e}")))?;
     }
-    img.save_with_format(path, image::ImageFormat::Png)
-        .map_err(|e| MapError::new(path, format!("cannot write PNG: {e}")))
+    // Encoded whole, then written to a temporary sibling and renamed: a
+    // killed `maps generate` never leaves a truncated map under its name.
+    let mut bytes = std::io::Cursor::new(Vec::new());
+    img.write_to(&mut bytes, image::ImageFormat::Png)
+        .map_err(|e| MapError::new(path, format!("cannot encode PNG: {e}")))?;
+    crate::nn::checkpoint::write_file_atomically(path, bytes.get_ref())
+        .map_err(|e| MapError::new(path, format!("cannot write PNG: {e:#}")))
 }
 
 #[cfg(test)]

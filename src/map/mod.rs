@@ -1,5 +1,6 @@
 //! Maps: the working grid, PNG loading, map sets and the floor-plan generator.
 pub mod catalog;
+pub mod fingerprint;
 pub mod generate;
 pub mod grid;
 pub mod load;

@@ -3,8 +3,16 @@
 //! A copy under another name or folder, or a re-encoded PNG, is still the
 //! test set; training on it is refused unless a config says it follows the
 //! paper's protocol.
+//!
+//! An edited copy (mirrored, turned, padded, shifted, a few pixels changed)
+//! has another hash; it is recognised by its resemblance to a test map's
+//! fingerprint (`map::fingerprint`, `resembled_test_map`), which the
+//! repository embeds instead of the maps themselves.
 
-use super::Grid;
+use super::fingerprint::{decode, CroppedFree, Probe, SYMMETRIES};
+use super::{Grid, SizeClass};
+use std::fmt;
+use std::sync::OnceLock;
 
 /// (name, content hash) of the 26 Gibson maps of `../shared/maps/gibson`.
 pub const GIBSON_GRIDS: [(&str, &str); 26] = [
@@ -121,4 +129,97 @@ pub fn gibson_name(grid: &Grid) -> Option<&'static str> {
         .iter()
         .find(|(_, h)| *h == hash)
         .map(|(name, _)| *name)
+}
+
+/// Similarity (`map::fingerprint::Match`: the smaller of the free-space
+/// IoU and the agreement of the walls, at 0.1 m, best of the 8 symmetries
+/// of the square, centroids aligned) from which a training map counts as a
+/// copy of a test map. Measured by `tests/protocol.rs` `near_copy_margins`
+/// (every Gibson map, each edit): mirrored, flipped, turned 90/180/270
+/// degrees, transposed, padded by 40 px and one pixel changed (in the free
+/// space, or an island far away) all score 1.000; shifted by 3 px at least
+/// 0.968; all of it at once (mirrored, turned, padded 43/17 px, a pixel
+/// changed) at least 0.970. No shipped map and no map of generated:40
+/// scores above 0.474 against any test map (their free space alone
+/// overlaps up to 0.778: rooms of one size look alike, their walls do
+/// not). 0.7 lies between, 0.27 below the copies and 0.23 above the
+/// others; the test holds both margins above 0.1.
+pub const NEAR_COPY_THRESHOLD: f64 = 0.7;
+
+/// A test map that a grid resembles.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Resemblance {
+    pub name: &'static str,
+    pub class: Option<SizeClass>,
+    /// min(free_iou, walls) (`map::fingerprint::Match`).
+    pub similarity: f64,
+    pub free_iou: f64,
+    pub walls: f64,
+    /// How the grid is turned or mirrored relative to the test map.
+    pub how: &'static str,
+}
+
+impl fmt::Display for Resemblance {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "the Gibson test map {} ({}) at similarity {:.3} (free space IoU {:.3}, walls agreeing within 0.1 m {:.3}, {}; a copy from {NEAR_COPY_THRESHOLD} up)",
+            self.name,
+            self.class.map_or("no class", |c| c.name()),
+            self.similarity,
+            self.free_iou,
+            self.walls,
+            self.how
+        )
+    }
+}
+
+/// The embedded fingerprints of the 26 Gibson maps (`map::fingerprint`),
+/// generated from `../shared/maps/gibson` by
+/// `cargo test --release --test gibson_maps -- --ignored write_test_map_fingerprints`
+/// and checked against that folder, where present, by
+/// `the_embedded_fingerprints_are_those_of_the_test_maps`.
+pub const FINGERPRINTS_FILE: &[u8] = include_bytes!("gibson_fingerprints.bin");
+
+/// The decoded fingerprints, ready to compare, with each map's class.
+pub fn test_probes() -> &'static [(Probe, Option<SizeClass>)] {
+    static PROBES: OnceLock<Vec<(Probe, Option<SizeClass>)>> = OnceLock::new();
+    PROBES.get_or_init(|| {
+        decode(FINGERPRINTS_FILE)
+            .expect("the embedded fingerprints of the Gibson maps are readable")
+            .into_iter()
+            .map(|(fp, class)| (Probe::new(fp), class))
+            .collect()
+    })
+}
+
+/// The size class the embedded list gives a Gibson map.
+pub fn gibson_class(name: &str) -> Option<SizeClass> {
+    test_probes()
+        .iter()
+        .find(|(p, _)| p.fingerprint.name == name)
+        .and_then(|(_, c)| *c)
+}
+
+/// The test map `grid` resembles most, if its similarity reaches `floor`
+/// (pairs whose free areas alone keep them below `floor` are not compared).
+pub fn resembled_test_map(grid: &Grid, floor: f64) -> Option<Resemblance> {
+    let cropped = CroppedFree::of(grid);
+    let mut best: Option<Resemblance> = None;
+    for (probe, class) in test_probes() {
+        let Some(m) = probe.similarity_at_least(&cropped, floor) else {
+            continue;
+        };
+        if best.as_ref().is_none_or(|b| m.similarity > b.similarity) {
+            best = Some(Resemblance {
+                name: probe.fingerprint.name.as_str(),
+                class: *class,
+                similarity: m.similarity,
+                free_iou: m.free_iou,
+                walls: m.walls,
+                how: SYMMETRIES[m.symmetry].3,
+            });
+        }
+    }
+    best
 }

@@ -509,6 +509,13 @@ fn fill_checkpoint(
 }
 
 pub fn read_meta(dir: &Path) -> Result<CheckpointMeta> {
+    Ok(read_meta_hashed(dir)?.0)
+}
+
+/// `read_meta`, and the SHA-256 of the exact bytes it parsed: what an eval
+/// setting's identity records, so an edited sidecar (its protocol, say) is
+/// another setting.
+pub fn read_meta_hashed(dir: &Path) -> Result<(CheckpointMeta, String)> {
     let path = dir.join("meta.json");
     if !path.is_file() {
         bail!(
@@ -519,6 +526,7 @@ pub fn read_meta(dir: &Path) -> Result<CheckpointMeta> {
     }
     let text = std::fs::read_to_string(&path)
         .with_context(|| format!("{}: cannot read", path.display()))?;
+    let sha256 = crate::util::sha256_hex(text.as_bytes());
     #[derive(Deserialize)]
     struct Format {
         format: u32,
@@ -558,7 +566,7 @@ pub fn read_meta(dir: &Path) -> Result<CheckpointMeta> {
     meta.net
         .validate()
         .map_err(|e| anyhow::anyhow!("{}: net.{e}", path.display()))?;
-    Ok(meta)
+    Ok((meta, sha256))
 }
 
 /// The newest checkpoint of `side` in a run folder or a `checkpoints` folder.
@@ -663,13 +671,15 @@ pub fn resolve_checkpoint(path: &Path, side: Side) -> Result<PathBuf> {
 pub struct PolicySnapshot {
     pub dir: PathBuf,
     pub meta: CheckpointMeta,
+    /// SHA-256 of the `meta.json` bytes `meta` was read from.
+    pub meta_sha256: String,
     weights: Vec<(String, Vec<i64>, Vec<f32>)>,
 }
 
 impl PolicySnapshot {
     pub fn load(path: &Path, side: Side) -> Result<PolicySnapshot> {
         let dir = resolve_checkpoint(path, side)?;
-        let meta = read_meta(&dir)?;
+        let (meta, meta_sha256) = read_meta_hashed(&dir)?;
         let tensors = read_checked(&dir, &meta, "actor.safetensors")?;
         let weights = tensors
             .into_iter()
@@ -680,7 +690,12 @@ impl PolicySnapshot {
                 (n, t.size(), data)
             })
             .collect();
-        let snap = PolicySnapshot { dir, meta, weights };
+        let snap = PolicySnapshot {
+            dir,
+            meta,
+            meta_sha256,
+            weights,
+        };
         // Fail now, with the file's name, rather than inside an episode.
         snap.build_actor(Device::Cpu)?;
         Ok(snap)

@@ -462,6 +462,35 @@ fn to_frame(img: RgbImage, delay_ms: u32) -> Frame {
     Frame::from_parts(rgba, 0, 0, Delay::from_numer_denom_ms(delay_ms, 1))
 }
 
+/// Removes the temporaries (`.NAME.tmp-PID`, see `write_file_atomically`)
+/// that killed renders left beside `out`; only those of `out`'s own name,
+/// and only of processes no longer alive.
+pub fn remove_dead_temporaries(out: &Path) {
+    let Some(name) = out.file_name().map(|n| n.to_string_lossy().into_owned()) else {
+        return;
+    };
+    let parent = out
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    let Ok(entries) = std::fs::read_dir(parent) else {
+        return;
+    };
+    let prefix = format!(".{name}.tmp-");
+    for e in entries.flatten() {
+        let file = e.file_name().to_string_lossy().into_owned();
+        let Some(pid) = file
+            .strip_prefix(&prefix)
+            .and_then(|p| p.parse::<u32>().ok())
+        else {
+            continue;
+        };
+        if pid != std::process::id() && !Path::new(&format!("/proc/{pid}")).exists() {
+            let _ = std::fs::remove_file(e.path());
+        }
+    }
+}
+
 /// Plays one episode from `seed` with the two controllers and writes it to
 /// `out` as a looping GIF (parent folders are created). The environment is
 /// left in the episode's final state.
@@ -548,7 +577,11 @@ pub fn render_episode(
             )
         })?;
     }
-    std::fs::write(out, &bytes).with_context(|| format!("cannot write GIF {}", out.display()))?;
+    // Written to a temporary sibling, synced and renamed: a render killed
+    // while writing leaves the previous GIF (or none), never half of one.
+    remove_dead_temporaries(out);
+    crate::nn::checkpoint::write_file_atomically(out, &bytes)
+        .with_context(|| format!("cannot write GIF {}", out.display()))?;
     Ok(EpisodeSummary {
         map: map.grid.name.clone(),
         seed,

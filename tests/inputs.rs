@@ -1,0 +1,473 @@
+//! Bad inputs and faults a new user meets in `maps`, `eval`, `table` and
+//! `render`: contradictory class lists, table cells given twice, an edited
+//! checkpoint sidecar, a render killed while writing, negative list values.
+//! Each test failed before its fix: the tool picked one input silently,
+//! relabelled results, lost a previous file or gave clap's error instead of
+//! ours.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use t2e::cli::eval::EvalArgs;
+use t2e::cli::table::TableArgs;
+use t2e::controllers::ControllerSpec;
+use t2e::env::{CaptureRule, EnvConfig};
+use t2e::eval::{EvalSetting, SettingIdentity, Summary};
+use t2e::learn::train::{SideConfig, TrainConfig, Trainer};
+use t2e::map::catalog;
+use t2e::map::SizeClass;
+use t2e::nn::NetConfig;
+
+const BIN: &str = env!("CARGO_BIN_EXE_t2e-league");
+
+/// A folder with copies of two shipped maps (a.png small, b.png large) and
+/// the given class lists.
+fn map_folder(lists: &[(&str, &str)]) -> tempfile::TempDir {
+    let dir = tempfile::tempdir().unwrap();
+    for (name, shipped) in [("a", "gen-small-1"), ("b", "gen-large-1")] {
+        std::fs::copy(
+            catalog::shipped_dir().join(format!("{shipped}.png")),
+            dir.path().join(format!("{name}.png")),
+        )
+        .unwrap();
+    }
+    for (file, text) in lists {
+        std::fs::write(dir.path().join(file), text).unwrap();
+    }
+    dir
+}
+
+fn err_of<T: std::fmt::Debug>(r: anyhow::Result<T>) -> String {
+    format!("{:#}", r.unwrap_err())
+}
+
+#[test]
+fn a_map_listed_with_two_classes_is_refused_naming_the_file_map_classes_and_lines() {
+    // Twice in one splits.csv, with other classes: today the last row won.
+    let dir = map_folder(&[("splits.csv", "map,split\na,small\nb,large\na,medium\n")]);
+    let spec = dir.path().display().to_string();
+    let err = err_of(catalog::resolve(&spec));
+    assert!(
+        err.contains("splits.csv: map 'a' is listed as small and as medium")
+            && err.contains("splits.csv line 2 and")
+            && err.contains("splits.csv line 4"),
+        "{err}"
+    );
+    assert!(err_of(catalog::resolve(&format!("{spec}:small")))
+        .contains("listed as small and as medium"));
+    // `maps list` and loading for training refuse it too.
+    assert!(catalog::load_prepared(&spec).is_err());
+
+    // Twice with the same class: nothing contradicts, accepted.
+    let dir = map_folder(&[("splits.csv", "map,split\na,small\nb,large\na,small\n")]);
+    let entries = catalog::list_dir(dir.path()).unwrap();
+    assert_eq!(entries[0].listed_class, Some(SizeClass::Small));
+    assert_eq!(
+        catalog::resolve(&format!("{}:small", dir.path().display()))
+            .unwrap()
+            .len(),
+        1
+    );
+
+    // splits.csv and manifest.csv of one folder disagreeing: both named.
+    let dir = map_folder(&[
+        ("splits.csv", "map,split\na,small\n"),
+        (
+            "manifest.csv",
+            "map,split,area_m2,seed\nb,large,70,1\na,large,30,1\n",
+        ),
+    ]);
+    let err = err_of(catalog::list_dir(dir.path()));
+    assert!(
+        err.contains("map 'a' is listed as small and as large")
+            && err.contains("splits.csv line 2")
+            && err.contains("manifest.csv line 3"),
+        "{err}"
+    );
+
+    // A class names a map whose file is missing: the set would silently
+    // be smaller than the list says.
+    let dir = map_folder(&[("splits.csv", "map,split\na,small\nb,large\nc,small\n")]);
+    let err = err_of(catalog::resolve(&format!("{}:small", dir.path().display())));
+    assert!(
+        err.contains("splits.csv line 4 lists the small map 'c'") && err.contains("no c.png"),
+        "{err}"
+    );
+    // The other class and the whole folder are unaffected.
+    assert_eq!(
+        catalog::resolve(&format!("{}:large", dir.path().display()))
+            .unwrap()
+            .len(),
+        1
+    );
+
+    // A map file in capitals is a map of the folder too (it was skipped),
+    // and two files of one name are refused.
+    let dir = map_folder(&[]);
+    std::fs::copy(dir.path().join("a.png"), dir.path().join("C.PNG")).unwrap();
+    let names: Vec<String> = catalog::list_dir(dir.path())
+        .unwrap()
+        .into_iter()
+        .map(|e| e.name)
+        .collect();
+    assert_eq!(names, ["C", "a", "b"]);
+    std::fs::copy(dir.path().join("a.png"), dir.path().join("a.PNG")).unwrap();
+    let err = err_of(catalog::list_dir(dir.path()));
+    assert!(err.contains("are both map 'a'"), "{err}");
+
+    // `maps generate` merges into a manifest: a contradictory one is
+    // refused before any map is written.
+    let dir = map_folder(&[("manifest.csv", "map,split\nx,small\nx,large\n")]);
+    let err = err_of(t2e::cli::maps::generate_maps(
+        SizeClass::Small,
+        900,
+        1,
+        dir.path(),
+    ));
+    assert!(
+        err.contains("manifest.csv: map 'x' is listed as small (line 2) and as large (line 3)"),
+        "{err}"
+    );
+    assert!(!dir.path().join("gen-small-900.png").exists());
+}
+
+#[test]
+fn maps_commands_do_not_overwrite_what_they_read() {
+    let dir = map_folder(&[]);
+    let map = dir.path().join("a.png");
+    let before = std::fs::read(&map).unwrap();
+    // `maps show` onto its own map would replace the map with a picture.
+    let out = Command::new(BIN)
+        .args([
+            "maps",
+            "show",
+            map.to_str().unwrap(),
+            "--out",
+            map.to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && stderr.contains("the picture would replace the map"),
+        "{stderr}"
+    );
+    assert_eq!(std::fs::read(&map).unwrap(), before);
+    let out = Command::new(BIN)
+        .args(["maps", "show", map.to_str().unwrap(), "--out"])
+        .arg(dir.path().join("pic.jpg"))
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("must end in .png"), "{stderr}");
+    // Generated maps written into a test set would join its classes.
+    let test_set = map_folder(&[("splits.csv", "map,split\na,small\nb,large\n")]);
+    let err = err_of(t2e::cli::maps::generate_maps(
+        SizeClass::Small,
+        1,
+        1,
+        test_set.path(),
+    ));
+    assert!(err.contains("holds a splits.csv"), "{err}");
+    assert!(!test_set.path().join("manifest.csv").exists());
+}
+
+fn summary(maps: &str, episodes: usize, episode_length: u32, sr: f64) -> Summary {
+    Summary {
+        captors: "ckpt:runs/mappo".into(),
+        captors_learner: "MAPPO".into(),
+        captors_sha256: None,
+        target: "heuristic".into(),
+        num_captors: 3,
+        speed_ratio: 1.0,
+        maps: maps.into(),
+        protocol: "held-out".into(),
+        episodes,
+        episode_length,
+        seed: 0,
+        capture_rule: CaptureRule::Fast,
+        soa_every: 0,
+        time: 200.0,
+        sr,
+        sr_low: sr - 3.0,
+        sr_high: (sr + 3.0).min(100.0),
+        path_len: 20.0,
+        mean_soa_m2: None,
+        soa_curve: Vec::new(),
+    }
+}
+
+/// An eval --out folder holding these summaries.
+fn eval_folder(root: &Path, name: &str, summaries: &[Summary]) -> PathBuf {
+    let dir = root.join(name);
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(
+        dir.join("summary.json"),
+        serde_json::to_string_pretty(summaries).unwrap(),
+    )
+    .unwrap();
+    dir
+}
+
+fn table(evals: Vec<PathBuf>, out: Option<PathBuf>) -> anyhow::Result<()> {
+    t2e::cli::table::run(TableArgs {
+        evals,
+        out,
+        latex: None,
+    })
+}
+
+#[test]
+fn table_refuses_two_results_for_one_cell_and_rows_of_mixed_settings() {
+    let root = tempfile::tempdir().unwrap();
+    let first = eval_folder(
+        root.path(),
+        "first",
+        &[
+            summary("small", 500, 500, 90.0),
+            summary("medium", 500, 500, 80.0),
+        ],
+    );
+    // The same cell again, from a shorter evaluation: today the later one
+    // silently replaced the first.
+    let second = eval_folder(root.path(), "second", &[summary("small", 100, 500, 70.0)]);
+    let err = err_of(table(vec![first.clone(), second.clone()], None));
+    assert!(
+        err.contains("two results for one table cell")
+            && err.contains(&first.join("summary.json").display().to_string())
+            && err.contains(&second.join("summary.json").display().to_string())
+            && err.contains("episodes 500 vs 100"),
+        "{err}"
+    );
+    // Another class of the row at another episode length: today merged
+    // into one row.
+    let longer = eval_folder(root.path(), "longer", &[summary("large", 500, 1000, 60.0)]);
+    let err = err_of(table(vec![first.clone(), longer.clone()], None));
+    assert!(
+        err.contains("one table row")
+            && err.contains("episode_length 500 vs 1000")
+            && err.contains("longer"),
+        "{err}"
+    );
+    // The same folder twice is one result; --out is written.
+    let md = root.path().join("t.md");
+    table(
+        vec![first.clone(), first.join("summary.json")],
+        Some(md.clone()),
+    )
+    .unwrap();
+    let text = std::fs::read_to_string(&md).unwrap();
+    assert_eq!(text.matches("| 90.0 [").count(), 1, "{text}");
+    assert!(text.contains("| 500 x 500 steps |"), "{text}");
+    // An output that is an input is refused before it is overwritten.
+    let before = std::fs::read(first.join("summary.json")).unwrap();
+    let err = err_of(table(vec![first.clone()], Some(first.join("summary.json"))));
+    assert!(
+        err.contains("--out") && err.contains("would overwrite it"),
+        "{err}"
+    );
+    assert_eq!(std::fs::read(first.join("summary.json")).unwrap(), before);
+    // A setting folder's own summary (one object) reads too; an empty
+    // list or nothing for the tables is an error, not an empty table.
+    let setting = root.path().join("setting");
+    std::fs::create_dir(&setting).unwrap();
+    std::fs::write(
+        setting.join("summary.json"),
+        serde_json::to_string(&summary("large", 500, 500, 50.0)).unwrap(),
+    )
+    .unwrap();
+    table(vec![first.clone(), setting], None).unwrap();
+    let empty = eval_folder(root.path(), "empty", &[]);
+    assert!(err_of(table(vec![empty], None)).contains("holds no summary"));
+    let mut other = summary("shipped", 500, 500, 50.0);
+    other.target = "random".into();
+    let other = eval_folder(root.path(), "other", &[other]);
+    assert!(err_of(table(vec![other], None)).contains("belongs in the paper's tables"));
+}
+
+fn tiny_run(dir: &Path) -> PathBuf {
+    tch::set_num_threads(1);
+    let cfg = TrainConfig {
+        name: "inputs".into(),
+        seed: 1,
+        num_envs: 2,
+        rollout_steps: 10,
+        total_env_steps: 20,
+        device: "cpu".into(),
+        protocol: t2e::protocol::Protocol::HeldOut,
+        maps: "shipped".into(),
+        env: EnvConfig {
+            num_captors: 2,
+            episode_length: 20,
+            ..EnvConfig::default()
+        },
+        captors: SideConfig {
+            play: "mappo".into(),
+            net: NetConfig {
+                hidden: 8,
+                conv_channels: [2, 2],
+                patch_pool: 4,
+            },
+            ..SideConfig::default()
+        },
+        target: SideConfig {
+            play: "heuristic".into(),
+            ..SideConfig::default()
+        },
+        ..TrainConfig::default()
+    };
+    let maps = catalog::load_prepared("shipped:small").unwrap();
+    let mut t = Trainer::new(cfg, maps).unwrap();
+    t.iterate().unwrap();
+    t.save(dir).unwrap().remove(0)
+}
+
+#[test]
+fn an_edited_meta_json_is_another_setting_and_is_not_resumed_as_the_old_one() {
+    let run = tempfile::tempdir().unwrap();
+    let ckpt = tiny_run(run.path());
+    let spec = || -> ControllerSpec { format!("ckpt:{}", ckpt.display()).parse().unwrap() };
+    let maps = catalog::load_prepared("shipped:small").unwrap();
+    let setting = |captors| EvalSetting {
+        captors,
+        num_captors: 2,
+        episodes: 2,
+        episode_length: 20,
+        soa_every: 0,
+        ..EvalSetting::default()
+    };
+    let before = SettingIdentity::of(&setting(spec()), "shipped:small", &maps).unwrap();
+
+    // Relabel the protocol by hand: the weights are untouched, so their
+    // hashes still match, but the rows it labels would lie.
+    let meta = ckpt.join("meta.json");
+    let text = std::fs::read_to_string(&meta).unwrap();
+    assert!(text.contains("\"held-out\""));
+    std::fs::write(&meta, text.replace("\"held-out\"", "\"paper\"")).unwrap();
+    let after = SettingIdentity::of(&setting(spec()), "shipped:small", &maps).unwrap();
+    assert_eq!(before.captors_sha256, after.captors_sha256);
+    assert_ne!(before, after, "an edited sidecar must be another setting");
+    assert_ne!(before.short_hash(), after.short_hash());
+
+    // Through `eval --resume`: the first result is not reused under the
+    // new label; the edited checkpoint is played again in its own folder.
+    std::fs::write(&meta, &text).unwrap();
+    let out = tempfile::tempdir().unwrap();
+    let args = || EvalArgs {
+        captors: spec(),
+        target: ControllerSpec::Heuristic,
+        maps: vec!["shipped:small".into()],
+        k: vec![2],
+        speed_ratio: vec![1.0],
+        episodes: 2,
+        episode_length: 20,
+        seed: 0,
+        capture_rule: CaptureRule::Fast,
+        soa_every: 0,
+        out: out.path().to_path_buf(),
+        quiet: true,
+        resume: true,
+    };
+    t2e::cli::eval::run(args()).unwrap();
+    std::fs::write(&meta, text.replace("\"held-out\"", "\"paper\"")).unwrap();
+    t2e::cli::eval::run(args()).unwrap();
+    let folders: Vec<Summary> = std::fs::read_dir(out.path())
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.is_dir())
+        .map(|p| {
+            serde_json::from_str(&std::fs::read_to_string(p.join("summary.json")).unwrap()).unwrap()
+        })
+        .collect();
+    let mut protocols: Vec<&str> = folders.iter().map(|s| s.protocol.as_str()).collect();
+    protocols.sort();
+    assert_eq!(protocols, ["held-out", "paper"], "one folder per sidecar");
+}
+
+#[test]
+fn a_render_killed_while_writing_leaves_the_previous_gif() {
+    let dir = tempfile::tempdir().unwrap();
+    let gif = dir.path().join("episode.gif");
+    let previous = b"GIF89a: the previous render".to_vec();
+    std::fs::write(&gif, &previous).unwrap();
+    let render = |limit: Option<u32>| {
+        let mut cmd = Command::new("sh");
+        let ulimit = limit.map_or(String::new(), |kb| format!("ulimit -f {kb}; "));
+        cmd.arg("-c")
+            .arg(format!("{ulimit}exec \"$0\" \"$@\""))
+            .arg(BIN)
+            .args(["render", "--maps"])
+            .arg(catalog::shipped_dir().join("gen-small-1.png"))
+            .args(["--episode-length", "15", "--out"])
+            .arg(&gif);
+        cmd.output().unwrap()
+    };
+    // The file-size limit kills the process (SIGXFSZ) while it writes the
+    // GIF, as a kill or a full disk would: today the old file was truncated
+    // and half of the new one written in its place.
+    let out = render(Some(4));
+    assert!(!out.status.success(), "{out:?}");
+    assert_eq!(
+        std::fs::read(&gif).unwrap(),
+        previous,
+        "the previous GIF was destroyed"
+    );
+    // The next render replaces it whole and removes the dead temporary.
+    let out = render(None);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let bytes = std::fs::read(&gif).unwrap();
+    assert!(bytes.starts_with(b"GIF89a") && bytes.ends_with(b";") && bytes.len() > 4096);
+    let left: Vec<String> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(left, ["episode.gif"]);
+}
+
+#[test]
+fn negative_list_values_reach_our_own_checks() {
+    let run = |args: &[&str]| {
+        let out = Command::new(BIN).args(args).output().unwrap();
+        assert!(!out.status.success(), "{args:?} succeeded");
+        String::from_utf8_lossy(&out.stderr).into_owned()
+    };
+    for args in [
+        &["eval", "--k", "-1"][..],
+        &["eval", "--k", "3,-1"],
+        &["eval", "--k=-1"],
+    ] {
+        let err = run(args);
+        assert!(
+            err.contains("K = -1: the number of captors must be at least 1")
+                && !err.contains("unexpected argument"),
+            "{args:?}: {err}"
+        );
+    }
+    let err = run(&["eval", "--k", "0"]);
+    assert!(
+        err.contains("K = 0: the number of captors must be at least 1"),
+        "{err}"
+    );
+    let err = run(&["eval", "--speed-ratio", "-1.2"]);
+    assert!(
+        err.contains("--speed-ratio -1.2: must be a number in (0, 10]"),
+        "{err}"
+    );
+    let err = run(&["eval", "--maps", "-nowhere"]);
+    assert!(err.contains("--maps '-nowhere': not found"), "{err}");
+    let err = run(&["render", "--speed-ratio", "-1", "--out", "x.gif"]);
+    assert!(
+        err.contains("--speed-ratio -1: must be a number in (0, 10]"),
+        "{err}"
+    );
+    let err = run(&["render", "--k", "-2", "--out", "x.gif"]);
+    assert!(
+        err.contains("-2") && !err.contains("unexpected argument"),
+        "{err}"
+    );
+}
