@@ -12,12 +12,11 @@ use std::process::Command;
 use t2e::cli::eval::EvalArgs;
 use t2e::cli::table::TableArgs;
 use t2e::controllers::ControllerSpec;
-use t2e::env::{CaptureRule, EnvConfig};
+use t2e::env::CaptureRule;
 use t2e::eval::{EvalSetting, SettingIdentity, Summary};
-use t2e::learn::train::{SideConfig, TrainConfig, Trainer};
+use t2e::learn::train::Trainer;
 use t2e::map::catalog;
 use t2e::map::SizeClass;
-use t2e::nn::NetConfig;
 
 const BIN: &str = env!("CARGO_BIN_EXE_t2e-league");
 
@@ -288,35 +287,7 @@ fn table_refuses_two_results_for_one_cell_and_rows_of_mixed_settings() {
 
 fn tiny_run(dir: &Path) -> PathBuf {
     tch::set_num_threads(1);
-    let cfg = TrainConfig {
-        name: "inputs".into(),
-        seed: 1,
-        num_envs: 2,
-        rollout_steps: 10,
-        total_env_steps: 20,
-        device: "cpu".into(),
-        protocol: t2e::protocol::Protocol::HeldOut,
-        maps: "shipped".into(),
-        env: EnvConfig {
-            num_captors: 2,
-            episode_length: 20,
-            ..EnvConfig::default()
-        },
-        captors: SideConfig {
-            play: "mappo".into(),
-            net: NetConfig {
-                hidden: 8,
-                conv_channels: [2, 2],
-                patch_pool: 4,
-            },
-            ..SideConfig::default()
-        },
-        target: SideConfig {
-            play: "heuristic".into(),
-            ..SideConfig::default()
-        },
-        ..TrainConfig::default()
-    };
+    let cfg = common::tiny_train_config("inputs", t2e::protocol::Protocol::HeldOut, "shipped");
     let maps = catalog::load_prepared("shipped:small").unwrap();
     let mut t = Trainer::new(cfg, maps).unwrap();
     t.iterate().unwrap();

@@ -3,46 +3,20 @@
 //! must fit it, and the protocol travels with the checkpoint into every eval
 //! table, so no figure can be read under the wrong one.
 
+mod common;
+
 use std::sync::Arc;
 use t2e::controllers::ControllerSpec;
-use t2e::env::EnvConfig;
+
 use t2e::eval::{self, EvalSetting};
-use t2e::learn::train::{SideConfig, TrainConfig, Trainer};
+use t2e::learn::train::{TrainConfig, Trainer};
 use t2e::map::catalog;
 use t2e::nn::checkpoint::read_meta;
-use t2e::nn::NetConfig;
+
 use t2e::protocol::Protocol;
 
 fn tiny(protocol: Protocol, maps: &str) -> TrainConfig {
-    TrainConfig {
-        name: "protocol".into(),
-        seed: 1,
-        num_envs: 2,
-        rollout_steps: 10,
-        total_env_steps: 20,
-        device: "cpu".into(),
-        protocol,
-        maps: maps.into(),
-        env: EnvConfig {
-            num_captors: 2,
-            episode_length: 20,
-            ..EnvConfig::default()
-        },
-        captors: SideConfig {
-            play: "mappo".into(),
-            net: NetConfig {
-                hidden: 8,
-                conv_channels: [2, 2],
-                patch_pool: 4,
-            },
-            ..SideConfig::default()
-        },
-        target: SideConfig {
-            play: "heuristic".into(),
-            ..SideConfig::default()
-        },
-        ..TrainConfig::default()
-    }
+    common::tiny_train_config("protocol", protocol, maps)
 }
 
 #[test]

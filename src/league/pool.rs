@@ -115,39 +115,27 @@ pub fn reconcile(dir: &LeagueDir, store: &Store, league_id: &str) -> Result<Reco
             Err(why) => out.unrecorded.push((rel, format!("{why:#}"))),
         }
     }
-    for p in store
-        .players()?
-        .iter()
-        .filter(|p| p.kind == Kind::Snapshot && p.quarantined.is_none())
-    {
+    // Every snapshot row against its files: one whose files are missing or
+    // corrupt leaves play; a quarantined one whose files are back and verify
+    // against the hash recorded with it plays again (they are the very
+    // weights that played its recorded matches).
+    for p in store.players()?.iter().filter(|p| p.kind == Kind::Snapshot) {
         let Some((rel, sha)) = &p.checkpoint else {
             continue;
         };
         let meta = dir.root.join(rel).join("meta.json");
         let ok = crate::util::sha256_file(&meta).is_ok_and(|got| &got == sha)
             && PolicySnapshot::load(&dir.root.join(rel), p.side).is_ok();
-        if !ok {
-            store.quarantine(p.id, "checkpoint files missing or corrupt at league start")?;
-            out.quarantined.push(p.name.clone());
-        }
-    }
-    // A member quarantined because its files were missing, whose files are
-    // back and verify against the hash recorded with it, plays again: they
-    // are the very weights that played its recorded matches.
-    for p in store
-        .players()?
-        .iter()
-        .filter(|p| p.kind == Kind::Snapshot && p.quarantined.is_some())
-    {
-        let Some((rel, sha)) = &p.checkpoint else {
-            continue;
-        };
-        let meta = dir.root.join(rel).join("meta.json");
-        if crate::util::sha256_file(&meta).is_ok_and(|got| &got == sha)
-            && PolicySnapshot::load(&dir.root.join(rel), p.side).is_ok()
-        {
-            store.reinstate(p.id)?;
-            out.reinstated.push(p.name.clone());
+        match (ok, p.quarantined.is_some()) {
+            (false, false) => {
+                store.quarantine(p.id, "checkpoint files missing or corrupt at league start")?;
+                out.quarantined.push(p.name.clone());
+            }
+            (true, true) => {
+                store.reinstate(p.id)?;
+                out.reinstated.push(p.name.clone());
+            }
+            _ => {}
         }
     }
     Ok(out)

@@ -62,3 +62,43 @@ pub fn children_of(parent: u32, needle: &str) -> Vec<i64> {
     }
     pids
 }
+
+/// A training config small enough to run an iteration in a test: MAPPO
+/// captors (K = 2, tiny networks) against the rule-based target, 2 worlds x
+/// 10 steps.
+pub fn tiny_train_config(
+    name: &str,
+    protocol: t2e::protocol::Protocol,
+    maps: &str,
+) -> t2e::learn::train::TrainConfig {
+    use t2e::learn::train::{SideConfig, TrainConfig};
+    TrainConfig {
+        name: name.into(),
+        seed: 1,
+        num_envs: 2,
+        rollout_steps: 10,
+        total_env_steps: 20,
+        device: "cpu".into(),
+        protocol,
+        maps: maps.into(),
+        env: EnvConfig {
+            num_captors: 2,
+            episode_length: 20,
+            ..EnvConfig::default()
+        },
+        captors: SideConfig {
+            play: "mappo".into(),
+            net: t2e::nn::NetConfig {
+                hidden: 8,
+                conv_channels: [2, 2],
+                patch_pool: 4,
+            },
+            ..SideConfig::default()
+        },
+        target: SideConfig {
+            play: "heuristic".into(),
+            ..SideConfig::default()
+        },
+        ..TrainConfig::default()
+    }
+}
