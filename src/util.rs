@@ -4,6 +4,7 @@
 use sha2::{Digest, Sha256};
 use std::io::Read;
 use std::path::Path;
+use std::time::Duration;
 
 /// Lower-case hex of bytes.
 pub fn hex(bytes: &[u8]) -> String {
@@ -55,6 +56,32 @@ pub fn safe_component(text: &str, max: usize) -> String {
     out
 }
 
+/// Parses a wall-clock duration given to `option` (`--for`,
+/// `--eval-every`): `90` or `90s`, `10m`, `2h`; more than 0, at most 30
+/// days, and finite, so 0, negatives and garbage are refused by name.
+pub fn parse_duration(option: &str, text: &str) -> Result<Duration, String> {
+    let t = text.trim();
+    let (num, unit) = match t.char_indices().find(|(_, c)| c.is_ascii_alphabetic()) {
+        Some((i, _)) => (&t[..i], &t[i..]),
+        None => (t, "s"),
+    };
+    let n: f64 = num
+        .parse()
+        .map_err(|_| format!("{option} {text}: expected a duration such as 90s, 10m or 2h"))?;
+    let secs = match unit {
+        "s" => n,
+        "m" | "min" => n * 60.0,
+        "h" => n * 3600.0,
+        _ => return Err(format!("{option} {text}: unknown unit '{unit}' (s, m or h)")),
+    };
+    if !(secs.is_finite() && secs > 0.0 && secs <= 30.0 * 86400.0) {
+        return Err(format!(
+            "{option} {text}: must be more than 0 and at most 30 days"
+        ));
+    }
+    Ok(Duration::from_secs_f64(secs))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -69,5 +96,16 @@ mod tests {
             sha256_hex(b"abc"),
             "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad"
         );
+    }
+
+    #[test]
+    fn durations_parse_and_nonsense_is_refused() {
+        assert_eq!(parse_duration("--for", "90").unwrap(), Duration::from_secs(90));
+        assert_eq!(parse_duration("--for", "10m").unwrap(), Duration::from_secs(600));
+        assert_eq!(parse_duration("--for", "1.5h").unwrap(), Duration::from_secs(5400));
+        for bad in ["", "0", "-5m", "10x", "nanm", "1e9h", "0s"] {
+            let e = parse_duration("--eval-every", bad).unwrap_err();
+            assert!(e.starts_with("--eval-every"), "{bad}: {e}");
+        }
     }
 }

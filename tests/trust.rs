@@ -13,7 +13,8 @@ use t2e::cli::bench::BenchArgs;
 use t2e::cli::eval::EvalArgs;
 use t2e::env::{CaptureRule, EnvConfig, Side};
 use t2e::eval::Summary;
-use t2e::learn::ppo::{PpoConfig, PpoLearner, Rollout};
+use t2e::learn::ppo::{PpoConfig, PpoLearner};
+use t2e::learn::rollout::Rollout;
 use t2e::learn::train::{SideConfig, TrainConfig, Trainer};
 use t2e::nn::checkpoint::{clean_stale_temporaries, read_meta, write_dir_atomically, Written};
 use t2e::nn::{NetConfig, PolicySnapshot};
@@ -141,7 +142,7 @@ fn degenerate_options_are_refused() {
             maps: Some("shipped".into()),
             seconds,
             envs: 4,
-            train: None,
+            train: Vec::new(),
             iterations: 1,
             device: None,
             opponents: false,
@@ -196,7 +197,7 @@ fn nan_in_a_config_is_an_error_naming_the_field() {
 /// A small learner and a rollout of random but finite data.
 fn learner_and_rollout() -> (PpoLearner, Rollout) {
     use rand::{Rng, SeedableRng};
-    tch::manual_seed(0);
+    let _seed = t2e::nn::seed_torch(0);
     let net = NetConfig {
         hidden: 16,
         conv_channels: [2, 4],

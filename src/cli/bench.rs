@@ -25,9 +25,11 @@ pub struct BenchArgs {
     pub envs: usize,
     /// Instead of the environment table, time whole training iterations
     /// (rollout + update) of this training config, any learner, and print
-    /// where the time goes (`--ppo` is the older name).
+    /// where the time goes and the network FLOP/s against the cores' peak.
+    /// Repeat it to compare configs side by side in one run (`--ppo` is the
+    /// older name).
     #[arg(long, alias = "ppo")]
-    pub train: Option<std::path::PathBuf>,
+    pub train: Vec<std::path::PathBuf>,
     /// Iterations to time, after warming up (one iteration; an off-policy
     /// learner's until its replay holds `learning_starts` and it updates).
     #[arg(long, default_value_t = 5)]
@@ -42,8 +44,74 @@ pub struct BenchArgs {
     pub opponents: bool,
 }
 
-/// Times whole training iterations of a training config, any learner.
-fn ppo_table(args: &BenchArgs, path: &std::path::Path) -> Result<()> {
+/// One config's whole iterations, timed.
+struct TrainTiming {
+    label: String,
+    learners: String,
+    device: tch::Device,
+    worlds_steps: String,
+    steps_per_s: f64,
+    secs_per_iteration: f64,
+    shares: [f64; 3],
+    /// Network FLOPs per iteration (rollout passes + update passes).
+    flops_per_iteration: f64,
+}
+
+/// Times whole training iterations of training configs, any learner, in
+/// turn in this one process, so the rows compare on the same machine state.
+fn train_table(args: &BenchArgs, paths: &[std::path::PathBuf]) -> Result<()> {
+    let peak = matmul_peak_flops();
+    let mut rows = Vec::new();
+    for path in paths {
+        rows.push(time_training(args, path)?);
+    }
+    println!(
+        "| config | learners | device | threads | worlds x steps | env steps/s | x first row | s per iteration | env | inference | update | GFLOP/s | % of peak |"
+    );
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|");
+    let first = rows[0].steps_per_s;
+    for r in &rows {
+        let gflops = r.flops_per_iteration / r.secs_per_iteration / 1e9;
+        println!(
+            "| {} | {} | {:?} | {} | {} | {:.0} | {:.2} | {:.3} | {:.0}% | {:.0}% | {:.0}% | {:.2} | {:.1}% |",
+            r.label,
+            r.learners,
+            r.device,
+            rayon::current_num_threads(),
+            r.worlds_steps,
+            r.steps_per_s,
+            r.steps_per_s / first,
+            r.secs_per_iteration,
+            100.0 * r.shares[0],
+            100.0 * r.shares[1],
+            100.0 * r.shares[2],
+            gflops,
+            100.0 * gflops * 1e9 / peak,
+        );
+    }
+    println!(
+        "\npeak: {:.1} GFLOP/s, measured here as a 1024 x 1024 f32 matmul on {} torch threads; network FLOPs per iteration counted from the layer shapes (NetConfig::forward_flops; a backward pass as two forwards)",
+        peak / 1e9,
+        tch::get_num_threads()
+    );
+    Ok(())
+}
+
+/// f32 FLOP/s of a large matmul: what the cores can give dense network work.
+fn matmul_peak_flops() -> f64 {
+    let a = tch::Tensor::randn([1024, 1024], (tch::Kind::Float, tch::Device::Cpu));
+    let b = tch::Tensor::randn([1024, 1024], (tch::Kind::Float, tch::Device::Cpu));
+    let _ = a.matmul(&b);
+    let start = Instant::now();
+    let mut n = 0;
+    while start.elapsed().as_secs_f64() < 1.0 {
+        let _ = a.matmul(&b);
+        n += 1;
+    }
+    2.0 * 1024f64.powi(3) * n as f64 / start.elapsed().as_secs_f64()
+}
+
+fn time_training(args: &BenchArgs, path: &std::path::Path) -> Result<TrainTiming> {
     let mut cfg = crate::learn::train::TrainConfig::load(path)?;
     if let Some(d) = &args.device {
         cfg.device = d.clone();
@@ -70,25 +138,16 @@ fn ppo_table(args: &BenchArgs, path: &std::path::Path) -> Result<()> {
         .iter()
         .map(|(s, a)| format!("{} {}", s.name(), a.name()))
         .collect();
-    println!(
-        "| config | learners | device | threads | worlds x steps | env steps/s | s per iteration | env | inference | update |"
-    );
-    println!("|---|---|---|---|---|---|---|---|---|---|");
-    println!(
-        "| {} | {} | {:?} | {} | {} x {} | {:.0} | {:.2} | {:.0}% | {:.0}% | {:.0}% |",
-        path.display(),
-        learners.join(" + "),
-        trainer.device,
-        rayon::current_num_threads(),
-        cfg.num_envs,
-        cfg.rollout_steps,
-        steps as f64 / secs,
-        secs / args.iterations.max(1) as f64,
-        100.0 * env / secs,
-        100.0 * inf / secs,
-        100.0 * upd / secs,
-    );
-    Ok(())
+    Ok(TrainTiming {
+        label: path.display().to_string(),
+        learners: learners.join(" + "),
+        device: trainer.device,
+        worlds_steps: format!("{} x {}", cfg.num_envs, cfg.rollout_steps),
+        steps_per_s: steps as f64 / secs,
+        secs_per_iteration: secs / args.iterations.max(1) as f64,
+        shares: [env / secs, inf / secs, upd / secs],
+        flops_per_iteration: trainer.network_flops_per_iteration(),
+    })
 }
 
 struct Row {
@@ -165,8 +224,8 @@ pub fn run(args: BenchArgs) -> Result<()> {
     if args.iterations == 0 {
         anyhow::bail!("--iterations 0: needs at least one timed iteration");
     }
-    if let Some(p) = &args.train {
-        return ppo_table(&args, p);
+    if !args.train.is_empty() {
+        return train_table(&args, &args.train);
     }
     if args.opponents {
         return super::bench_opponents::run(args.seconds, args.envs);

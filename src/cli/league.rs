@@ -74,7 +74,7 @@ pub fn run(args: RunArgs) -> Result<()> {
     let run_for = args
         .run_for
         .as_deref()
-        .map(manager::parse_duration)
+        .map(|t| crate::util::parse_duration("--for", t))
         .transpose()
         .map_err(anyhow::Error::msg)?;
     let dir = match (&args.dir, &args.config) {

@@ -6,6 +6,7 @@ mod bench_opponents;
 pub mod eval;
 pub mod league;
 pub mod maps;
+pub mod periodic_eval;
 pub mod render;
 pub mod table;
 pub mod train;

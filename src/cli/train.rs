@@ -1,6 +1,7 @@
 //! `t2e-league train`: one training run from a TOML config (see configs/).
 
 use crate::learn::train::{Metrics, TrainConfig, Trainer};
+use super::periodic_eval::{EvalPlan, PeriodicEval};
 use crate::render::plot::{self, line_plot, Series};
 use anyhow::{bail, Context, Result};
 use clap::Args;
@@ -29,12 +30,43 @@ pub struct TrainArgs {
     /// Hide the progress bar (logs one line per checkpoint instead).
     #[arg(long)]
     pub quiet: bool,
+    /// Stop after this much training wall-clock in this invocation (90s,
+    /// 10m, 2h), with a final checkpoint, even before total_env_steps.
+    #[arg(long = "for", value_name = "DURATION", allow_hyphen_values = true)]
+    pub run_for: Option<String>,
+    /// Every DURATION, evaluate the newest checkpoint of each learning side
+    /// against the rule-based opponent in a child process at the lowest CPU
+    /// priority (one thread); SR against wall-clock and env steps goes to
+    /// eval.csv and eval.png in the run folder.
+    #[arg(long, value_name = "DURATION", allow_hyphen_values = true)]
+    pub eval_every: Option<String>,
+    /// Map sets of the periodic evaluation (as `eval --maps`).
+    #[arg(long, default_value = "small,medium,large", value_delimiter = ',')]
+    pub eval_maps: Vec<String>,
+    /// Episodes per map set of each periodic evaluation.
+    #[arg(long, default_value_t = 100)]
+    pub eval_episodes: usize,
+    /// Episode length of the periodic evaluation (the paper tests on 500).
+    #[arg(long, default_value_t = 500)]
+    pub eval_episode_length: u32,
 }
 
 /// Set by Ctrl-C: the loop saves a checkpoint and stops after the current iteration.
 static STOP: AtomicBool = AtomicBool::new(false);
 
 pub fn run(args: TrainArgs) -> Result<()> {
+    let run_for = args
+        .run_for
+        .as_deref()
+        .map(|t| crate::util::parse_duration("--for", t))
+        .transpose()
+        .map_err(anyhow::Error::msg)?;
+    let eval_every = args
+        .eval_every
+        .as_deref()
+        .map(|t| crate::util::parse_duration("--eval-every", t))
+        .transpose()
+        .map_err(anyhow::Error::msg)?;
     let mut cfg = match (&args.config, &args.out, args.resume) {
         (Some(p), _, _) => TrainConfig::load(p)?,
         (None, Some(out), true) => TrainConfig::load_stored(&out.join("config.toml"))?,
@@ -63,6 +95,34 @@ pub fn run(args: TrainArgs) -> Result<()> {
     }
     std::fs::create_dir_all(&run_dir)
         .with_context(|| format!("cannot create {}", run_dir.display()))?;
+    let eval_plan = match eval_every {
+        Some(every) => {
+            let plan = EvalPlan {
+                every,
+                maps: args.eval_maps.clone(),
+                episodes: args.eval_episodes,
+                episode_length: args.eval_episode_length,
+                seed: 0,
+                num_captors: cfg.env.num_captors,
+                speed_ratio: cfg.env.speed_ratio(),
+            };
+            crate::eval::EvalSetting {
+                num_captors: plan.num_captors,
+                speed_ratio: plan.speed_ratio,
+                episodes: plan.episodes,
+                episode_length: plan.episode_length,
+                ..Default::default()
+            }
+            .validate()
+            .map_err(|e| anyhow::anyhow!("--eval-episodes / --eval-episode-length: {e}"))?;
+            for m in &plan.maps {
+                crate::map::catalog::load_prepared(m)
+                    .with_context(|| format!("--eval-maps {m}"))?;
+            }
+            Some(plan)
+        }
+        None => None,
+    };
     let maps = crate::map::catalog::load_prepared(&cfg.maps)
         .with_context(|| format!("maps = \"{}\"", cfg.maps))?;
     let mut trainer = if args.resume {
@@ -123,7 +183,14 @@ pub fn run(args: TrainArgs) -> Result<()> {
     };
     let metrics_path = run_dir.join("metrics.csv");
     let mut recent: Vec<Metrics> = Vec::new();
+    let mut periodic = eval_plan.map(|p| PeriodicEval::new(p, &run_dir));
+    let started = std::time::Instant::now();
+    let mut out_of_time = false;
     while trainer.env_steps < cfg.total_env_steps && !STOP.load(Ordering::SeqCst) {
+        if run_for.is_some_and(|d| started.elapsed() >= d) {
+            out_of_time = true;
+            break;
+        }
         let m = trainer.iterate()?;
         append_metrics(&metrics_path, &m)?;
         bar.set_position(m.env_steps);
@@ -132,19 +199,46 @@ pub fn run(args: TrainArgs) -> Result<()> {
             recent.remove(0);
         }
         bar.set_message(status_line(&recent));
-        if trainer.iteration % cfg.checkpoint_every == 0 {
-            trainer.save(&run_dir)?;
+        let eval_due = periodic.as_ref().is_some_and(|p| p.is_due());
+        if trainer.iteration % cfg.checkpoint_every == 0 || eval_due {
+            let written = trainer.save(&run_dir)?;
             write_curves(&run_dir)?;
-            if args.quiet {
+            if args.quiet && trainer.iteration % cfg.checkpoint_every == 0 {
                 eprintln!("iteration {}: {}", trainer.iteration, status_line(&recent));
             }
+            if let (true, Some(p)) = (eval_due, periodic.as_mut()) {
+                let sides: Vec<_> = trainer
+                    .learner_sides()
+                    .into_iter()
+                    .map(|(s, _)| s)
+                    .zip(written)
+                    .collect();
+                p.launch(&sides, trainer.env_steps, trainer.wall_s)?;
+            }
+        }
+        if let Some(p) = periodic.as_mut() {
+            p.collect(false)?;
         }
     }
     let written = trainer.save(&run_dir)?;
     write_curves(&run_dir)?;
     bar.finish_and_clear();
+    if let Some(p) = periodic.as_mut() {
+        // The last checkpoint too, then every evaluation still running.
+        let sides: Vec<_> = trainer
+            .learner_sides()
+            .into_iter()
+            .map(|(s, _)| s)
+            .zip(written.iter().cloned())
+            .collect();
+        p.launch(&sides, trainer.env_steps, trainer.wall_s)?;
+        eprintln!("waiting for the periodic evaluations to finish");
+        p.collect(true)?;
+    }
     let why = if STOP.load(Ordering::SeqCst) {
         "stopped"
+    } else if out_of_time {
+        "out of time (--for)"
     } else {
         "done"
     };
@@ -372,7 +466,9 @@ mod tests {
             }
             if p.extension().and_then(|x| x.to_str()) == Some("toml") {
                 let cfg = TrainConfig::load(&p).unwrap();
-                refuse_test_maps(&cfg.maps).unwrap();
+                if cfg.protocol == crate::protocol::Protocol::HeldOut {
+                    refuse_test_maps(&cfg.maps).unwrap();
+                }
                 n += 1;
             }
         }

@@ -9,6 +9,7 @@ pub mod controller;
 pub mod observe;
 pub mod physics;
 pub mod placement;
+pub mod potential;
 pub mod vec_env;
 
 pub use action::Action;

@@ -144,9 +144,21 @@ pub fn step(
 /// The fast capture rule: all 12 probe positions 1.5 r around the target are
 /// blocked by an obstacle or by another robot.
 pub fn target_is_trapped(map: &PreparedMap, target: [f64; 2], captors: &[Robot]) -> bool {
-    ray_dirs().iter().all(|u| {
-        let probe = [target[0] + PROBE_DIST * u[0], target[1] + PROBE_DIST * u[1]];
-        captors.iter().any(|c| dist(c.pos, probe) < CONTACT_DIST)
-            || map.disc_touches_obstacle(probe, RADIUS)
-    })
+    ray_dirs()
+        .iter()
+        .all(|u| probe_is_blocked(map, target, captors, u))
+}
+
+/// How many of the 12 capture probes are blocked (12: captured).
+pub fn blocked_probes(map: &PreparedMap, target: [f64; 2], captors: &[Robot]) -> usize {
+    ray_dirs()
+        .iter()
+        .filter(|u| probe_is_blocked(map, target, captors, u))
+        .count()
+}
+
+fn probe_is_blocked(map: &PreparedMap, target: [f64; 2], captors: &[Robot], u: &[f64; 2]) -> bool {
+    let probe = [target[0] + PROBE_DIST * u[0], target[1] + PROBE_DIST * u[1]];
+    captors.iter().any(|c| dist(c.pos, probe) < CONTACT_DIST)
+        || map.disc_touches_obstacle(probe, RADIUS)
 }

@@ -4,6 +4,7 @@
 //! Scripted sides (rule-based robots, frozen checkpoints) act inside the same
 //! parallel pass.
 
+use super::potential::Potential;
 use super::{Action, Controller, EnvConfig, PlacementError, Side, TrapEnv, PATCH_LEN};
 use crate::map::PreparedMap;
 use rayon::prelude::*;
@@ -64,6 +65,13 @@ pub struct VecEnv {
     pub final_patches: Vec<u8>,
     /// Episodes that ended in the last step.
     pub finished: Vec<EpisodeStats>,
+    /// The potential tracked for reward shaping, if any (`track_potential`).
+    potential: Option<Potential>,
+    /// [env]: the potential of each world's current state (0 untracked).
+    pub potentials: Vec<f32>,
+    /// [env]: the potential of the state an episode ended in during the
+    /// last step (stale for other worlds), beside `final_vectors`.
+    pub final_potentials: Vec<f32>,
 }
 
 impl VecEnv {
@@ -106,6 +114,9 @@ impl VecEnv {
             terminated: vec![false; num_envs],
             truncated: vec![false; num_envs],
             finished: Vec::new(),
+            potential: None,
+            potentials: vec![0.0; num_envs],
+            final_potentials: vec![0.0; num_envs],
             cfg,
         })
     }
@@ -147,6 +158,15 @@ impl VecEnv {
         self.slots[world].env.set_speeds(captor_speed, target_speed)
     }
 
+    /// Computes `potential` of every world's state from now on, into
+    /// `potentials` and `final_potentials` (for training-only shaping).
+    pub fn track_potential(&mut self, potential: Potential) {
+        self.potential = Some(potential);
+        for (p, slot) in self.potentials.iter_mut().zip(&self.slots) {
+            *p = potential.of(&slot.env);
+        }
+    }
+
     /// Index of the episode world `world` is playing (0 for its first).
     pub fn episode_index(&self, world: usize) -> u64 {
         self.slots[world].episode
@@ -178,15 +198,18 @@ impl VecEnv {
         } else {
             (0..self.slots.len()).map(|_| &mut [][..]).collect()
         };
+        let potential = self.potential;
         self.slots
             .par_iter_mut()
             .zip(self.vectors.par_chunks_mut(na * vl))
             .zip(patches.par_iter_mut())
+            .zip(self.potentials.par_iter_mut())
             .enumerate()
-            .try_for_each(|(e, ((slot, vec), patch))| {
+            .try_for_each(|(e, (((slot, vec), patch), phi))| {
                 slot.episode = 0;
                 slot.begin(episode_seed(base, e, 0))?;
                 slot.write_obs(vec, patch, vl, obs);
+                *phi = potential.map_or(0.0, |p| p.of(&slot.env));
                 Ok(())
             })
     }
@@ -213,6 +236,7 @@ impl VecEnv {
         } else {
             (0..self.slots.len()).map(|_| &mut [][..]).collect()
         };
+        let potential = self.potential;
         let results: Vec<Result<Option<EpisodeStats>, PlacementError>> = self
             .slots
             .par_iter_mut()
@@ -230,11 +254,19 @@ impl VecEnv {
                     .par_iter_mut()
                     .zip(self.truncated.par_iter_mut()),
             )
+            .zip(
+                self.potentials
+                    .par_iter_mut()
+                    .zip(self.final_potentials.par_iter_mut()),
+            )
             .enumerate()
             .map(
                 |(
                     e,
-                    ((((((slot, vec), patch), (final_vec, final_patch)), rew), act), (term, trunc)),
+                    (
+                        ((((((slot, vec), patch), (final_vec, final_patch)), rew), act), (term, trunc)),
+                        (phi, final_phi),
+                    ),
                 )| {
                     let mut acts = [Action::Stop; 33];
                     acts[..na].copy_from_slice(act);
@@ -261,10 +293,16 @@ impl VecEnv {
                             captor_path_len: env.path_len[..k].iter().sum::<f64>() / k as f64,
                         });
                         slot.write_obs(final_vec, final_patch, vl, obs);
+                        if let Some(p) = potential {
+                            *final_phi = p.of(&slot.env);
+                        }
                         slot.episode += 1;
                         slot.begin(episode_seed(base, e, slot.episode))?;
                     }
                     slot.write_obs(vec, patch, vl, obs);
+                    if let Some(p) = potential {
+                        *phi = p.of(&slot.env);
+                    }
                     Ok(stats)
                 },
             )

@@ -9,45 +9,99 @@ use crate::env::CaptureRule;
 use std::collections::BTreeMap;
 use std::fmt::Write;
 
-/// The paper's reported SR % (small, medium, large) against the rule-based
-/// target, as spec §8 gives them: (K, speed ratio, learner, SR). Trained and
-/// tested on the Gibson maps (paper protocol), 30 M steps per run. Cells the
-/// spec does not quote are absent, not zero.
-pub const PAPER_SR: &[(usize, f64, &str, [f64; 3])] = &[
-    (3, 1.0, "MAPPO", [99.8, 99.8, 94.8]),
-    (3, 1.0, "MAAC", [100.0, 99.8, 91.2]),
-    (3, 1.2, "MAPPO", [92.4, 80.6, 78.4]),
-    (3, 1.4, "MAPPO", [64.2, 43.8, 43.1]),
-    (4, 1.0, "MAPPO", [100.0, 99.8, 99.2]),
-    (4, 1.2, "IPPO", [99.2, 97.8, 95.6]),
-    (4, 1.4, "MAPPO", [93.2, 87.2, 85.6]),
-    (4, 1.4, "IPPO", [94.0, 86.2, 87.6]),
-];
+/// Every cell of the paper's Tables II, III and V (a copy of
+/// ../shared/paper/tables.csv; a test keeps them equal): per table, K,
+/// speed ratio, learner, target and map class, the paper's Time (steps),
+/// SR % and Path Len (m). Paper protocol: trained and tested on the Gibson
+/// maps, 30 M steps per run.
+const PAPER_TABLES: &str = include_str!("paper_tables.csv");
+
+/// One cell of the paper's tables.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PaperCell {
+    pub table: String,
+    pub num_captors: usize,
+    pub speed_ratio: f64,
+    pub learner: String,
+    pub target: String,
+    pub map_class: String,
+    pub time: f64,
+    pub sr: f64,
+    pub path_len: f64,
+}
+
+/// The paper's cells, parsed once from the embedded CSV.
+pub fn paper_cells() -> &'static [PaperCell] {
+    static CELLS: std::sync::OnceLock<Vec<PaperCell>> = std::sync::OnceLock::new();
+    CELLS.get_or_init(|| parse_paper_tables(PAPER_TABLES).expect("the embedded paper tables parse"))
+}
+
+fn parse_paper_tables(text: &str) -> Result<Vec<PaperCell>, String> {
+    let mut out = Vec::new();
+    for (n, line) in text.lines().enumerate().skip(1) {
+        if line.trim().is_empty() {
+            continue;
+        }
+        let f: Vec<&str> = line.split(',').collect();
+        let bad = |what: &str| format!("paper tables line {}: {what}: {line}", n + 1);
+        if f.len() != 9 {
+            return Err(bad("expected 9 fields"));
+        }
+        let num = |x: &str| -> Result<f64, String> {
+            x.parse::<f64>()
+                .ok()
+                .filter(|v| v.is_finite())
+                .ok_or_else(|| bad(&format!("'{x}' is not a number")))
+        };
+        let ratio = f[2]
+            .strip_prefix("1.0:")
+            .ok_or_else(|| bad("speed ratio is not 1.0:R"))?;
+        out.push(PaperCell {
+            table: f[0].into(),
+            num_captors: f[1].parse().map_err(|_| bad("K"))?,
+            speed_ratio: num(ratio)?,
+            learner: f[3].into(),
+            target: f[4].into(),
+            map_class: f[5].into(),
+            time: num(f[6])?,
+            sr: num(f[7])?,
+            path_len: num(f[8])?,
+        });
+    }
+    Ok(out)
+}
 
 const CLASSES: [&str; 3] = ["small", "medium", "large"];
 
-/// The paper's SR (small / medium / large) for a row: the same learner's
-/// where the paper quotes it, else every learner it quotes for that K and
-/// ratio, named ("MAPPO 99.8 / 99.8 / 94.8; MAAC 100.0 / 99.8 / 91.2").
-fn paper_cells(k: usize, ratio: f64, learner: &str) -> String {
-    let at: Vec<&(usize, f64, &str, [f64; 3])> = PAPER_SR
-        .iter()
-        .filter(|(pk, pr, _, _)| *pk == k && (pr - ratio).abs() < 1e-9)
-        .collect();
-    let three = |sr: &[f64; 3]| format!("{:.1} / {:.1} / {:.1}", sr[0], sr[1], sr[2]);
-    if let Some((_, _, _, sr)) = at
-        .iter()
-        .find(|(_, _, l, _)| l.eq_ignore_ascii_case(learner))
-    {
-        return three(sr);
+/// The paper's own cell for a row's learner against the rule-based target
+/// (Table II or III): (SR, Time) per class, or None where the paper has no
+/// such learner (a heuristic) or no such setting. Never another learner's.
+pub fn paper_row(k: usize, ratio: f64, learner: &str) -> Option<[(f64, f64); 3]> {
+    let mut row = [(f64::NAN, f64::NAN); 3];
+    for (i, class) in CLASSES.iter().enumerate() {
+        let cell = paper_cells().iter().find(|c| {
+            c.table != "V"
+                && c.num_captors == k
+                && (c.speed_ratio - ratio).abs() < 1e-9
+                && c.learner.eq_ignore_ascii_case(learner)
+                && c.target == "rule-based"
+                && c.map_class == *class
+        })?;
+        row[i] = (cell.sr, cell.time);
     }
-    if at.is_empty() {
-        return "-".into();
+    Some(row)
+}
+
+/// The paper's SR and Time for a row, as two cells of text ("-" where the
+/// paper has no cell for this learner).
+fn paper_text(k: usize, ratio: f64, learner: &str) -> (String, String) {
+    match paper_row(k, ratio, learner) {
+        Some(r) => (
+            format!("{:.1} / {:.1} / {:.1}", r[0].0, r[1].0, r[2].0),
+            format!("{:.0} / {:.0} / {:.0}", r[0].1, r[1].1, r[2].1),
+        ),
+        None => ("-".into(), "-".into()),
     }
-    at.iter()
-        .map(|(_, _, l, sr)| format!("{l} {}", three(sr)))
-        .collect::<Vec<_>>()
-        .join("; ")
 }
 
 /// A summary and where it was read (its eval folder's summary.json), so a
@@ -232,19 +286,19 @@ pub fn markdown(summaries: &[Sourced]) -> Result<String, String> {
             "### {k}:1 against the rule-based target (paper Table {})\n",
             if *k == 3 { "II" } else { "III" }
         );
-        out.push_str("| v_p:v_e | captors | learner | protocol | SR % small | SR % medium | SR % large | paper SR % small / medium / large | Time (steps) s / m / l | Path Len (m) s / m / l | episodes per class |\n");
-        out.push_str("|---|---|---|---|---|---|---|---|---|---|---|\n");
+        out.push_str("| v_p:v_e | captors | learner | protocol | SR % small | SR % medium | SR % large | paper SR % small / medium / large | Time (steps) s / m / l | paper Time s / m / l | Path Len (m) s / m / l | episodes per class |\n");
+        out.push_str("|---|---|---|---|---|---|---|---|---|---|---|---|\n");
         for r in rows {
             let sr = triple(&r.cells, |s| {
                 format!("{:.1} [{:.1}, {:.1}]", s.sr, s.sr_low, s.sr_high)
             });
             let time = triple(&r.cells, |s| format!("{:.0}", s.time)).join(" / ");
             let path = triple(&r.cells, |s| format!("{:.1}", s.path_len)).join(" / ");
-            let paper = paper_cells(*k, r.ratio, &r.learner);
+            let (paper, paper_time) = paper_text(*k, r.ratio, &r.learner);
             let episodes = episodes_cell(&r.cells);
             let _ = writeln!(
                 out,
-                "| 1.0:{} | {} | {} | {} | {} | {} | {} | {paper} | {time} | {path} | {episodes} |",
+                "| 1.0:{} | {} | {} | {} | {} | {} | {} | {paper} | {time} | {paper_time} | {path} | {episodes} |",
                 ratio_label(r.ratio),
                 r.captors,
                 r.learner,
@@ -256,7 +310,7 @@ pub fn markdown(summaries: &[Sourced]) -> Result<String, String> {
         }
         out.push('\n');
     }
-    out.push_str("Paper SR: as quoted in spec §8 (paper protocol: trained and tested on the Gibson maps, 30 M steps); for the same learner where the paper quotes it, else the learners it quotes for the cell; - where it quotes none.\n");
+    out.push_str("Paper SR and Time: the same learner's cell of the paper's Table II / III (paper protocol: trained and tested on the Gibson maps, 30 M steps); - where the paper has no such learner (a heuristic).\n");
     if left_out > 0 {
         let _ = writeln!(out, "\n{left_out} summaries left out: against another target than the rule-based one, or on maps other than the three Gibson classes.");
     }
@@ -283,7 +337,7 @@ pub fn latex(summaries: &[Sourced]) -> Result<String, String> {
                 format!("{:.1} [{:.1}, {:.1}]", s.sr, s.sr_low, s.sr_high)
             });
             let time = triple(&r.cells, |s| format!("{:.0}", s.time)).join(" / ");
-            let paper = paper_cells(*k, r.ratio, &r.learner);
+            let (paper, _) = paper_text(*k, r.ratio, &r.learner);
             let _ = writeln!(
                 out,
                 "1.0:{} & {} & {} & {} & {} & {} & {} & {} & {} \\\\",
@@ -351,17 +405,18 @@ mod tests {
         ];
         let s = sourced(s);
         let md = markdown(&s).unwrap();
-        assert!(md.contains("| 1.0:1.0 | ckpt:runs/MAPPO | MAPPO | held-out | 85.8 [81.8, 89.8] | 74.6 [70.6, 78.6] | 63.0 [59.0, 67.0] | 99.8 / 99.8 / 94.8 |"), "{md}");
-        // No IPPO number at 3:1 1.2: the learners the paper quotes there.
-        assert!(md.contains("| MAPPO 92.4 / 80.6 / 78.4 |"), "{md}");
+        assert!(md.contains("| 1.0:1.0 | ckpt:runs/MAPPO | MAPPO | held-out | 85.8 [81.8, 89.8] | 74.6 [70.6, 78.6] | 63.0 [59.0, 67.0] | 99.8 / 99.8 / 94.8 | 300 / 300 / 300 | 101 / 130 / 185 |"), "{md}");
+        // IPPO at 3:1, 1.2: IPPO's own cell (Table II), never MAPPO's.
+        assert!(md.contains("| IPPO | held-out | - | 40.0 [36.0, 44.0] | - | 84.8 / 64.8 / 68.4 | - / 300 / - | 222 / 319 / 323 |"), "{md}");
+        // A heuristic has no cell in the paper: none is borrowed.
         let heuristic = Summary {
             captors: "heuristic".into(),
             captors_learner: "expert heuristic".into(),
             ..summary(3, 1.0, "small", "heuristic", "x", 78.4)
         };
-        assert!(markdown(&sourced(vec![heuristic]))
-            .unwrap()
-            .contains("| MAPPO 99.8 / 99.8 / 94.8; MAAC 100.0 / 99.8 / 91.2 |"));
+        let hmd = markdown(&sourced(vec![heuristic])).unwrap();
+        assert!(hmd.contains("| - | 300 / - / - | - |"), "{hmd}");
+        assert!(!hmd.contains("99.8"), "{hmd}");
         assert!(md.contains("| 1.0:1.4 | ckpt:runs/IPPO | IPPO | held-out | 50.0 [46.0, 54.0] | - | - | 94.0 / 86.2 / 87.6 |"), "{md}");
         assert!(md.contains("Table II") && md.contains("Table III"));
         assert!(md.contains("1 summaries left out"), "{md}");
@@ -372,6 +427,33 @@ mod tests {
             "{tex}"
         );
         assert_eq!(tex.matches("\\begin{tabular}").count(), 2);
+    }
+
+    #[test]
+    fn every_paper_cell_is_there_once_and_matches_the_shared_copy() {
+        let cells = paper_cells();
+        assert_eq!(cells.len(), 80);
+        // Tables II and III: 4 learners x 3 ratios x 3 classes, per K.
+        for k in [3, 4] {
+            for ratio in [1.0, 1.2, 1.4] {
+                for learner in ["MAPPO", "IPPO", "MADDPG", "MAAC"] {
+                    assert!(paper_row(k, ratio, learner).is_some(), "{k} {ratio} {learner}");
+                }
+            }
+        }
+        assert_eq!(
+            paper_row(3, 1.0, "mappo").unwrap(),
+            [(99.8, 100.71), (99.8, 129.52), (94.8, 185.44)]
+        );
+        assert!(paper_row(3, 1.0, "expert heuristic").is_none());
+        assert!(parse_paper_tables("h\nII,3,1.0:1.0,MAPPO,rule-based,small,x,1,1\n")
+            .unwrap_err()
+            .contains("line 2"));
+        let shared = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../shared/paper/tables.csv");
+        if let Ok(text) = std::fs::read_to_string(&shared) {
+            assert_eq!(text, PAPER_TABLES, "src/eval/paper_tables.csv differs from {}", shared.display());
+        }
     }
 
     #[test]

@@ -11,6 +11,7 @@ use crate::env::{EnvConfig, Side};
 use crate::learn::maac::MaacConfig;
 use crate::learn::maddpg::MaddpgConfig;
 use crate::learn::ppo::PpoConfig;
+use crate::learn::shaping::ShapingConfig;
 use crate::learn::train::{SideConfig, TrainConfig};
 use crate::nn::NetConfig;
 use crate::protocol::Protocol;
@@ -78,6 +79,9 @@ pub struct LearnerConfig {
     #[serde(skip_serializing_if = "is_default")]
     pub maac: MaacConfig,
     pub net: NetConfig,
+    /// Training-only potential-based shaping (stored only when on).
+    #[serde(skip_serializing_if = "is_default")]
+    pub shaping: ShapingConfig,
 }
 
 fn is_default<T: Default + PartialEq>(x: &T) -> bool {
@@ -95,6 +99,7 @@ impl Default for LearnerConfig {
             maddpg: MaddpgConfig::default(),
             maac: MaacConfig::default(),
             net: NetConfig::default(),
+            shaping: ShapingConfig::default(),
         }
     }
 }
@@ -247,6 +252,7 @@ impl LeagueConfig {
             maddpg: learner.maddpg.clone(),
             maac: learner.maac.clone(),
             net: learner.net.clone(),
+            shaping: learner.shaping.clone(),
         };
         let other = SideConfig {
             play: "still".into(),

@@ -62,29 +62,6 @@ fn lock_holder(path: &Path) -> String {
         .unwrap_or_default()
 }
 
-/// Parses `--for`: `90` or `90s`, `10m`, `2h`.
-pub fn parse_duration(text: &str) -> Result<Duration, String> {
-    let t = text.trim();
-    let (num, unit) = match t.char_indices().find(|(_, c)| c.is_ascii_alphabetic()) {
-        Some((i, _)) => (&t[..i], &t[i..]),
-        None => (t, "s"),
-    };
-    let n: f64 = num
-        .parse()
-        .map_err(|_| format!("--for {text}: expected a duration such as 90s, 10m or 2h"))?;
-    let secs = match unit {
-        "s" => n,
-        "m" | "min" => n * 60.0,
-        "h" => n * 3600.0,
-        _ => return Err(format!("--for {text}: unknown unit '{unit}' (s, m or h)")),
-    };
-    if !(secs.is_finite() && secs > 0.0 && secs <= 30.0 * 86400.0) {
-        return Err(format!(
-            "--for {text}: must be more than 0 and at most 30 days"
-        ));
-    }
-    Ok(Duration::from_secs_f64(secs))
-}
 
 /// A child process the manager supervises.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -504,16 +481,6 @@ fn lock(dir: &LeagueDir) -> Result<File> {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn durations_parse_and_nonsense_is_refused() {
-        assert_eq!(parse_duration("90").unwrap(), Duration::from_secs(90));
-        assert_eq!(parse_duration("10m").unwrap(), Duration::from_secs(600));
-        assert_eq!(parse_duration("1.5h").unwrap(), Duration::from_secs(5400));
-        for bad in ["", "0", "-5m", "10x", "nanm", "1e9h"] {
-            assert!(parse_duration(bad).is_err(), "{bad}");
-        }
-    }
 
     #[test]
     fn a_lock_is_exclusive_while_held() {

@@ -5,7 +5,8 @@
 //! the tensors and state a checkpoint holds. The algorithms themselves read
 //! top to bottom in their own files (`ppo.rs`, `maddpg.rs`, `maac.rs`).
 
-use super::ppo::{Adam, BadUpdate, Rollout, UpdateStats};
+use super::adam::Adam;
+use super::rollout::{BadUpdate, Rollout, UpdateStats};
 use super::Algorithm;
 use crate::nn::{Actor, NetConfig};
 use rand_chacha::ChaCha8Rng;

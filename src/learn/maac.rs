@@ -28,10 +28,11 @@
 
 use super::learner::{Learner, NamedTensors};
 use super::offpolicy::{
-    check_replay, one_hot, td_target, within, Batch, Params, ReplayLearner, ReplaySchedule,
+    check_replay, gumbel_noise, one_hot, td_target, within, Batch, Params, ReplayLearner,
+    ReplaySchedule,
     SequenceReplay,
 };
-use super::ppo::{BadUpdate, Rollout, UpdateStats};
+use super::rollout::{BadUpdate, Rollout, UpdateStats};
 use super::Algorithm;
 use crate::env::Action;
 use crate::nn::{Actor, NetConfig, Trunk};
@@ -276,10 +277,12 @@ pub struct MaacLearner {
     pub replay: SequenceReplay,
 }
 
-/// (sampled actions [N], their log-probabilities [N]) of logits [N, 5].
-fn sample_actions(logits: &Tensor) -> (Tensor, Tensor) {
+/// (sampled actions [N], their log-probabilities [N]) of logits [N, 5]:
+/// the Gumbel-max trick, argmax(log p + Gumbel noise), with the noise from
+/// the trainer's generator.
+fn sample_actions(logits: &Tensor, rng: &mut ChaCha8Rng) -> (Tensor, Tensor) {
     let logp = logits.log_softmax(-1, Kind::Float);
-    let a = logp.exp().multinomial(1, true);
+    let a = (&logp + gumbel_noise(&logp, rng)).argmax(1, true);
     (a.squeeze_dim(1), logp.gather(1, &a, false).squeeze_dim(1))
 }
 
@@ -323,7 +326,7 @@ impl MaacLearner {
     }
 
     /// The soft TD targets of a batch, [len * rows].
-    fn targets(&self, b: &Batch) -> Tensor {
+    fn targets(&self, b: &Batch, rng: &mut ChaCha8Rng) -> Tensor {
         let (l, n) = (b.len as i64, b.rows as i64);
         let alpha = self.cfg.entropy_coef;
         tch::no_grad(|| {
@@ -333,14 +336,14 @@ impl MaacLearner {
             let hc = self
                 .target_critic
                 .unroll(&b.patches, &b.vectors, &b.critic_h0, &b.masks);
-            let soft_value = |ha: &Tensor, hc: &Tensor| {
-                let (a, logp) = sample_actions(&self.target_actor.logits(ha));
+            let soft_value = |ha: &Tensor, hc: &Tensor, rng: &mut ChaCha8Rng| {
+                let (a, logp) = sample_actions(&self.target_actor.logits(ha), rng);
                 let (q, _) = self
                     .target_critic
                     .q_all(hc, &one_hot(&a, Action::COUNT as i64));
                 q.gather(1, &a.unsqueeze(1), false).squeeze_dim(1) - logp * alpha
             };
-            let next = soft_value(&ha, &hc).narrow(0, n, l * n);
+            let next = soft_value(&ha, &hc, rng).narrow(0, n, l * n);
             let mut final_value = next.zeros_like();
             if let Some((state_rows, final_rows, at)) = b.truncated_rows() {
                 let p = b.final_patches.index_select(0, &final_rows);
@@ -351,7 +354,7 @@ impl MaacLearner {
                 let hc_f = self
                     .target_critic
                     .step(&p, &v, &hc.index_select(0, &state_rows));
-                final_value = final_value.index_copy(0, &at, &soft_value(&ha_f, &hc_f));
+                final_value = final_value.index_copy(0, &at, &soft_value(&ha_f, &hc_f, rng));
             }
             td_target(
                 &b.rewards,
@@ -365,9 +368,14 @@ impl MaacLearner {
     }
 
     /// One gradient step of critic, actor and targets on a batch.
-    fn gradient_step(&mut self, b: &Batch, stats: &mut UpdateStats) -> Result<(), BadUpdate> {
+    fn gradient_step(
+        &mut self,
+        b: &Batch,
+        stats: &mut UpdateStats,
+        rng: &mut ChaCha8Rng,
+    ) -> Result<(), BadUpdate> {
         let cfg = self.cfg.clone();
-        let y = self.targets(b);
+        let y = self.targets(b, rng);
         let (p, v, m) = b.now();
 
         let hc = self.critic.unroll(&p, &v, &b.critic_h0, &m);
@@ -385,7 +393,7 @@ impl MaacLearner {
         let ha = self.actor.unroll_states(&p, &v, &b.actor_h0, &m);
         let logits = self.actor.logits(&ha);
         let logp_all = logits.log_softmax(-1, Kind::Float);
-        let (a, _) = tch::no_grad(|| sample_actions(&logits));
+        let (a, _) = tch::no_grad(|| sample_actions(&logits, rng));
         let advantage = tch::no_grad(|| {
             let (q_pi, _) = self.critic.q_all(&hc, &one_hot(&a, Action::COUNT as i64));
             let baseline = (logp_all.exp() * &q_pi).sum_dim_intlist(-1, false, Kind::Float);
@@ -454,8 +462,13 @@ impl ReplayLearner for MaacLearner {
     fn device(&self) -> Device {
         self.device
     }
-    fn gradient_step(&mut self, b: &Batch, stats: &mut UpdateStats) -> Result<(), BadUpdate> {
-        MaacLearner::gradient_step(self, b, stats)
+    fn gradient_step(
+        &mut self,
+        b: &Batch,
+        stats: &mut UpdateStats,
+        rng: &mut ChaCha8Rng,
+    ) -> Result<(), BadUpdate> {
+        MaacLearner::gradient_step(self, b, stats, rng)
     }
 }
 
@@ -564,7 +577,7 @@ mod tests {
     fn q_values_do_not_depend_on_the_robots_own_replayed_action() {
         // Q_i(o, a_-i, .) reads the others' actions only: changing robot 0's
         // action changes its teammates' Q, not its own.
-        tch::manual_seed(0);
+        let _seed = crate::nn::seed_torch(0);
         let vs = nn::VarStore::new(Device::Cpu);
         let net = NetConfig {
             hidden: 16,

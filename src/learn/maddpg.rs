@@ -25,7 +25,8 @@ use super::offpolicy::{
     check_replay, gumbel_noise, gumbel_softmax_st, one_hot, td_target, within, Batch, Params,
     ReplayLearner, ReplaySchedule, SequenceReplay,
 };
-use super::ppo::{BadUpdate, CriticView, Rollout, UpdateStats};
+use super::ppo::CriticView;
+use super::rollout::{BadUpdate, Rollout, UpdateStats};
 use super::Algorithm;
 use crate::env::Action;
 use crate::nn::{Actor, NetConfig, Trunk};
@@ -306,7 +307,12 @@ impl MaddpgLearner {
     }
 
     /// One gradient step of critic, actor and targets on a batch.
-    fn gradient_step(&mut self, b: &Batch, stats: &mut UpdateStats) -> Result<(), BadUpdate> {
+    fn gradient_step(
+        &mut self,
+        b: &Batch,
+        stats: &mut UpdateStats,
+        rng: &mut ChaCha8Rng,
+    ) -> Result<(), BadUpdate> {
         let cfg = self.cfg.clone();
         let y = self.targets(b);
         let (p, v, m) = b.now();
@@ -334,7 +340,7 @@ impl MaddpgLearner {
 
         let ha = self.actor.unroll_states(&p, &v, &b.actor_h0, &m);
         let logits = self.actor.logits(&ha);
-        let sampled = gumbel_softmax_st(&logits, &gumbel_noise(&logits), cfg.gumbel_temperature);
+        let sampled = gumbel_softmax_st(&logits, &gumbel_noise(&logits, rng), cfg.gumbel_temperature);
         let q_pi = self.critic.q(
             &hc.detach(),
             &team_actions(&sampled, &buffer_actions, self.team),
@@ -388,8 +394,13 @@ impl ReplayLearner for MaddpgLearner {
     fn device(&self) -> Device {
         self.device
     }
-    fn gradient_step(&mut self, b: &Batch, stats: &mut UpdateStats) -> Result<(), BadUpdate> {
-        MaddpgLearner::gradient_step(self, b, stats)
+    fn gradient_step(
+        &mut self,
+        b: &Batch,
+        stats: &mut UpdateStats,
+        rng: &mut ChaCha8Rng,
+    ) -> Result<(), BadUpdate> {
+        MaddpgLearner::gradient_step(self, b, stats, rng)
     }
 }
 

@@ -4,6 +4,8 @@
 //! frozen checkpoints or each other.
 
 pub mod acting;
+pub mod adam;
+pub mod config;
 pub mod ippo;
 pub mod learner;
 pub mod maac;
@@ -12,6 +14,8 @@ pub mod mappo;
 pub mod offpolicy;
 pub mod persist;
 pub mod ppo;
+pub mod rollout;
+pub mod shaping;
 pub mod train;
 
 use serde::{Deserialize, Serialize};

@@ -14,7 +14,8 @@
 //! next episode's first one.
 
 use super::learner::{file, optimizer_file, restore_optimizers, NamedTensors};
-use super::ppo::{Adam, BadUpdate, Rollout, UpdateStats};
+use super::adam::Adam;
+use super::rollout::{BadUpdate, Rollout, UpdateStats};
 use crate::nn::checkpoint::{load_into, named_cpu_tensors};
 use crate::nn::obs_tensors;
 use rand::Rng;
@@ -347,9 +348,20 @@ pub fn td_target(
     rewards + (live * next_value + truncated * final_value) * gamma
 }
 
-/// Gumbel(0, 1) noise shaped like `like`.
-pub fn gumbel_noise(like: &Tensor) -> Tensor {
-    let u = like.rand_like().clamp(1e-10, 1.0 - 1e-7);
+/// Uniform [0, 1) noise shaped like `like`, on its device, drawn from the
+/// trainer's own generator: torch's global one is shared by every trainer
+/// in the process (tests run in parallel), so runs stay reproducible.
+pub fn uniform_like(like: &Tensor, rng: &mut ChaCha8Rng) -> Tensor {
+    let n = like.numel();
+    let u: Vec<f32> = (0..n).map(|_| rng.gen::<f32>()).collect();
+    Tensor::from_slice(&u)
+        .view(like.size().as_slice())
+        .to_device(like.device())
+}
+
+/// Gumbel(0, 1) noise shaped like `like`, from `rng`.
+pub fn gumbel_noise(like: &Tensor, rng: &mut ChaCha8Rng) -> Tensor {
+    let u = uniform_like(like, rng).clamp(1e-10, 1.0 - 1e-7);
     -(-u.log()).log()
 }
 
@@ -590,7 +602,12 @@ pub trait ReplayLearner {
     fn device(&self) -> Device;
     /// One gradient step on a sampled batch (critic, actor, targets), its
     /// losses and norms added to `stats`.
-    fn gradient_step(&mut self, b: &Batch, stats: &mut UpdateStats) -> Result<(), BadUpdate>;
+    fn gradient_step(
+        &mut self,
+        b: &Batch,
+        stats: &mut UpdateStats,
+        rng: &mut ChaCha8Rng,
+    ) -> Result<(), BadUpdate>;
 
     /// After each rollout: its chunks into the replay and its world-steps
     /// onto the clock; then, once the replay holds `learning_starts`
@@ -616,7 +633,7 @@ pub trait ReplayLearner {
         let device = self.device();
         for _ in 0..steps {
             let b = self.replay().sample(schedule.batch_size, rng, device);
-            if let Err(bad) = self.gradient_step(&b, &mut stats) {
+            if let Err(bad) = self.gradient_step(&b, &mut stats, rng) {
                 self.params().undo(undo);
                 return Err(bad);
             }

@@ -1,9 +1,12 @@
-//! Recurrent PPO, the part MAPPO and IPPO share: hyperparameters, the
-//! rollout buffer, GAE, value normalisation, the clipped objective, the Huber
-//! value loss, Adam, and the update that ties them together, top to bottom.
+//! Recurrent PPO, the part MAPPO and IPPO share: hyperparameters, GAE, value
+//! normalisation, the clipped objective, the Huber value loss, and the
+//! update that ties them together, top to bottom (the rollout buffer and
+//! Adam, which every learner uses, are in `rollout.rs` and `adam.rs`).
 //! MAPPO and IPPO differ only in what the critic reads (`mappo.rs`, `ippo.rs`).
 
+use super::adam::Adam;
 use super::learner::{file, optimizer_file, restore_optimizers, Learner, NamedTensors};
+use super::rollout::{BadUpdate, Rollout, UpdateStats};
 use super::Algorithm;
 use crate::nn::checkpoint::{load_into, named_cpu_tensors};
 use crate::nn::{Actor, Critic, NetConfig};
@@ -243,208 +246,6 @@ pub fn huber(pred: &Tensor, target: &Tensor, delta: f64) -> Tensor {
     (quad.square() * 0.5 + lin * delta).mean(Kind::Float)
 }
 
-/// Adam over the variables of one var store, by name, with its moments kept
-/// as tensors so a checkpoint can carry them and a resumed run continues
-/// exactly where it stopped.
-pub struct Adam {
-    pub lr: f64,
-    pub eps: f64,
-    pub beta1: f64,
-    pub beta2: f64,
-    pub steps: u64,
-    params: Vec<(String, Tensor)>,
-    m: Vec<Tensor>,
-    v: Vec<Tensor>,
-}
-
-impl Adam {
-    pub fn new(vs: &nn::VarStore, lr: f64, eps: f64) -> Adam {
-        let mut params: Vec<(String, Tensor)> = vs.variables().into_iter().collect();
-        params.sort_by(|a, b| a.0.cmp(&b.0));
-        let m = params.iter().map(|(_, p)| p.zeros_like()).collect();
-        let v = params.iter().map(|(_, p)| p.zeros_like()).collect();
-        Adam {
-            lr,
-            eps,
-            beta1: 0.9,
-            beta2: 0.999,
-            steps: 0,
-            params,
-            m,
-            v,
-        }
-    }
-
-    pub fn zero_grad(&mut self) {
-        for (_, p) in &mut self.params {
-            p.zero_grad();
-        }
-    }
-
-    /// Scales the gradients to a global norm of at most `max_norm`; returns
-    /// the norm before clipping.
-    pub fn clip_grad_norm(&mut self, max_norm: f64) -> f64 {
-        let norm = tch::no_grad(|| {
-            let sq: Vec<Tensor> = self
-                .params
-                .iter()
-                .map(|(_, p)| p.grad())
-                .filter(|g| g.defined())
-                .map(|g| g.square().sum(Kind::Float))
-                .collect();
-            if sq.is_empty() {
-                0.0
-            } else {
-                Tensor::stack(&sq, 0)
-                    .sum(Kind::Float)
-                    .sqrt()
-                    .double_value(&[])
-            }
-        });
-        if norm > max_norm {
-            let scale = max_norm / (norm + 1e-6);
-            tch::no_grad(|| {
-                for (_, p) in &self.params {
-                    let mut g = p.grad();
-                    if g.defined() {
-                        let _ = g.g_mul_scalar_(scale);
-                    }
-                }
-            });
-        }
-        norm
-    }
-
-    pub fn step(&mut self) {
-        self.steps += 1;
-        let t = self.steps as i32;
-        let (b1, b2) = (self.beta1, self.beta2);
-        let step_size = self.lr / (1.0 - b1.powi(t));
-        let bias2 = (1.0 - b2.powi(t)).sqrt();
-        tch::no_grad(|| {
-            for (((_, p), m), v) in self.params.iter_mut().zip(&mut self.m).zip(&mut self.v) {
-                let g = p.grad();
-                if !g.defined() {
-                    continue;
-                }
-                let _ = m.g_mul_scalar_(b1).g_add_(&(&g * (1.0 - b1)));
-                let _ = v.g_mul_scalar_(b2).g_add_(&(g.square() * (1.0 - b2)));
-                let denom = v.sqrt() / bias2 + self.eps;
-                let _ = p.g_sub_(&(&*m / denom * step_size));
-            }
-        });
-    }
-
-    /// Moments as named tensors on the CPU (`m.NAME`, `v.NAME`).
-    pub fn state_tensors(&self) -> Vec<(String, Tensor)> {
-        let mut out = Vec::new();
-        for (((name, _), m), v) in self.params.iter().zip(&self.m).zip(&self.v) {
-            out.push((format!("m.{name}"), m.to_device(Device::Cpu)));
-            out.push((format!("v.{name}"), v.to_device(Device::Cpu)));
-        }
-        out
-    }
-
-    pub fn load_state(&mut self, tensors: &[(String, Tensor)], steps: u64) -> Result<(), String> {
-        for (((name, p), m), v) in self.params.iter().zip(&mut self.m).zip(&mut self.v) {
-            for (prefix, dst) in [("m", &mut *m), ("v", &mut *v)] {
-                let key = format!("{prefix}.{name}");
-                let src = tensors
-                    .iter()
-                    .find(|(n, _)| *n == key)
-                    .ok_or_else(|| format!("no optimizer moment '{key}'"))?;
-                if src.1.size() != p.size() {
-                    return Err(format!("optimizer moment '{key}' has the wrong shape"));
-                }
-                tch::no_grad(|| dst.copy_(&src.1));
-            }
-        }
-        self.steps = steps;
-        Ok(())
-    }
-}
-
-/// What one side's robots saw and did during a rollout, [step][row] with
-/// rows = worlds x robots of the side (a world's robots adjacent).
-pub struct Rollout {
-    pub steps: usize,
-    /// Side of the pooled patches the network reads.
-    pub patch_side: usize,
-    pub rows: usize,
-    pub vector_len: usize,
-    pub hidden: usize,
-    pub chunk_len: usize,
-    pub patches: Vec<u8>,
-    pub vectors: Vec<f32>,
-    pub actions: Vec<i64>,
-    pub logp: Vec<f32>,
-    /// Critic outputs (normalised units when value normalisation is on).
-    pub values: Vec<f32>,
-    pub rewards: Vec<f32>,
-    pub dones: Vec<f32>,
-    /// 1 where the step limit (not a capture) ended the episode.
-    pub truncated: Vec<f32>,
-    /// Critic output for the state a truncated episode reached (same units
-    /// as `values`), where `truncated` is 1.
-    pub final_values: Vec<f32>,
-    /// 0 where a step starts an episode (the recurrent state is reset).
-    pub masks: Vec<f32>,
-    /// Recurrent states at the start of every chunk, [chunk][row][hidden].
-    pub actor_h: Vec<f32>,
-    pub critic_h: Vec<f32>,
-    pub last_values: Vec<f32>,
-    /// Observations of the states truncated episodes reached (where
-    /// `truncated` is 1; stale elsewhere), as the network reads them: the
-    /// off-policy learners bootstrap their TD targets from them.
-    pub final_patches: Vec<u8>,
-    pub final_vectors: Vec<f32>,
-    /// Observations after the rollout's last step, and their masks (0 where
-    /// that step starts an episode): the last chunk's next observations.
-    pub last_patches: Vec<u8>,
-    pub last_vectors: Vec<f32>,
-    pub last_masks: Vec<f32>,
-}
-
-impl Rollout {
-    pub fn new(
-        steps: usize,
-        rows: usize,
-        vector_len: usize,
-        net: &NetConfig,
-        chunk_len: usize,
-    ) -> Rollout {
-        let n = steps * rows;
-        let chunks = steps / chunk_len;
-        let hidden = net.hidden as usize;
-        Rollout {
-            steps,
-            patch_side: net.input_side(),
-            rows,
-            vector_len,
-            hidden,
-            chunk_len,
-            patches: vec![0; n * net.input_len()],
-            vectors: vec![0.0; n * vector_len],
-            actions: vec![0; n],
-            logp: vec![0.0; n],
-            values: vec![0.0; n],
-            rewards: vec![0.0; n],
-            dones: vec![0.0; n],
-            truncated: vec![0.0; n],
-            final_values: vec![0.0; n],
-            masks: vec![1.0; n],
-            actor_h: vec![0.0; chunks * rows * hidden],
-            critic_h: vec![0.0; chunks * rows * hidden],
-            last_values: vec![0.0; rows],
-            final_patches: vec![0; n * net.input_len()],
-            final_vectors: vec![0.0; n * vector_len],
-            last_patches: vec![0; rows * net.input_len()],
-            last_vectors: vec![0.0; rows * vector_len],
-            last_masks: vec![1.0; rows],
-        }
-    }
-}
-
 /// How the critic's inputs are made from the actors' (the one thing MAPPO
 /// and IPPO do differently).
 pub trait CriticView {
@@ -454,39 +255,6 @@ pub trait CriticView {
     /// (..., world, robot) with `team` robots per world, the critic inputs
     /// [rows, C, 48, 48] and [rows, C V].
     fn critic_inputs(&self, patches: &Tensor, vectors: &Tensor, team: usize) -> (Tensor, Tensor);
-}
-
-/// Losses and diagnostics of one update.
-#[derive(Clone, Debug, Default, Serialize)]
-pub struct UpdateStats {
-    pub policy_loss: f64,
-    pub value_loss: f64,
-    pub entropy: f64,
-    pub approx_kl: f64,
-    pub clip_frac: f64,
-    pub actor_grad_norm: f64,
-    pub critic_grad_norm: f64,
-    /// Gradient steps the numbers above average over (0: the learner did
-    /// not learn this time, e.g. an off-policy replay still filling).
-    pub gradient_steps: usize,
-}
-
-impl UpdateStats {
-    /// Sums over gradient steps become means.
-    pub fn average(&mut self) {
-        let n = self.gradient_steps.max(1) as f64;
-        for x in [
-            &mut self.policy_loss,
-            &mut self.value_loss,
-            &mut self.entropy,
-            &mut self.approx_kl,
-            &mut self.clip_frac,
-            &mut self.actor_grad_norm,
-            &mut self.critic_grad_norm,
-        ] {
-            *x /= n;
-        }
-    }
 }
 
 /// One side's learning state: networks, optimisers, return statistics.
@@ -862,11 +630,6 @@ struct LearnerSnapshot {
     adam_steps: (u64, u64),
     value_norm: ValueNorm,
 }
-
-/// An update that was undone because a loss or gradient norm was not finite.
-#[derive(Clone, Debug, PartialEq, thiserror::Error)]
-#[error("non-finite update, undone: {0}")]
-pub struct BadUpdate(pub String);
 
 #[cfg(test)]
 mod tests {

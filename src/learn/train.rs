@@ -9,23 +9,24 @@
 //! `checkpoints/SIDE-STEPS/` and `state.json`, which names the checkpoints
 //! a `--resume` continues from.
 
+pub use super::config::{check_rollout, Role, SideConfig, TrainConfig};
 use super::acting::{gather_side, gather_worlds, sample};
 use super::learner::Learner;
-use super::maac::{MaacConfig, MaacLearner};
-use super::maddpg::{MaddpgConfig, MaddpgLearner};
+use super::maac::MaacLearner;
+use super::maddpg::MaddpgLearner;
 use super::offpolicy::sequence_bytes;
 use super::persist::{self, RunState};
-use super::ppo::{PpoConfig, PpoLearner, Rollout, UpdateStats};
+use super::ppo::PpoLearner;
+use super::rollout::{Rollout, UpdateStats};
+use super::shaping::shaping_term;
 use super::Algorithm;
-use crate::controllers::ControllerSpec;
 use crate::env::vec_env::episode_seed;
-use crate::env::{Action, EnvConfig, Side, VecEnv};
+use crate::env::{Action, Side, VecEnv};
 use crate::map::PreparedMap;
 use crate::nn::checkpoint::{
     checkpoint_name, clean_stale_temporaries, code_version, CheckpointMeta, FORMAT,
 };
-use crate::nn::{obs_tensors, NetConfig};
-use crate::protocol::Protocol;
+use crate::nn::obs_tensors;
 use anyhow::{anyhow, bail, Context, Result};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -34,281 +35,6 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Instant;
 use tch::{Device, Kind, Tensor};
-
-/// A training run, as written in `configs/*.toml`.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct TrainConfig {
-    /// Run name: the run folder is `runs/NAME` unless `--out` says otherwise.
-    pub name: String,
-    pub seed: u64,
-    /// Stop after this many environment steps (all worlds together; paper: 30 M).
-    pub total_env_steps: u64,
-    /// Worlds stepped in parallel (paper: 16 to 32).
-    pub num_envs: usize,
-    /// Steps per world between updates; a multiple of each learner's chunk_len.
-    pub rollout_steps: usize,
-    /// Write checkpoints every this many iterations (and at the end).
-    pub checkpoint_every: u64,
-    /// "auto" (CUDA when tch sees a GPU), "cpu" or "cuda".
-    pub device: String,
-    /// "held-out" (train on generated maps, test on the unseen Gibson maps)
-    /// or "paper" (train on the 26 Gibson maps, as the paper did). A config
-    /// file must name it; the training maps must fit it (checked by content).
-    pub protocol: Protocol,
-    /// Training maps. Held-out: never the Gibson test set; `generated:N`
-    /// makes N maps per size class with the project's generator; also
-    /// `shipped` or a folder. Paper: `gibson`.
-    pub maps: String,
-    pub env: EnvConfig,
-    pub captors: SideConfig,
-    pub target: SideConfig,
-}
-
-/// Who plays one side, and how it learns if it does.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct SideConfig {
-    /// "mappo", "ippo", "maddpg" or "maac" to learn; otherwise a controller
-    /// that does not learn: heuristic, greedy, random, still or ckpt:PATH.
-    pub play: String,
-    /// MAPPO's and IPPO's settings.
-    pub ppo: PpoConfig,
-    /// MADDPG's settings (left out of the stored config, and so of the
-    /// config hash, while they are the defaults).
-    #[serde(skip_serializing_if = "is_default")]
-    pub maddpg: MaddpgConfig,
-    /// MAAC's settings (as MADDPG's).
-    #[serde(skip_serializing_if = "is_default")]
-    pub maac: MaacConfig,
-    pub net: NetConfig,
-}
-
-fn is_default<T: Default + PartialEq>(x: &T) -> bool {
-    *x == T::default()
-}
-
-impl Default for SideConfig {
-    fn default() -> Self {
-        SideConfig {
-            play: "heuristic".into(),
-            ppo: PpoConfig::default(),
-            maddpg: MaddpgConfig::default(),
-            maac: MaacConfig::default(),
-            net: NetConfig::default(),
-        }
-    }
-}
-
-impl Default for TrainConfig {
-    fn default() -> Self {
-        TrainConfig {
-            name: "train".into(),
-            seed: 0,
-            total_env_steps: 30_000_000,
-            num_envs: 32,
-            rollout_steps: 100,
-            checkpoint_every: 25,
-            device: "auto".into(),
-            protocol: Protocol::HeldOut,
-            maps: "generated:20".into(),
-            env: EnvConfig::default(),
-            captors: SideConfig {
-                play: "mappo".into(),
-                ..SideConfig::default()
-            },
-            target: SideConfig::default(),
-        }
-    }
-}
-
-/// What plays a side, once the config is read.
-#[derive(Clone, Debug)]
-pub enum Role {
-    Learn(Algorithm),
-    Script(ControllerSpec),
-}
-
-impl SideConfig {
-    pub fn role(&self) -> Result<Role, String> {
-        let play = self.play.trim();
-        if let Some(algorithm) = Algorithm::parse(play) {
-            return Ok(Role::Learn(algorithm));
-        }
-        play.parse::<ControllerSpec>()
-            .map(Role::Script)
-            .map_err(|e| {
-                format!("play = \"{play}\": {e}; or mappo / ippo / maddpg / maac to learn")
-            })
-    }
-
-    /// The recurrent chunk length `algorithm` trains on.
-    pub fn chunk_len(&self, algorithm: Algorithm) -> usize {
-        match algorithm {
-            Algorithm::Mappo | Algorithm::Ippo => self.ppo.chunk_len,
-            Algorithm::Maddpg => self.maddpg.chunk_len,
-            Algorithm::Maac => self.maac.chunk_len,
-        }
-    }
-
-    /// Checks the settings of `algorithm`; the error names the field.
-    fn validate_learner(&self, algorithm: Algorithm) -> Result<(), String> {
-        self.net.validate().map_err(|e| format!("net.{e}"))?;
-        match algorithm {
-            Algorithm::Mappo | Algorithm::Ippo => {
-                self.ppo.validate().map_err(|e| format!("ppo.{e}"))
-            }
-            Algorithm::Maddpg => self.maddpg.validate().map_err(|e| format!("maddpg.{e}")),
-            Algorithm::Maac => self
-                .maac
-                .validate(&self.net)
-                .map_err(|e| format!("maac.{e}")),
-        }
-    }
-}
-
-/// Worlds and steps per world of one rollout: each in range, and the
-/// rollout small enough to hold (checked before anything divides by them).
-pub fn check_rollout(num_envs: usize, rollout_steps: usize) -> Result<(), String> {
-    if !(1..=4096).contains(&num_envs) {
-        return Err(format!(
-            "num_envs = {num_envs}: must be in 1..=4096 (the paper uses 16 to 32)"
-        ));
-    }
-    if !(1..=100_000).contains(&rollout_steps) {
-        return Err(format!(
-            "rollout_steps = {rollout_steps}: must be in 1..=100000"
-        ));
-    }
-    if num_envs * rollout_steps > 4_000_000 {
-        return Err(format!(
-            "num_envs x rollout_steps = {}: a rollout of more than 4,000,000 steps does not fit in memory",
-            num_envs * rollout_steps
-        ));
-    }
-    Ok(())
-}
-
-impl TrainConfig {
-    /// Reads a TOML config; errors name the file and the field.
-    /// A config file as a user wrote it: it must name its protocol.
-    pub fn load(path: &Path) -> Result<TrainConfig> {
-        Self::read(path, true)
-    }
-
-    /// A run folder's own `config.toml`, written by this program. One written
-    /// before configs named their protocol reads as held-out: the Gibson maps
-    /// were refused for training then.
-    pub fn load_stored(path: &Path) -> Result<TrainConfig> {
-        Self::read(path, false)
-    }
-
-    fn read(path: &Path, require_protocol: bool) -> Result<TrainConfig> {
-        let text = std::fs::read_to_string(path)
-            .with_context(|| format!("{}: cannot read", path.display()))?;
-        if require_protocol {
-            crate::protocol::require_named(&text)
-                .map_err(|e| anyhow!("{}: {e}", path.display()))?;
-        }
-        let cfg: TrainConfig =
-            toml::from_str(&text).map_err(|e| anyhow!("{}: {e}", path.display()))?;
-        cfg.validate()
-            .map_err(|e| anyhow!("{}: {e}", path.display()))?;
-        Ok(cfg)
-    }
-
-    /// Checks every setting; the error names the field.
-    pub fn validate(&self) -> Result<(), String> {
-        let mut env = self.env.clone();
-        env.observations = true;
-        env.validate().map_err(|e| format!("env.{e}"))?;
-        validate_name(&self.name)?;
-        check_rollout(self.num_envs, self.rollout_steps)?;
-        let per_iteration = (self.num_envs * self.rollout_steps) as u64;
-        if self.total_env_steps < per_iteration {
-            return Err(format!(
-                "total_env_steps = {}: less than one iteration ({} worlds x {} steps = {per_iteration}); nothing would be trained",
-                self.total_env_steps, self.num_envs, self.rollout_steps
-            ));
-        }
-        if self.checkpoint_every == 0 {
-            return Err("checkpoint_every = 0: must be at least 1 iteration".into());
-        }
-        if !["auto", "cpu", "cuda"].contains(&self.device.as_str()) {
-            return Err(format!(
-                "device = \"{}\": expected auto, cpu or cuda",
-                self.device
-            ));
-        }
-        let mut learners = 0;
-        for (name, side_cfg, side) in [
-            ("captors", &self.captors, Side::Captors),
-            ("target", &self.target, Side::Target),
-        ] {
-            match side_cfg.role().map_err(|e| format!("{name}.{e}"))? {
-                Role::Learn(algorithm) => {
-                    learners += 1;
-                    side_cfg
-                        .validate_learner(algorithm)
-                        .map_err(|e| format!("{name}.{e}"))?;
-                    let chunk_len = side_cfg.chunk_len(algorithm);
-                    let field = if algorithm.off_policy() {
-                        algorithm.name()
-                    } else {
-                        "ppo"
-                    };
-                    if !self.rollout_steps.is_multiple_of(chunk_len) {
-                        return Err(format!(
-                            "rollout_steps = {} is not a multiple of {name}.{field}.chunk_len = {chunk_len}",
-                            self.rollout_steps
-                        ));
-                    }
-                    // A replayed sequence holds the state of at most one
-                    // truncation to bootstrap from.
-                    if algorithm.off_policy() && self.env.episode_length as usize <= chunk_len {
-                        return Err(format!(
-                            "env.episode_length = {}: must exceed {name}.{field}.chunk_len = {chunk_len} for {}",
-                            self.env.episode_length,
-                            algorithm.name()
-                        ));
-                    }
-                }
-                Role::Script(spec) => spec
-                    .check(side, &env)
-                    .map_err(|e| format!("{name}.play: {e}"))?,
-            }
-        }
-        if learners == 0 {
-            return Err("neither captors.play nor target.play is a learner (mappo, ippo, maddpg or maac): nothing to train".into());
-        }
-        Ok(())
-    }
-
-    /// A stable hash of the settings that shape learning (FNV-1a of the
-    /// canonical JSON); the name, the step budget and the device are left
-    /// out, so a run can be renamed, extended or moved to a GPU and resumed.
-    pub fn hash(&self) -> String {
-        let mut c = self.clone();
-        c.name = String::new();
-        c.total_env_steps = 0;
-        c.device = String::new();
-        let json = serde_json::to_string(&c).expect("config serialises");
-        let mut h: u64 = 0xcbf2_9ce4_8422_2325;
-        for b in json.bytes() {
-            h ^= b as u64;
-            h = h.wrapping_mul(0x0100_0000_01b3);
-        }
-        format!("{h:016x}")
-    }
-
-    pub fn device(&self) -> Device {
-        match self.device.as_str() {
-            "cpu" => Device::Cpu,
-            "cuda" => Device::Cuda(0),
-            _ => Device::cuda_if_available(),
-        }
-    }
-}
 
 /// What a caller adds to a rollout: actions for robots that neither a
 /// learner of the trainer nor a controller inside the vector env plays (the
@@ -333,24 +59,6 @@ impl RolloutHooks for NoHooks {
     }
 }
 
-/// A run name becomes the folder `runs/NAME`: it must stay one plain
-/// component inside `runs/`.
-fn validate_name(name: &str) -> Result<(), String> {
-    let plain = !name.is_empty()
-        && name.len() <= 100
-        && !name.starts_with('.')
-        && name
-            .chars()
-            .all(|c| c.is_ascii_alphanumeric() || matches!(c, '-' | '_' | '.' | '+'));
-    if plain {
-        Ok(())
-    } else {
-        Err(format!(
-            "name = {name:?}: must be 1 to 100 letters, digits, '-', '_', '+' or '.', not starting with '.' (it names the folder runs/NAME)"
-        ))
-    }
-}
-
 /// One learning side during training.
 struct LearnerSide {
     side: Side,
@@ -364,6 +72,92 @@ struct LearnerSide {
     next_mask: Vec<f32>,
     /// Updates undone in a row because they were not finite.
     bad_updates: u32,
+    /// (phi's signed weight for this side, the side's gamma) when it shapes.
+    shaping: Option<(f32, f64)>,
+}
+
+/// What a rollout's finished episodes and its clocks add up to.
+#[derive(Default)]
+struct RolloutTally {
+    episodes: usize,
+    captures: usize,
+    len_sum: f64,
+    captor_return: f64,
+    target_return: f64,
+    time_env: f64,
+    time_inference: f64,
+}
+
+impl RolloutTally {
+    /// The episode means and the rollout's clocks as a metrics row; the
+    /// caller fills in the counters and the update's part.
+    fn metrics(&self, time_bootstrap: f64) -> Metrics {
+        let per = |x: f64| {
+            if self.episodes > 0 {
+                x / self.episodes as f64
+            } else {
+                f64::NAN
+            }
+        };
+        Metrics {
+            episodes: self.episodes,
+            capture_rate: per(self.captures as f64),
+            episode_len: per(self.len_sum),
+            captor_return: per(self.captor_return),
+            target_return: per(self.target_return),
+            time_env: self.time_env,
+            time_inference: self.time_inference + time_bootstrap,
+            ..Metrics::default()
+        }
+    }
+}
+
+/// One side's part of an update, for the metrics.
+struct SideUpdate {
+    side: Side,
+    algorithm: Algorithm,
+    learning_rate: Option<f64>,
+    /// None when the learner took no gradient step.
+    stats: Option<UpdateStats>,
+}
+
+impl SideUpdate {
+    fn record(self, m: &mut Metrics) {
+        match self.side {
+            Side::Captors => m.captor_lr = self.learning_rate,
+            Side::Target => m.target_lr = self.learning_rate,
+        }
+        let Some(u) = self.stats else {
+            return;
+        };
+        let fields = match self.side {
+            Side::Captors => [
+                &mut m.captor_policy_loss,
+                &mut m.captor_value_loss,
+                &mut m.captor_entropy,
+                &mut m.captor_approx_kl,
+                &mut m.captor_clip_frac,
+            ],
+            Side::Target => [
+                &mut m.target_policy_loss,
+                &mut m.target_value_loss,
+                &mut m.target_entropy,
+                &mut m.target_approx_kl,
+                &mut m.target_clip_frac,
+            ],
+        };
+        // KL and clipping are PPO's; an off-policy learner leaves them empty.
+        let ppo_only = |x: f64| (!self.algorithm.off_policy()).then_some(x);
+        for (f, v) in fields.into_iter().zip([
+            Some(u.policy_loss),
+            Some(u.value_loss),
+            Some(u.entropy),
+            ppo_only(u.approx_kl),
+            ppo_only(u.clip_frac),
+        ]) {
+            *f = v;
+        }
+    }
 }
 
 /// One row of `metrics.csv`.
@@ -450,7 +244,6 @@ impl Trainer {
             mix_seed(cfg.seed, iteration),
         )
         .map_err(anyhow::Error::msg)?;
-        tch::manual_seed(mix_seed(cfg.seed ^ 0x5eed, iteration) as i64);
         let mut learners = Vec::new();
         for (side, side_cfg) in [(Side::Captors, &cfg.captors), (Side::Target, &cfg.target)] {
             match side_cfg.role().map_err(anyhow::Error::msg)? {
@@ -460,14 +253,19 @@ impl Trainer {
                 Role::Learn(algorithm) => {
                     let team = side.agents(k).len();
                     let rows = team * cfg.num_envs;
-                    let learner = build_learner(
-                        algorithm,
-                        side,
-                        side_cfg,
-                        env_cfg.vector_len(),
-                        team,
-                        device,
-                    )?;
+                    // Each side's initial weights from its own seed, drawn
+                    // while no other trainer in the process can reseed torch.
+                    let init_seed = mix_seed(cfg.seed ^ 0x5eed ^ side as u64, iteration);
+                    let learner = crate::nn::seeded(init_seed, || {
+                        build_learner(
+                            algorithm,
+                            side,
+                            side_cfg,
+                            env_cfg.vector_len(),
+                            team,
+                            device,
+                        )
+                    })?;
                     let h = side_cfg.net.hidden;
                     learners.push(LearnerSide {
                         side,
@@ -485,6 +283,19 @@ impl Trainer {
                         critic_h: Tensor::zeros([rows as i64, h], (Kind::Float, device)),
                         next_mask: vec![0.0; rows],
                         bad_updates: 0,
+                        shaping: side_cfg.shaping.potential.filter(|_| !side_cfg.shaping.is_off()).map(
+                            |potential| {
+                                venv.track_potential(potential);
+                                let sign = match side {
+                                    Side::Captors => 1.0,
+                                    Side::Target => -1.0,
+                                };
+                                (
+                                    sign * side_cfg.shaping.weight as f32,
+                                    side_cfg.gamma(algorithm),
+                                )
+                            },
+                        ),
                     });
                 }
             }
@@ -578,15 +389,44 @@ impl Trainer {
     }
 
     /// `iterate`, with `hooks` acting for robots no learner here controls
-    /// and seeing every step's outcome (the league's opponents).
+    /// and seeing every step's outcome (the league's opponents): collect a
+    /// rollout, bootstrap its last states, update every learning side.
     pub fn iterate_with(&mut self, hooks: &mut dyn RolloutHooks) -> Result<Metrics> {
         let start = Instant::now();
-        let (mut time_env, mut time_inference) = (0.0, 0.0);
+        let tally = self.collect(hooks)?;
+        let t2 = Instant::now();
+        self.bootstrap();
+        let time_bootstrap = t2.elapsed().as_secs_f64();
+        let t3 = Instant::now();
+        let updates = self.update()?;
+        let time_update = t3.elapsed().as_secs_f64();
+
+        self.iteration += 1;
+        let steps = (self.cfg.num_envs * self.cfg.rollout_steps) as u64;
+        self.env_steps += steps;
+        let secs = start.elapsed().as_secs_f64();
+        self.wall_s += secs;
+        let mut m = tally.metrics(time_bootstrap);
+        m.iteration = self.iteration;
+        m.env_steps = self.env_steps;
+        m.wall_s = self.wall_s;
+        m.steps_per_s = steps as f64 / secs;
+        m.time_update = time_update;
+        for u in updates {
+            u.record(&mut m);
+        }
+        Ok(m)
+    }
+
+    /// Plays `rollout_steps` in every world: each learning side acts from
+    /// its actor (and values the states with its critic) batched over all
+    /// its robots, `hooks` act for the rest, and every step's observations,
+    /// actions and rewards (plus any shaping) go into the sides' rollouts.
+    fn collect(&mut self, hooks: &mut dyn RolloutHooks) -> Result<RolloutTally> {
         let k = self.cfg.env.num_captors;
         let na = k + 1;
         let vl = self.venv.cfg.vector_len();
-        let (mut episodes, mut captures, mut len_sum, mut captor_ret, mut target_ret) =
-            (0usize, 0usize, 0f64, 0f64, 0f64);
+        let mut tally = RolloutTally::default();
         for t in 0..self.cfg.rollout_steps {
             let t0 = Instant::now();
             for ls in &mut self.learners {
@@ -661,6 +501,7 @@ impl Trainer {
             // Opponents acting count as environment time, like the scripted
             // controllers that act inside the vector env.
             hooks.before_step(&mut self.venv, &mut self.actions)?;
+            let phi_before = self.venv.potentials.clone();
             self.venv
                 .step(&self.actions)
                 .map_err(|e| anyhow!("placing robots: {e}"))?;
@@ -673,8 +514,19 @@ impl Trainer {
                 for row in 0..ls.rows {
                     let (e, j) = (row / ls.team, row % ls.team);
                     let done = self.venv.terminated[e] || self.venv.truncated[e];
-                    ls.rollout.rewards[base + row] =
-                        self.venv.rewards[e * na + ls.side.agents(k).start + j];
+                    let mut reward = self.venv.rewards[e * na + ls.side.agents(k).start + j];
+                    if let Some((weight, gamma)) = ls.shaping {
+                        reward += weight
+                            * shaping_term(
+                                phi_before[e],
+                                self.venv.potentials[e],
+                                self.venv.final_potentials[e],
+                                self.venv.terminated[e],
+                                self.venv.truncated[e],
+                                gamma,
+                            );
+                    }
+                    ls.rollout.rewards[base + row] = reward;
                     ls.rollout.dones[base + row] = done as u8 as f32;
                     ls.rollout.truncated[base + row] = self.venv.truncated[e] as u8 as f32;
                     ls.next_mask[row] = (!done) as u8 as f32;
@@ -684,17 +536,21 @@ impl Trainer {
                 }
             }
             for s in &self.venv.finished {
-                episodes += 1;
-                captures += s.captured as usize;
-                len_sum += s.steps as f64;
-                captor_ret += s.returns[..k].iter().sum::<f64>() / k as f64;
-                target_ret += s.returns[k];
+                tally.episodes += 1;
+                tally.captures += s.captured as usize;
+                tally.len_sum += s.steps as f64;
+                tally.captor_return += s.returns[..k].iter().sum::<f64>() / k as f64;
+                tally.target_return += s.returns[k];
             }
-            time_inference += (t1 - t0).as_secs_f64();
-            time_env += t1.elapsed().as_secs_f64();
+            tally.time_inference += (t1 - t0).as_secs_f64();
+            tally.time_env += t1.elapsed().as_secs_f64();
         }
-        // The states after the rollout (and their values), for bootstrapping.
-        let t2 = Instant::now();
+        Ok(tally)
+    }
+
+    /// The states after the rollout, and their values where a learner
+    /// needs them: GAE and the TD targets bootstrap from them.
+    fn bootstrap(&mut self) {
         for ls in &mut self.learners {
             let ro = &mut ls.rollout;
             let rows = ls.rows;
@@ -729,21 +585,27 @@ impl Trainer {
             });
             values.copy_data(&mut ro.last_values, rows);
         }
-        time_inference += t2.elapsed().as_secs_f64();
-        let t3 = Instant::now();
-        let mut updates: Vec<(Side, Algorithm, UpdateStats)> = Vec::new();
+    }
+
+    /// Every learning side's update on its rollout. A non-finite update is
+    /// undone by the learner; `max_bad_updates` of them in a row stop the
+    /// run.
+    fn update(&mut self) -> Result<Vec<SideUpdate>> {
         let done = self.env_steps as f64 / self.cfg.total_env_steps as f64;
-        let mut learning_rates = Vec::new();
+        let mut updates = Vec::new();
         for ls in &mut self.learners {
             ls.learner.set_progress(done);
-            learning_rates.push((ls.side, ls.learner.learning_rate()));
+            let mut update = SideUpdate {
+                side: ls.side,
+                algorithm: ls.learner.algorithm(),
+                learning_rate: ls.learner.learning_rate(),
+                stats: None,
+            };
             match ls.learner.update(&ls.rollout, &mut self.rng) {
                 Ok(stats) => {
                     ls.bad_updates = 0;
                     // No gradient step (a replay still filling): no losses to report.
-                    if stats.gradient_steps > 0 {
-                        updates.push((ls.side, ls.learner.algorithm(), stats));
-                    }
+                    update.stats = (stats.gradient_steps > 0).then_some(stats);
                 }
                 Err(bad) => {
                     ls.bad_updates += 1;
@@ -764,72 +626,9 @@ impl Trainer {
                     }
                 }
             }
+            updates.push(update);
         }
-        let time_update = t3.elapsed().as_secs_f64();
-
-        self.iteration += 1;
-        let steps = (self.cfg.num_envs * self.cfg.rollout_steps) as u64;
-        self.env_steps += steps;
-        let secs = start.elapsed().as_secs_f64();
-        self.wall_s += secs;
-        let per = |x: f64| {
-            if episodes > 0 {
-                x / episodes as f64
-            } else {
-                f64::NAN
-            }
-        };
-        let mut m = Metrics {
-            iteration: self.iteration,
-            env_steps: self.env_steps,
-            wall_s: self.wall_s,
-            steps_per_s: steps as f64 / secs,
-            episodes,
-            capture_rate: per(captures as f64),
-            episode_len: per(len_sum),
-            captor_return: per(captor_ret),
-            target_return: per(target_ret),
-            time_env,
-            time_inference,
-            time_update,
-            ..Metrics::default()
-        };
-        for (side, lr) in learning_rates {
-            match side {
-                Side::Captors => m.captor_lr = lr,
-                Side::Target => m.target_lr = lr,
-            }
-        }
-        for (side, algorithm, u) in updates {
-            let fields = match side {
-                Side::Captors => [
-                    &mut m.captor_policy_loss,
-                    &mut m.captor_value_loss,
-                    &mut m.captor_entropy,
-                    &mut m.captor_approx_kl,
-                    &mut m.captor_clip_frac,
-                ],
-                Side::Target => [
-                    &mut m.target_policy_loss,
-                    &mut m.target_value_loss,
-                    &mut m.target_entropy,
-                    &mut m.target_approx_kl,
-                    &mut m.target_clip_frac,
-                ],
-            };
-            // KL and clipping are PPO's; an off-policy learner leaves them empty.
-            let ppo_only = |x: f64| (!algorithm.off_policy()).then_some(x);
-            for (f, v) in fields.into_iter().zip([
-                Some(u.policy_loss),
-                Some(u.value_loss),
-                Some(u.entropy),
-                ppo_only(u.approx_kl),
-                ppo_only(u.clip_frac),
-            ]) {
-                *f = v;
-            }
-        }
-        Ok(m)
+        Ok(updates)
     }
 
     /// The sidecar of `side`'s checkpoint as of now.
@@ -925,6 +724,40 @@ impl Trainer {
         ls.actor_h = ls.actor_h.zeros_like();
         ls.critic_h = ls.critic_h.zeros_like();
         Ok(())
+    }
+
+    /// Network FLOPs of one iteration, counted from the layer shapes: the
+    /// rollout's forward passes (actor, and the critic where the learner
+    /// values states) and PPO's update (each epoch a forward and a
+    /// backward, about three forwards, of actor and critic over every row).
+    /// NaN for the off-policy learners, whose update cost follows their
+    /// replay settings.
+    pub fn network_flops_per_iteration(&self) -> f64 {
+        let vl = self.venv.cfg.vector_len();
+        let mut total = 0.0;
+        for ls in &self.learners {
+            let net = ls.learner.net();
+            let actor = net.forward_flops(1, vl, Action::COUNT);
+            let critic = if ls.learner.needs_values() {
+                let c = ls.learner.critic_agents();
+                net.forward_flops(c, vl * c, 1)
+            } else {
+                0.0
+            };
+            let rows = (ls.rows * self.cfg.rollout_steps) as f64;
+            let update = match ls.learner.algorithm() {
+                Algorithm::Mappo | Algorithm::Ippo => {
+                    let side_cfg = match ls.side {
+                        Side::Captors => &self.cfg.captors,
+                        Side::Target => &self.cfg.target,
+                    };
+                    3.0 * side_cfg.ppo.epochs as f64 * (actor + critic)
+                }
+                Algorithm::Maddpg | Algorithm::Maac => f64::NAN,
+            };
+            total += rows * (actor + critic + update);
+        }
+        total
     }
 
     pub fn learner_sides(&self) -> Vec<(Side, Algorithm)> {
@@ -1050,35 +883,6 @@ fn keep_truncated_states(
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn config_errors_name_the_field() {
-        let bad: Result<TrainConfig, _> = toml::from_str("[captors.ppo]\nentropy = 0.1\n");
-        assert!(
-            bad.unwrap_err().to_string().contains("entropy"),
-            "unknown key reported"
-        );
-        let cfg = TrainConfig {
-            rollout_steps: 15,
-            ..TrainConfig::default()
-        };
-        assert!(cfg.validate().unwrap_err().contains("chunk_len"));
-        let mut cfg = TrainConfig::default();
-        cfg.captors.play = "heuristic".into();
-        assert!(cfg.validate().unwrap_err().contains("nothing to train"));
-        let mut cfg = TrainConfig::default();
-        cfg.target.play = "greedy".into();
-        assert!(cfg.validate().unwrap_err().starts_with("target.play"));
-        let mut cfg = TrainConfig::default();
-        cfg.captors.ppo.gamma = 1.5;
-        assert!(cfg.validate().unwrap_err().starts_with("captors.ppo.gamma"));
-        assert_eq!(TrainConfig::default().hash(), TrainConfig::default().hash());
-        let other = TrainConfig {
-            seed: 1,
-            ..TrainConfig::default()
-        };
-        assert_ne!(other.hash(), TrainConfig::default().hash());
-    }
 
     #[test]
     fn sampling_follows_the_probabilities() {

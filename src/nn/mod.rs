@@ -72,6 +72,23 @@ impl NetConfig {
         self.input_side() * self.input_side()
     }
 
+    /// Multiply-adds x 2 of one forward pass of one row through a trunk
+    /// with `channels` stacked patches and a `vector_len` vector, plus a
+    /// head of `outputs` (the actor's 5, a critic's 1): the convolutions,
+    /// the linear layers and the GRU cell. Norms and activations are left
+    /// out (a few percent). A backward pass costs about twice this.
+    pub fn forward_flops(&self, channels: usize, vector_len: usize, outputs: usize) -> f64 {
+        let s0 = self.input_side() as f64;
+        let s1 = ((s0 - 3.0) / 2.0).floor() + 1.0;
+        let s2 = self.conv_out_side() as f64;
+        let [c1, c2] = self.conv_channels.map(|c| c as f64);
+        let (h, cin, v) = (self.hidden as f64, channels as f64, vector_len as f64);
+        let conv = 2.0 * 9.0 * (s1 * s1 * c1 * cin + s2 * s2 * c2 * c1);
+        let linear = 2.0 * (c2 * s2 * s2 * h + v * h + 2.0 * h * h + h * outputs as f64);
+        let gru = 2.0 * 2.0 * 3.0 * h * h;
+        conv + linear + gru
+    }
+
     /// Side of the CNN's output map.
     fn conv_out_side(&self) -> i64 {
         let s = self.input_side() as i64;
@@ -319,6 +336,25 @@ impl Critic {
     }
 }
 
+/// Runs `f` with torch's global generator seeded by `seed`, holding a
+/// process-wide lock: weights initialised inside come out the same whatever
+/// other trainers in the process (tests run in parallel) are doing. Torch
+/// draws nothing else for training here; sampling and noise come from each
+/// trainer's own ChaCha generator.
+pub fn seeded<T>(seed: u64, f: impl FnOnce() -> T) -> T {
+    let _held = seed_torch(seed);
+    f()
+}
+
+/// Seeds torch's global generator and holds the lock `seeded` takes until
+/// the guard drops: for code (tests) that draws from torch directly.
+pub fn seed_torch(seed: u64) -> std::sync::MutexGuard<'static, ()> {
+    static TORCH_SEED: std::sync::Mutex<()> = std::sync::Mutex::new(());
+    let held = TORCH_SEED.lock().unwrap_or_else(|e| e.into_inner());
+    tch::manual_seed(seed as i64);
+    held
+}
+
 /// Max-pools a 48x48 patch by `pool` into `out` ((48 / pool)^2 bytes): a
 /// pooled pixel is obstacle if any cell under it is. Done once per
 /// observation, outside the network, so training never re-pools.
@@ -367,7 +403,7 @@ mod tests {
 
     #[test]
     fn shapes_and_masked_unroll_match_stepping() {
-        tch::manual_seed(0);
+        let _seed = seed_torch(0);
         let vs = nn::VarStore::new(Device::Cpu);
         let cfg = NetConfig {
             hidden: 16,
@@ -406,6 +442,20 @@ mod tests {
             &Tensor::zeros([4, 16], (Kind::Float, Device::Cpu)),
         );
         assert_eq!((v.size(), h.size()), (vec![4], vec![4, 16]));
+    }
+
+    #[test]
+    fn flops_of_the_small_actor_by_hand() {
+        // Patch 48 / 4 = 12 -> conv1 5x5x8 -> conv2 2x2x16; hidden 64; 20 inputs.
+        let cfg = NetConfig {
+            hidden: 64,
+            conv_channels: [8, 16],
+            patch_pool: 4,
+        };
+        let conv = 2.0 * 9.0 * (25.0 * 8.0 + 4.0 * 16.0 * 8.0);
+        let linear = 2.0 * (16.0 * 4.0 * 64.0 + 20.0 * 64.0 + 2.0 * 64.0 * 64.0 + 64.0 * 5.0);
+        let gru = 12.0 * 64.0 * 64.0;
+        assert_eq!(cfg.forward_flops(1, 20, 5), conv + linear + gru);
     }
 
     #[test]

@@ -184,7 +184,7 @@ mod tests {
 
     #[test]
     fn stacked_actors_match_each_actors_own_pass() {
-        tch::manual_seed(3);
+        let _seed = crate::nn::seed_torch(3);
         let cfg = NetConfig {
             hidden: 16,
             conv_channels: [4, 8],

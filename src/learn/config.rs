@@ -1,0 +1,361 @@
+//! The schema of a training run (`configs/*.toml`): who plays each side,
+//! every learner's hyperparameters, the worlds and the budget, checked
+//! field by field with errors that name the file and the field.
+
+use super::maac::MaacConfig;
+use super::maddpg::MaddpgConfig;
+use super::ppo::PpoConfig;
+use super::shaping::ShapingConfig;
+use super::Algorithm;
+use crate::controllers::ControllerSpec;
+use crate::env::{EnvConfig, Side};
+use crate::nn::NetConfig;
+use crate::protocol::Protocol;
+use anyhow::{anyhow, Context, Result};
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+use tch::Device;
+
+/// A training run, as written in `configs/*.toml`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct TrainConfig {
+    /// Run name: the run folder is `runs/NAME` unless `--out` says otherwise.
+    pub name: String,
+    pub seed: u64,
+    /// Stop after this many environment steps (all worlds together; paper: 30 M).
+    pub total_env_steps: u64,
+    /// Worlds stepped in parallel (paper: 16 to 32).
+    pub num_envs: usize,
+    /// Steps per world between updates; a multiple of each learner's chunk_len.
+    pub rollout_steps: usize,
+    /// Write checkpoints every this many iterations (and at the end).
+    pub checkpoint_every: u64,
+    /// "auto" (CUDA when tch sees a GPU), "cpu" or "cuda".
+    pub device: String,
+    /// "held-out" (train on generated maps, test on the unseen Gibson maps)
+    /// or "paper" (train on the 26 Gibson maps, as the paper did). A config
+    /// file must name it; the training maps must fit it (checked by content).
+    pub protocol: Protocol,
+    /// Training maps. Held-out: never the Gibson test set; `generated:N`
+    /// makes N maps per size class with the project's generator; also
+    /// `shipped` or a folder. Paper: `gibson`.
+    pub maps: String,
+    pub env: EnvConfig,
+    pub captors: SideConfig,
+    pub target: SideConfig,
+}
+
+/// Who plays one side, and how it learns if it does.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SideConfig {
+    /// "mappo", "ippo", "maddpg" or "maac" to learn; otherwise a controller
+    /// that does not learn: heuristic, greedy, random, still or ckpt:PATH.
+    pub play: String,
+    /// MAPPO's and IPPO's settings.
+    pub ppo: PpoConfig,
+    /// MADDPG's settings (left out of the stored config, and so of the
+    /// config hash, while they are the defaults).
+    #[serde(skip_serializing_if = "is_default")]
+    pub maddpg: MaddpgConfig,
+    /// MAAC's settings (as MADDPG's).
+    #[serde(skip_serializing_if = "is_default")]
+    pub maac: MaacConfig,
+    pub net: NetConfig,
+    /// Training-only potential-based shaping (off by default; left out of
+    /// the stored config, and so of the config hash, while off).
+    #[serde(skip_serializing_if = "is_default")]
+    pub shaping: ShapingConfig,
+}
+
+fn is_default<T: Default + PartialEq>(x: &T) -> bool {
+    *x == T::default()
+}
+
+impl Default for SideConfig {
+    fn default() -> Self {
+        SideConfig {
+            play: "heuristic".into(),
+            ppo: PpoConfig::default(),
+            maddpg: MaddpgConfig::default(),
+            maac: MaacConfig::default(),
+            net: NetConfig::default(),
+            shaping: ShapingConfig::default(),
+        }
+    }
+}
+
+impl Default for TrainConfig {
+    fn default() -> Self {
+        TrainConfig {
+            name: "train".into(),
+            seed: 0,
+            total_env_steps: 30_000_000,
+            num_envs: 32,
+            rollout_steps: 100,
+            checkpoint_every: 25,
+            device: "auto".into(),
+            protocol: Protocol::HeldOut,
+            maps: "generated:20".into(),
+            env: EnvConfig::default(),
+            captors: SideConfig {
+                play: "mappo".into(),
+                ..SideConfig::default()
+            },
+            target: SideConfig::default(),
+        }
+    }
+}
+
+/// What plays a side, once the config is read.
+#[derive(Clone, Debug)]
+pub enum Role {
+    Learn(Algorithm),
+    Script(ControllerSpec),
+}
+
+impl SideConfig {
+    pub fn role(&self) -> Result<Role, String> {
+        let play = self.play.trim();
+        if let Some(algorithm) = Algorithm::parse(play) {
+            return Ok(Role::Learn(algorithm));
+        }
+        play.parse::<ControllerSpec>()
+            .map(Role::Script)
+            .map_err(|e| {
+                format!("play = \"{play}\": {e}; or mappo / ippo / maddpg / maac to learn")
+            })
+    }
+
+    /// The recurrent chunk length `algorithm` trains on.
+    pub fn chunk_len(&self, algorithm: Algorithm) -> usize {
+        match algorithm {
+            Algorithm::Mappo | Algorithm::Ippo => self.ppo.chunk_len,
+            Algorithm::Maddpg => self.maddpg.chunk_len,
+            Algorithm::Maac => self.maac.chunk_len,
+        }
+    }
+
+    /// The discount `algorithm` learns with (the shaping term uses it too).
+    pub fn gamma(&self, algorithm: Algorithm) -> f64 {
+        match algorithm {
+            Algorithm::Mappo | Algorithm::Ippo => self.ppo.gamma,
+            Algorithm::Maddpg => self.maddpg.gamma,
+            Algorithm::Maac => self.maac.gamma,
+        }
+    }
+
+    /// Checks the settings of `algorithm`; the error names the field.
+    fn validate_learner(&self, algorithm: Algorithm) -> Result<(), String> {
+        self.net.validate().map_err(|e| format!("net.{e}"))?;
+        self.shaping
+            .validate()
+            .map_err(|e| format!("shaping.{e}"))?;
+        match algorithm {
+            Algorithm::Mappo | Algorithm::Ippo => {
+                self.ppo.validate().map_err(|e| format!("ppo.{e}"))
+            }
+            Algorithm::Maddpg => self.maddpg.validate().map_err(|e| format!("maddpg.{e}")),
+            Algorithm::Maac => self
+                .maac
+                .validate(&self.net)
+                .map_err(|e| format!("maac.{e}")),
+        }
+    }
+}
+
+/// Worlds and steps per world of one rollout: each in range, and the
+/// rollout small enough to hold (checked before anything divides by them).
+pub fn check_rollout(num_envs: usize, rollout_steps: usize) -> Result<(), String> {
+    if !(1..=4096).contains(&num_envs) {
+        return Err(format!(
+            "num_envs = {num_envs}: must be in 1..=4096 (the paper uses 16 to 32)"
+        ));
+    }
+    if !(1..=100_000).contains(&rollout_steps) {
+        return Err(format!(
+            "rollout_steps = {rollout_steps}: must be in 1..=100000"
+        ));
+    }
+    if num_envs * rollout_steps > 4_000_000 {
+        return Err(format!(
+            "num_envs x rollout_steps = {}: a rollout of more than 4,000,000 steps does not fit in memory",
+            num_envs * rollout_steps
+        ));
+    }
+    Ok(())
+}
+
+impl TrainConfig {
+    /// Reads a TOML config; errors name the file and the field.
+    /// A config file as a user wrote it: it must name its protocol.
+    pub fn load(path: &Path) -> Result<TrainConfig> {
+        Self::read(path, true)
+    }
+
+    /// A run folder's own `config.toml`, written by this program. One written
+    /// before configs named their protocol reads as held-out: the Gibson maps
+    /// were refused for training then.
+    pub fn load_stored(path: &Path) -> Result<TrainConfig> {
+        Self::read(path, false)
+    }
+
+    fn read(path: &Path, require_protocol: bool) -> Result<TrainConfig> {
+        let text = std::fs::read_to_string(path)
+            .with_context(|| format!("{}: cannot read", path.display()))?;
+        if require_protocol {
+            crate::protocol::require_named(&text)
+                .map_err(|e| anyhow!("{}: {e}", path.display()))?;
+        }
+        let cfg: TrainConfig =
+            toml::from_str(&text).map_err(|e| anyhow!("{}: {e}", path.display()))?;
+        cfg.validate()
+            .map_err(|e| anyhow!("{}: {e}", path.display()))?;
+        Ok(cfg)
+    }
+
+    /// Checks every setting; the error names the field.
+    pub fn validate(&self) -> Result<(), String> {
+        let mut env = self.env.clone();
+        env.observations = true;
+        env.validate().map_err(|e| format!("env.{e}"))?;
+        validate_name(&self.name)?;
+        check_rollout(self.num_envs, self.rollout_steps)?;
+        let per_iteration = (self.num_envs * self.rollout_steps) as u64;
+        if self.total_env_steps < per_iteration {
+            return Err(format!(
+                "total_env_steps = {}: less than one iteration ({} worlds x {} steps = {per_iteration}); nothing would be trained",
+                self.total_env_steps, self.num_envs, self.rollout_steps
+            ));
+        }
+        if self.checkpoint_every == 0 {
+            return Err("checkpoint_every = 0: must be at least 1 iteration".into());
+        }
+        if !["auto", "cpu", "cuda"].contains(&self.device.as_str()) {
+            return Err(format!(
+                "device = \"{}\": expected auto, cpu or cuda",
+                self.device
+            ));
+        }
+        let mut learners = 0;
+        for (name, side_cfg, side) in [
+            ("captors", &self.captors, Side::Captors),
+            ("target", &self.target, Side::Target),
+        ] {
+            match side_cfg.role().map_err(|e| format!("{name}.{e}"))? {
+                Role::Learn(algorithm) => {
+                    learners += 1;
+                    side_cfg
+                        .validate_learner(algorithm)
+                        .map_err(|e| format!("{name}.{e}"))?;
+                    let chunk_len = side_cfg.chunk_len(algorithm);
+                    let field = if algorithm.off_policy() {
+                        algorithm.name()
+                    } else {
+                        "ppo"
+                    };
+                    if !self.rollout_steps.is_multiple_of(chunk_len) {
+                        return Err(format!(
+                            "rollout_steps = {} is not a multiple of {name}.{field}.chunk_len = {chunk_len}",
+                            self.rollout_steps
+                        ));
+                    }
+                    // A replayed sequence holds the state of at most one
+                    // truncation to bootstrap from.
+                    if algorithm.off_policy() && self.env.episode_length as usize <= chunk_len {
+                        return Err(format!(
+                            "env.episode_length = {}: must exceed {name}.{field}.chunk_len = {chunk_len} for {}",
+                            self.env.episode_length,
+                            algorithm.name()
+                        ));
+                    }
+                }
+                Role::Script(spec) => spec
+                    .check(side, &env)
+                    .map_err(|e| format!("{name}.play: {e}"))?,
+            }
+        }
+        if learners == 0 {
+            return Err("neither captors.play nor target.play is a learner (mappo, ippo, maddpg or maac): nothing to train".into());
+        }
+        Ok(())
+    }
+
+    /// A stable hash of the settings that shape learning (FNV-1a of the
+    /// canonical JSON); the name, the step budget and the device are left
+    /// out, so a run can be renamed, extended or moved to a GPU and resumed.
+    pub fn hash(&self) -> String {
+        let mut c = self.clone();
+        c.name = String::new();
+        c.total_env_steps = 0;
+        c.device = String::new();
+        let json = serde_json::to_string(&c).expect("config serialises");
+        let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+        for b in json.bytes() {
+            h ^= b as u64;
+            h = h.wrapping_mul(0x0100_0000_01b3);
+        }
+        format!("{h:016x}")
+    }
+
+    pub fn device(&self) -> Device {
+        match self.device.as_str() {
+            "cpu" => Device::Cpu,
+            "cuda" => Device::Cuda(0),
+            _ => Device::cuda_if_available(),
+        }
+    }
+}
+
+/// A run name becomes the folder `runs/NAME`: it must stay one plain
+/// component inside `runs/`.
+fn validate_name(name: &str) -> Result<(), String> {
+    let plain = !name.is_empty()
+        && name.len() <= 100
+        && !name.starts_with('.')
+        && name
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || matches!(c, '-' | '_' | '.' | '+'));
+    if plain {
+        Ok(())
+    } else {
+        Err(format!(
+            "name = {name:?}: must be 1 to 100 letters, digits, '-', '_', '+' or '.', not starting with '.' (it names the folder runs/NAME)"
+        ))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn config_errors_name_the_field() {
+        let bad: Result<TrainConfig, _> = toml::from_str("[captors.ppo]\nentropy = 0.1\n");
+        assert!(
+            bad.unwrap_err().to_string().contains("entropy"),
+            "unknown key reported"
+        );
+        let cfg = TrainConfig {
+            rollout_steps: 15,
+            ..TrainConfig::default()
+        };
+        assert!(cfg.validate().unwrap_err().contains("chunk_len"));
+        let mut cfg = TrainConfig::default();
+        cfg.captors.play = "heuristic".into();
+        assert!(cfg.validate().unwrap_err().contains("nothing to train"));
+        let mut cfg = TrainConfig::default();
+        cfg.target.play = "greedy".into();
+        assert!(cfg.validate().unwrap_err().starts_with("target.play"));
+        let mut cfg = TrainConfig::default();
+        cfg.captors.ppo.gamma = 1.5;
+        assert!(cfg.validate().unwrap_err().starts_with("captors.ppo.gamma"));
+        assert_eq!(TrainConfig::default().hash(), TrainConfig::default().hash());
+        let other = TrainConfig {
+            seed: 1,
+            ..TrainConfig::default()
+        };
+        assert_ne!(other.hash(), TrainConfig::default().hash());
+    }
+}
