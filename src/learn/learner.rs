@@ -41,6 +41,20 @@ pub trait Learner {
         vectors: &Tensor,
         h: &Tensor,
     ) -> (Option<Tensor>, Tensor);
+    /// Whether the critic values a rollout after it is collected
+    /// (`value_rollout`) instead of stepping beside the actor while acting:
+    /// the same values, with the encoder run once over every step.
+    fn values_after_rollout(&self) -> bool {
+        false
+    }
+    /// Fills the rollout's `values`, `critic_h` (chunk starts),
+    /// `final_values` and `last_values` from its observations, masks and
+    /// final and last observations, the critic starting from `h0`; returns
+    /// the critic's state after the last step. Only where
+    /// `values_after_rollout`.
+    fn value_rollout(&self, _ro: &mut Rollout, _h0: &Tensor) -> Tensor {
+        unreachable!("values_after_rollout is false")
+    }
     /// Learns from one rollout. A non-finite loss or gradient undoes
     /// everything the update changed.
     fn update(&mut self, ro: &Rollout, rng: &mut ChaCha8Rng) -> Result<UpdateStats, BadUpdate>;

@@ -352,6 +352,90 @@ impl PpoLearner {
         self.value_norm = snap.value_norm;
     }
 
+    /// The critic's values of a whole rollout, after it: what stepping the
+    /// critic beside the actor gave, step for step, with its encoder run
+    /// once over all steps instead of once per step (see
+    /// `Learner::value_rollout`). GAE needs the value of every step, of the
+    /// state each truncated episode reached (continuing that row's
+    /// recurrent state) and of the states after the last step.
+    pub fn value_rollout(&self, ro: &mut Rollout, h0: &Tensor) -> Tensor {
+        let dev = self.device;
+        let (steps, rows, l, hd) = (ro.steps, ro.rows, ro.chunk_len, ro.hidden);
+        let (pl, vl) = (ro.patch_side * ro.patch_side, ro.vector_len);
+        let n = steps * rows;
+        tch::no_grad(|| {
+            let (p, v) = crate::nn::obs_tensors(&ro.patches, &ro.vectors, n, 1, ro.patch_side, dev);
+            let (cp, cv) = self.view.critic_inputs(&p, &v, self.team);
+            let x = self
+                .critic
+                .encode(&cp, &cv)
+                .view([steps as i64, rows as i64, -1]);
+            let masks = Tensor::from_slice(&ro.masks)
+                .to_device(dev)
+                .view([steps as i64, rows as i64, 1]);
+            let mut h = h0.shallow_clone();
+            let mut states = Vec::with_capacity(steps);
+            let hsz = rows * hd;
+            for t in 0..steps {
+                if t % l == 0 {
+                    let c = t / l;
+                    h.to_device(Device::Cpu)
+                        .copy_data(&mut ro.critic_h[c * hsz..(c + 1) * hsz], hsz);
+                }
+                h = self
+                    .critic
+                    .gru_step(&x.get(t as i64), &(&h * masks.get(t as i64)));
+                states.push(h.shallow_clone());
+            }
+            let states = Tensor::stack(&states, 0).view([n as i64, hd as i64]);
+            self.critic
+                .values(&states)
+                .to_device(Device::Cpu)
+                .copy_data(&mut ro.values, n);
+
+            // Truncated rows come in whole teams (a world ends for all its
+            // robots), in row order, as the critic's team view needs.
+            let cut: Vec<usize> = (0..n).filter(|&i| ro.truncated[i] > 0.5).collect();
+            if !cut.is_empty() {
+                let m = cut.len();
+                let mut fp = vec![0u8; m * pl];
+                let mut fv = vec![0f32; m * vl];
+                for (k, &i) in cut.iter().enumerate() {
+                    fp[k * pl..(k + 1) * pl].copy_from_slice(&ro.final_patches[i * pl..(i + 1) * pl]);
+                    fv[k * vl..(k + 1) * vl].copy_from_slice(&ro.final_vectors[i * vl..(i + 1) * vl]);
+                }
+                let (p, v) = crate::nn::obs_tensors(&fp, &fv, m, 1, ro.patch_side, dev);
+                let (cp, cv) = self.view.critic_inputs(&p, &v, self.team);
+                let at: Vec<i64> = cut.iter().map(|&i| i as i64).collect();
+                let hs = states.index_select(0, &Tensor::from_slice(&at).to_device(dev));
+                let (values, _) = self.critic.step(&cp, &cv, &hs);
+                let mut out = vec![0f32; m];
+                values.to_device(Device::Cpu).copy_data(&mut out, m);
+                for (&i, value) in cut.iter().zip(out) {
+                    ro.final_values[i] = value;
+                }
+            }
+
+            let (p, v) = crate::nn::obs_tensors(
+                &ro.last_patches,
+                &ro.last_vectors,
+                rows,
+                1,
+                ro.patch_side,
+                dev,
+            );
+            let (cp, cv) = self.view.critic_inputs(&p, &v, self.team);
+            let last_masks = Tensor::from_slice(&ro.last_masks)
+                .to_device(dev)
+                .unsqueeze(1);
+            let (values, _) = self.critic.step(&cp, &cv, &(&h * last_masks));
+            values
+                .to_device(Device::Cpu)
+                .copy_data(&mut ro.last_values, rows);
+            h
+        })
+    }
+
     /// The PPO update on one rollout. A non-finite loss or gradient norm
     /// undoes the whole update (weights, moments and return statistics as
     /// they were before it) and says what went wrong.
@@ -557,6 +641,12 @@ impl Learner for PpoLearner {
         let (cp, cv) = self.view.critic_inputs(patches, vectors, self.team);
         let (values, h) = self.critic.step(&cp, &cv, h);
         (Some(values), h)
+    }
+    fn values_after_rollout(&self) -> bool {
+        true
+    }
+    fn value_rollout(&self, ro: &mut Rollout, h0: &Tensor) -> Tensor {
+        self.value_rollout(ro, h0)
     }
     fn update(&mut self, ro: &Rollout, rng: &mut ChaCha8Rng) -> Result<UpdateStats, BadUpdate> {
         PpoLearner::update(self, ro, rng)
@@ -773,5 +863,102 @@ mod tests {
         for (o, e) in out.iter().zip([0.9, 1.1, 0.9]) {
             assert!((o - e).abs() < 1e-5, "{out:?}");
         }
+    }
+
+    #[test]
+    fn values_after_the_rollout_equal_the_critic_stepped_while_acting() {
+        use rand::{Rng, SeedableRng};
+        let net = NetConfig {
+            hidden: 16,
+            conv_channels: [2, 4],
+            patch_pool: 4,
+        };
+        let (steps, worlds, team, vl) = (6usize, 2usize, 3usize, 20usize);
+        let rows = worlds * team;
+        let learner = crate::nn::seeded(5, || {
+            PpoLearner::new(
+                Algorithm::Mappo,
+                PpoConfig {
+                    chunk_len: 3,
+                    ..PpoConfig::default()
+                },
+                net.clone(),
+                vl,
+                team,
+                Device::Cpu,
+            )
+        });
+        let mut ro = Rollout::new(steps, rows, vl, &net, 3);
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(1);
+        ro.patches.iter_mut().for_each(|x| *x = rng.gen_range(0..2));
+        ro.final_patches.iter_mut().for_each(|x| *x = rng.gen_range(0..2));
+        ro.last_patches.iter_mut().for_each(|x| *x = rng.gen_range(0..2));
+        for v in [&mut ro.vectors, &mut ro.final_vectors, &mut ro.last_vectors] {
+            v.iter_mut().for_each(|x| *x = rng.gen_range(-1.0..1.0));
+        }
+        // World 1 is cut off after step 2 and starts again at step 3; world 0
+        // restarts at step 4 after a capture.
+        for j in 0..team {
+            ro.truncated[2 * rows + team + j] = 1.0;
+            ro.masks[3 * rows + team + j] = 0.0;
+            ro.masks[4 * rows + j] = 0.0;
+        }
+        ro.last_masks[0] = 0.0;
+        let h0 = Tensor::randn([rows as i64, 16], (Kind::Float, Device::Cpu));
+
+        // By stepping, as the trainer does while acting.
+        let step_rows = |patches: &[u8], vectors: &[f32], h: &Tensor| {
+            let (p, v) = crate::nn::obs_tensors(patches, vectors, rows, 1, 12, Device::Cpu);
+            let (values, h) = tch::no_grad(|| learner.critic_step(&p, &v, h));
+            let mut out = vec![0f32; rows];
+            values.unwrap().copy_data(&mut out, rows);
+            (out, h)
+        };
+        let (pl, n) = (144, steps * rows);
+        let mut h = h0.shallow_clone();
+        let mut values = vec![0f32; n];
+        let mut chunk_h = Vec::new();
+        let mut final_values = vec![0f32; n];
+        for t in 0..steps {
+            if t % 3 == 0 {
+                chunk_h.push(h.shallow_clone());
+            }
+            let m = Tensor::from_slice(&ro.masks[t * rows..(t + 1) * rows]).unsqueeze(1);
+            let (v, h2) = step_rows(
+                &ro.patches[t * rows * pl..(t + 1) * rows * pl],
+                &ro.vectors[t * rows * vl..(t + 1) * rows * vl],
+                &(&h * m),
+            );
+            values[t * rows..(t + 1) * rows].copy_from_slice(&v);
+            h = h2;
+            if t == 2 {
+                let (v, _) = step_rows(
+                    &ro.final_patches[t * rows * pl..(t + 1) * rows * pl],
+                    &ro.final_vectors[t * rows * vl..(t + 1) * rows * vl],
+                    &h,
+                );
+                final_values[t * rows + team..(t + 1) * rows].copy_from_slice(&v[team..]);
+            }
+        }
+        let m = Tensor::from_slice(&ro.last_masks).unsqueeze(1);
+        let (last, _) = step_rows(&ro.last_patches, &ro.last_vectors, &(&h * m));
+
+        let h_after = learner.value_rollout(&mut ro, &h0);
+        let close = |a: &[f32], b: &[f32], what: &str| {
+            for (i, (x, y)) in a.iter().zip(b).enumerate() {
+                assert!((x - y).abs() < 1e-4, "{what}[{i}]: {x} vs {y}");
+            }
+        };
+        close(&ro.values, &values, "values");
+        close(&ro.last_values, &last, "last_values");
+        let cut: Vec<f32> = (0..n).filter(|&i| ro.truncated[i] > 0.5).map(|i| ro.final_values[i]).collect();
+        let want: Vec<f32> = (0..n).filter(|&i| ro.truncated[i] > 0.5).map(|i| final_values[i]).collect();
+        assert_eq!(cut.len(), team);
+        close(&cut, &want, "final_values");
+        let mut stored = vec![0f32; chunk_h.len() * rows * 16];
+        let len = stored.len();
+        Tensor::cat(&chunk_h, 0).copy_data(&mut stored, len);
+        close(&ro.critic_h, &stored, "chunk starts");
+        assert!(f64::try_from((&h_after - &h).abs().max()).unwrap() < 1e-4);
     }
 }

@@ -443,15 +443,20 @@ impl Trainer {
                 );
                 ro.masks[base..base + rows].copy_from_slice(&ls.next_mask);
                 let l = ro.chunk_len;
+                // A critic that values the rollout afterwards leaves its
+                // state as it was, and stores its chunk starts itself.
+                let critic_steps = !ls.learner.values_after_rollout();
                 if t % l == 0 {
                     let c = t / l;
                     let hsz = rows * ro.hidden;
                     ls.actor_h
                         .to_device(Device::Cpu)
                         .copy_data(&mut ro.actor_h[c * hsz..(c + 1) * hsz], hsz);
-                    ls.critic_h
-                        .to_device(Device::Cpu)
-                        .copy_data(&mut ro.critic_h[c * hsz..(c + 1) * hsz], hsz);
+                    if critic_steps {
+                        ls.critic_h
+                            .to_device(Device::Cpu)
+                            .copy_data(&mut ro.critic_h[c * hsz..(c + 1) * hsz], hsz);
+                    }
                 }
                 let (p, v) = obs_tensors(
                     &ro.patches[base * pl..(base + rows) * pl],
@@ -467,16 +472,23 @@ impl Trainer {
                 let lr = &ls.learner;
                 let (probs, values, ha, hc) = tch::no_grad(|| {
                     let (logits, ha) = lr.actor().step(&p, &v, &(&ls.actor_h * &m));
-                    let (values, hc) = lr.critic_step(&p, &v, &(&ls.critic_h * &m));
+                    let (values, hc) = if critic_steps {
+                        let (values, hc) = lr.critic_step(&p, &v, &(&ls.critic_h * &m));
+                        (values.map(|v| v.to_device(Device::Cpu)), Some(hc))
+                    } else {
+                        (None, None)
+                    };
                     (
                         logits.softmax(-1, Kind::Float).to_device(Device::Cpu),
-                        values.map(|v| v.to_device(Device::Cpu)),
+                        values,
                         ha,
                         hc,
                     )
                 });
                 ls.actor_h = ha;
-                ls.critic_h = hc;
+                if let Some(hc) = hc {
+                    ls.critic_h = hc;
+                }
                 let mut pr = vec![0f32; rows * Action::COUNT];
                 probs.copy_data(&mut pr, rows * Action::COUNT);
                 if let Some(values) = values {
@@ -562,6 +574,10 @@ impl Trainer {
                 &mut ro.last_patches,
             );
             ro.last_masks.copy_from_slice(&ls.next_mask);
+            if ls.learner.values_after_rollout() {
+                ls.critic_h = ls.learner.value_rollout(ro, &ls.critic_h);
+                continue;
+            }
             if !ls.learner.needs_values() {
                 continue;
             }
@@ -859,7 +875,7 @@ fn keep_truncated_states(
         ro.final_patches[at * pl..(at + 1) * pl].copy_from_slice(&patches[i * pl..(i + 1) * pl]);
         ro.final_vectors[at * vl..(at + 1) * vl].copy_from_slice(&vectors[i * vl..(i + 1) * vl]);
     }
-    if !ls.learner.needs_values() {
+    if !ls.learner.needs_values() || ls.learner.values_after_rollout() {
         return;
     }
     let (p, v) = obs_tensors(&patches, &vectors, n, 1, ls.rollout.patch_side, device);

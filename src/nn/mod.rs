@@ -334,6 +334,26 @@ impl Critic {
             .apply(&self.head)
             .squeeze_dim(1)
     }
+
+    /// The encoder alone, [B, hidden], for many steps at once (the GRU then
+    /// runs step by step with `gru_step`): a rollout's values in one pass.
+    pub fn encode(&self, patches: &Tensor, vectors: &Tensor) -> Tensor {
+        self.trunk.encoder.forward(patches, vectors)
+    }
+
+    /// One GRU step from encoded inputs: the next state [B, hidden].
+    pub fn gru_step(&self, x: &Tensor, h: &Tensor) -> Tensor {
+        self.trunk
+            .gru
+            .step(x, &nn::GRUState(h.unsqueeze(0)))
+            .0
+            .squeeze_dim(0)
+    }
+
+    /// Values [B] of recurrent states [B, hidden].
+    pub fn values(&self, states: &Tensor) -> Tensor {
+        states.apply(&self.head).squeeze_dim(1)
+    }
 }
 
 /// Runs `f` with torch's global generator seeded by `seed`, holding a
