@@ -15,10 +15,10 @@
 #   CELLS      "K:RATIO ..." [3:1.0 3:1.2 3:1.4 4:1.0 4:1.2 4:1.4]
 #   LEARNERS   [mappo ippo maddpg maac]
 #   PROTOCOLS  [paper]; "held-out" runs MAPPO only (the issue's minimum)
-#   ROLLOUT    rollout_steps per world and iteration [50]: on the 3:1, 1.0
-#              MAPPO setting, 50 instead of the paper's 100 moved the learning
-#              curve most per env step of what we tried (README, "Sample
-#              efficiency"); every learner gets it
+#   ROLLOUT    rollout_steps per world and iteration [100]; every learner
+#              gets it. The base config is configs/cpu-3v1-1.0.toml, the CPU
+#              default (README, "Learning per CPU-minute"): its network for
+#              every learner, its PPO settings for MAPPO and IPPO
 #   JOBS       runs in parallel, each with one thread [1]
 #   DEVICE     auto, cpu or cuda [auto]
 # Finished runs and evaluations are kept: run it again to resume.
@@ -33,7 +33,7 @@ LEARNERS=${LEARNERS:-"mappo ippo maddpg maac"}
 PROTOCOLS=${PROTOCOLS:-paper}
 JOBS=${JOBS:-1}
 DEVICE=${DEVICE:-auto}
-ROLLOUT=${ROLLOUT:-50}
+ROLLOUT=${ROLLOUT:-100}
 mkdir -p "$OUT/configs"
 export OMP_NUM_THREADS=${OMP_NUM_THREADS:-1} RAYON_NUM_THREADS=${RAYON_NUM_THREADS:-1}
 
@@ -50,7 +50,7 @@ one() { # protocol learner k ratio
         -e "s/^target_speed = .*/target_speed = $ratio/" \
         -e "s/^rollout_steps = .*/rollout_steps = $ROLLOUT/" \
         -e "s/^play = \"mappo\"/play = \"$learner\"/" \
-        configs/mappo-3v1-1.0-cpu.toml > "$cfg"
+        configs/cpu-3v1-1.0.toml > "$cfg"
     # The CPU config's minibatches are PPO's; the others ignore the table.
     if [ ! -f "$OUT/runs/$name/.done" ]; then
         if [ -f "$OUT/runs/$name/state.json" ]; then

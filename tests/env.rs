@@ -2,7 +2,8 @@
 //! capture, rewards, placement, observations, determinism and the vector env.
 
 use std::sync::Arc;
-use t2e::env::physics::{target_is_trapped, Robot};
+use t2e::env::physics::{blocked_probes, target_is_trapped, Robot};
+use t2e::env::potential::Potential;
 use t2e::env::vec_env::episode_seed;
 use t2e::env::*;
 use t2e::heuristics::{Heuristic, RandomActions};
@@ -184,6 +185,52 @@ fn fast_capture_needs_every_probe_blocked() {
     };
     assert!(!target_is_trapped(&m, [0.0, 2.5], &ring(2)));
     assert!(target_is_trapped(&m, [0.0, 2.5], &ring(3)));
+    // The trap potential counts them: a captor 0.45 m away blocks the
+    // probes within 60.6 degrees of it (0, +-30, +-60), 5 of the 12.
+    assert_eq!(blocked_probes(&m, [0.0, 2.5], &[]), 0);
+    assert_eq!(blocked_probes(&m, [0.0, 2.5], &ring(1)), 5);
+    assert_eq!(blocked_probes(&m, [0.0, 2.5], &ring(2)), 10);
+    assert_eq!(blocked_probes(&m, [0.0, 2.5], &ring(3)), 12);
+    let walls = blocked_probes(&m, target, &[]);
+    assert!(0 < walls && walls < 12, "{walls}");
+    assert_eq!(blocked_probes(&m, target, &[plug]), 12);
+}
+
+#[test]
+fn the_vector_env_tracks_the_trap_potential_of_every_state() {
+    // Expert captors against the rule-based target in a small room: the
+    // potential of each world's state after every step (after any reset),
+    // and of the state an episode ended in, 1 exactly at a capture.
+    let m = maps(room(120, 200, 120, 200)); // 4 m x 4 m
+    let short = EnvConfig {
+        episode_length: 60,
+        observations: false,
+        ..cfg(3)
+    };
+    let mut venv = VecEnv::new(short, m, 6, 5).unwrap();
+    venv.script(Side::Captors, || Box::new(Heuristic));
+    venv.script(Side::Target, || Box::new(Heuristic));
+    venv.track_potential(Potential::Trap);
+    venv.reset().unwrap();
+    let actions = vec![Action::Stop; 6 * 4];
+    let (mut captures, mut cut) = (0, 0);
+    for _ in 0..600 {
+        venv.step(&actions).unwrap();
+        for e in 0..6 {
+            let phi = venv.potentials[e];
+            assert_eq!(phi, Potential::Trap.of(venv.env(e)));
+            assert!((0.0..1.0).contains(&phi), "a live state is not a capture: {phi}");
+            if venv.terminated[e] {
+                assert_eq!(venv.final_potentials[e], 1.0);
+                captures += 1;
+            }
+            if venv.truncated[e] {
+                assert!(venv.final_potentials[e] < 1.0);
+                cut += 1;
+            }
+        }
+    }
+    assert!(captures > 0 && cut > 0, "{captures} captures, {cut} cut off");
 }
 
 #[test]

@@ -442,3 +442,58 @@ fn negative_list_values_reach_our_own_checks() {
         "{err}"
     );
 }
+
+/// `train --for` stops at a wall-clock budget with a final checkpoint, and
+/// `--eval-every` evaluates checkpoints in the background into eval.csv and
+/// eval.png, the final checkpoint included; bad durations name the option.
+#[test]
+fn train_for_a_wall_clock_budget_with_periodic_evaluation() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut cfg = common::tiny_train_config("budget", t2e::protocol::Protocol::HeldOut, "shipped");
+    cfg.total_env_steps = 100_000_000;
+    let config = dir.path().join("config.toml");
+    std::fs::write(&config, toml::to_string(&cfg).unwrap()).unwrap();
+    let run = dir.path().join("run");
+    let train = |extra: &[&str]| {
+        Command::new(BIN)
+            .args(["train", "--config"])
+            .arg(&config)
+            .arg("--out")
+            .arg(&run)
+            .args(["--quiet", "--eval-maps", "shipped", "--eval-episodes", "4"])
+            .args(["--eval-episode-length", "30"])
+            .args(extra)
+            .env("RAYON_NUM_THREADS", "1")
+            .env("OMP_NUM_THREADS", "1")
+            .output()
+            .unwrap()
+    };
+    for (option, value) in [("--for", "0"), ("--for", "-5m"), ("--for", "soon"), ("--eval-every", "0")] {
+        let out = train(&[option, value]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success() && err.contains(option) && err.contains(value), "{option} {value}: {err}");
+        assert!(!run.join("state.json").exists(), "{option} {value}: refused before training");
+    }
+    let out = train(&["--for", "6s", "--eval-every", "2s"]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(stdout.contains("out of time (--for)"), "{stdout}");
+    let state: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(run.join("state.json")).unwrap()).unwrap();
+    let final_steps = state["env_steps"].as_u64().unwrap();
+    assert!(final_steps > 0 && final_steps < cfg.total_env_steps);
+    let mut reader = csv::Reader::from_path(run.join("eval.csv")).unwrap();
+    let rows: Vec<t2e::cli::periodic_eval::EvalRow> =
+        reader.deserialize().collect::<Result<_, _>>().unwrap();
+    assert!(rows.len() >= 2, "{rows:?}");
+    for pair in rows.windows(2) {
+        assert!(pair[0].env_steps < pair[1].env_steps && pair[0].wall_s <= pair[1].wall_s);
+    }
+    for r in &rows {
+        assert_eq!((r.side.as_str(), r.maps.as_str(), r.episodes, r.episode_length), ("captors", "shipped", 4, 30));
+        assert!(0.0 <= r.sr_low && r.sr_low <= r.sr && r.sr <= r.sr_high && r.sr_high <= 100.0, "{r:?}");
+        assert!(r.wall_s > 0.0 && r.wall_s < 7.0 && (0.0..=30.0).contains(&r.time), "{r:?}");
+    }
+    assert_eq!(rows.last().unwrap().env_steps, final_steps, "the final checkpoint is evaluated too");
+    assert!(run.join("eval.png").exists());
+}

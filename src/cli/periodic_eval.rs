@@ -55,6 +55,9 @@ pub struct PeriodicEval {
     run_dir: PathBuf,
     next_due: Instant,
     running: Vec<Running>,
+    /// Env steps of the last checkpoint handed out: the run's final
+    /// checkpoint may be the one just evaluated.
+    last_launched: Option<u64>,
 }
 
 impl PeriodicEval {
@@ -64,6 +67,7 @@ impl PeriodicEval {
             plan,
             run_dir: run_dir.to_path_buf(),
             running: Vec::new(),
+            last_launched: None,
         }
     }
 
@@ -80,6 +84,10 @@ impl PeriodicEval {
         wall_s: f64,
     ) -> Result<()> {
         self.next_due = Instant::now() + self.plan.every;
+        if self.last_launched == Some(env_steps) {
+            return Ok(());
+        }
+        self.last_launched = Some(env_steps);
         for (side, dir) in checkpoints {
             let out = self
                 .run_dir
@@ -198,14 +206,7 @@ fn rows_of(r: &Running) -> Result<Vec<EvalRow>> {
 }
 
 pub fn read_rows(path: &Path) -> Result<Vec<EvalRow>> {
-    if !path.exists() {
-        return Ok(Vec::new());
-    }
-    let mut r =
-        csv::Reader::from_path(path).with_context(|| format!("cannot read {}", path.display()))?;
-    r.deserialize()
-        .collect::<Result<Vec<EvalRow>, _>>()
-        .with_context(|| format!("{}: malformed row", path.display()))
+    super::read_csv(path)
 }
 
 fn write_rows(path: &Path, rows: &[EvalRow]) -> Result<()> {

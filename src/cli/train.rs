@@ -55,18 +55,14 @@ pub struct TrainArgs {
 static STOP: AtomicBool = AtomicBool::new(false);
 
 pub fn run(args: TrainArgs) -> Result<()> {
-    let run_for = args
-        .run_for
-        .as_deref()
-        .map(|t| crate::util::parse_duration("--for", t))
-        .transpose()
-        .map_err(anyhow::Error::msg)?;
-    let eval_every = args
-        .eval_every
-        .as_deref()
-        .map(|t| crate::util::parse_duration("--eval-every", t))
-        .transpose()
-        .map_err(anyhow::Error::msg)?;
+    let duration = |option: &str, text: &Option<String>| {
+        text.as_deref()
+            .map(|t| crate::util::parse_duration(option, t))
+            .transpose()
+            .map_err(anyhow::Error::msg)
+    };
+    let run_for = duration("--for", &args.run_for)?;
+    let eval_every = duration("--eval-every", &args.eval_every)?;
     let mut cfg = match (&args.config, &args.out, args.resume) {
         (Some(p), _, _) => TrainConfig::load(p)?,
         (None, Some(out), true) => TrainConfig::load_stored(&out.join("config.toml"))?,
@@ -319,14 +315,7 @@ fn append_metrics(path: &Path, m: &Metrics) -> Result<()> {
 }
 
 pub fn read_metrics(path: &Path) -> Result<Vec<Metrics>> {
-    if !path.exists() {
-        return Ok(Vec::new());
-    }
-    let mut r =
-        csv::Reader::from_path(path).with_context(|| format!("cannot read {}", path.display()))?;
-    r.deserialize()
-        .collect::<Result<Vec<Metrics>, _>>()
-        .with_context(|| format!("{}: malformed row", path.display()))
+    super::read_csv(path)
 }
 
 /// After a kill, rows past the last checkpoint describe iterations the
