@@ -3,7 +3,7 @@
 # ships, all under runs/default/:
 #  1. the heuristic captors against the rule-based target (the paper's
 #     protocol, 3:1, speed ratio 1.0): table, SoA plot, one rendered episode;
-#  2. a short league (configs/league-default.toml, about a minute per
+#  2. a short league (configs/league-default.toml, about two minutes per
 #     learner on 2 cores): MAPPO captors and MAPPO target against pools of
 #     each other's snapshots and the heuristics;
 #  3. the league's status, the export of the best member of each side, and
