@@ -72,7 +72,11 @@ pub fn parse_duration(option: &str, text: &str) -> Result<Duration, String> {
         "s" => n,
         "m" | "min" => n * 60.0,
         "h" => n * 3600.0,
-        _ => return Err(format!("{option} {text}: unknown unit '{unit}' (s, m or h)")),
+        _ => {
+            return Err(format!(
+                "{option} {text}: unknown unit '{unit}' (s, m or h)"
+            ))
+        }
     };
     if !(secs.is_finite() && secs > 0.0 && secs <= 30.0 * 86400.0) {
         return Err(format!(
@@ -100,9 +104,18 @@ mod tests {
 
     #[test]
     fn durations_parse_and_nonsense_is_refused() {
-        assert_eq!(parse_duration("--for", "90").unwrap(), Duration::from_secs(90));
-        assert_eq!(parse_duration("--for", "10m").unwrap(), Duration::from_secs(600));
-        assert_eq!(parse_duration("--for", "1.5h").unwrap(), Duration::from_secs(5400));
+        assert_eq!(
+            parse_duration("--for", "90").unwrap(),
+            Duration::from_secs(90)
+        );
+        assert_eq!(
+            parse_duration("--for", "10m").unwrap(),
+            Duration::from_secs(600)
+        );
+        assert_eq!(
+            parse_duration("--for", "1.5h").unwrap(),
+            Duration::from_secs(5400)
+        );
         for bad in ["", "0", "-5m", "10x", "nanm", "1e9h", "0s"] {
             let e = parse_duration("--eval-every", bad).unwrap_err();
             assert!(e.starts_with("--eval-every"), "{bad}: {e}");

@@ -219,7 +219,10 @@ fn the_vector_env_tracks_the_trap_potential_of_every_state() {
         for e in 0..6 {
             let phi = venv.potentials[e];
             assert_eq!(phi, Potential::Trap.of(venv.env(e)));
-            assert!((0.0..1.0).contains(&phi), "a live state is not a capture: {phi}");
+            assert!(
+                (0.0..1.0).contains(&phi),
+                "a live state is not a capture: {phi}"
+            );
             if venv.terminated[e] {
                 assert_eq!(venv.final_potentials[e], 1.0);
                 captures += 1;
@@ -230,7 +233,10 @@ fn the_vector_env_tracks_the_trap_potential_of_every_state() {
             }
         }
     }
-    assert!(captures > 0 && cut > 0, "{captures} captures, {cut} cut off");
+    assert!(
+        captures > 0 && cut > 0,
+        "{captures} captures, {cut} cut off"
+    );
 }
 
 #[test]

@@ -468,15 +468,30 @@ fn train_for_a_wall_clock_budget_with_periodic_evaluation() {
             .output()
             .unwrap()
     };
-    for (option, value) in [("--for", "0"), ("--for", "-5m"), ("--for", "soon"), ("--eval-every", "0")] {
+    for (option, value) in [
+        ("--for", "0"),
+        ("--for", "-5m"),
+        ("--for", "soon"),
+        ("--eval-every", "0"),
+    ] {
         let out = train(&[option, value]);
         let err = String::from_utf8_lossy(&out.stderr);
-        assert!(!out.status.success() && err.contains(option) && err.contains(value), "{option} {value}: {err}");
-        assert!(!run.join("state.json").exists(), "{option} {value}: refused before training");
+        assert!(
+            !out.status.success() && err.contains(option) && err.contains(value),
+            "{option} {value}: {err}"
+        );
+        assert!(
+            !run.join("state.json").exists(),
+            "{option} {value}: refused before training"
+        );
     }
     let out = train(&["--for", "6s", "--eval-every", "2s"]);
     let stdout = String::from_utf8_lossy(&out.stdout);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     assert!(stdout.contains("out of time (--for)"), "{stdout}");
     let state: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(run.join("state.json")).unwrap()).unwrap();
@@ -490,10 +505,28 @@ fn train_for_a_wall_clock_budget_with_periodic_evaluation() {
         assert!(pair[0].env_steps < pair[1].env_steps && pair[0].wall_s <= pair[1].wall_s);
     }
     for r in &rows {
-        assert_eq!((r.side.as_str(), r.maps.as_str(), r.episodes, r.episode_length), ("captors", "shipped", 4, 30));
-        assert!(0.0 <= r.sr_low && r.sr_low <= r.sr && r.sr <= r.sr_high && r.sr_high <= 100.0, "{r:?}");
-        assert!(r.wall_s > 0.0 && r.wall_s < 7.0 && (0.0..=30.0).contains(&r.time), "{r:?}");
+        assert_eq!(
+            (
+                r.side.as_str(),
+                r.maps.as_str(),
+                r.episodes,
+                r.episode_length
+            ),
+            ("captors", "shipped", 4, 30)
+        );
+        assert!(
+            0.0 <= r.sr_low && r.sr_low <= r.sr && r.sr <= r.sr_high && r.sr_high <= 100.0,
+            "{r:?}"
+        );
+        assert!(
+            r.wall_s > 0.0 && r.wall_s < 7.0 && (0.0..=30.0).contains(&r.time),
+            "{r:?}"
+        );
     }
-    assert_eq!(rows.last().unwrap().env_steps, final_steps, "the final checkpoint is evaluated too");
+    assert_eq!(
+        rows.last().unwrap().env_steps,
+        final_steps,
+        "the final checkpoint is evaluated too"
+    );
     assert!(run.join("eval.png").exists());
 }

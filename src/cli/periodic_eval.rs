@@ -184,8 +184,8 @@ fn lowest_priority(cmd: &mut Command) {
 
 fn rows_of(r: &Running) -> Result<Vec<EvalRow>> {
     let path = r.out.join("summary.json");
-    let text =
-        std::fs::read_to_string(&path).with_context(|| format!("cannot read {}", path.display()))?;
+    let text = std::fs::read_to_string(&path)
+        .with_context(|| format!("cannot read {}", path.display()))?;
     let summaries: Vec<Summary> =
         serde_json::from_str(&text).with_context(|| format!("{}: malformed", path.display()))?;
     Ok(summaries

@@ -1,7 +1,7 @@
 //! `t2e-league train`: one training run from a TOML config (see configs/).
 
-use crate::learn::train::{Metrics, TrainConfig, Trainer};
 use super::periodic_eval::{EvalPlan, PeriodicEval};
+use crate::learn::train::{Metrics, TrainConfig, Trainer};
 use crate::render::plot::{self, line_plot, Series};
 use anyhow::{bail, Context, Result};
 use clap::Args;

@@ -264,7 +264,10 @@ impl VecEnv {
                 |(
                     e,
                     (
-                        ((((((slot, vec), patch), (final_vec, final_patch)), rew), act), (term, trunc)),
+                        (
+                            (((((slot, vec), patch), (final_vec, final_patch)), rew), act),
+                            (term, trunc),
+                        ),
                         (phi, final_phi),
                     ),
                 )| {

@@ -437,7 +437,10 @@ mod tests {
         for k in [3, 4] {
             for ratio in [1.0, 1.2, 1.4] {
                 for learner in ["MAPPO", "IPPO", "MADDPG", "MAAC"] {
-                    assert!(paper_row(k, ratio, learner).is_some(), "{k} {ratio} {learner}");
+                    assert!(
+                        paper_row(k, ratio, learner).is_some(),
+                        "{k} {ratio} {learner}"
+                    );
                 }
             }
         }
@@ -446,13 +449,20 @@ mod tests {
             [(99.8, 100.71), (99.8, 129.52), (94.8, 185.44)]
         );
         assert!(paper_row(3, 1.0, "expert heuristic").is_none());
-        assert!(parse_paper_tables("h\nII,3,1.0:1.0,MAPPO,rule-based,small,x,1,1\n")
-            .unwrap_err()
-            .contains("line 2"));
-        let shared = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("../shared/paper/tables.csv");
+        assert!(
+            parse_paper_tables("h\nII,3,1.0:1.0,MAPPO,rule-based,small,x,1,1\n")
+                .unwrap_err()
+                .contains("line 2")
+        );
+        let shared =
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/paper/tables.csv");
         if let Ok(text) = std::fs::read_to_string(&shared) {
-            assert_eq!(text, PAPER_TABLES, "src/eval/paper_tables.csv differs from {}", shared.display());
+            assert_eq!(
+                text,
+                PAPER_TABLES,
+                "src/eval/paper_tables.csv differs from {}",
+                shared.display()
+            );
         }
     }
 

@@ -62,7 +62,6 @@ fn lock_holder(path: &Path) -> String {
         .unwrap_or_default()
 }
 
-
 /// A child process the manager supervises.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Role {

@@ -29,8 +29,7 @@
 use super::learner::{Learner, NamedTensors};
 use super::offpolicy::{
     check_replay, gumbel_noise, one_hot, td_target, within, Batch, Params, ReplayLearner,
-    ReplaySchedule,
-    SequenceReplay,
+    ReplaySchedule, SequenceReplay,
 };
 use super::rollout::{BadUpdate, Rollout, UpdateStats};
 use super::Algorithm;

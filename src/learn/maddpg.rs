@@ -340,7 +340,8 @@ impl MaddpgLearner {
 
         let ha = self.actor.unroll_states(&p, &v, &b.actor_h0, &m);
         let logits = self.actor.logits(&ha);
-        let sampled = gumbel_softmax_st(&logits, &gumbel_noise(&logits, rng), cfg.gumbel_temperature);
+        let sampled =
+            gumbel_softmax_st(&logits, &gumbel_noise(&logits, rng), cfg.gumbel_temperature);
         let q_pi = self.critic.q(
             &hc.detach(),
             &team_actions(&sampled, &buffer_actions, self.team),

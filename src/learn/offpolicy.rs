@@ -13,8 +13,8 @@
 //! end of the game, so the target bootstraps from that state, not from the
 //! next episode's first one.
 
-use super::learner::{file, optimizer_file, restore_optimizers, NamedTensors};
 use super::adam::Adam;
+use super::learner::{file, optimizer_file, restore_optimizers, NamedTensors};
 use super::rollout::{BadUpdate, Rollout, UpdateStats};
 use crate::nn::checkpoint::{load_into, named_cpu_tensors};
 use crate::nn::obs_tensors;

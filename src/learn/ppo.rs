@@ -370,9 +370,10 @@ impl PpoLearner {
                 .critic
                 .encode(&cp, &cv)
                 .view([steps as i64, rows as i64, -1]);
-            let masks = Tensor::from_slice(&ro.masks)
-                .to_device(dev)
-                .view([steps as i64, rows as i64, 1]);
+            let masks =
+                Tensor::from_slice(&ro.masks)
+                    .to_device(dev)
+                    .view([steps as i64, rows as i64, 1]);
             let mut h = h0.shallow_clone();
             let mut states = Vec::with_capacity(steps);
             let hsz = rows * hd;
@@ -401,8 +402,10 @@ impl PpoLearner {
                 let mut fp = vec![0u8; m * pl];
                 let mut fv = vec![0f32; m * vl];
                 for (k, &i) in cut.iter().enumerate() {
-                    fp[k * pl..(k + 1) * pl].copy_from_slice(&ro.final_patches[i * pl..(i + 1) * pl]);
-                    fv[k * vl..(k + 1) * vl].copy_from_slice(&ro.final_vectors[i * vl..(i + 1) * vl]);
+                    fp[k * pl..(k + 1) * pl]
+                        .copy_from_slice(&ro.final_patches[i * pl..(i + 1) * pl]);
+                    fv[k * vl..(k + 1) * vl]
+                        .copy_from_slice(&ro.final_vectors[i * vl..(i + 1) * vl]);
                 }
                 let (p, v) = crate::nn::obs_tensors(&fp, &fv, m, 1, ro.patch_side, dev);
                 let (cp, cv) = self.view.critic_inputs(&p, &v, self.team);
@@ -891,8 +894,12 @@ mod tests {
         let mut ro = Rollout::new(steps, rows, vl, &net, 3);
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(1);
         ro.patches.iter_mut().for_each(|x| *x = rng.gen_range(0..2));
-        ro.final_patches.iter_mut().for_each(|x| *x = rng.gen_range(0..2));
-        ro.last_patches.iter_mut().for_each(|x| *x = rng.gen_range(0..2));
+        ro.final_patches
+            .iter_mut()
+            .for_each(|x| *x = rng.gen_range(0..2));
+        ro.last_patches
+            .iter_mut()
+            .for_each(|x| *x = rng.gen_range(0..2));
         for v in [&mut ro.vectors, &mut ro.final_vectors, &mut ro.last_vectors] {
             v.iter_mut().for_each(|x| *x = rng.gen_range(-1.0..1.0));
         }
@@ -951,8 +958,14 @@ mod tests {
         };
         close(&ro.values, &values, "values");
         close(&ro.last_values, &last, "last_values");
-        let cut: Vec<f32> = (0..n).filter(|&i| ro.truncated[i] > 0.5).map(|i| ro.final_values[i]).collect();
-        let want: Vec<f32> = (0..n).filter(|&i| ro.truncated[i] > 0.5).map(|i| final_values[i]).collect();
+        let cut: Vec<f32> = (0..n)
+            .filter(|&i| ro.truncated[i] > 0.5)
+            .map(|i| ro.final_values[i])
+            .collect();
+        let want: Vec<f32> = (0..n)
+            .filter(|&i| ro.truncated[i] > 0.5)
+            .map(|i| final_values[i])
+            .collect();
         assert_eq!(cut.len(), team);
         close(&cut, &want, "final_values");
         let mut stored = vec![0f32; chunk_h.len() * rows * 16];

@@ -9,8 +9,8 @@
 //! `checkpoints/SIDE-STEPS/` and `state.json`, which names the checkpoints
 //! a `--resume` continues from.
 
-pub use super::config::{check_rollout, Role, SideConfig, TrainConfig};
 use super::acting::{gather_side, gather_worlds, sample};
+pub use super::config::{check_rollout, Role, SideConfig, TrainConfig};
 use super::learner::Learner;
 use super::maac::MaacLearner;
 use super::maddpg::MaddpgLearner;
@@ -283,8 +283,11 @@ impl Trainer {
                         critic_h: Tensor::zeros([rows as i64, h], (Kind::Float, device)),
                         next_mask: vec![0.0; rows],
                         bad_updates: 0,
-                        shaping: side_cfg.shaping.potential.filter(|_| !side_cfg.shaping.is_off()).map(
-                            |potential| {
+                        shaping: side_cfg
+                            .shaping
+                            .potential
+                            .filter(|_| !side_cfg.shaping.is_off())
+                            .map(|potential| {
                                 venv.track_potential(potential);
                                 let sign = match side {
                                     Side::Captors => 1.0,
@@ -294,8 +297,7 @@ impl Trainer {
                                     sign * side_cfg.shaping.weight as f32,
                                     side_cfg.gamma(algorithm),
                                 )
-                            },
-                        ),
+                            }),
                     });
                 }
             }
