@@ -209,7 +209,7 @@ pub fn run(args: TrainArgs) -> Result<()> {
                     .map(|(s, _)| s)
                     .zip(written)
                     .collect();
-                p.launch(&sides, trainer.env_steps, trainer.wall_s)?;
+                launch_or_warn(p, &sides, trainer.env_steps, trainer.wall_s);
             }
         }
         if let Some(p) = periodic.as_mut() {
@@ -227,7 +227,7 @@ pub fn run(args: TrainArgs) -> Result<()> {
             .map(|(s, _)| s)
             .zip(written.iter().cloned())
             .collect();
-        p.launch(&sides, trainer.env_steps, trainer.wall_s)?;
+        launch_or_warn(p, &sides, trainer.env_steps, trainer.wall_s);
         eprintln!("waiting for the periodic evaluations to finish");
         p.collect(true)?;
     }
@@ -250,6 +250,19 @@ pub fn run(args: TrainArgs) -> Result<()> {
     }
     println!("curves {}", run_dir.join("curves.png").display());
     Ok(())
+}
+
+/// An evaluation that cannot start (a full disk, no processes left) is
+/// worth a warning, not the training run it watches.
+fn launch_or_warn(
+    p: &mut PeriodicEval,
+    sides: &[(crate::env::Side, PathBuf)],
+    env_steps: u64,
+    wall_s: f64,
+) {
+    if let Err(e) = p.launch(sides, env_steps, wall_s) {
+        tracing::warn!("periodic evaluation at {env_steps} env steps not started: {e:#}");
+    }
 }
 
 /// Under the held-out protocol the Gibson maps are the test set: never
