@@ -13,7 +13,7 @@ use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 use t2e::env::Side;
 use t2e::league::dir::LeagueDir;
-use t2e::league::store::{Kind, Store};
+use t2e::league::store::{BeatState, Kind, Store};
 use t2e::learn::persist::RunState;
 
 const CONFIG: &str = r#"
@@ -75,7 +75,7 @@ fn sigkill(pid: i64) {
 /// Checks the invariants; returns (matches, per-learner env steps of their
 /// resume points).
 fn check(dir: &LeagueDir) -> (u64, Vec<u64>) {
-    let store = Store::open(&dir.root).unwrap();
+    let store = Store::open(&dir.store).unwrap();
     let players = store.players().unwrap();
     // No duplicate member: one row per name (the schema) and per snapshot.
     let mut seen = BTreeSet::new();
@@ -225,9 +225,12 @@ fn killed_at_random_moments_the_league_loses_and_duplicates_nothing() {
     let (m, r) = check(&dir);
     assert!(m >= matches);
     assert_eq!(r, vec![9_600, 9_600], "both learners reach their budget");
-    let store = Store::open(&dir.root).unwrap();
+    let store = Store::open(&dir.store).unwrap();
     let beats = store.heartbeats().unwrap();
-    assert!(beats.iter().all(|b| b.state == "done"), "{beats:?}");
+    assert!(
+        beats.iter().all(|b| b.state == BeatState::Done),
+        "{beats:?}"
+    );
     if killed_once {
         assert!(
             !store.crashes().unwrap().is_empty(),
@@ -304,7 +307,7 @@ fn killed_at_random_moments_the_league_loses_and_duplicates_nothing() {
     );
 
     // A second manager on a live league is refused.
-    let _held = t2e::league::manager::try_lock(&dir.root.join("league.lock"))
+    let _held = t2e::league::process::try_lock(&dir.root.join("league.lock"))
         .unwrap()
         .unwrap();
     let out = Command::new(bin())
@@ -346,7 +349,7 @@ fn exploiters_play_the_main_learners_join_the_pool_and_start_again() {
         String::from_utf8_lossy(&out.stderr)
     );
 
-    let store = Store::open(&dir.root).unwrap();
+    let store = Store::open(&dir.store).unwrap();
     let players = store.players().unwrap();
     let id = |name: &str| players.iter().find(|p| p.name == name).map(|p| p.id);
     let payoff = store.payoff().unwrap();

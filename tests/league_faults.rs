@@ -12,7 +12,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Output, Stdio};
 use std::time::{Duration, Instant};
 use t2e::league::dir::LeagueDir;
-use t2e::league::store::{Kind, Store};
+use t2e::league::store::{BeatState, Kind, Store};
 
 /// A tiny league: 80 env steps per iteration, tiny networks, no pacing.
 fn config(name: &str, budget: u64, extra: &str) -> String {
@@ -125,11 +125,11 @@ fn child_pid(manager: u32, needle: &str) -> Option<i64> {
 /// Waits until both main learners have trained a step.
 fn wait_both_training(l: &League, limit: Duration) {
     wait_for("both learners training", limit, || {
-        Store::open_existing(&l.dir.root)
+        Store::open_existing(&l.dir.store)
             .and_then(|s| s.heartbeats())
             .map(|b| {
                 b.iter()
-                    .filter(|b| b.state == "training" && b.env_steps > 0)
+                    .filter(|b| b.state == BeatState::Training && b.env_steps > 0)
                     .count()
                     == 2
             })
@@ -207,7 +207,7 @@ fn a_learner_killed_between_checkpoints_never_rewrites_a_pool_member() {
     // The manager restarts it; the league runs to its budget.
     let status = wait_exit(&mut manager, Duration::from_secs(240));
     assert!(status.success(), "{status:?}");
-    let store = Store::open(&l.dir.root).unwrap();
+    let store = Store::open(&l.dir.store).unwrap();
     let players = store.players().unwrap();
     for (name, first_sha) in &seen {
         let now =
@@ -246,7 +246,7 @@ fn finished(name: &str) -> (League, BTreeMap<String, String>, u64) {
     run_to_end(&l);
     let pool = pool_files(&l.dir);
     assert!(pool.len() >= 4, "{pool:?}");
-    let matches = Store::open_existing(&l.dir.root)
+    let matches = Store::open_existing(&l.dir.store)
         .unwrap()
         .match_count()
         .unwrap();
@@ -308,7 +308,7 @@ fn a_lost_empty_or_foreign_store_is_refused_and_the_pool_kept() {
 
     // Its write-ahead log lost: the tables exist, their rows do not.
     let blank = tempfile::tempdir().unwrap();
-    drop(Store::open(blank.path()).unwrap());
+    drop(Store::open(&t2e::league::store::StoreUrl::in_dir(blank.path())).unwrap());
     std::fs::copy(blank.path().join("league.db"), &db).unwrap();
     let o = run_dir(&l);
     assert!(!o.status.success());
@@ -401,7 +401,7 @@ fn unrecorded_snapshot_folders_are_adopted_or_kept_never_deleted() {
         "a folder that verifies is never deleted"
     );
     assert!(!temporary.exists(), "a dead writer's temporary is removed");
-    let store = Store::open_existing(&l.dir.root).unwrap();
+    let store = Store::open_existing(&l.dir.store).unwrap();
     let players = store.players().unwrap();
     let adopted = players
         .iter()
@@ -442,7 +442,7 @@ fn unrecorded_snapshot_folders_are_adopted_or_kept_never_deleted() {
         "{}",
         stderr(&o)
     );
-    let store = Store::open_existing(&l.dir.root).unwrap();
+    let store = Store::open_existing(&l.dir.store).unwrap();
     let row = store
         .players()
         .unwrap()
@@ -462,7 +462,7 @@ fn copy_dir(src: &Path, dst: &Path) {
 #[test]
 fn a_learner_never_starts_over_silently_and_a_broken_one_stops_the_league() {
     let (l, _, _) = finished("resume");
-    let store = Store::open_existing(&l.dir.root).unwrap();
+    let store = Store::open_existing(&l.dir.store).unwrap();
     let row_steps = |store: &Store| {
         store
             .players()
@@ -526,12 +526,12 @@ fn every_learner_exit_has_an_outcome_and_every_line_reaches_a_redirected_log() {
         Duration::from_secs(120),
         || {
             target = child_pid(manager.id(), "--side target");
-            let beats = Store::open_existing(&l.dir.root).and_then(|s| s.heartbeats());
+            let beats = Store::open_existing(&l.dir.store).and_then(|s| s.heartbeats());
             target.is_some()
                 && beats.is_ok_and(|b| {
                     b.iter().any(|b| {
                         b.learner == "target-main"
-                            && b.state == "training"
+                            && b.state == BeatState::Training
                             && b.env_steps > 0
                             && Some(b.pid) == target
                     })
@@ -552,10 +552,10 @@ fn every_learner_exit_has_an_outcome_and_every_line_reaches_a_redirected_log() {
         "{text}"
     );
     assert!(text.contains("captors-main crashed (signal 9)"), "{text}");
-    let store = Store::open_existing(&l.dir.root).unwrap();
+    let store = Store::open_existing(&l.dir.store).unwrap();
     let beats = store.heartbeats().unwrap();
     for b in beats.iter().filter(|b| b.learner.ends_with("-main")) {
-        assert_eq!(b.state, "done", "{b:?}");
+        assert_eq!(b.state, BeatState::Done, "{b:?}");
         assert_eq!(b.env_steps, 2_400);
     }
 }
@@ -603,7 +603,7 @@ fn a_finished_league_keeps_its_rate_and_its_evaluator_count() {
     let o = run_dir(&l);
     assert!(o.status.success(), "{}", stderr(&o));
     let again = t2e::league::status::report(&l.dir).unwrap();
-    let store = Store::open_existing(&l.dir.root).unwrap();
+    let store = Store::open_existing(&l.dir.store).unwrap();
     let panel = store.matches_recorded_by("evaluator").unwrap();
     assert!(panel > 0);
     for r in &again.learners {
@@ -639,7 +639,7 @@ fn bad_arguments_and_a_missing_config_toml_change_nothing() {
         "{}",
         stderr(&o)
     );
-    let store = Store::open_existing(&l.dir.root).unwrap();
+    let store = Store::open_existing(&l.dir.store).unwrap();
     assert!(
         !store
             .players()
@@ -898,8 +898,8 @@ fn sigterm_stops_the_league_as_ctrl_c_does() {
     signal(manager.id() as i64, libc::SIGTERM);
     let status = wait_exit(&mut manager, Duration::from_secs(60));
     assert!(status.success(), "{status:?}");
-    let store = Store::open_existing(&l.dir.root).unwrap();
+    let store = Store::open_existing(&l.dir.store).unwrap();
     for b in store.heartbeats().unwrap() {
-        assert_eq!(b.state, "stopped", "{b:?}");
+        assert_eq!(b.state, BeatState::Stopped, "{b:?}");
     }
 }

@@ -3,7 +3,9 @@
 
 use crate::env::Side;
 use crate::league::dir::LeagueDir;
-use crate::league::{learner, manager, status};
+use crate::league::store::StoreUrl;
+use crate::league::worker::WorkerOptions;
+use crate::league::{learner, manager, process, status};
 use anyhow::{bail, Context, Result};
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -21,13 +23,56 @@ pub struct RunArgs {
     /// iteration and checkpoints. Without it, the league runs to its budget.
     #[arg(long = "for", value_name = "DURATION", allow_hyphen_values = true)]
     pub run_for: Option<String>,
+    /// The league's store, shared by workers on many hosts:
+    /// postgres://USER[:PASSWORD]@HOST:PORT/DB (the password may come from
+    /// PGPASSWORD instead), or a SQLite file. With it, --pool is the shared
+    /// folder of snapshots and checkpoints, --dir holds the local workers'
+    /// logs, and the seats run on workers. Default: league.db in --dir.
+    #[arg(long, value_name = "URL")]
+    pub store: Option<String>,
+    /// The pool folder every host shares (with --store).
+    #[arg(long, value_name = "DIR")]
+    pub pool: Option<PathBuf>,
+    /// Workers this manager starts on its own host (with --store; default:
+    /// one per seat; 0 leaves every seat to workers on other hosts).
+    #[arg(long, value_name = "N")]
+    pub workers: Option<usize>,
+}
+
+#[derive(clap::Args, Debug)]
+pub struct WorkerArgs {
+    /// The league's store (as `run --store`); default: $T2E_STORE.
+    #[arg(long, value_name = "URL")]
+    pub store: Option<String>,
+    /// The pool folder every host shares (as `run --pool`).
+    #[arg(long, value_name = "DIR")]
+    pub pool: PathBuf,
+    /// A local folder for this worker's logs.
+    #[arg(long, value_name = "DIR")]
+    pub dir: PathBuf,
+    /// Seats to run at once on this host.
+    #[arg(long, default_value_t = 1)]
+    pub seats: usize,
+    /// The name its leases and heartbeats record (default: the hostname).
+    #[arg(long)]
+    pub host: Option<String>,
+    /// Stop after this long: seats checkpoint and go back to the store.
+    #[arg(long = "for", value_name = "DURATION", allow_hyphen_values = true)]
+    pub run_for: Option<String>,
+    /// How long a seat stays this worker's without a renewal; after that,
+    /// another worker may take it (renewed every third of it).
+    #[arg(long, value_name = "DURATION", default_value = "60s")]
+    pub lease: String,
 }
 
 #[derive(clap::Args, Debug)]
 pub struct StatusArgs {
-    /// League directory.
+    /// League directory (with --store: the pool folder, optional).
     #[arg(long, default_value = "runs/league/default")]
     pub dir: PathBuf,
+    /// The league's store when it is not league.db in --dir (as `run --store`).
+    #[arg(long, value_name = "URL")]
+    pub store: Option<String>,
     /// Print the documented JSON shape (see src/league/status.rs) instead of tables.
     #[arg(long)]
     pub json: bool,
@@ -46,6 +91,12 @@ pub struct ExportArgs {
     /// League directory.
     #[arg(long, default_value = "runs/league/default")]
     pub dir: PathBuf,
+    /// The league's store when it is not league.db in --dir (as `run --store`).
+    #[arg(long, value_name = "URL")]
+    pub store: Option<String>,
+    /// The pool folder (with --store): where the player's files are.
+    #[arg(long, value_name = "DIR")]
+    pub pool: Option<PathBuf>,
     /// Folder to create: weights, sidecar, league config, rating history, SHA256SUMS.
     #[arg(long)]
     pub out: PathBuf,
@@ -89,11 +140,83 @@ pub fn run(args: RunArgs) -> Result<()> {
         ),
     };
     on_ctrl_c()?;
-    manager::run(&LeagueDir::new(dir), args.config.as_deref(), run_for, &STOP)
+    let Some(store) = &args.store else {
+        if args.pool.is_some() || args.workers.is_some() {
+            bail!("--pool and --workers go with --store URL (a league whose seats run on workers)");
+        }
+        return manager::run(&LeagueDir::new(dir), args.config.as_deref(), run_for, &STOP);
+    };
+    let url = StoreUrl::parse(store).map_err(anyhow::Error::msg)?;
+    let Some(pool) = &args.pool else {
+        bail!("--store {url}: give --pool DIR too, the folder every host shares");
+    };
+    let league = LeagueDir::with_store(pool, url);
+    let seats = {
+        let cfg = match &args.config {
+            Some(c) => crate::league::config::LeagueConfig::load(c)?,
+            None => league.config()?,
+        };
+        2 + [Side::Captors, Side::Target]
+            .into_iter()
+            .filter(|s| cfg.exploiters.enabled(*s))
+            .count()
+            + usize::from(cfg.evaluator.enabled)
+    };
+    let launch = manager::Launch::Workers {
+        local: args.workers.unwrap_or(seats),
+        logs: dir.join("logs"),
+    };
+    manager::run_with(&league, args.config.as_deref(), run_for, &STOP, &launch)
+}
+
+/// The league directory of `--dir` and `--store`: league.db in it by default.
+fn league_dir(dir: &std::path::Path, store: Option<&str>) -> Result<LeagueDir> {
+    Ok(match store {
+        None => LeagueDir::new(dir),
+        Some(s) => LeagueDir::with_store(dir, StoreUrl::parse(s).map_err(anyhow::Error::msg)?),
+    })
+}
+
+pub fn worker(args: WorkerArgs) -> Result<()> {
+    let store = match args
+        .store
+        .clone()
+        .or_else(|| std::env::var("T2E_STORE").ok())
+    {
+        Some(s) => s,
+        None => bail!("--store: give the league's store URL (or set T2E_STORE)"),
+    };
+    let url = StoreUrl::parse(&store).map_err(anyhow::Error::msg)?;
+    let opts = WorkerOptions {
+        seats: args.seats,
+        host: args
+            .host
+            .clone()
+            .unwrap_or_else(crate::league::worker::default_host),
+        run_for: args
+            .run_for
+            .as_deref()
+            .map(|t| crate::util::parse_duration("--for", t))
+            .transpose()
+            .map_err(anyhow::Error::msg)?,
+        lease: crate::util::parse_duration("--lease", &args.lease).map_err(anyhow::Error::msg)?,
+        logs: args.dir.join("logs"),
+    };
+    opts.check()?;
+    if !args.pool.is_dir() {
+        bail!(
+            "--pool {}: not a folder; give the league's pool folder, the one every host shares",
+            args.pool.display()
+        );
+    }
+    // Children read the host name from the environment (heartbeats).
+    std::env::set_var("T2E_HOST", &opts.host);
+    on_ctrl_c()?;
+    crate::league::worker::run_worker(&LeagueDir::with_store(&args.pool, url), &opts, &STOP)
 }
 
 pub fn status(args: StatusArgs) -> Result<()> {
-    let dir = LeagueDir::new(&args.dir);
+    let dir = league_dir(&args.dir, args.store.as_deref())?;
     if let Some(w) = args.watch {
         if !(w.is_finite() && w >= 0.5) {
             bail!("--watch {w}: must be at least 0.5 seconds");
@@ -126,7 +249,15 @@ pub fn status(args: StatusArgs) -> Result<()> {
 }
 
 pub fn export(args: ExportArgs) -> Result<()> {
-    status::export(&LeagueDir::new(&args.dir), &args.player, &args.out)?;
+    let dir = match (&args.store, &args.pool) {
+        (Some(_), None) => {
+            bail!("--store: give --pool DIR too, the folder that holds the players' files")
+        }
+        (Some(s), Some(pool)) => league_dir(pool, Some(s))?,
+        (None, Some(_)) => bail!("--pool goes with --store URL"),
+        (None, None) => LeagueDir::new(&args.dir),
+    };
+    status::export(&dir, &args.player, &args.out)?;
     println!("exported {} -> {}", args.player, args.out.display());
     Ok(())
 }
@@ -138,10 +269,10 @@ pub struct EvaluatorArgs {
 }
 
 pub fn evaluator(args: EvaluatorArgs) -> Result<()> {
-    let dir = LeagueDir::new(&args.dir);
+    let dir = process::dir_from_env(&args.dir)?;
     let lock_path = dir.root.join("learners").join("evaluator.lock");
     std::fs::create_dir_all(lock_path.parent().unwrap())?;
-    let Some(_lock) = manager::try_lock(&lock_path)? else {
+    let Some(_lock) = process::try_lock(&lock_path)? else {
         bail!(
             "{}: another evaluator is running this league",
             lock_path.display()
@@ -172,14 +303,14 @@ pub fn learner(args: LearnerArgs) -> Result<()> {
         "target" => Side::Target,
         other => bail!("--side {other}: expected captors or target"),
     };
-    let dir = LeagueDir::new(&args.dir);
+    let dir = process::dir_from_env(&args.dir)?;
     let seat = learner::Seat {
         side,
         exploiter: args.exploiter,
     };
     let lock_path = dir.seat_dir(seat).with_extension("lock");
     std::fs::create_dir_all(lock_path.parent().unwrap())?;
-    let Some(_lock) = manager::try_lock(&lock_path)? else {
+    let Some(_lock) = process::try_lock(&lock_path)? else {
         bail!(
             "{}: another {} is running this league",
             lock_path.display(),

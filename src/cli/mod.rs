@@ -58,6 +58,9 @@ pub enum Command {
     Status(league::StatusArgs),
     /// Write one league player as a self-contained checkpoint folder.
     Export(league::ExportArgs),
+    /// Run a league's seats on this host, taken from its store (a league
+    /// started with `run --store URL --pool DIR`).
+    Worker(league::WorkerArgs),
     /// One learner of a league (spawned by `run`).
     #[command(hide = true)]
     LeagueLearner(league::LearnerArgs),
@@ -100,6 +103,7 @@ pub fn main() -> anyhow::Result<()> {
         Command::Run(a) => league::run(a),
         Command::Status(a) => league::status(a),
         Command::Export(a) => league::export(a),
+        Command::Worker(a) => league::worker(a),
         Command::LeagueLearner(a) => league::learner(a),
         Command::LeagueEvaluator(a) => league::evaluator(a),
     }

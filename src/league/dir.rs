@@ -6,7 +6,9 @@
 //!     config.toml          the league's config (as started)
 //!     league.json          the league's identity (also in the store and in
 //!                          every snapshot's meta.json)
-//!     league.db            the store (SQLite, WAL)
+//!     league.db            the store (SQLite, WAL), unless the league's store
+//!                          is a PostgreSQL database (`--store postgres://`):
+//!                          then this folder is the pool that every host shares
 //!     league.lock          held by the live manager (flock)
 //!     learners/SIDE-main/  each main learner's run folder (state.json, checkpoints/)
 //!     players/NAME/        frozen snapshots in the pool (checkpoint folders)
@@ -14,6 +16,7 @@
 //! ```
 
 use super::config::LeagueConfig;
+use super::store::StoreUrl;
 use crate::env::Side;
 use anyhow::{bail, Context, Result};
 use serde::{Deserialize, Serialize};
@@ -48,11 +51,26 @@ pub fn new_league_id() -> String {
 #[derive(Clone, Debug)]
 pub struct LeagueDir {
     pub root: PathBuf,
+    /// The league's store: `league.db` in `root` by default.
+    pub store: StoreUrl,
 }
 
 impl LeagueDir {
     pub fn new(root: impl Into<PathBuf>) -> LeagueDir {
-        LeagueDir { root: root.into() }
+        let root = root.into();
+        LeagueDir {
+            store: StoreUrl::in_dir(&root),
+            root,
+        }
+    }
+
+    /// A league whose store is elsewhere (a PostgreSQL database): `root` is
+    /// the pool folder every host shares.
+    pub fn with_store(root: impl Into<PathBuf>, store: StoreUrl) -> LeagueDir {
+        LeagueDir {
+            root: root.into(),
+            store,
+        }
     }
 
     pub fn config_path(&self) -> PathBuf {

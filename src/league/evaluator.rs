@@ -8,7 +8,7 @@
 use super::config::LeagueConfig;
 use super::dir::LeagueDir;
 use super::learner::{heuristic_name, learner_name, CannotStart, Outcome};
-use super::store::{Kind, MatchRecord, Store};
+use super::store::{BeatState, Kind, MatchRecord, Store};
 use crate::controllers::ControllerSpec;
 use crate::env::{CaptureRule, Side};
 use crate::eval::{play_episode, EvalSetting};
@@ -181,7 +181,7 @@ pub fn run_evaluator(dir: &LeagueDir, stop: &AtomicBool) -> Result<Outcome> {
         .map_err(|e| anyhow::Error::new(CannotStart(format!("{e:#}"))))?;
     // The count covers every evaluator process of this league, not only this one.
     let mut total = store.matches_recorded_by("evaluator")?;
-    store.heartbeat("evaluator", "evaluating", total, None)?;
+    store.heartbeat("evaluator", BeatState::Evaluating, total, None)?;
     while !stop.load(Ordering::SeqCst) {
         let played = evaluate_pending(dir, &cfg, &maps, &store, stop)?;
         total += played as u64;
@@ -190,7 +190,7 @@ pub fn run_evaluator(dir: &LeagueDir, stop: &AtomicBool) -> Result<Outcome> {
             let done = learners.iter().all(|name| {
                 beats
                     .iter()
-                    .any(|b| b.learner == *name && b.state == "done")
+                    .any(|b| b.learner == *name && b.state == BeatState::Done)
             });
             if done {
                 // One more pass: a last snapshot may have landed since.
@@ -201,7 +201,7 @@ pub fn run_evaluator(dir: &LeagueDir, stop: &AtomicBool) -> Result<Outcome> {
             }
             std::thread::sleep(Duration::from_secs(2));
         }
-        store.heartbeat("evaluator", "evaluating", total, None)?;
+        store.heartbeat("evaluator", BeatState::Evaluating, total, None)?;
     }
     let outcome = if stop.load(Ordering::SeqCst) {
         Outcome::Stopped
@@ -209,8 +209,8 @@ pub fn run_evaluator(dir: &LeagueDir, stop: &AtomicBool) -> Result<Outcome> {
         Outcome::Done
     };
     let state = match outcome {
-        Outcome::Done => "done",
-        Outcome::Stopped => "stopped",
+        Outcome::Done => BeatState::Done,
+        Outcome::Stopped => BeatState::Stopped,
     };
     store.heartbeat("evaluator", state, total, None)?;
     eprintln!("evaluator: {state}, {total} panel episodes played in this league");

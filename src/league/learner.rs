@@ -15,7 +15,7 @@ use super::matchmaking::{
     choose_opponent, draw_seed, pick_slot, slot_seed, Candidate, MatchmakingConfig, Opponent,
 };
 use super::pool::{add_snapshot, SnapshotOutcome};
-use super::store::{Kind, MatchRecord, NewPlayer, Player, Store};
+use super::store::{BeatState, Kind, MatchRecord, NewPlayer, Player, Store};
 use crate::controllers::ControllerSpec;
 use crate::env::{Action, Side, VecEnv};
 use crate::learn::acting::{gather_worlds, sample};
@@ -583,14 +583,14 @@ impl RolloutHooks for LeagueHooks<'_> {
 /// None before its first): it does while it is more than `lead` ahead of a
 /// learner that is still training. A learner that is done, stopped or
 /// silent for two minutes (crashed, restarting) is not waited for.
-pub fn should_wait(mine: u64, other: Option<(&str, u64, i64)>, lead: u64) -> bool {
+pub fn should_wait(mine: u64, other: Option<(BeatState, u64, i64)>, lead: u64) -> bool {
     if lead == 0 {
         return false;
     }
     match other {
         None => mine > lead,
         Some((state, steps, age_ms)) => {
-            matches!(state, "training" | "waiting")
+            matches!(state, BeatState::Training | BeatState::Waiting)
                 && age_ms < 120_000
                 && mine > steps.saturating_add(lead)
         }
@@ -617,7 +617,7 @@ fn wait_for_other_main(
         let theirs = beats
             .iter()
             .find(|b| b.learner == other)
-            .map(|b| (b.state.as_str(), b.env_steps, now - b.at_ms));
+            .map(|b| (b.state, b.env_steps, now - b.at_ms));
         if !should_wait(mine, theirs, lead) {
             break;
         }
@@ -629,7 +629,7 @@ fn wait_for_other_main(
             );
             announced = true;
         }
-        store.heartbeat(&seat.name(), "waiting", mine, None)?;
+        store.heartbeat(&seat.name(), BeatState::Waiting, mine, None)?;
         std::thread::sleep(std::time::Duration::from_millis(500));
     }
     Ok(started.elapsed().as_secs_f64())
@@ -759,7 +759,7 @@ fn resume_point(
                 "{}: at {} env steps, but the store ({}) recorded {} at {} env steps; it would train again over steps it already played. Put the newer state.json back",
                 state_path.display(),
                 state.env_steps,
-                store.path().display(),
+                store.url(),
                 row.name,
                 row.env_steps
             );
@@ -829,7 +829,7 @@ fn resume_point(
         "{}: missing, and no checkpoint in {} can stand in for it (the store ({}) records {} at {} env steps{}); refusing to start it over. Put state.json back",
         state_path.display(),
         checkpoints_dir.display(),
-        store.path().display(),
+        store.url(),
         row.name,
         row.env_steps,
         if rejected.is_empty() {
@@ -889,7 +889,7 @@ fn train_learner(
     }
     hooks.assign_all(trainer.venv_mut())?;
     let (mut wins_at_snapshot, mut games_at_snapshot) = (0u64, 0u64);
-    store.heartbeat(&name, "training", trainer.env_steps, None)?;
+    store.heartbeat(&name, BeatState::Training, trainer.env_steps, None)?;
     let (segment_start, steps_at_start) = (Instant::now(), trainer.env_steps);
     let mut own_inference = 0.0;
     let mut waited = 0.0;
@@ -957,7 +957,7 @@ fn train_learner(
         let steps = (cfg.num_envs * cfg.rollout_steps) as f64;
         store.heartbeat(
             &name,
-            "training",
+            BeatState::Training,
             trainer.env_steps,
             Some(steps / started.elapsed().as_secs_f64()),
         )?;
@@ -969,8 +969,8 @@ fn train_learner(
         Outcome::Stopped
     };
     let state = match outcome {
-        Outcome::Done => "done",
-        Outcome::Stopped => "stopped",
+        Outcome::Done => BeatState::Done,
+        Outcome::Stopped => BeatState::Stopped,
     };
     let secs = segment_start.elapsed().as_secs_f64() - waited;
     let trained = trainer.env_steps - steps_at_start;
@@ -1025,34 +1025,34 @@ mod tests {
     #[test]
     fn a_learner_waits_only_for_a_live_learner_it_is_far_ahead_of() {
         assert!(
-            !should_wait(50_000, Some(("training", 0, 10)), 0),
+            !should_wait(50_000, Some((BeatState::Training, 0, 10)), 0),
             "0: never"
         );
         assert!(should_wait(
             30_001,
-            Some(("training", 10_000, 1_000)),
+            Some((BeatState::Training, 10_000, 1_000)),
             20_000
         ));
         assert!(
-            !should_wait(30_000, Some(("training", 10_000, 1_000)), 20_000),
+            !should_wait(30_000, Some((BeatState::Training, 10_000, 1_000)), 20_000),
             "exactly the lead"
         );
         assert!(should_wait(
             30_001,
-            Some(("waiting", 10_000, 1_000)),
+            Some((BeatState::Waiting, 10_000, 1_000)),
             20_000
         ));
         assert!(
-            !should_wait(90_000, Some(("done", 10_000, 1_000)), 20_000),
+            !should_wait(90_000, Some((BeatState::Done, 10_000, 1_000)), 20_000),
             "done: nothing to wait for"
         );
         assert!(!should_wait(
             90_000,
-            Some(("stopped", 10_000, 1_000)),
+            Some((BeatState::Stopped, 10_000, 1_000)),
             20_000
         ));
         assert!(
-            !should_wait(90_000, Some(("training", 10_000, 130_000)), 20_000),
+            !should_wait(90_000, Some((BeatState::Training, 10_000, 130_000)), 20_000),
             "silent: crashed"
         );
         assert!(should_wait(20_001, None, 20_000), "not started yet");

@@ -20,6 +20,7 @@ use super::dir::{new_league_id, LeagueDir, LeagueIdentity};
 use super::learner::Seat;
 use super::open::{plan_start, StartPlan};
 use super::pool::{ensure_heuristic_members, reconcile};
+use super::process::{lock_holder, log_since, spawn, tail, try_lock, Role, Supervised};
 use super::store::{now_ms, Store};
 use super::supervision::{classify, decide, last_error_line, CrashBudget, Exit, Next};
 use crate::env::Side;
@@ -27,132 +28,9 @@ use crate::nn::checkpoint::write_file_atomically;
 use anyhow::{bail, Context, Result};
 use indicatif::{MultiProgress, ProgressBar, ProgressStyle};
 use std::fs::File;
-use std::path::Path;
-use std::process::{Child, Command, Stdio};
+use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
-
-/// An exclusive lock on `path` (flock), held while the file stays open and
-/// released by the kernel when the process dies, however it dies. None if
-/// another live process holds it.
-pub fn try_lock(path: &Path) -> Result<Option<File>> {
-    use std::io::Write;
-    use std::os::unix::io::AsRawFd;
-    let mut f = std::fs::OpenOptions::new()
-        .create(true)
-        .truncate(false)
-        .write(true)
-        .read(true)
-        .open(path)
-        .with_context(|| format!("cannot open {}", path.display()))?;
-    // SAFETY: flock on a file descriptor this function owns.
-    let rc = unsafe { libc::flock(f.as_raw_fd(), libc::LOCK_EX | libc::LOCK_NB) };
-    if rc != 0 {
-        return Ok(None);
-    }
-    f.set_len(0)?;
-    writeln!(f, "{}", std::process::id())?;
-    Ok(Some(f))
-}
-
-/// The pid written in a lock file, for messages.
-fn lock_holder(path: &Path) -> String {
-    std::fs::read_to_string(path)
-        .map(|s| s.trim().to_string())
-        .unwrap_or_default()
-}
-
-/// A child process the manager supervises.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Role {
-    Learner(Seat),
-    Evaluator,
-}
-
-impl Role {
-    fn name(self) -> String {
-        match self {
-            Role::Learner(seat) => seat.name(),
-            Role::Evaluator => "evaluator".into(),
-        }
-    }
-
-    fn log_path(self, dir: &LeagueDir) -> std::path::PathBuf {
-        dir.root.join("logs").join(format!("{}.log", self.name()))
-    }
-}
-
-struct Supervised {
-    role: Role,
-    child: Option<Child>,
-    /// Finished: done, or stopped when the manager asked.
-    finished: bool,
-    restart_at: Option<Instant>,
-    failures: u32,
-    started: Instant,
-    /// Length of its log when it started: what it printed since is its own.
-    log_offset: u64,
-    /// Its crashes: (at ms, cause), for the crash budget.
-    crashes: Vec<(i64, String)>,
-}
-
-fn spawn(dir: &LeagueDir, role: Role) -> Result<Child> {
-    let exe = std::env::current_exe().context("cannot find this program to spawn learners")?;
-    std::fs::create_dir_all(dir.root.join("logs"))?;
-    let log = std::fs::OpenOptions::new()
-        .create(true)
-        .append(true)
-        .open(role.log_path(dir))?;
-    let mut cmd = Command::new(exe);
-    match role {
-        Role::Learner(seat) => {
-            cmd.arg("league-learner")
-                .arg("--side")
-                .arg(seat.side.name());
-            if seat.exploiter {
-                cmd.arg("--exploiter");
-            }
-            &mut cmd
-        }
-        Role::Evaluator => cmd.arg("league-evaluator"),
-    };
-    cmd.arg("--dir")
-        .arg(&dir.root)
-        .stdin(Stdio::null())
-        .stdout(log.try_clone()?)
-        .stderr(log);
-    #[cfg(target_os = "linux")]
-    {
-        use std::os::unix::process::CommandExt;
-        // SAFETY: prctl is async-signal-safe; the child dies with its manager.
-        unsafe {
-            cmd.pre_exec(|| {
-                libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGKILL);
-                Ok(())
-            });
-        }
-    }
-    cmd.spawn()
-        .with_context(|| format!("cannot start the {}", role.name()))
-}
-
-/// What a log holds from byte `offset` on.
-fn log_since(path: &Path, offset: u64) -> String {
-    use std::io::{Read, Seek, SeekFrom};
-    let mut text = String::new();
-    if let Ok(mut f) = File::open(path) {
-        if f.seek(SeekFrom::Start(offset)).is_ok() {
-            let _ = f.read_to_string(&mut text);
-        }
-    }
-    text
-}
-
-/// The last lines of a text, for the crash record.
-fn tail(text: &str, n: usize) -> String {
-    let lines: Vec<&str> = text.lines().rev().take(n).collect();
-    lines.into_iter().rev().collect::<Vec<_>>().join("\n")
-}
 
 /// Prints a line above the progress bars on a terminal, and plainly where
 /// stderr is redirected (indicatif draws nothing there, lines included).
@@ -166,11 +44,32 @@ fn say(multi: &MultiProgress, line: impl AsRef<str>) {
 
 /// Starts or resumes the league in `dir` and runs it to its end. Every
 /// check (`open::plan_start`) passes before anything is written.
+/// How the manager runs the league's seats.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Launch {
+    /// As child processes of its own (the embedded default, one host).
+    Direct,
+    /// As seats in the store, taken by workers (`worker`) on any host; the
+    /// manager starts `local` of them itself, logging to `logs`.
+    Workers { local: usize, logs: PathBuf },
+}
+
 pub fn run(
     dir: &LeagueDir,
     config: Option<&Path>,
     run_for: Option<Duration>,
     stop: &AtomicBool,
+) -> Result<()> {
+    run_with(dir, config, run_for, stop, &Launch::Direct)
+}
+
+/// `run`, with the seats run as `launch` says.
+pub fn run_with(
+    dir: &LeagueDir,
+    config: Option<&Path>,
+    run_for: Option<Duration>,
+    stop: &AtomicBool,
+    launch: &Launch,
 ) -> Result<()> {
     let (plan, _lock) = {
         // The lock comes first (two managers must not both decide), but a
@@ -218,7 +117,7 @@ pub fn run(
                 );
             }
             if set_store_identity {
-                Store::open_existing(&dir.root)?.set_league_id_once(&identity.league_id)?;
+                Store::open_existing(&dir.store)?.set_league_id_once(&identity.league_id)?;
             }
             if write_identity {
                 dir.write_identity(&identity)?;
@@ -232,8 +131,8 @@ pub fn run(
         None => lock(dir)?,
     };
     let store = match &league_id {
-        Some(_) => Store::open_existing(&dir.root)?,
-        None => Store::open(&dir.root)?,
+        Some(_) => Store::open_existing(&dir.store)?,
+        None => Store::open(&dir.store)?,
     };
     let league_id = match league_id {
         Some(id) => id,
@@ -292,6 +191,11 @@ pub fn run(
     if cfg.evaluator.enabled {
         roles.push(Role::Evaluator);
     }
+    if let Launch::Workers { local, logs } = launch {
+        return super::seats::supervise_workers(
+            dir, &cfg, &store, &roles, *local, logs, run_for, stop,
+        );
+    }
     let multi = MultiProgress::new();
     let bars: Vec<ProgressBar> = seats
         .iter()
@@ -308,6 +212,7 @@ pub fn run(
             b
         })
         .collect();
+    let logs = dir.root.join("logs");
     let mut procs: Vec<Supervised> = roles
         .into_iter()
         .map(|role| Supervised {
@@ -352,7 +257,7 @@ pub fn run(
                     p.child = None;
                     use std::os::unix::process::ExitStatusExt;
                     let exit = classify(status.code(), status.signal());
-                    let log = log_since(&p.role.log_path(dir), p.log_offset);
+                    let log = log_since(&p.role.log_path(&logs), p.log_offset);
                     let message = last_error_line(&log);
                     if p.started.elapsed() > Duration::from_secs(120) {
                         p.failures = 0;
@@ -381,7 +286,7 @@ pub fn run(
                                     "{} crashed ({cause}); restarting from its last checkpoint in {} s (log: {})",
                                     p.role.name(),
                                     after.as_secs(),
-                                    p.role.log_path(dir).display()
+                                    p.role.log_path(&logs).display()
                                 ),
                             );
                             p.restart_at = Some(Instant::now() + after);
@@ -392,7 +297,7 @@ pub fn run(
                             }
                             say(
                                 &multi,
-                                format!("{why} (log: {})", p.role.log_path(dir).display()),
+                                format!("{why} (log: {})", p.role.log_path(&logs).display()),
                             );
                             p.finished = true;
                             failure.get_or_insert(why);
@@ -403,10 +308,10 @@ pub fn run(
             if p.child.is_none() && !p.finished && !stopping {
                 if let Some(at) = p.restart_at {
                     if Instant::now() >= at {
-                        p.log_offset = std::fs::metadata(p.role.log_path(dir))
+                        p.log_offset = std::fs::metadata(p.role.log_path(&logs))
                             .map(|m| m.len())
                             .unwrap_or(0);
-                        p.child = Some(spawn(dir, p.role)?);
+                        p.child = Some(spawn(dir, p.role, &logs, None)?);
                         p.started = Instant::now();
                         p.restart_at = None;
                     }
@@ -474,21 +379,5 @@ fn lock(dir: &LeagueDir) -> Result<File> {
             dir.root.display(),
             lock_holder(&lock_path)
         ),
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn a_lock_is_exclusive_while_held() {
-        let dir = tempfile::tempdir().unwrap();
-        let p = dir.path().join("l.lock");
-        let held = try_lock(&p).unwrap().unwrap();
-        // flock locks are per open file description: a second open fails.
-        assert!(try_lock(&p).unwrap().is_none());
-        drop(held);
-        assert!(try_lock(&p).unwrap().is_some());
     }
 }

@@ -16,7 +16,7 @@
 
 use super::config::LeagueConfig;
 use super::dir::{LeagueDir, LeagueIdentity};
-use super::store::Store;
+use super::store::{Presence, Store, StoreUrl};
 use anyhow::{bail, Context, Result};
 use std::path::Path;
 
@@ -49,27 +49,31 @@ pub enum StartPlan {
 /// reading only.
 pub fn plan_start(dir: &LeagueDir, given: Option<&Path>) -> Result<StartPlan> {
     let root = dir.root.display().to_string();
-    let db = dir.root.join("league.db");
+    let db = &dir.store;
     let files = dir.league_files();
-    let db_len = std::fs::metadata(&db).ok().map(|m| m.len());
+    let restore = match db {
+        StoreUrl::Sqlite(_) => {
+            "Restore league.db (with league.db-wal beside it, if there was one) from a backup"
+        }
+        StoreUrl::Postgres(_) => "Point --store at this league's database",
+    };
     let given_cfg = given.map(LeagueConfig::load).transpose()?;
     let lost = |what: &str| -> anyhow::Error {
         anyhow::anyhow!(
-            "{}: {what}, but {root} holds a league ({}). Refusing to start: a new store would not know its pool, matches or learners. \
-             Restore league.db (with league.db-wal beside it, if there was one) from a backup, or move {root} aside and start a new league in an empty directory",
-            db.display(),
+            "{db}: {what}, but {root} holds a league ({}). Refusing to start: a new store would not know its pool, matches or learners. \
+             {restore}, or move {root} aside and start a new league in an empty directory",
             files.join(", ")
         )
     };
-    let held = match db_len {
-        None => Err("missing"),
-        Some(0) => Err("empty (0 bytes)"),
-        Some(_) => {
+    let held = match Store::presence(db)? {
+        Presence::Missing => Err("missing"),
+        Presence::Empty => Err("empty (0 bytes)"),
+        Presence::Present => {
             // Read-only: a file that is not this league's store (another
             // program's database, a corrupt one) is refused untouched.
-            let store = Store::inspect(&dir.root).map_err(|e| {
+            let store = Store::inspect(db).map_err(|e| {
                 anyhow::anyhow!(
-                    "{e}. Nothing was changed; restore league.db from a backup, or move {root} aside"
+                    "{e}. Nothing was changed; restore the store from a backup, or move {root} aside"
                 )
             })?;
             match store.stored_config()? {
@@ -95,7 +99,7 @@ pub fn plan_start(dir: &LeagueDir, given: Option<&Path>) -> Result<StartPlan> {
         }
     };
     let stored_cfg = LeagueConfig::parse(&stored_toml)
-        .map_err(|e| anyhow::anyhow!("{}: the config it holds is invalid: {e}", db.display()))?;
+        .map_err(|e| anyhow::anyhow!("{db}: the config it holds is invalid: {e}"))?;
     let on_disk = if dir.config_path().is_file() {
         Some(dir.config()?)
     } else {
@@ -104,9 +108,8 @@ pub fn plan_start(dir: &LeagueDir, given: Option<&Path>) -> Result<StartPlan> {
     if let Some(cfg) = &on_disk {
         if *cfg != stored_cfg {
             bail!(
-                "{}: differs from the config the league's store ({}) was started with; put the league's config back, or pick another --dir",
+                "{}: differs from the config the league's store ({db}) was started with; put the league's config back, or pick another --dir",
                 dir.config_path().display(),
-                db.display()
             );
         }
     }
@@ -117,7 +120,7 @@ pub fn plan_start(dir: &LeagueDir, given: Option<&Path>) -> Result<StartPlan> {
                 if on_disk.is_some() {
                     dir.config_path().display().to_string()
                 } else {
-                    format!("the one in {}", db.display())
+                    format!("the one in {db}")
                 }
             );
         }
@@ -126,15 +129,13 @@ pub fn plan_start(dir: &LeagueDir, given: Option<&Path>) -> Result<StartPlan> {
     let store_identity = store.league_id()?;
     let identity = match (&store_identity, &file_identity) {
         (Some(s), Some(f)) if *s != f.league_id => bail!(
-            "{}: belongs to another league (id {s}) than {} (id {}, league {}); put this league's own league.db back, or pick another --dir",
-            db.display(),
+            "{db}: belongs to another league (id {s}) than {} (id {}, league {}); put this league's own store back, or pick another --dir",
             dir.identity_path().display(),
             f.league_id,
             f.name
         ),
         (None, Some(f)) => bail!(
-            "{}: has no league identity, but {} names league {} (id {}): the store is not this league's; put its own league.db back",
-            db.display(),
+            "{db}: has no league identity, but {} names league {} (id {}): the store is not this league's; put its own store back",
             dir.identity_path().display(),
             f.name,
             f.league_id
@@ -148,7 +149,7 @@ pub fn plan_start(dir: &LeagueDir, given: Option<&Path>) -> Result<StartPlan> {
             name: stored_cfg.name.clone(),
         },
     };
-    check_pool_identity(dir, &identity.league_id, &db)?;
+    check_pool_identity(dir, &identity.league_id, db)?;
     Ok(StartPlan::Resume {
         cfg: stored_cfg,
         restore_config: on_disk.is_none(),
@@ -161,11 +162,11 @@ pub fn plan_start(dir: &LeagueDir, given: Option<&Path>) -> Result<StartPlan> {
 /// Opens the league for one of its processes (a learner, the evaluator),
 /// which the manager starts only after `plan_start`'s checks.
 pub fn open_process(dir: &LeagueDir) -> Result<Opened> {
-    let store = Store::open_existing(&dir.root)?;
+    let store = Store::open_existing(&dir.store)?;
     let league_id = check_identity(dir, &store)?.with_context(|| {
         format!(
             "{}: has no league identity; start the league with `t2e-league run --dir {}`",
-            store.path().display(),
+            store.url(),
             dir.root.display()
         )
     })?;
@@ -179,31 +180,33 @@ pub fn open_process(dir: &LeagueDir) -> Result<Opened> {
 /// Opens a league to read it (`status`, `export`): nothing in the directory
 /// is created or changed. A missing config.toml is read from the store.
 pub fn open_read_only(dir: &LeagueDir) -> Result<(LeagueConfig, Store)> {
-    let db = dir.root.join("league.db");
-    if !db.is_file() {
-        bail!(
+    let db = &dir.store;
+    match db {
+        StoreUrl::Sqlite(path) if !path.is_file() => bail!(
             "{}: holds no league (no league.db); start one with `t2e-league run --config configs/league-default.toml --dir {}`",
             dir.root.display(),
             dir.root.display()
-        );
+        ),
+        StoreUrl::Postgres(_) if Store::presence(db)? == Presence::Missing => bail!(
+            "{db}: holds no league; start one with `t2e-league run --config configs/league-default.toml --store URL --pool DIR`"
+        ),
+        _ => {}
     }
-    let store = Store::open_read_only(&dir.root)?;
+    let store = Store::open_read_only(db)?;
     let Some(stored) = store.stored_config()? else {
         bail!(
-            "{}: holds no league (its tables are empty: truncated, or its write-ahead log was lost)",
-            db.display()
+            "{db}: holds no league (its tables are empty: truncated, or its write-ahead log was lost)"
         );
     };
     let stored_cfg = LeagueConfig::parse(&stored)
-        .map_err(|e| anyhow::anyhow!("{}: the config it holds is invalid: {e}", db.display()))?;
+        .map_err(|e| anyhow::anyhow!("{db}: the config it holds is invalid: {e}"))?;
     if let Some(id) = check_identity(dir, &store)? {
-        check_pool_identity(dir, &id, &db)?;
+        check_pool_identity(dir, &id, db)?;
     }
     if dir.config_path().is_file() && dir.config()? != stored_cfg {
         bail!(
-            "{}: differs from the config {} holds: the store is another league's, or config.toml was edited",
+            "{}: differs from the config {db} holds: the store is another league's, or config.toml was edited",
             dir.config_path().display(),
-            db.display()
         );
     }
     Ok((stored_cfg, store))
@@ -211,7 +214,7 @@ pub fn open_read_only(dir: &LeagueDir) -> Result<(LeagueConfig, Store)> {
 
 /// Snapshots name their league: a pool of another league beside this store
 /// means the store (or the pool) is not this league's.
-fn check_pool_identity(dir: &LeagueDir, league_id: &str, db: &Path) -> Result<()> {
+fn check_pool_identity(dir: &LeagueDir, league_id: &str, db: &StoreUrl) -> Result<()> {
     let Ok(entries) = std::fs::read_dir(dir.players_dir()) else {
         return Ok(());
     };
@@ -223,10 +226,9 @@ fn check_pool_identity(dir: &LeagueDir, league_id: &str, db: &Path) -> Result<()
             if let Some(m) = meta.league {
                 if m.league_id != league_id {
                     bail!(
-                        "{}: belongs to league {}, but {} is league {league_id}: the store and the pool are from different leagues",
+                        "{}: belongs to league {}, but {db} is league {league_id}: the store and the pool are from different leagues",
                         e.path().display(),
                         m.league_id,
-                        db.display(),
                     );
                 }
             }
@@ -244,14 +246,14 @@ fn check_identity(dir: &LeagueDir, store: &Store) -> Result<Option<String>> {
         (Some(s), Some(f)) if s == f.league_id => Ok(Some(s)),
         (Some(s), Some(f)) => bail!(
             "{}: belongs to another league (id {s}) than {} (id {}, league {})",
-            store.path().display(),
+            store.url(),
             dir.identity_path().display(),
             f.league_id,
             f.name
         ),
         (None, Some(f)) => bail!(
             "{}: has no league identity, but {} names league {} (id {}): the store is not this league's",
-            store.path().display(),
+            store.url(),
             dir.identity_path().display(),
             f.name,
             f.league_id

@@ -14,14 +14,17 @@
 //!                 "quarantined": str|null }],
 //!   "curriculum": { "stage", "speed_ratio",
 //!                   "history": [{ "stage", "speed_ratio", "reason", "at_ms" }] },
-//!   "learners": [{ "name", "pid", "state", "env_steps", "steps_per_s",
-//!                  "heartbeat_age_s" }],   // state "dead": it said it was
+//!   "learners": [{ "name", "pid", "host": str|null, "state", "env_steps",
+//!                  "steps_per_s", "heartbeat_age_s" }],   // state "dead": it said it was
 //!                                          // working, but its process is gone
 //!                                          // (or silent for 10 min elsewhere);
 //!                                          // the evaluator's env_steps counts
 //!                                          // the league's panel episodes
 //!   "payoff": [{ "captor", "target", "captor_wins", "games" }],
-//!   "crashes": [{ "learner", "exit_status", "message", "at_ms" }] }
+//!   "crashes": [{ "learner", "exit_status", "message", "at_ms" }],
+//!   "seats": [{ "name", "state": "open"|"done"|"failed", "host": str|null,
+//!               "lease_left_s": float|null, "claims", "reason": str|null }] }
+//!                                          // leagues on workers only
 //! ```
 
 use super::config::LeagueConfig;
@@ -71,6 +74,8 @@ pub struct Curriculum {
 pub struct LearnerRow {
     pub name: String,
     pub pid: i64,
+    /// The host it runs on (its pid is that host's).
+    pub host: Option<String>,
     pub state: String,
     pub env_steps: u64,
     pub steps_per_s: f64,
@@ -103,6 +108,22 @@ pub struct StatusReport {
     pub learners: Vec<LearnerRow>,
     pub payoff: Vec<PayoffRow>,
     pub crashes: Vec<CrashRow>,
+    /// Seats as leases, for a league whose seats run on workers (empty
+    /// otherwise).
+    pub seats: Vec<SeatStatus>,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct SeatStatus {
+    pub name: String,
+    /// open, done or failed.
+    pub state: String,
+    /// The host of the worker holding it while its lease is live.
+    pub host: Option<String>,
+    pub lease_left_s: Option<f64>,
+    /// How many times a worker has taken it.
+    pub claims: u64,
+    pub reason: Option<String>,
 }
 
 /// Opens a league directory for reading only (see `open::open_read_only`).
@@ -141,11 +162,10 @@ fn pid_is_league_process(pid: i64) -> bool {
 /// The state `status` shows: a process that says it is working but is gone
 /// is `dead`.
 pub fn shown_state(beat: &Heartbeat, age_s: f64) -> String {
-    let working = matches!(beat.state.as_str(), "training" | "waiting" | "evaluating");
-    if working && !alive(beat, age_s) {
+    if beat.state.is_working() && !alive(beat, age_s) {
         "dead".into()
     } else {
-        beat.state.clone()
+        beat.state.name().into()
     }
 }
 
@@ -239,6 +259,7 @@ pub fn report(dir: &LeagueDir) -> Result<StatusReport> {
                     state: shown_state(&b, age),
                     name: b.learner,
                     pid: b.pid,
+                    host: b.host,
                     env_steps,
                     steps_per_s: b.steps_per_s,
                     heartbeat_age_s: age,
@@ -262,6 +283,20 @@ pub fn report(dir: &LeagueDir) -> Result<StatusReport> {
                 exit_status: c.exit_status,
                 message: c.message,
                 at_ms: c.at_ms,
+            })
+            .collect(),
+        seats: store
+            .seats()?
+            .into_iter()
+            .map(|s| SeatStatus {
+                state: s.state.name().into(),
+                host: s.held_at(now).then(|| s.host.clone()).flatten(),
+                lease_left_s: s
+                    .held_at(now)
+                    .then(|| (s.lease_until_ms - now) as f64 / 1000.0),
+                claims: s.claims,
+                reason: s.reason,
+                name: s.name,
             })
             .collect(),
     })
@@ -312,15 +347,15 @@ pub fn render(r: &StatusReport) -> String {
         if l.name == "evaluator" {
             let _ = writeln!(
                 s,
-                "  {:<14} {:<9} {:>11} panel episodes                last heartbeat {:.0} s ago (pid {})",
-                l.name, l.state, l.env_steps, l.heartbeat_age_s, l.pid
+                "  {:<14} {:<9} {:>11} panel episodes                last heartbeat {:.0} s ago (pid {} on {})",
+                l.name, l.state, l.env_steps, l.heartbeat_age_s, l.pid, l.host.as_deref().unwrap_or("?")
             );
             continue;
         }
         let _ = writeln!(
             s,
-            "  {:<14} {:<9} {:>11} env steps {:>7.0} steps/s  last heartbeat {:.0} s ago (pid {})",
-            l.name, l.state, l.env_steps, l.steps_per_s, l.heartbeat_age_s, l.pid
+            "  {:<14} {:<9} {:>11} env steps {:>7.0} steps/s  last heartbeat {:.0} s ago (pid {} on {})",
+            l.name, l.state, l.env_steps, l.steps_per_s, l.heartbeat_age_s, l.pid, l.host.as_deref().unwrap_or("?")
         );
     }
     let _ = writeln!(
@@ -465,11 +500,14 @@ pub fn export(dir: &LeagueDir, player: &str, out: &Path) -> Result<()> {
             toml::to_string_pretty(&cfg).context("cannot write the league's config")?,
         )?;
         let mut csv = String::from("match_id,mu,sigma,at_ms\n");
-        for (m, mu, sigma, at) in store.rating_history(p.id)? {
+        for r in store.rating_history(p.id)? {
             let _ = writeln!(
                 csv,
-                "{},{mu},{sigma},{at}",
-                m.map(|x| x.to_string()).unwrap_or_default()
+                "{},{},{},{}",
+                r.match_id.map(|x| x.to_string()).unwrap_or_default(),
+                r.mu,
+                r.sigma,
+                r.at_ms
             );
         }
         std::fs::write(tmp.join("ratings.csv"), csv)?;
@@ -522,7 +560,7 @@ pub fn plot(dir: &LeagueDir, r: &StatusReport, path: &Path) -> Result<()> {
         let points: Vec<(f64, f64)> = store
             .rating_history(p.id)?
             .iter()
-            .filter_map(|(m, mu, _, _)| m.map(|m| (m as f64, *mu)))
+            .filter_map(|r| r.match_id.map(|m| (m as f64, r.mu)))
             .collect();
         if points.is_empty() {
             continue;

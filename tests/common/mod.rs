@@ -102,3 +102,4 @@ pub fn tiny_train_config(
         ..TrainConfig::default()
     }
 }
+pub mod postgres;

@@ -1,0 +1,171 @@
+//! The manager's side of a league whose seats run on workers (`run
+//! --store URL --pool DIR`): it defines the seats in the store, starts its
+//! local workers, and follows the seats until every one is done, one fails,
+//! `--for` passes or Ctrl-C. Workers on other hosts (`t2e-league worker`)
+//! take seats the same way as the local ones; the manager only reads.
+
+use super::config::LeagueConfig;
+use super::dir::LeagueDir;
+use super::process::Role;
+use super::store::{SeatState, Store, StoreUrl};
+use anyhow::{bail, Context, Result};
+use std::path::Path;
+use std::process::{Child, Command, Stdio};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
+
+/// Starts a worker for the league in `dir` as a child of this process.
+pub fn spawn_worker(dir: &LeagueDir, logs: &Path, index: usize) -> Result<Child> {
+    let exe = std::env::current_exe().context("cannot find this program to spawn workers")?;
+    std::fs::create_dir_all(logs).with_context(|| format!("cannot create {}", logs.display()))?;
+    let log = std::fs::OpenOptions::new()
+        .create(true)
+        .append(true)
+        .open(logs.join(format!("worker-{index}.log")))?;
+    let mut cmd = Command::new(exe);
+    cmd.arg("worker")
+        .arg("--pool")
+        .arg(&dir.root)
+        .arg("--dir")
+        .arg(logs.parent().unwrap_or(logs))
+        .arg("--seats")
+        .arg("1");
+    match &dir.store {
+        StoreUrl::Postgres(_) => cmd.env("T2E_STORE", dir.store.secret()),
+        StoreUrl::Sqlite(path) => cmd.env("T2E_STORE", path),
+    };
+    cmd.stdin(Stdio::null())
+        .stdout(log.try_clone()?)
+        .stderr(log);
+    #[cfg(target_os = "linux")]
+    {
+        use std::os::unix::process::CommandExt;
+        // SAFETY: prctl is async-signal-safe; the worker dies with its manager.
+        unsafe {
+            cmd.pre_exec(|| {
+                libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGKILL);
+                Ok(())
+            });
+        }
+    }
+    cmd.spawn().context("cannot start a worker")
+}
+
+/// Defines the seats, runs `local` workers, and waits for the league.
+#[allow(clippy::too_many_arguments)]
+pub fn supervise_workers(
+    dir: &LeagueDir,
+    cfg: &LeagueConfig,
+    store: &Store,
+    roles: &[Role],
+    local: usize,
+    logs: &Path,
+    run_for: Option<Duration>,
+    stop: &AtomicBool,
+) -> Result<()> {
+    let names: Vec<String> = roles.iter().map(|r| r.name()).collect();
+    store.define_seats(&names)?;
+    let reopened = store.reopen_failed_seats()?;
+    for s in reopened {
+        eprintln!("seat {s} had failed; open again for this run");
+    }
+    eprintln!(
+        "league {}: {} seats in {} for workers; {local} local workers (logs in {}); more join with `t2e-league worker --store URL --pool {}`",
+        cfg.name,
+        names.len(),
+        store.url(),
+        logs.display(),
+        dir.root.display()
+    );
+    let mut workers: Vec<Option<Child>> = Vec::new();
+    for i in 0..local {
+        workers.push(Some(spawn_worker(dir, logs, i)?));
+    }
+    let deadline = run_for.map(|d| Instant::now() + d);
+    let mut stopping = false;
+    let mut failure: Option<String> = None;
+    let mut last_look = Instant::now() - Duration::from_secs(60);
+    let mut last_line = String::new();
+    loop {
+        if !stopping
+            && (stop.load(Ordering::SeqCst)
+                || failure.is_some()
+                || deadline.is_some_and(|d| Instant::now() >= d))
+        {
+            stopping = true;
+            eprintln!("stopping: each worker's seats finish their iteration and checkpoint");
+            for c in workers.iter().flatten() {
+                // SAFETY: signalling our own child by pid.
+                unsafe {
+                    libc::kill(c.id() as i32, libc::SIGINT);
+                }
+            }
+        }
+        let mut all_done = false;
+        if last_look.elapsed() >= Duration::from_secs(1) {
+            last_look = Instant::now();
+            // A store out of reach for a moment is waited out (`Store::run`).
+            let seats = store.seats()?;
+            if let Some(f) = seats.iter().find(|s| s.state == SeatState::Failed) {
+                failure.get_or_insert(format!(
+                    "seat {} failed: {}",
+                    f.name,
+                    f.reason.as_deref().unwrap_or("no reason recorded")
+                ));
+            }
+            all_done = seats.iter().all(|s| s.state == SeatState::Done);
+            let line = seats
+                .iter()
+                .map(|s| {
+                    format!(
+                        "{} {}{}",
+                        s.name,
+                        s.state.name(),
+                        match (&s.host, s.state) {
+                            (Some(h), SeatState::Open) if s.holder.is_some() => format!(" on {h}"),
+                            _ => String::new(),
+                        }
+                    )
+                })
+                .collect::<Vec<_>>()
+                .join(", ");
+            if line != last_line {
+                eprintln!("seats: {line}");
+                last_line = line;
+            }
+        }
+        for (i, slot) in workers.iter_mut().enumerate() {
+            if let Some(c) = slot {
+                if let Some(status) = c.try_wait()? {
+                    *slot = None;
+                    if !stopping && !all_done && !status.success() {
+                        eprintln!(
+                            "worker {i} exited ({status}); starting another (log: {})",
+                            logs.join(format!("worker-{i}.log")).display()
+                        );
+                        std::thread::sleep(Duration::from_secs(1));
+                        *slot = Some(spawn_worker(dir, logs, i)?);
+                    }
+                }
+            }
+        }
+        let running = workers.iter().flatten().count();
+        if (all_done || stopping) && running == 0 {
+            break;
+        }
+        if all_done && running > 0 && !stopping {
+            // Every seat is done: the workers see it and exit on their own.
+        }
+        std::thread::sleep(Duration::from_millis(200));
+    }
+    eprintln!(
+        "league {}: {} matches, {} players; `t2e-league status --store URL` shows the table",
+        cfg.name,
+        store.match_count()?,
+        store.players()?.len()
+    );
+    match failure {
+        Some(why) => bail!("{why}"),
+        None => Ok(()),
+    }
+}

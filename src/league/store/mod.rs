@@ -1,0 +1,1174 @@
+//! The league's store: players, matches, ratings, curriculum, heartbeats,
+//! crashes, seats and the config, through sqlx. Two backends behind one
+//! API (`url`): a SQLite file (`league.db` in the league directory, the
+//! embedded default) or a PostgreSQL database that workers on many hosts
+//! share. sqlx is async; its runtime lives here, inside `Store`, so the
+//! rest of the league stays synchronous.
+//!
+//! Invariants:
+//! - SQLite: WAL, a busy timeout and short transactions: several processes
+//!   (the manager, the learners, `status`) read and write it at once.
+//! - The schema comes from `league/migrations/{sqlite,postgres}/*.sql`
+//!   (`sqlx::migrate!`): the same migrations, numbered alike, for both
+//!   (tests/store.rs checks the schemas agree); an older database is
+//!   migrated, one written by a newer schema is refused.
+//! - Queries are one text for both backends (`$N` parameters, `ON
+//!   CONFLICT`, no database-specific function; times are written by the
+//!   program), except where a backend has its own way to do a thing right
+//!   (taking a seat: `FOR UPDATE SKIP LOCKED` on PostgreSQL).
+//! - A match is recorded once: its key names the episode (learner, world,
+//!   episode), and recording it again is a no-op. The rating update of a
+//!   match is written in the same transaction as the match. So every
+//!   write can be retried when the connection fails (`Store::run`).
+//! - A PostgreSQL URL's password is never printed (`StoreUrl`'s Display).
+
+mod leases;
+mod rows;
+pub mod url;
+
+pub use leases::SeatLease;
+pub use rows::{
+    inside_pool, BeatState, Crash, Heartbeat, Kind, MatchRecord, NewPlayer, PairResult, Player,
+    RatingEntry, SeatRow, SeatState, StageChange,
+};
+pub use url::{Backend, StoreUrl};
+
+use super::ratings::{self, Rating};
+use rows::{side_name, PlayerRow};
+use sqlx::any::AnyPoolOptions;
+use sqlx::AnyPool;
+use sqlx::{Executor, Row};
+use std::collections::HashMap;
+use std::future::Future;
+use std::path::Path;
+use std::time::{Duration, Instant};
+
+/// Why no query binds an `Option<f64>`: sqlx 0.8's Any driver sends a NULL
+/// f64 to PostgreSQL as a float4 (its Real and Double are swapped in
+/// `AnyArguments::convert_to`), so a statement first prepared with a NULL
+/// there (and cached per connection) refuses every later float with
+/// "incorrect binary data format". Optional floats are bound as a value and
+/// a 0/1 flag instead; tests/store.rs binds NULL first to keep it honest.
+#[allow(dead_code)]
+const NO_NULL_FLOATS: () = ();
+
+static SQLITE_MIGRATIONS: sqlx::migrate::Migrator = sqlx::migrate!("league/migrations/sqlite");
+static POSTGRES_MIGRATIONS: sqlx::migrate::Migrator = sqlx::migrate!("league/migrations/postgres");
+
+#[derive(Debug, thiserror::Error)]
+pub enum StoreError {
+    #[error("{store}: written by a newer t2e-league (schema migration {version} is unknown to this build); use a newer build to open it")]
+    NewerSchema { store: String, version: i64 },
+    #[error("{store}: {source}")]
+    Database {
+        store: String,
+        #[source]
+        source: sqlx::Error,
+    },
+    #[error("{store}: cannot connect: {why}")]
+    Connect { store: String, why: String },
+    #[error("{store}: migrating the schema failed: {source}")]
+    Migrate {
+        store: String,
+        #[source]
+        source: sqlx::migrate::MigrateError,
+    },
+    #[error("{0}")]
+    Invalid(String),
+}
+
+pub fn now_ms() -> i64 {
+    std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map(|d| d.as_millis() as i64)
+        .unwrap_or(0)
+}
+
+/// How a process opens the store.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Access {
+    Create,
+    Existing,
+    ReadOnly { immutable: bool },
+}
+
+/// A SQLite `league.db` that is missing or empty is not a store.
+fn check_present(path: &Path) -> Result<(), StoreError> {
+    match std::fs::metadata(path) {
+        Ok(m) if m.len() > 0 => Ok(()),
+        Ok(_) => Err(StoreError::Invalid(format!(
+            "{}: empty (0 bytes): the league's store was truncated",
+            path.display()
+        ))),
+        Err(_) => Err(StoreError::Invalid(format!(
+            "{}: missing: the directory holds no league store",
+            path.display()
+        ))),
+    }
+}
+
+/// What a store location holds, read without creating anything.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Presence {
+    /// No store there (no file; a database without the league's tables).
+    Missing,
+    /// A SQLite file of 0 bytes.
+    Empty,
+    /// Something to open and check.
+    Present,
+}
+
+/// This machine's name, for heartbeats and leases: `T2E_HOST` when a
+/// worker was started with `--host`, else the kernel's hostname.
+pub fn host_name() -> String {
+    if let Ok(h) = std::env::var("T2E_HOST") {
+        if !h.trim().is_empty() {
+            return h.trim().to_string();
+        }
+    }
+    std::fs::read_to_string("/proc/sys/kernel/hostname")
+        .map(|s| s.trim().to_string())
+        .ok()
+        .filter(|s| !s.is_empty())
+        .unwrap_or_else(|| "localhost".into())
+}
+
+/// A database error that a later try can get past: the server is gone for
+/// a moment (restarting, unreachable), not a query that is wrong.
+fn transient(e: &sqlx::Error) -> bool {
+    match e {
+        sqlx::Error::Io(_) | sqlx::Error::PoolTimedOut | sqlx::Error::Tls(_) => true,
+        sqlx::Error::Database(d) => d.code().is_some_and(|c| {
+            // PostgreSQL: connection exceptions (08), the server shutting
+            // down or starting (57P01-57P03), too many connections (53300).
+            c.starts_with("08") || matches!(&*c, "57P01" | "57P02" | "57P03" | "53300")
+        }),
+        _ => false,
+    }
+}
+
+/// How long a process keeps retrying a store that went away before it
+/// gives up: a PostgreSQL restart or failover takes seconds to a minute.
+fn retry_budget() -> Duration {
+    std::env::var("T2E_STORE_RETRY_S")
+        .ok()
+        .and_then(|s| s.parse::<u64>().ok())
+        .map(Duration::from_secs)
+        .unwrap_or(Duration::from_secs(300))
+}
+
+pub struct Store {
+    rt: tokio::runtime::Runtime,
+    pool: AnyPool,
+    url: StoreUrl,
+}
+
+impl Store {
+    /// Opens (creating if needed) a league's store and brings its schema up
+    /// to date. Only a league being started creates its store; every other
+    /// process opens it with `open_existing`.
+    pub fn open(url: &StoreUrl) -> Result<Store, StoreError> {
+        if let StoreUrl::Sqlite(path) = url {
+            if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+                std::fs::create_dir_all(dir).map_err(|e| {
+                    StoreError::Invalid(format!("cannot create {}: {e}", dir.display()))
+                })?;
+            }
+        }
+        Store::connect(url, Access::Create)
+    }
+
+    /// Opens a store that exists, refusing a missing or empty SQLite file
+    /// (SQLite would take either for a new database).
+    pub fn open_existing(url: &StoreUrl) -> Result<Store, StoreError> {
+        if let StoreUrl::Sqlite(path) = url {
+            check_present(path)?;
+        }
+        Store::connect(url, Access::Existing)
+    }
+
+    /// What `url` holds, creating nothing: a SQLite file's size, or whether
+    /// a PostgreSQL database has the league's tables.
+    pub fn presence(url: &StoreUrl) -> Result<Presence, StoreError> {
+        match url {
+            StoreUrl::Sqlite(path) => Ok(match std::fs::metadata(path) {
+                Err(_) => Presence::Missing,
+                Ok(m) if m.len() == 0 => Presence::Empty,
+                Ok(_) => Presence::Present,
+            }),
+            StoreUrl::Postgres(_) => {
+                let store = Store::connect(url, Access::ReadOnly { immutable: false })?;
+                let pool = &store.pool;
+                let n: i64 = store.run(move || async move {
+                    sqlx::query(
+                        "SELECT COUNT(*) FROM information_schema.tables WHERE table_schema = current_schema() AND table_name = '_sqlx_migrations'",
+                    )
+                    .fetch_one(pool)
+                    .await?
+                    .try_get(0)
+                })?;
+                Ok(if n > 0 {
+                    Presence::Present
+                } else {
+                    Presence::Missing
+                })
+            }
+        }
+    }
+
+    fn migrator(&self) -> &'static sqlx::migrate::Migrator {
+        match self.url.backend() {
+            Backend::Sqlite => &SQLITE_MIGRATIONS,
+            Backend::Postgres => &POSTGRES_MIGRATIONS,
+        }
+    }
+
+    /// Opens a league's store for reading only (`status`, `export`): nothing
+    /// is created or changed, so it works on a read-only copy. The schema
+    /// is not migrated; an older one is refused with the command that
+    /// migrates it.
+    pub fn open_read_only(url: &StoreUrl) -> Result<Store, StoreError> {
+        let store = Store::inspect(url)?;
+        let pool = &store.pool;
+        let applied: Vec<i64> = store.run(move || async move {
+            let rows = sqlx::query("SELECT version FROM _sqlx_migrations WHERE success = TRUE")
+                .fetch_all(pool)
+                .await?;
+            rows.iter().map(|r| r.try_get::<i64, _>(0)).collect()
+        })?;
+        for m in store.migrator().iter() {
+            if !applied.contains(&m.version) {
+                return Err(StoreError::Invalid(format!(
+                    "{url}: written by an older t2e-league (schema migration {} missing); `t2e-league run` on this league migrates it",
+                    m.version,
+                )));
+            }
+        }
+        if let Some(v) = applied
+            .iter()
+            .find(|v| !store.migrator().iter().any(|m| m.version == **v))
+        {
+            return Err(StoreError::NewerSchema {
+                store: url.to_string(),
+                version: *v,
+            });
+        }
+        Ok(store)
+    }
+
+    /// Opens a store read-only whatever its schema version, to check what
+    /// it holds before anything is written (a file that is not a league's
+    /// store is refused untouched).
+    pub fn inspect(url: &StoreUrl) -> Result<Store, StoreError> {
+        let probe = |store: &Store| {
+            let pool = &store.pool;
+            store.run(move || async move {
+                sqlx::query("SELECT COUNT(*) FROM league_config")
+                    .fetch_one(pool)
+                    .await
+                    .map(|_| ())
+            })
+        };
+        let path = match url {
+            StoreUrl::Postgres(_) => {
+                let store = Store::connect(url, Access::ReadOnly { immutable: false })?;
+                probe(&store).map_err(|e| {
+                    StoreError::Invalid(format!(
+                        "{url}: holds no league store, or not one this build reads ({e})"
+                    ))
+                })?;
+                return Ok(store);
+            }
+            StoreUrl::Sqlite(path) => path,
+        };
+        check_present(path)?;
+        let normal = Store::connect(url, Access::ReadOnly { immutable: false })
+            .and_then(|s| probe(&s).map(|()| s));
+        let store = match normal {
+            Ok(s) => s,
+            Err(first) => {
+                // A WAL database whose -shm file is absent and cannot be
+                // created (a read-only directory) opens only as immutable,
+                // which ignores the write-ahead log: refuse rather than read
+                // a stale store when the log holds changes.
+                let mut wal = path.as_os_str().to_owned();
+                wal.push("-wal");
+                let wal = std::path::PathBuf::from(wal);
+                if std::fs::metadata(&wal).is_ok_and(|m| m.len() > 0) {
+                    return Err(StoreError::Invalid(format!(
+                        "{}: cannot be read here ({first}); its write-ahead log {} holds changes not yet in it, which only a process that can write the directory can read",
+                        path.display(),
+                        wal.display()
+                    )));
+                }
+                let s = Store::connect(url, Access::ReadOnly { immutable: true })?;
+                probe(&s).map_err(|e| {
+                    StoreError::Invalid(format!(
+                        "{}: not a league store, or not readable as one ({e}); restore it from a backup",
+                        path.display()
+                    ))
+                })?;
+                s
+            }
+        };
+        Ok(store)
+    }
+
+    fn connect(url: &StoreUrl, access: Access) -> Result<Store, StoreError> {
+        sqlx::any::install_default_drivers();
+        let rt = tokio::runtime::Builder::new_current_thread()
+            .enable_time()
+            .enable_io()
+            .build()
+            .map_err(|e| StoreError::Invalid(format!("cannot start the store's runtime: {e}")))?;
+        let shown = url.to_string();
+        let connect_error = |source: sqlx::Error| StoreError::Connect {
+            store: shown.clone(),
+            why: explain_connect(&source),
+        };
+        let pool = match url {
+            StoreUrl::Sqlite(path) => {
+                let mut options = sqlx::sqlite::SqliteConnectOptions::new()
+                    .filename(path)
+                    .foreign_keys(true);
+                options = match access {
+                    Access::Create | Access::Existing => {
+                        options.create_if_missing(access == Access::Create)
+                    }
+                    Access::ReadOnly { immutable } => options.read_only(true).immutable(immutable),
+                };
+                let any: sqlx::any::AnyConnectOptions =
+                    sqlx::ConnectOptions::to_url_lossy(&options)
+                        .as_str()
+                        .parse()
+                        .map_err(connect_error)?;
+                let writable = matches!(access, Access::Create | Access::Existing);
+                rt.block_on(
+                    AnyPoolOptions::new()
+                        .max_connections(1)
+                        .after_connect(move |conn, _| {
+                            Box::pin(async move {
+                                conn.execute("PRAGMA busy_timeout = 30000").await?;
+                                conn.execute("PRAGMA foreign_keys = ON").await?;
+                                if writable {
+                                    conn.execute("PRAGMA journal_mode = WAL").await?;
+                                }
+                                Ok(())
+                            })
+                        })
+                        .connect_with(any),
+                )
+                .map_err(|source| StoreError::Database {
+                    store: shown.clone(),
+                    source,
+                })?
+            }
+            StoreUrl::Postgres(_) => {
+                let any: sqlx::any::AnyConnectOptions =
+                    url.secret().parse().map_err(connect_error)?;
+                let read_only = matches!(access, Access::ReadOnly { .. });
+                // One plain connection first: the pool retries a refused
+                // connection until its timeout and then reports only that,
+                // where this gives the cause (refused, password, database).
+                let probe = rt
+                    .block_on(<sqlx::AnyConnection as sqlx::Connection>::connect_with(
+                        &any,
+                    ))
+                    .map_err(connect_error)?;
+                rt.block_on(sqlx::Connection::close(probe)).ok();
+                rt.block_on(
+                    AnyPoolOptions::new()
+                        .max_connections(2)
+                        .acquire_timeout(Duration::from_secs(10))
+                        .after_connect(move |conn, _| {
+                            Box::pin(async move {
+                                if read_only {
+                                    conn.execute("SET default_transaction_read_only = on")
+                                        .await?;
+                                }
+                                Ok(())
+                            })
+                        })
+                        .connect_with(any),
+                )
+                .map_err(connect_error)?
+            }
+        };
+        let store = Store {
+            rt,
+            pool,
+            url: url.clone(),
+        };
+        if matches!(access, Access::Create | Access::Existing) {
+            match store.rt.block_on(store.migrator().run(&store.pool)) {
+                Ok(()) => {}
+                Err(sqlx::migrate::MigrateError::VersionMissing(version)) => {
+                    return Err(StoreError::NewerSchema {
+                        store: shown,
+                        version,
+                    })
+                }
+                Err(source) => {
+                    return Err(StoreError::Migrate {
+                        store: shown,
+                        source,
+                    })
+                }
+            }
+        }
+        Ok(store)
+    }
+
+    /// Where the store is (a PostgreSQL URL with its password masked).
+    pub fn url(&self) -> &StoreUrl {
+        &self.url
+    }
+
+    pub fn backend(&self) -> Backend {
+        self.url.backend()
+    }
+
+    /// Runs one database operation to its end: a connection that fails
+    /// (the server restarting, a network blip) is retried with back-off
+    /// for up to `T2E_STORE_RETRY_S` seconds (default 300), so a worker
+    /// waits out an outage instead of crashing; any other error is
+    /// returned at once. Every operation here may run twice safely (see
+    /// the module's invariants).
+    fn run<T, F, Fut>(&self, mut op: F) -> Result<T, StoreError>
+    where
+        F: FnMut() -> Fut,
+        Fut: Future<Output = Result<T, sqlx::Error>>,
+    {
+        let started = Instant::now();
+        let mut wait = Duration::from_millis(250);
+        let mut said = false;
+        loop {
+            match self.rt.block_on(op()) {
+                Ok(v) => {
+                    if said {
+                        eprintln!("{}: reachable again", self.url);
+                    }
+                    return Ok(v);
+                }
+                Err(e) if transient(&e) && started.elapsed() < retry_budget() => {
+                    if !said {
+                        eprintln!(
+                            "{}: {e}; retrying with back-off for up to {} s",
+                            self.url,
+                            retry_budget().as_secs()
+                        );
+                        said = true;
+                    }
+                    std::thread::sleep(wait);
+                    wait = (wait * 2).min(Duration::from_secs(5));
+                }
+                Err(source) => {
+                    return Err(StoreError::Database {
+                        store: self.url.to_string(),
+                        source,
+                    })
+                }
+            }
+        }
+    }
+
+    /// Stores the league's config the first time; returns the one stored
+    /// (the first), so a resumed league can tell whether it changed.
+    pub fn config_once(&self, toml: &str) -> Result<String, StoreError> {
+        let pool = &self.pool;
+        self.run(move || async move {
+            sqlx::query(
+                "INSERT INTO league_config (id, config_toml, created_at_ms) VALUES (1, $1, $2) ON CONFLICT (id) DO NOTHING",
+            )
+            .bind(toml)
+            .bind(now_ms())
+            .execute(pool)
+            .await?;
+            sqlx::query("SELECT config_toml FROM league_config WHERE id = 1")
+                .fetch_one(pool)
+                .await?
+                .try_get::<String, _>(0)
+        })
+    }
+
+    /// The config the league was started with, if the store holds one (an
+    /// empty store does not).
+    pub fn stored_config(&self) -> Result<Option<String>, StoreError> {
+        let pool = &self.pool;
+        self.run(move || async move {
+            sqlx::query("SELECT config_toml FROM league_config WHERE id = 1")
+                .fetch_optional(pool)
+                .await?
+                .map(|r| r.try_get::<String, _>(0))
+                .transpose()
+        })
+    }
+
+    /// The league's identity, if one was written (a store from before
+    /// identities has no such column until it is migrated).
+    pub fn league_id(&self) -> Result<Option<String>, StoreError> {
+        let pool = &self.pool;
+        let row = self.run(move || async move {
+            sqlx::query("SELECT * FROM league_config WHERE id = 1")
+                .fetch_optional(pool)
+                .await
+        })?;
+        Ok(row.and_then(|r| r.try_get::<Option<String>, _>("league_id").ok().flatten()))
+    }
+
+    /// Takes a member back into play: its files verify again.
+    pub fn reinstate(&self, id: i64) -> Result<(), StoreError> {
+        let pool = &self.pool;
+        self.run(move || async move {
+            sqlx::query("UPDATE players SET quarantined = NULL WHERE id = $1")
+                .bind(id)
+                .execute(pool)
+                .await
+                .map(|_| ())
+        })
+    }
+
+    /// Writes the league's identity once (the config row must exist);
+    /// returns the identity stored, which is `id` unless one was there.
+    pub fn set_league_id_once(&self, id: &str) -> Result<String, StoreError> {
+        let pool = &self.pool;
+        self.run(move || async move {
+            sqlx::query(
+                "UPDATE league_config SET league_id = $1 WHERE id = 1 AND league_id IS NULL",
+            )
+            .bind(id)
+            .execute(pool)
+            .await
+            .map(|_| ())
+        })?;
+        self.league_id()?.ok_or_else(|| {
+            StoreError::Invalid(format!(
+                "{}: holds no league config to attach an identity to",
+                self.url
+            ))
+        })
+    }
+
+    /// Matches a recorder (a learner's name, or "evaluator") wrote.
+    pub fn matches_recorded_by(&self, recorder: &str) -> Result<u64, StoreError> {
+        let pool = &self.pool;
+        self.run(move || async move {
+            sqlx::query("SELECT COUNT(*) FROM matches WHERE recorded_by = $1")
+                .bind(recorder)
+                .fetch_one(pool)
+                .await?
+                .try_get::<i64, _>(0)
+        })
+        .map(|n| n as u64)
+    }
+
+    /// Adds a player; a player of the same name already there is returned
+    /// as it is (adding is idempotent, so a killed writer cannot duplicate).
+    /// A recorded member never changes: adding a name that is recorded with
+    /// other checkpoint files is an error, not a silent no-op.
+    pub fn add_player(&self, p: &NewPlayer) -> Result<i64, StoreError> {
+        if let Some((rel, _)) = p
+            .checkpoint
+            .as_ref()
+            .filter(|(rel, _)| !rows::inside_pool(rel))
+        {
+            return Err(StoreError::Invalid(format!(
+                "{}: player {} would name the checkpoint {rel:?}, outside the league's pool folder",
+                self.url, p.name
+            )));
+        }
+        let (path, sha) = match &p.checkpoint {
+            Some((a, b)) => (Some(a.as_str()), Some(b.as_str())),
+            None => (None, None),
+        };
+        let pool = &self.pool;
+        let (id, stored_path, stored_sha) = self.run(move || async move {
+            sqlx::query(
+                "INSERT INTO players (name, side, kind, parent, created_at_ms, env_steps, curriculum_stage, checkpoint_path, checkpoint_sha256) \
+                 VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9) ON CONFLICT (name) DO NOTHING",
+            )
+            .bind(&p.name)
+            .bind(side_name(p.side))
+            .bind(p.kind.name())
+            .bind(p.parent)
+            .bind(now_ms())
+            .bind(p.env_steps as i64)
+            .bind(p.curriculum_stage as i64)
+            .bind(path)
+            .bind(sha)
+            .execute(pool)
+            .await?;
+            let row = sqlx::query(
+                "SELECT id, checkpoint_path, checkpoint_sha256 FROM players WHERE name = $1",
+            )
+            .bind(&p.name)
+            .fetch_one(pool)
+            .await?;
+            Ok((
+                row.try_get::<i64, _>("id")?,
+                row.try_get::<Option<String>, _>("checkpoint_path")?,
+                row.try_get::<Option<String>, _>("checkpoint_sha256")?,
+            ))
+        })?;
+        if p.checkpoint.is_some()
+            && (stored_path.as_deref() != path || stored_sha.as_deref() != sha)
+        {
+            return Err(StoreError::Invalid(format!(
+                "{}: player {} is already recorded with other checkpoint files ({} sha256 {}); a recorded member never changes",
+                self.url,
+                p.name,
+                stored_path.as_deref().unwrap_or("none"),
+                stored_sha.as_deref().unwrap_or("none"),
+            )));
+        }
+        Ok(id)
+    }
+
+    /// Points a learner's row at its newest checkpoint.
+    pub fn update_learner(
+        &self,
+        id: i64,
+        env_steps: u64,
+        checkpoint: (&str, &str),
+    ) -> Result<(), StoreError> {
+        let pool = &self.pool;
+        self.run(move || async move {
+            sqlx::query(
+                "UPDATE players SET env_steps = $1, checkpoint_path = $2, checkpoint_sha256 = $3 WHERE id = $4",
+            )
+            .bind(env_steps as i64)
+            .bind(checkpoint.0)
+            .bind(checkpoint.1)
+            .bind(id)
+            .execute(pool)
+            .await
+            .map(|_| ())
+        })
+    }
+
+    /// Takes a member out of play, saying why.
+    pub fn quarantine(&self, id: i64, why: &str) -> Result<(), StoreError> {
+        let pool = &self.pool;
+        self.run(move || async move {
+            sqlx::query("UPDATE players SET quarantined = $1 WHERE id = $2")
+                .bind(why)
+                .bind(id)
+                .execute(pool)
+                .await
+                .map(|_| ())
+        })
+    }
+
+    pub fn players(&self) -> Result<Vec<Player>, StoreError> {
+        let pool = &self.pool;
+        let rows: Vec<PlayerRow> = self.run(move || async move {
+            sqlx::query_as(
+                "SELECT id, name, side, kind, parent, created_at_ms, env_steps, curriculum_stage, checkpoint_path, checkpoint_sha256, quarantined \
+                 FROM players ORDER BY id",
+            )
+            .fetch_all(pool)
+            .await
+        })?;
+        rows.into_iter()
+            .map(|r| {
+                Player::try_from(r).map_err(|e| StoreError::Invalid(format!("{}: {e}", self.url)))
+            })
+            .collect()
+    }
+
+    /// Records a match and updates both players' live ratings, in one
+    /// transaction. Returns false (and changes nothing) when a match with
+    /// the same key is already recorded.
+    pub fn record_match(&self, m: &MatchRecord) -> Result<bool, StoreError> {
+        if !m.speed_ratio.is_finite() || m.final_asz_m2.is_some_and(|a| !a.is_finite()) {
+            return Err(StoreError::Invalid(format!(
+                "match {}: non-finite speed ratio or |ASZ|",
+                m.key
+            )));
+        }
+        let pool = &self.pool;
+        self.run(move || async move {
+            let mut tx = pool.begin().await?;
+            let inserted = sqlx::query(
+                "INSERT INTO matches (match_key, captor_player, target_player, map, num_captors, speed_ratio, seed, captured, steps, final_asz_m2, recorded_by, recorded_at_ms) \
+                 VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, CASE WHEN $13 = 1 THEN $10 ELSE NULL END, $11, $12) ON CONFLICT (match_key) DO NOTHING",
+            )
+            .bind(&m.key)
+            .bind(m.captor_player)
+            .bind(m.target_player)
+            .bind(&m.map)
+            .bind(m.num_captors as i64)
+            .bind(m.speed_ratio)
+            .bind(m.seed as i64)
+            .bind(m.captured as i64)
+            .bind(m.steps as i64)
+            .bind(m.final_asz_m2.unwrap_or(0.0))
+            .bind(&m.recorded_by)
+            .bind(now_ms())
+            .bind(m.final_asz_m2.is_some() as i64)
+            .execute(&mut *tx)
+            .await?
+            .rows_affected()
+                == 1;
+            if !inserted {
+                tx.rollback().await?;
+                return Ok(false);
+            }
+            let match_id: i64 = sqlx::query("SELECT id FROM matches WHERE match_key = $1")
+                .bind(&m.key)
+                .fetch_one(&mut *tx)
+                .await?
+                .try_get(0)?;
+            let mut current = [Rating::default(); 2];
+            for (slot, player) in current.iter_mut().zip([m.captor_player, m.target_player]) {
+                if let Some(row) = sqlx::query(
+                    "SELECT mu, sigma FROM ratings WHERE player = $1 ORDER BY id DESC LIMIT 1",
+                )
+                .bind(player)
+                .fetch_optional(&mut *tx)
+                .await?
+                {
+                    *slot = Rating {
+                        mu: row.try_get(0)?,
+                        sigma: row.try_get(1)?,
+                    };
+                }
+            }
+            let (c, t) = ratings::update(current[0], current[1], m.captured);
+            for (player, r) in [(m.captor_player, c), (m.target_player, t)] {
+                sqlx::query(
+                    "INSERT INTO ratings (player, match_id, mu, sigma, at_ms) VALUES ($1, $2, $3, $4, $5)",
+                )
+                .bind(player)
+                .bind(match_id)
+                .bind(r.mu)
+                .bind(r.sigma)
+                .bind(now_ms())
+                .execute(&mut *tx)
+                .await?;
+            }
+            tx.commit().await?;
+            Ok(true)
+        })
+    }
+
+    pub fn has_match(&self, key: &str) -> Result<bool, StoreError> {
+        let pool = &self.pool;
+        self.run(move || async move {
+            sqlx::query("SELECT COUNT(*) FROM matches WHERE match_key = $1")
+                .bind(key)
+                .fetch_one(pool)
+                .await?
+                .try_get::<i64, _>(0)
+        })
+        .map(|n| n > 0)
+    }
+
+    pub fn match_count(&self) -> Result<u64, StoreError> {
+        let pool = &self.pool;
+        self.run(move || async move {
+            sqlx::query("SELECT COUNT(*) FROM matches")
+                .fetch_one(pool)
+                .await?
+                .try_get::<i64, _>(0)
+        })
+        .map(|n| n as u64)
+    }
+
+    /// The payoff table: captor wins and games per captor-target pair.
+    pub fn payoff(&self) -> Result<Vec<PairResult>, StoreError> {
+        let pool = &self.pool;
+        self.run(move || async move {
+            sqlx::query_as(
+                "SELECT captor_player AS captor, target_player AS target, CAST(SUM(captured) AS BIGINT) AS captor_wins, COUNT(*) AS games FROM matches \
+                 GROUP BY captor_player, target_player ORDER BY captor_player, target_player",
+            )
+            .fetch_all(pool)
+            .await
+        })
+    }
+
+    /// Each player's latest live rating (players without matches are absent).
+    pub fn ratings(&self) -> Result<HashMap<i64, Rating>, StoreError> {
+        let pool = &self.pool;
+        let rows = self.run(move || async move {
+            sqlx::query(
+                "SELECT r.player, r.mu, r.sigma FROM ratings r \
+                 WHERE r.id = (SELECT MAX(q.id) FROM ratings q WHERE q.player = r.player)",
+            )
+            .fetch_all(pool)
+            .await
+        })?;
+        rows.iter()
+            .map(|r| {
+                Ok((
+                    r.try_get::<i64, _>(0)?,
+                    Rating {
+                        mu: r.try_get(1)?,
+                        sigma: r.try_get(2)?,
+                    },
+                ))
+            })
+            .collect::<Result<_, sqlx::Error>>()
+            .map_err(|e| self.db(e))
+    }
+
+    fn db(&self, source: sqlx::Error) -> StoreError {
+        StoreError::Database {
+            store: self.url.to_string(),
+            source,
+        }
+    }
+
+    /// A player's live ratings, oldest first.
+    pub fn rating_history(&self, player: i64) -> Result<Vec<RatingEntry>, StoreError> {
+        let pool = &self.pool;
+        self.run(move || async move {
+            sqlx::query_as(
+                "SELECT match_id, mu, sigma, at_ms FROM ratings WHERE player = $1 ORDER BY id",
+            )
+            .bind(player)
+            .fetch_all(pool)
+            .await
+        })
+    }
+
+    /// Appends a curriculum stage change.
+    pub fn push_curriculum(
+        &self,
+        stage: usize,
+        speed_ratio: f64,
+        reason: &str,
+    ) -> Result<(), StoreError> {
+        let pool = &self.pool;
+        self.run(move || async move {
+            sqlx::query(
+                "INSERT INTO curriculum (stage, speed_ratio, reason, at_ms) VALUES ($1, $2, $3, $4)",
+            )
+            .bind(stage as i64)
+            .bind(speed_ratio)
+            .bind(reason)
+            .bind(now_ms())
+            .execute(pool)
+            .await
+            .map(|_| ())
+        })
+    }
+
+    /// Outcomes (captured or not), oldest first, of the last `limit`
+    /// matches `captor_player` played at `speed_ratio` since `since_ms`: the
+    /// curriculum's window, rebuilt when a learner restarts.
+    pub fn recent_outcomes(
+        &self,
+        captor_player: i64,
+        speed_ratio: f64,
+        since_ms: i64,
+        limit: usize,
+    ) -> Result<Vec<bool>, StoreError> {
+        let pool = &self.pool;
+        let rows = self.run(move || async move {
+            sqlx::query(
+                "SELECT captured FROM matches WHERE captor_player = $1 AND ABS(speed_ratio - $2) < 1e-9 \
+                 AND recorded_at_ms >= $3 ORDER BY id DESC LIMIT $4",
+            )
+            .bind(captor_player)
+            .bind(speed_ratio)
+            .bind(since_ms)
+            .bind(limit as i64)
+            .fetch_all(pool)
+            .await
+        })?;
+        rows.iter()
+            .rev()
+            .map(|r| r.try_get::<i64, _>(0).map(|c| c != 0))
+            .collect::<Result<_, _>>()
+            .map_err(|e| self.db(e))
+    }
+
+    /// Curriculum stage changes, oldest first.
+    pub fn curriculum_history(&self) -> Result<Vec<StageChange>, StoreError> {
+        let pool = &self.pool;
+        self.run(move || async move {
+            sqlx::query_as("SELECT stage, speed_ratio, reason, at_ms FROM curriculum ORDER BY id")
+                .fetch_all(pool)
+                .await
+        })
+    }
+
+    /// A learner's latest state and throughput; `steps_per_s` None keeps
+    /// the rate last reported (a run that trained no step measured none).
+    pub fn heartbeat(
+        &self,
+        learner: &str,
+        state: BeatState,
+        env_steps: u64,
+        steps_per_s: Option<f64>,
+    ) -> Result<(), StoreError> {
+        let rate = steps_per_s.map(|r| if r.is_finite() { r } else { 0.0 });
+        let host = host_name();
+        let host = host.as_str();
+        let pool = &self.pool;
+        // No Option<f64> bind (see NO_NULL_FLOATS): a flag says whether the
+        // rate is new.
+        self.run(move || async move {
+            sqlx::query(
+                "INSERT INTO heartbeats (learner, pid, host, state, env_steps, steps_per_s, at_ms) VALUES ($1, $2, $3, $4, $5, $6, $7) \
+                 ON CONFLICT (learner) DO UPDATE SET pid = excluded.pid, host = excluded.host, state = excluded.state, env_steps = excluded.env_steps, \
+                 steps_per_s = CASE WHEN $8 = 1 THEN excluded.steps_per_s ELSE heartbeats.steps_per_s END, at_ms = excluded.at_ms",
+            )
+            .bind(learner)
+            .bind(std::process::id() as i64)
+            .bind(host)
+            .bind(state.name())
+            .bind(env_steps as i64)
+            .bind(rate.unwrap_or(0.0))
+            .bind(now_ms())
+            .bind(rate.is_some() as i64)
+            .execute(pool)
+            .await
+            .map(|_| ())
+        })
+    }
+
+    pub fn heartbeats(&self) -> Result<Vec<Heartbeat>, StoreError> {
+        let pool = &self.pool;
+        self.run(move || async move {
+            sqlx::query_as(
+                "SELECT learner, pid, host, state, env_steps, steps_per_s, at_ms FROM heartbeats ORDER BY learner",
+            )
+            .fetch_all(pool)
+            .await
+        })
+    }
+
+    pub fn record_crash(
+        &self,
+        learner: &str,
+        exit_status: &str,
+        message: &str,
+    ) -> Result<(), StoreError> {
+        let pool = &self.pool;
+        self.run(move || async move {
+            sqlx::query(
+                "INSERT INTO crashes (learner, exit_status, message, at_ms) VALUES ($1, $2, $3, $4)",
+            )
+            .bind(learner)
+            .bind(exit_status)
+            .bind(message)
+            .bind(now_ms())
+            .execute(pool)
+            .await
+            .map(|_| ())
+        })
+    }
+
+    /// Crashes, oldest first.
+    pub fn crashes(&self) -> Result<Vec<Crash>, StoreError> {
+        let pool = &self.pool;
+        self.run(move || async move {
+            sqlx::query_as("SELECT learner, exit_status, message, at_ms FROM crashes ORDER BY id")
+                .fetch_all(pool)
+                .await
+        })
+    }
+}
+
+/// Why a connection failed, in words a user can act on (the URL is shown
+/// by the caller, masked).
+fn explain_connect(e: &sqlx::Error) -> String {
+    match e {
+        sqlx::Error::Database(d) => match d.code().as_deref() {
+            Some("28P01") | Some("28000") => format!("{} (check the user and password in the URL or PGPASSWORD)", d.message()),
+            Some("3D000") => format!("{} (create it, or name an existing database in the URL)", d.message()),
+            _ => d.message().to_string(),
+        },
+        sqlx::Error::Io(io) => format!(
+            "{io} (is the server running and listening there? `scripts/postgres.sh start DIR` starts one)"
+        ),
+        sqlx::Error::PoolTimedOut => "no answer within 10 s (a host that drops packets, or a server too busy to accept)".into(),
+        sqlx::Error::Configuration(c) => format!("the URL is not one PostgreSQL reads: {c}"),
+        other => other.to_string(),
+    }
+}
+
+impl Drop for Store {
+    /// Closes the connections; on SQLite the last one to close folds the
+    /// write-ahead log into league.db and removes it: a league left alone
+    /// is a single file that a reader without write access can open.
+    fn drop(&mut self) {
+        self.rt.block_on(self.pool.close());
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::env::Side;
+
+    fn player(name: &str, side: Side, kind: Kind) -> NewPlayer {
+        NewPlayer {
+            name: name.into(),
+            side,
+            kind,
+            parent: None,
+            env_steps: 0,
+            curriculum_stage: 0,
+            checkpoint: None,
+        }
+    }
+
+    fn game(key: &str, c: i64, t: i64, captured: bool) -> MatchRecord {
+        MatchRecord {
+            key: key.into(),
+            captor_player: c,
+            target_player: t,
+            map: "m".into(),
+            num_captors: 3,
+            speed_ratio: 1.0,
+            seed: 7,
+            captured,
+            steps: 120,
+            final_asz_m2: Some(0.2),
+            recorded_by: "test".into(),
+        }
+    }
+
+    #[test]
+    fn matches_count_once_and_move_ratings() {
+        let dir = tempfile::tempdir().unwrap();
+        let store = Store::open(&StoreUrl::in_dir(dir.path())).unwrap();
+        let c = store
+            .add_player(&player("captors-main", Side::Captors, Kind::Learner))
+            .unwrap();
+        let t = store
+            .add_player(&player("rule-based", Side::Target, Kind::Heuristic))
+            .unwrap();
+        assert_eq!(
+            store
+                .add_player(&player("captors-main", Side::Captors, Kind::Learner))
+                .unwrap(),
+            c,
+            "adding twice is a no-op"
+        );
+        assert!(store.record_match(&game("a/0/0", c, t, true)).unwrap());
+        assert!(
+            !store.record_match(&game("a/0/0", c, t, true)).unwrap(),
+            "same key: no-op"
+        );
+        assert!(store.record_match(&game("a/0/1", c, t, false)).unwrap());
+        assert!(store.record_match(&game("a/1/0", c, t, true)).unwrap());
+        assert_eq!(store.match_count().unwrap(), 3);
+        assert_eq!(
+            store.payoff().unwrap(),
+            vec![PairResult {
+                captor: c,
+                target: t,
+                captor_wins: 2,
+                games: 3
+            }]
+        );
+        let r = store.ratings().unwrap();
+        assert!(r[&c].mu > r[&t].mu, "{r:?}");
+        // Reopening keeps everything (and migrates nothing twice).
+        drop(store);
+        let store = Store::open(&StoreUrl::in_dir(dir.path())).unwrap();
+        assert_eq!(store.players().unwrap().len(), 2);
+        assert_eq!(store.config_once("a = 1").unwrap(), "a = 1");
+        assert_eq!(
+            store.config_once("a = 2").unwrap(),
+            "a = 1",
+            "the first config stays"
+        );
+        store
+            .push_curriculum(1, 1.2, "captors won 61% at 1.0")
+            .unwrap();
+        assert_eq!(store.curriculum_history().unwrap()[0].speed_ratio, 1.2);
+        store
+            .heartbeat("captors-main", BeatState::Training, 640, Some(512.0))
+            .unwrap();
+        store
+            .heartbeat("captors-main", BeatState::Training, 1280, Some(530.0))
+            .unwrap();
+        assert_eq!(store.heartbeats().unwrap().len(), 1);
+        store
+            .heartbeat("captors-main", BeatState::Done, 1280, None)
+            .unwrap();
+        let beat = &store.heartbeats().unwrap()[0];
+        assert_eq!(
+            (beat.state, beat.steps_per_s),
+            (BeatState::Done, 530.0),
+            "a run that trained nothing keeps the last rate"
+        );
+        store
+            .record_crash("target-main", "signal 9", "killed")
+            .unwrap();
+        assert_eq!(store.crashes().unwrap().len(), 1);
+        store.quarantine(t, "files missing").unwrap();
+        assert_eq!(
+            store.players().unwrap()[1].quarantined.as_deref(),
+            Some("files missing")
+        );
+    }
+
+    #[test]
+    fn the_curriculum_window_comes_back_from_the_store() {
+        let dir = tempfile::tempdir().unwrap();
+        let store = Store::open(&StoreUrl::in_dir(dir.path())).unwrap();
+        let c = store
+            .add_player(&player("captors-main", Side::Captors, Kind::Learner))
+            .unwrap();
+        let t = store
+            .add_player(&player("rule-based", Side::Target, Kind::Heuristic))
+            .unwrap();
+        for (i, won) in [true, false, true, true, false].into_iter().enumerate() {
+            store
+                .record_match(&game(&format!("k/{i}"), c, t, won))
+                .unwrap();
+        }
+        let faster = MatchRecord {
+            speed_ratio: 1.2,
+            ..game("k/fast", c, t, true)
+        };
+        store.record_match(&faster).unwrap();
+        assert_eq!(
+            store.recent_outcomes(c, 1.0, 0, 3).unwrap(),
+            vec![true, true, false],
+            "the last 3, oldest first"
+        );
+        assert_eq!(store.recent_outcomes(c, 1.2, 0, 10).unwrap(), vec![true]);
+        assert_eq!(
+            store.recent_outcomes(t, 1.0, 0, 10).unwrap(),
+            Vec::<bool>::new(),
+            "only this captor's"
+        );
+        assert!(
+            store
+                .recent_outcomes(c, 1.0, now_ms() + 60_000, 10)
+                .unwrap()
+                .is_empty(),
+            "only since the stage began"
+        );
+    }
+
+    #[test]
+    fn a_newer_schema_is_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let store = Store::open(&StoreUrl::in_dir(dir.path())).unwrap();
+        store
+            .rt
+            .block_on(
+                sqlx::query(
+                    "INSERT INTO _sqlx_migrations (version, description, installed_on, success, checksum, execution_time) \
+                     VALUES (9999, 'from the future', CURRENT_TIMESTAMP, TRUE, x'00', 0)",
+                )
+                .execute(&store.pool),
+            )
+            .unwrap();
+        drop(store);
+        let err = Store::open(&StoreUrl::in_dir(dir.path()))
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(err.contains("newer") && err.contains("9999"), "{err}");
+    }
+}

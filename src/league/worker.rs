@@ -1,0 +1,313 @@
+//! `t2e-league worker`: runs a league's seats on any host. It takes free
+//! seats from the store (leases, `store::leases`), runs each as a child
+//! process of this binary against the shared pool folder, renews the
+//! leases while they run, and supervises them with the manager's rules
+//! (`supervision`): a crash restarts from the last checkpoint with
+//! back-off, a seat that cannot start fails and stops the league.
+//!
+//! Safety rules:
+//! - A lease that cannot be renewed because another worker holds the seat
+//!   now (it expired) ends the child at once: a seat never trains twice.
+//! - A worker that cannot reach the store for as long as its leases last
+//!   ends its children itself before another worker may take their seats.
+//! - A worker killed with -9 takes its children with it (`PR_SET_PDEATHSIG`);
+//!   its leases expire and other workers resume the seats from the pool.
+//! - The pool folder must be the one every host shares: a worker that
+//!   cannot see a file the store names refuses to start, naming the file.
+
+use super::dir::LeagueDir;
+use super::open::open_process;
+use super::process::{log_since, spawn, tail, Role, Supervised};
+use super::store::{host_name, now_ms, SeatLease, SeatState, Store};
+use super::supervision::{classify, decide, last_error_line, CrashBudget, Exit, Next};
+use anyhow::{bail, Result};
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
+
+/// How a worker runs.
+#[derive(Clone, Debug)]
+pub struct WorkerOptions {
+    /// Seats it runs at once.
+    pub seats: usize,
+    /// The host name its leases and heartbeats record.
+    pub host: String,
+    /// Stop after this long (children checkpoint, seats are given back).
+    pub run_for: Option<Duration>,
+    /// How long a lease lasts without renewal (renewed every third of it).
+    pub lease: Duration,
+    /// Where the children's logs go (a local folder).
+    pub logs: PathBuf,
+}
+
+impl WorkerOptions {
+    pub fn check(&self) -> Result<()> {
+        if self.seats == 0 {
+            bail!("--seats 0: a worker runs at least one seat");
+        }
+        if self.lease < Duration::from_secs(3) {
+            bail!(
+                "--lease {:?}: at least 3 s (it is renewed every third of it)",
+                self.lease
+            );
+        }
+        if self.host.trim().is_empty() {
+            bail!("--host: empty");
+        }
+        Ok(())
+    }
+}
+
+/// A seat this worker holds and its process.
+struct Held {
+    lease: SeatLease,
+    proc: Supervised,
+}
+
+/// The pool folder holds this league and every file the store names, or the
+/// worker refuses to run on it.
+fn check_pool(dir: &LeagueDir, store: &Store) -> Result<()> {
+    let pool = dir.root.display();
+    if !dir.identity_path().is_file() {
+        bail!(
+            "{pool}: holds no league.json, so it is not this league's pool folder (the store is {}). --pool must be the folder the manager's --pool names, shared by every host",
+            store.url()
+        );
+    }
+    for p in store.players()? {
+        if let Some((path, _)) = &p.checkpoint {
+            if !super::store::inside_pool(path) {
+                bail!(
+                    "{}: player {} names {path}, outside the pool folder; refusing it",
+                    store.url(),
+                    p.name
+                );
+            }
+            if !dir.root.join(path).exists() {
+                bail!(
+                    "{pool}: cannot see {path}, which the store names for player {} (written by another host?): the pool folder is not shared. Every worker's --pool must be the one folder all hosts share",
+                    p.name
+                );
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Runs seats until every seat of the league is done (Ok), one fails (an
+/// error naming it), `run_for` passes or `stop` is set (Ok: seats given
+/// back for other workers or a later run).
+pub fn run_worker(dir: &LeagueDir, opts: &WorkerOptions, stop: &AtomicBool) -> Result<()> {
+    opts.check()?;
+    let opened = open_process(dir)?;
+    let store = opened.store;
+    check_pool(dir, &store)?;
+    let holder = format!(
+        "{}:{}:{}",
+        opts.host,
+        std::process::id(),
+        &super::dir::new_league_id()[..8]
+    );
+    let lease_ms = opts.lease.as_millis() as i64;
+    let budget = CrashBudget::default();
+    let deadline = opts.run_for.map(|d| Instant::now() + d);
+    let mut held: Vec<Held> = Vec::new();
+    let mut stopping = false;
+    let mut failure: Option<String> = None;
+    let mut last_renewed = Instant::now();
+    let mut last_claim = Instant::now() - Duration::from_secs(60);
+    eprintln!(
+        "worker {holder}: league {} ({}), pool {}, up to {} seats",
+        opened.cfg.name,
+        store.url(),
+        dir.root.display(),
+        opts.seats
+    );
+    loop {
+        if !stopping
+            && (stop.load(Ordering::SeqCst)
+                || failure.is_some()
+                || deadline.is_some_and(|d| Instant::now() >= d))
+        {
+            stopping = true;
+            for h in &held {
+                if let Some(c) = &h.proc.child {
+                    // SAFETY: signalling our own child by pid.
+                    unsafe {
+                        libc::kill(c.id() as i32, libc::SIGINT);
+                    }
+                }
+            }
+        }
+        // Renew every third of the lease; a seat taken over, or a store out
+        // of reach for as long as the lease, ends its child here.
+        if last_renewed.elapsed() >= opts.lease / 3 {
+            let mut all_ok = true;
+            for h in &mut held {
+                match store.renew_lease(&h.lease, lease_ms) {
+                    Ok(true) => {}
+                    Ok(false) => {
+                        eprintln!(
+                            "worker {holder}: lost the lease of {} (another worker holds it now); ending its process",
+                            h.lease.seat
+                        );
+                        if let Some(mut c) = h.proc.child.take() {
+                            c.kill().ok();
+                            c.wait().ok();
+                        }
+                        h.proc.finished = true;
+                    }
+                    Err(e) => {
+                        all_ok = false;
+                        eprintln!("worker {holder}: cannot renew {}: {e}", h.lease.seat);
+                    }
+                }
+            }
+            if all_ok {
+                last_renewed = Instant::now();
+            } else if last_renewed.elapsed() >= opts.lease * 9 / 10 {
+                for h in &mut held {
+                    if let Some(mut c) = h.proc.child.take() {
+                        eprintln!(
+                            "worker {holder}: the store was out of reach for the lease's length; ending {} before another worker may take it",
+                            h.lease.seat
+                        );
+                        c.kill().ok();
+                        c.wait().ok();
+                    }
+                    h.proc.finished = true;
+                }
+            }
+        }
+        for h in &mut held {
+            let p = &mut h.proc;
+            if let Some(child) = &mut p.child {
+                if let Some(status) = child.try_wait()? {
+                    p.child = None;
+                    use std::os::unix::process::ExitStatusExt;
+                    let exit = classify(status.code(), status.signal());
+                    let log = log_since(&p.role.log_path(&opts.logs), p.log_offset);
+                    let message = last_error_line(&log);
+                    if p.started.elapsed() > Duration::from_secs(120) {
+                        p.failures = 0;
+                    }
+                    p.failures += 1;
+                    let asked = stopping || stop.load(Ordering::SeqCst);
+                    let name = p.role.name();
+                    match decide(
+                        &name,
+                        &exit,
+                        message.as_deref(),
+                        asked,
+                        &mut p.crashes,
+                        now_ms(),
+                        p.failures,
+                        budget,
+                    ) {
+                        Next::Finished => {
+                            if exit == Exit::Done {
+                                store.finish_seat(&h.lease, SeatState::Done, None)?;
+                                eprintln!("worker {holder}: {name} done");
+                            } else {
+                                store.release_seat(&h.lease)?;
+                            }
+                            p.finished = true;
+                        }
+                        Next::Restart { after, cause } => {
+                            store
+                                .record_crash(&name, &cause, &tail(&log, 5))
+                                .unwrap_or_else(|e| eprintln!("cannot record a crash: {e}"));
+                            eprintln!(
+                                "worker {holder}: {name} crashed ({cause}); restarting it in {} s",
+                                after.as_secs()
+                            );
+                            p.restart_at = Some(Instant::now() + after);
+                        }
+                        Next::StopLeague { why } => {
+                            if exit != Exit::CannotStart {
+                                store.record_crash(&name, &why, &tail(&log, 5)).ok();
+                            }
+                            store.finish_seat(&h.lease, SeatState::Failed, Some(&why))?;
+                            eprintln!("worker {holder}: {why}");
+                            p.finished = true;
+                            failure.get_or_insert(why);
+                        }
+                    }
+                }
+            }
+            if p.child.is_none() && !p.finished && !stopping {
+                if let Some(at) = p.restart_at {
+                    if Instant::now() >= at {
+                        p.log_offset = std::fs::metadata(p.role.log_path(&opts.logs))
+                            .map(|m| m.len())
+                            .unwrap_or(0);
+                        p.child = Some(spawn(dir, p.role, &opts.logs, Some(&opts.host))?);
+                        p.started = Instant::now();
+                        p.restart_at = None;
+                    }
+                }
+            }
+            if stopping && p.child.is_none() && !p.finished {
+                store.release_seat(&h.lease).ok();
+                p.finished = true;
+            }
+        }
+        held.retain(|h| !h.proc.finished);
+        if !stopping && held.len() < opts.seats && last_claim.elapsed() >= Duration::from_secs(1) {
+            last_claim = Instant::now();
+            let seats = store.seats()?;
+            if let Some(f) = seats.iter().find(|s| s.state == SeatState::Failed) {
+                failure.get_or_insert(format!(
+                    "seat {} failed: {}",
+                    f.name,
+                    f.reason.as_deref().unwrap_or("no reason recorded")
+                ));
+                continue;
+            }
+            if held.is_empty() && seats.iter().all(|s| s.state == SeatState::Done) {
+                eprintln!("worker {holder}: every seat of the league is done");
+                return Ok(());
+            }
+            if let Some(lease) = store.claim_seat(&holder, &opts.host, lease_ms)? {
+                let Some(role) = Role::from_name(&lease.seat) else {
+                    store.release_seat(&lease)?;
+                    bail!(
+                        "{}: seat {} is not one this build runs (a newer manager?)",
+                        store.url(),
+                        lease.seat
+                    );
+                };
+                eprintln!(
+                    "worker {holder}: took {} (taken {} times so far)",
+                    lease.seat, lease.claims
+                );
+                last_renewed = last_renewed.min(Instant::now());
+                held.push(Held {
+                    lease,
+                    proc: Supervised {
+                        role,
+                        child: None,
+                        finished: false,
+                        restart_at: Some(Instant::now()),
+                        failures: 0,
+                        started: Instant::now(),
+                        log_offset: 0,
+                        crashes: Vec::new(),
+                    },
+                });
+            }
+        }
+        if stopping && held.is_empty() {
+            return match failure {
+                Some(why) => bail!("{why}"),
+                None => Ok(()),
+            };
+        }
+        std::thread::sleep(Duration::from_millis(200));
+    }
+}
+
+/// The worker's default host name.
+pub fn default_host() -> String {
+    host_name()
+}
