@@ -1,7 +1,20 @@
 #!/usr/bin/env bash
 # The test command (README, CI): installs what a fresh machine lacks, then
-# runs every test against the Gibson maps in ../shared/maps/gibson.
+# runs every test against the Gibson maps in ../shared/maps/gibson. The
+# store's tests run against real PostgreSQL servers that the tests start
+# with scripts/postgres.sh in a folder of this run's own; they are stopped
+# and removed when the tests end, pass or fail.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ./scripts/setup.sh --no-build
+T2E_PG_TEST_DIR=$(mktemp -d /tmp/t2e-pg-test.XXXXXX)
+chmod 755 "$T2E_PG_TEST_DIR"
+export T2E_PG_TEST_DIR
+cleanup() {
+    for cluster in "$T2E_PG_TEST_DIR"/*/; do
+        [ -d "$cluster/data" ] && ./scripts/postgres.sh stop "$cluster" >/dev/null 2>&1 || true
+    done
+    rm -rf "$T2E_PG_TEST_DIR"
+}
+trap cleanup EXIT
 cargo test --release "$@"

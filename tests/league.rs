@@ -7,47 +7,14 @@
 
 mod common;
 
-use std::collections::BTreeSet;
 use std::path::Path;
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 use t2e::env::Side;
 use t2e::league::dir::LeagueDir;
 use t2e::league::store::{BeatState, Kind, Store};
-use t2e::learn::persist::RunState;
 
-const CONFIG: &str = r#"
-name = "kill-test"
-protocol = "held-out"
-seed = 5
-env_steps_per_learner = 9_600
-maps = "shipped"
-num_captors = 2
-episode_length = 40
-threads_per_learner = 1
-num_envs = 8
-rollout_steps = 20
-checkpoint_every = 2
-opponent_cache = 2
-[captors.net]
-hidden = 16
-conv_channels = [2, 4]
-patch_pool = 4
-[target.net]
-hidden = 16
-conv_channels = [2, 4]
-patch_pool = 4
-[snapshots]
-every_env_steps = 640
-win_rate = 0.5
-timeout_env_steps = 1_280
-[curriculum]
-window = 20
-promote_at = 0.3
-[evaluator]
-episodes = 3
-cpu_share = 0.5
-"#;
+const CONFIG: &str = common::league::TINY_LEAGUE;
 
 fn bin() -> &'static str {
     env!("CARGO_BIN_EXE_t2e-league")
@@ -70,82 +37,6 @@ fn sigkill(pid: i64) {
     unsafe {
         libc::kill(pid as i32, libc::SIGKILL);
     }
-}
-
-/// Checks the invariants; returns (matches, per-learner env steps of their
-/// resume points).
-fn check(dir: &LeagueDir) -> (u64, Vec<u64>) {
-    let store = Store::open(&dir.store).unwrap();
-    let players = store.players().unwrap();
-    // No duplicate member: one row per name (the schema) and per snapshot.
-    let mut seen = BTreeSet::new();
-    for p in &players {
-        assert!(
-            seen.insert((
-                p.side.name(),
-                p.kind.name(),
-                p.parent,
-                p.env_steps,
-                p.name.clone()
-            )),
-            "duplicate {p:?}"
-        );
-    }
-    let snapshots: Vec<_> = players
-        .iter()
-        .filter(|p| p.kind == Kind::Snapshot)
-        .collect();
-    let mut steps = BTreeSet::new();
-    for s in &snapshots {
-        assert!(
-            steps.insert((s.side.name(), s.env_steps)),
-            "two snapshots of one state: {s:?}"
-        );
-    }
-    // No orphan file: every snapshot folder has a row, every row its files.
-    let rels: BTreeSet<String> = players
-        .iter()
-        .filter_map(|p| p.checkpoint.as_ref().map(|c| c.0.clone()))
-        .collect();
-    if let Ok(entries) = std::fs::read_dir(dir.players_dir()) {
-        for e in entries {
-            let path = e.unwrap().path();
-            let name = path.file_name().unwrap().to_string_lossy().into_owned();
-            if name.starts_with('.') {
-                continue; // a temporary a killed writer left: removed at the next start
-            }
-            if !rels.contains(&dir.relative(&path)) {
-                // A writer killed between the folder and its row leaves a
-                // complete snapshot that the next start adopts.
-                let meta = t2e::nn::checkpoint::read_meta(&path)
-                    .unwrap_or_else(|e| panic!("orphan {}: {e:#}", path.display()));
-                assert!(meta.league.is_some(), "orphan {}", path.display());
-                t2e::nn::PolicySnapshot::load(&path, meta.side).unwrap();
-            }
-        }
-    }
-    for s in &snapshots {
-        if s.quarantined.is_none() {
-            let (rel, sha) = s.checkpoint.as_ref().unwrap();
-            let meta = dir.root.join(rel).join("meta.json");
-            assert_eq!(&t2e::util::sha256_file(&meta).unwrap(), sha, "{rel}");
-            t2e::nn::PolicySnapshot::load(&dir.root.join(rel), s.side).unwrap();
-        }
-    }
-    // Matches reference known players; keys are unique (schema) and name their recorder.
-    let ids: BTreeSet<i64> = players.iter().map(|p| p.id).collect();
-    for r in store.payoff().unwrap() {
-        assert!(ids.contains(&r.captor) && ids.contains(&r.target));
-    }
-    let resume: Vec<u64> = [Side::Captors, Side::Target]
-        .iter()
-        .map(|&side| {
-            RunState::read(&dir.learner_dir(side))
-                .map(|s| s.env_steps)
-                .unwrap_or(0)
-        })
-        .collect();
-    (store.match_count().unwrap(), resume)
 }
 
 /// The learner processes the manager `manager` spawned.
@@ -186,7 +77,7 @@ fn killed_at_random_moments_the_league_loses_and_duplicates_nothing() {
         let _ = manager.wait();
         // Children die with the manager (PR_SET_PDEATHSIG); give them a moment.
         std::thread::sleep(Duration::from_millis(500));
-        let (m, r) = check(&dir);
+        let (m, r) = common::league::check(&dir);
         assert!(
             m >= matches,
             "round {round}: matches went from {matches} to {m}"
@@ -222,7 +113,7 @@ fn killed_at_random_moments_the_league_loses_and_duplicates_nothing() {
         );
         std::thread::sleep(Duration::from_millis(200));
     }
-    let (m, r) = check(&dir);
+    let (m, r) = common::league::check(&dir);
     assert!(m >= matches);
     assert_eq!(r, vec![9_600, 9_600], "both learners reach their budget");
     let store = Store::open(&dir.store).unwrap();

@@ -146,6 +146,8 @@ fn degenerate_options_are_refused() {
             iterations: 1,
             device: None,
             opponents: false,
+            store: None,
+            writers: vec![1],
         };
         let err = t2e::cli::bench::run(args).unwrap_err().to_string();
         assert!(err.contains("--seconds"), "{seconds}: {err}");

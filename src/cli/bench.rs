@@ -42,6 +42,14 @@ pub struct BenchArgs {
     /// robot row, over --envs worlds.
     #[arg(long)]
     pub opponents: bool,
+    /// Instead of the environment table, time the league store's writes
+    /// (matches with their rating updates) with --writers concurrent
+    /// writers: a postgres:// URL, or `sqlite` for a fresh SQLite file.
+    #[arg(long, value_name = "URL")]
+    pub store: Option<String>,
+    /// Concurrent writers for --store, comma-separated.
+    #[arg(long, value_delimiter = ',', default_value = "1,4,8")]
+    pub writers: Vec<usize>,
 }
 
 /// One config's whole iterations, timed.
@@ -226,6 +234,14 @@ pub fn run(args: BenchArgs) -> Result<()> {
     }
     if !args.train.is_empty() {
         return train_table(&args, &args.train);
+    }
+    if let Some(url) = &args.store {
+        let url = if url == "sqlite" {
+            "sqlite:league.db"
+        } else {
+            url.as_str()
+        };
+        return super::bench_store::run(url, &args.writers, args.seconds);
     }
     if args.opponents {
         return super::bench_opponents::run(args.seconds, args.envs);

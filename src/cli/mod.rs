@@ -3,6 +3,7 @@ use clap::{Parser, Subcommand};
 
 pub mod bench;
 mod bench_opponents;
+mod bench_store;
 pub mod eval;
 pub mod league;
 pub mod maps;

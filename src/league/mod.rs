@@ -9,8 +9,11 @@
 //! - `pool`: snapshot folders and their rows (written once, adopted,
 //!   quarantined, never deleted).
 //! - `supervision`: the one outcome of every process exit, the crash budget.
-//! - `store`: the SQLite store (players, matches, ratings, curriculum,
-//!   heartbeats, crashes, config), sqlx kept inside it.
+//! - `store`: the store (players, matches, ratings, curriculum, heartbeats,
+//!   crashes, seats, config) on SQLite or PostgreSQL, sqlx kept inside it.
+//! - `process`: spawning a seat's process, per-host locks, logs.
+//! - `worker`: `t2e-league worker`: runs seats taken from the store.
+//! - `seats`: the manager's side of a league whose seats run on workers.
 //! - `matchmaking`: PFSP opponent draws, pure and seeded.
 //! - `ratings`: live Weng-Lin ratings and a batch Bradley-Terry fit.
 //! - `curriculum`: the speed-ratio stages and when to move on.

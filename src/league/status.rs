@@ -421,6 +421,26 @@ pub fn render(r: &StatusReport) -> String {
     for t in &targets {
         let _ = writeln!(s, "  #{t} = {}", name(*t));
     }
+    if !r.seats.is_empty() {
+        let _ = writeln!(s, "\nseats (run by workers):");
+        for seat in &r.seats {
+            let _ = writeln!(
+                s,
+                "  {:<18} {:<7} {}taken {} times{}",
+                seat.name,
+                seat.state,
+                match (&seat.host, seat.lease_left_s) {
+                    (Some(h), Some(left)) => format!("on {h}, lease {left:.0} s left; "),
+                    _ => String::new(),
+                },
+                seat.claims,
+                seat.reason
+                    .as_deref()
+                    .map(|r| format!(": {r}"))
+                    .unwrap_or_default()
+            );
+        }
+    }
     if !r.crashes.is_empty() {
         let _ = writeln!(s, "\ncrashes:");
         for c in &r.crashes {

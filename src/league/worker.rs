@@ -68,12 +68,6 @@ struct Held {
 /// worker refuses to run on it.
 fn check_pool(dir: &LeagueDir, store: &Store) -> Result<()> {
     let pool = dir.root.display();
-    if !dir.identity_path().is_file() {
-        bail!(
-            "{pool}: holds no league.json, so it is not this league's pool folder (the store is {}). --pool must be the folder the manager's --pool names, shared by every host",
-            store.url()
-        );
-    }
     for p in store.players()? {
         if let Some((path, _)) = &p.checkpoint {
             if !super::store::inside_pool(path) {
@@ -99,6 +93,16 @@ fn check_pool(dir: &LeagueDir, store: &Store) -> Result<()> {
 /// back for other workers or a later run).
 pub fn run_worker(dir: &LeagueDir, opts: &WorkerOptions, stop: &AtomicBool) -> Result<()> {
     opts.check()?;
+    // The store first: an unreachable server or a wrong password is the
+    // error to show, before anything about the pool folder.
+    drop(Store::open_existing(&dir.store)?);
+    if !dir.identity_path().is_file() {
+        bail!(
+            "{}: holds no league.json, so it is not this league's pool folder (the store is {}). --pool must be the folder the manager's --pool names, shared by every host",
+            dir.root.display(),
+            dir.store
+        );
+    }
     let opened = open_process(dir)?;
     let store = opened.store;
     check_pool(dir, &store)?;

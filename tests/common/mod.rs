@@ -102,4 +102,5 @@ pub fn tiny_train_config(
         ..TrainConfig::default()
     }
 }
+pub mod league;
 pub mod postgres;

@@ -1,7 +1,9 @@
 //! A real PostgreSQL server for the tests, started by the project's own
-//! `scripts/postgres.sh` (no mock store): one cluster per test binary under
-//! `target/pg-test/NAME`, a fresh database per test. `scripts/test.sh`
-//! stops the clusters when the tests end.
+//! `scripts/postgres.sh` (no mock store): clusters under
+//! `$T2E_PG_TEST_DIR/NAME` (default /tmp/t2e-pg-test; a folder the server's
+//! unprivileged user can reach), a fresh database per test.
+//! `scripts/test.sh` gives each run its own folder and stops its clusters
+//! when the tests end.
 #![allow(dead_code)]
 
 use std::path::PathBuf;
@@ -15,7 +17,13 @@ pub fn repo() -> PathBuf {
 
 /// The folder of the cluster `name` (its data, port, password, logs).
 pub fn cluster_dir(name: &str) -> PathBuf {
-    repo().join("target").join("pg-test").join(name)
+    let root = std::env::var_os("T2E_PG_TEST_DIR")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from("/tmp/t2e-pg-test"));
+    std::fs::create_dir_all(&root).unwrap();
+    use std::os::unix::fs::PermissionsExt;
+    std::fs::set_permissions(&root, std::fs::Permissions::from_mode(0o755)).ok();
+    root.join(name)
 }
 
 /// Starts (or finds running) the cluster `name`; returns its URL.
