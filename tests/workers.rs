@@ -193,6 +193,20 @@ fn two_hosts_share_a_pool_and_kill_9_loses_nothing() {
         .iter()
         .all(|l| l["host"].is_string()));
     assert!(!String::from_utf8_lossy(&out.stdout).contains(raw.split(':').nth(2).unwrap()));
+    // export from "another host": the store and the shared pool.
+    let out = Command::new(bin())
+        .args(["export", "captors-main", "--store", &raw, "--pool"])
+        .arg(tmp.join("pool"))
+        .arg("--out")
+        .arg(tmp.join("exported"))
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(tmp.join("exported").join("meta.json").is_file());
 }
 
 #[test]

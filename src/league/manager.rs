@@ -213,19 +213,7 @@ pub fn run_with(
         })
         .collect();
     let logs = dir.root.join("logs");
-    let mut procs: Vec<Supervised> = roles
-        .into_iter()
-        .map(|role| Supervised {
-            role,
-            child: None,
-            finished: false,
-            restart_at: Some(Instant::now()),
-            failures: 0,
-            started: Instant::now(),
-            log_offset: 0,
-            crashes: Vec::new(),
-        })
-        .collect();
+    let mut procs: Vec<Supervised> = roles.into_iter().map(Supervised::new).collect();
     let budget = CrashBudget::default();
     let deadline = run_for.map(|d| Instant::now() + d);
     let mut stopping = false;

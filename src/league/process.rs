@@ -91,6 +91,38 @@ pub struct Supervised {
     pub crashes: Vec<(i64, String)>,
 }
 
+impl Supervised {
+    /// A process to start now.
+    pub fn new(role: Role) -> Supervised {
+        Supervised {
+            role,
+            child: None,
+            finished: false,
+            restart_at: Some(Instant::now()),
+            failures: 0,
+            started: Instant::now(),
+            log_offset: 0,
+            crashes: Vec::new(),
+        }
+    }
+}
+
+/// The child dies with its parent (Linux `PR_SET_PDEATHSIG`): a manager or
+/// worker killed with -9 leaves nothing running.
+pub fn die_with_parent(cmd: &mut Command) {
+    #[cfg(target_os = "linux")]
+    {
+        use std::os::unix::process::CommandExt;
+        // SAFETY: prctl is async-signal-safe.
+        unsafe {
+            cmd.pre_exec(|| {
+                libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGKILL);
+                Ok(())
+            });
+        }
+    }
+}
+
 /// Starts `role` for the league in `dir` as a child process, its output
 /// appended to its log in `logs`. A PostgreSQL store's URL reaches the child
 /// in its environment (`T2E_STORE`), never on its command line, where any
@@ -127,17 +159,7 @@ pub fn spawn(dir: &LeagueDir, role: Role, logs: &Path, host: Option<&str>) -> Re
         .stdin(Stdio::null())
         .stdout(log.try_clone()?)
         .stderr(log);
-    #[cfg(target_os = "linux")]
-    {
-        use std::os::unix::process::CommandExt;
-        // SAFETY: prctl is async-signal-safe; the child dies with its parent.
-        unsafe {
-            cmd.pre_exec(|| {
-                libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGKILL);
-                Ok(())
-            });
-        }
-    }
+    die_with_parent(&mut cmd);
     cmd.spawn()
         .with_context(|| format!("cannot start the {}", role.name()))
 }

@@ -37,17 +37,7 @@ pub fn spawn_worker(dir: &LeagueDir, logs: &Path, index: usize) -> Result<Child>
     cmd.stdin(Stdio::null())
         .stdout(log.try_clone()?)
         .stderr(log);
-    #[cfg(target_os = "linux")]
-    {
-        use std::os::unix::process::CommandExt;
-        // SAFETY: prctl is async-signal-safe; the worker dies with its manager.
-        unsafe {
-            cmd.pre_exec(|| {
-                libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGKILL);
-                Ok(())
-            });
-        }
-    }
+    super::process::die_with_parent(&mut cmd);
     cmd.spawn().context("cannot start a worker")
 }
 

@@ -288,16 +288,7 @@ pub fn run_worker(dir: &LeagueDir, opts: &WorkerOptions, stop: &AtomicBool) -> R
                 last_renewed = last_renewed.min(Instant::now());
                 held.push(Held {
                     lease,
-                    proc: Supervised {
-                        role,
-                        child: None,
-                        finished: false,
-                        restart_at: Some(Instant::now()),
-                        failures: 0,
-                        started: Instant::now(),
-                        log_offset: 0,
-                        crashes: Vec::new(),
-                    },
+                    proc: Supervised::new(role),
                 });
             }
         }
