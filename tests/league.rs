@@ -279,7 +279,7 @@ fn exploiters_play_the_main_learners_join_the_pool_and_start_again() {
         // It plays only the other side's main learner (its snapshots), or
         // the heuristic member before the main learner has one.
         let main = id(&format!("{}-main", other.name())).unwrap();
-        let heuristic = id(&t2e::league::learner::heuristic_name(other)).unwrap();
+        let heuristic = id(&t2e::league::players::heuristic_name(other)).unwrap();
         let mut games = 0;
         for r in &payoff {
             let (me, them) = match side {

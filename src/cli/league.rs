@@ -4,6 +4,7 @@
 use crate::env::Side;
 use crate::league::dir::LeagueDir;
 use crate::league::store::StoreUrl;
+use crate::league::supervision::{CannotStart, Outcome};
 use crate::league::worker::WorkerOptions;
 use crate::league::{learner, manager, process, status};
 use anyhow::{bail, Context, Result};
@@ -284,12 +285,12 @@ pub fn evaluator(args: EvaluatorArgs) -> Result<()> {
 
 /// A league process's exit code (`league::supervision`): the manager reads
 /// the outcome from it.
-fn exit_with(result: Result<learner::Outcome>) -> Result<()> {
+fn exit_with(result: Result<Outcome>) -> Result<()> {
     use crate::league::supervision::{EXIT_CANNOT_START, EXIT_STOPPED};
     match result {
-        Ok(learner::Outcome::Done) => Ok(()),
-        Ok(learner::Outcome::Stopped) => std::process::exit(EXIT_STOPPED),
-        Err(e) if e.downcast_ref::<learner::CannotStart>().is_some() => {
+        Ok(Outcome::Done) => Ok(()),
+        Ok(Outcome::Stopped) => std::process::exit(EXIT_STOPPED),
+        Err(e) if e.downcast_ref::<CannotStart>().is_some() => {
             eprintln!("error: {e:#}");
             std::process::exit(EXIT_CANNOT_START)
         }
@@ -304,7 +305,7 @@ pub fn learner(args: LearnerArgs) -> Result<()> {
         other => bail!("--side {other}: expected captors or target"),
     };
     let dir = process::dir_from_env(&args.dir)?;
-    let seat = learner::Seat {
+    let seat = crate::league::players::Seat {
         side,
         exploiter: args.exploiter,
     };

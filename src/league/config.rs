@@ -5,8 +5,8 @@
 
 use super::curriculum::CurriculumConfig;
 use super::evaluator::EvaluatorConfig;
-use super::learner::Seat;
 use super::matchmaking::MatchmakingConfig;
+use super::players::Seat;
 use crate::env::{EnvConfig, Side};
 use crate::learn::maac::MaacConfig;
 use crate::learn::maddpg::MaddpgConfig;

@@ -161,11 +161,11 @@ impl LeagueDir {
     }
 
     pub fn learner_dir(&self, side: Side) -> PathBuf {
-        self.seat_dir(super::learner::Seat::main(side))
+        self.seat_dir(super::players::Seat::main(side))
     }
 
     /// A learner's run folder (main learner or exploiter).
-    pub fn seat_dir(&self, seat: super::learner::Seat) -> PathBuf {
+    pub fn seat_dir(&self, seat: super::players::Seat) -> PathBuf {
         self.root.join("learners").join(seat.name())
     }
 
@@ -176,7 +176,7 @@ impl LeagueDir {
     pub fn log_path(&self, side: Side) -> PathBuf {
         self.root
             .join("logs")
-            .join(format!("{}.log", super::learner::learner_name(side)))
+            .join(format!("{}.log", super::players::learner_name(side)))
     }
 
     /// `path` relative to the league directory, '/'-separated (as stored).

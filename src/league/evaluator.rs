@@ -7,8 +7,9 @@
 
 use super::config::LeagueConfig;
 use super::dir::LeagueDir;
-use super::learner::{heuristic_name, learner_name, CannotStart, Outcome};
+use super::players::{heuristic_name, learner_name, Seat};
 use super::store::{BeatState, Kind, MatchRecord, Store};
+use super::supervision::{CannotStart, Outcome};
 use crate::controllers::ControllerSpec;
 use crate::env::{CaptureRule, Side};
 use crate::eval::{play_episode, EvalSetting};
@@ -169,7 +170,7 @@ pub fn run_evaluator(dir: &LeagueDir, stop: &AtomicBool) -> Result<Outcome> {
         .collect();
     for side in [Side::Captors, Side::Target] {
         if cfg.exploiters.enabled(side) {
-            learners.push(super::learner::Seat::exploiter(side).name());
+            learners.push(Seat::exploiter(side).name());
         }
     }
     tch::set_num_threads(1);

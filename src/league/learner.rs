@@ -14,8 +14,10 @@ use super::dir::LeagueDir;
 use super::matchmaking::{
     choose_opponent, draw_seed, pick_slot, slot_seed, Candidate, MatchmakingConfig, Opponent,
 };
+use super::players::{learner_name, Seat};
 use super::pool::{add_snapshot, SnapshotOutcome};
 use super::store::{BeatState, Kind, MatchRecord, NewPlayer, Player, Store};
+use super::supervision::{CannotStart, Outcome};
 use crate::controllers::ControllerSpec;
 use crate::env::{Action, Side, VecEnv};
 use crate::learn::acting::{gather_worlds, sample};
@@ -30,51 +32,6 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::Instant;
 use tch::{Device, Kind as TKind, Tensor};
-
-/// The player name of a side's main learner.
-pub fn learner_name(side: Side) -> String {
-    format!("{}-main", side.name())
-}
-
-/// Which learner a process runs: a side's main learner or its main exploiter.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Seat {
-    pub side: Side,
-    pub exploiter: bool,
-}
-
-impl Seat {
-    pub fn main(side: Side) -> Seat {
-        Seat {
-            side,
-            exploiter: false,
-        }
-    }
-
-    pub fn exploiter(side: Side) -> Seat {
-        Seat {
-            side,
-            exploiter: true,
-        }
-    }
-
-    /// Its player name (`captors-main`, `target-exploiter`, ...).
-    pub fn name(self) -> String {
-        if self.exploiter {
-            format!("{}-exploiter", self.side.name())
-        } else {
-            learner_name(self.side)
-        }
-    }
-}
-
-/// The player name of a side's permanent heuristic member.
-pub fn heuristic_name(side: Side) -> String {
-    match side {
-        Side::Captors => "expert-captors".into(),
-        Side::Target => "rule-based-target".into(),
-    }
-}
 
 /// A loaded opponent network.
 struct Loaded {
@@ -597,6 +554,25 @@ pub fn should_wait(mine: u64, other: Option<(BeatState, u64, i64)>, lead: u64) -
     }
 }
 
+/// When a learner adds a snapshot of itself to the pool.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SnapshotRule {
+    /// At least this many env steps since its last snapshot...
+    pub every_env_steps: u64,
+    /// ...and winning at least this share of its games since then...
+    pub win_rate: f64,
+    /// ...or this many env steps since its last snapshot, winning or not.
+    pub timeout_env_steps: u64,
+}
+
+/// Whether a learner `since` env steps past its last snapshot, having won
+/// `wins` of `games` since, snapshots now (AlphaStar's rule: when it beats
+/// its opponents, or at a timeout so the pool keeps moving).
+pub fn should_snapshot(since: u64, wins: u64, games: u64, rule: SnapshotRule) -> bool {
+    let winning = games > 0 && wins as f64 / games as f64 >= rule.win_rate;
+    (since >= rule.every_env_steps && winning) || since >= rule.timeout_env_steps
+}
+
 /// Waits (heartbeating "waiting") while `should_wait`; returns the seconds waited.
 fn wait_for_other_main(
     store: &Store,
@@ -634,21 +610,6 @@ fn wait_for_other_main(
     }
     Ok(started.elapsed().as_secs_f64())
 }
-
-/// How a learner process ended (its exit code: `supervision`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Outcome {
-    /// It reached its budget.
-    Done,
-    /// It was stopped (SIGINT) before its budget, after checkpointing.
-    Stopped,
-}
-
-/// An error before the learner trained a step: restarting would fail the
-/// same way (`supervision::EXIT_CANNOT_START`).
-#[derive(Debug, thiserror::Error)]
-#[error("{0}")]
-pub struct CannotStart(pub String);
 
 fn cannot_start(e: anyhow::Error) -> anyhow::Error {
     anyhow::Error::new(CannotStart(format!("{e:#}")))
@@ -909,13 +870,20 @@ fn train_learner(
             hooks.wins - wins_at_snapshot,
             hooks.games - games_at_snapshot,
         );
-        let (win_rate, timeout) = if seat.exploiter {
-            (cfg.exploiters.win_rate, cfg.exploiters.timeout_env_steps)
-        } else {
-            (cfg.snapshots.win_rate, cfg.snapshots.timeout_env_steps)
+        let rule = SnapshotRule {
+            every_env_steps: cfg.snapshots.every_env_steps,
+            win_rate: if seat.exploiter {
+                cfg.exploiters.win_rate
+            } else {
+                cfg.snapshots.win_rate
+            },
+            timeout_env_steps: if seat.exploiter {
+                cfg.exploiters.timeout_env_steps
+            } else {
+                cfg.snapshots.timeout_env_steps
+            },
         };
-        let winning = g > 0 && w as f64 / g as f64 >= win_rate;
-        if (since >= cfg.snapshots.every_env_steps && winning) || since >= timeout {
+        if should_snapshot(since, w, g, rule) {
             // The learner's own checkpoint first: a restart then resumes at
             // or after this snapshot, so it never takes one under a name
             // the pool already holds.
@@ -1021,6 +989,33 @@ fn save_learner(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_learner_snapshots_when_it_wins_or_at_the_timeout() {
+        let rule = SnapshotRule {
+            every_env_steps: 40_000,
+            win_rate: 0.55,
+            timeout_env_steps: 80_000,
+        };
+        assert!(
+            should_snapshot(40_000, 11, 20, rule),
+            "55% after 40 k steps"
+        );
+        assert!(!should_snapshot(40_000, 10, 20, rule), "50% is under 55%");
+        assert!(
+            !should_snapshot(39_999, 20, 20, rule),
+            "winning, but too soon"
+        );
+        assert!(
+            !should_snapshot(60_000, 0, 0, rule),
+            "no games: not winning"
+        );
+        assert!(
+            should_snapshot(80_000, 0, 0, rule),
+            "the timeout, winning or not"
+        );
+        assert!(should_snapshot(80_000, 0, 20, rule));
+    }
 
     #[test]
     fn a_learner_waits_only_for_a_live_learner_it_is_far_ahead_of() {

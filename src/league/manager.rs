@@ -17,8 +17,8 @@
 
 use super::config::LeagueConfig;
 use super::dir::{new_league_id, LeagueDir, LeagueIdentity};
-use super::learner::Seat;
 use super::open::{plan_start, StartPlan};
+use super::players::Seat;
 use super::pool::{ensure_heuristic_members, reconcile};
 use super::process::{lock_holder, log_since, spawn, tail, try_lock, Role, Supervised};
 use super::store::{now_ms, Store};

@@ -6,6 +6,7 @@
 //! - `dir`: the league directory's layout.
 //! - `open`: opening a league directory, every check before any write
 //!   (identity, store, config).
+//! - `players`: who plays, by name (`Seat`, main and heuristic names).
 //! - `pool`: snapshot folders and their rows (written once, adopted,
 //!   quarantined, never deleted).
 //! - `supervision`: the one outcome of every process exit, the crash budget.
@@ -32,6 +33,7 @@ pub mod learner;
 pub mod manager;
 pub mod matchmaking;
 pub mod open;
+pub mod players;
 pub mod pool;
 pub mod process;
 pub mod ratings;

@@ -14,7 +14,7 @@
 //!   league goes on without them.
 
 use super::dir::LeagueDir;
-use super::learner::{heuristic_name, Seat};
+use super::players::{heuristic_name, Seat};
 use super::store::{Kind, NewPlayer, Store};
 use crate::env::Side;
 use crate::learn::train::Trainer;

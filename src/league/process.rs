@@ -3,7 +3,7 @@
 //! that keep a seat from running twice on a host, and their logs.
 
 use super::dir::LeagueDir;
-use super::learner::Seat;
+use super::players::Seat;
 use super::store::StoreUrl;
 use crate::env::Side;
 use anyhow::{Context, Result};

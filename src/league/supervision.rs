@@ -45,6 +45,21 @@ pub fn classify(code: Option<i32>, signal: Option<i32>) -> Exit {
     }
 }
 
+/// How a learner process ended (its exit code: `supervision`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Outcome {
+    /// It reached its budget.
+    Done,
+    /// It was stopped (SIGINT) before its budget, after checkpointing.
+    Stopped,
+}
+
+/// An error before the learner trained a step: restarting would fail the
+/// same way (`supervision::EXIT_CANNOT_START`).
+#[derive(Debug, thiserror::Error)]
+#[error("{0}")]
+pub struct CannotStart(pub String);
+
 /// How many crashes of one cause, within how long, stop the league.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct CrashBudget {
