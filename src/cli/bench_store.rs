@@ -76,6 +76,9 @@ pub fn run(url: &str, writers: &[usize], seconds: f64) -> Result<()> {
         for r in results {
             all.extend(r?);
         }
+        if all.is_empty() {
+            bail!("--seconds {seconds}: no write finished in that time; give the writers longer");
+        }
         all.sort_by(|a, b| a.total_cmp(b));
         let q = |p: f64| all[((all.len() - 1) as f64 * p).round() as usize];
         println!(

@@ -193,7 +193,7 @@ pub fn worker(args: WorkerArgs) -> Result<()> {
         host: args
             .host
             .clone()
-            .unwrap_or_else(crate::league::worker::default_host),
+            .unwrap_or_else(crate::league::store::host_name),
         run_for: args
             .run_for
             .as_deref()

@@ -20,7 +20,7 @@ use super::dir::{new_league_id, LeagueDir, LeagueIdentity};
 use super::open::{plan_start, StartPlan};
 use super::players::Seat;
 use super::pool::{ensure_heuristic_members, reconcile};
-use super::process::{lock_holder, log_since, spawn, tail, try_lock, Role, Supervised};
+use super::process::{interrupt, lock_holder, log_since, spawn, tail, try_lock, Role, Supervised};
 use super::store::{now_ms, Store};
 use super::supervision::{classify, decide, last_error_line, CrashBudget, Exit, Next};
 use crate::env::Side;
@@ -232,10 +232,7 @@ pub fn run_with(
             );
             for p in &procs {
                 if let Some(c) = &p.child {
-                    // SAFETY: signalling our own child by pid.
-                    unsafe {
-                        libc::kill(c.id() as i32, libc::SIGINT);
-                    }
+                    interrupt(c);
                 }
             }
         }

@@ -107,6 +107,14 @@ impl Supervised {
     }
 }
 
+/// Asks a child to stop (SIGINT): it finishes its iteration and checkpoints.
+pub fn interrupt(child: &Child) {
+    // SAFETY: signalling our own child by pid.
+    unsafe {
+        libc::kill(child.id() as i32, libc::SIGINT);
+    }
+}
+
 /// The child dies with its parent (Linux `PR_SET_PDEATHSIG`): a manager or
 /// worker killed with -9 leaves nothing running.
 pub fn die_with_parent(cmd: &mut Command) {

@@ -7,7 +7,7 @@
 use super::config::LeagueConfig;
 use super::dir::LeagueDir;
 use super::process::Role;
-use super::store::{SeatState, Store, StoreUrl};
+use super::store::{SeatRow, SeatState, Store, StoreUrl};
 use anyhow::{bail, Context, Result};
 use std::path::Path;
 use std::process::{Child, Command, Stdio};
@@ -84,24 +84,15 @@ pub fn supervise_workers(
         {
             stopping = true;
             eprintln!("stopping: each worker's seats finish their iteration and checkpoint");
-            for c in workers.iter().flatten() {
-                // SAFETY: signalling our own child by pid.
-                unsafe {
-                    libc::kill(c.id() as i32, libc::SIGINT);
-                }
-            }
+            workers.iter().flatten().for_each(super::process::interrupt);
         }
         let mut all_done = false;
         if last_look.elapsed() >= Duration::from_secs(1) {
             last_look = Instant::now();
             // A store out of reach for a moment is waited out (`Store::run`).
             let seats = store.seats()?;
-            if let Some(f) = seats.iter().find(|s| s.state == SeatState::Failed) {
-                failure.get_or_insert(format!(
-                    "seat {} failed: {}",
-                    f.name,
-                    f.reason.as_deref().unwrap_or("no reason recorded")
-                ));
+            if let Some(why) = SeatRow::first_failure(&seats) {
+                failure.get_or_insert(why);
             }
             all_done = seats.iter().all(|s| s.state == SeatState::Done);
             let line = seats
@@ -142,9 +133,6 @@ pub fn supervise_workers(
         let running = workers.iter().flatten().count();
         if (all_done || stopping) && running == 0 {
             break;
-        }
-        if all_done && running > 0 && !stopping {
-            // Every seat is done: the workers see it and exit on their own.
         }
         std::thread::sleep(Duration::from_millis(200));
     }

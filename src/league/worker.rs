@@ -17,8 +17,8 @@
 
 use super::dir::LeagueDir;
 use super::open::open_process;
-use super::process::{log_since, spawn, tail, Role, Supervised};
-use super::store::{host_name, now_ms, SeatLease, SeatState, Store};
+use super::process::{interrupt, log_since, spawn, tail, Role, Supervised};
+use super::store::{now_ms, SeatLease, SeatRow, SeatState, Store};
 use super::supervision::{classify, decide, last_error_line, CrashBudget, Exit, Next};
 use anyhow::{bail, Result};
 use std::path::PathBuf;
@@ -136,10 +136,7 @@ pub fn run_worker(dir: &LeagueDir, opts: &WorkerOptions, stop: &AtomicBool) -> R
             stopping = true;
             for h in &held {
                 if let Some(c) = &h.proc.child {
-                    // SAFETY: signalling our own child by pid.
-                    unsafe {
-                        libc::kill(c.id() as i32, libc::SIGINT);
-                    }
+                    interrupt(c);
                 }
             }
         }
@@ -260,12 +257,8 @@ pub fn run_worker(dir: &LeagueDir, opts: &WorkerOptions, stop: &AtomicBool) -> R
         if !stopping && held.len() < opts.seats && last_claim.elapsed() >= Duration::from_secs(1) {
             last_claim = Instant::now();
             let seats = store.seats()?;
-            if let Some(f) = seats.iter().find(|s| s.state == SeatState::Failed) {
-                failure.get_or_insert(format!(
-                    "seat {} failed: {}",
-                    f.name,
-                    f.reason.as_deref().unwrap_or("no reason recorded")
-                ));
+            if let Some(why) = SeatRow::first_failure(&seats) {
+                failure.get_or_insert(why);
                 continue;
             }
             if held.is_empty() && seats.iter().all(|s| s.state == SeatState::Done) {
@@ -285,7 +278,6 @@ pub fn run_worker(dir: &LeagueDir, opts: &WorkerOptions, stop: &AtomicBool) -> R
                     "worker {holder}: took {} (taken {} times so far)",
                     lease.seat, lease.claims
                 );
-                last_renewed = last_renewed.min(Instant::now());
                 held.push(Held {
                     lease,
                     proc: Supervised::new(role),
@@ -300,9 +292,4 @@ pub fn run_worker(dir: &LeagueDir, opts: &WorkerOptions, stop: &AtomicBool) -> R
         }
         std::thread::sleep(Duration::from_millis(200));
     }
-}
-
-/// The worker's default host name.
-pub fn default_host() -> String {
-    host_name()
 }

@@ -120,17 +120,22 @@ pub enum Presence {
 
 /// This machine's name, for heartbeats and leases: `T2E_HOST` when a
 /// worker was started with `--host`, else the kernel's hostname.
+/// Read once per process: every heartbeat records it.
 pub fn host_name() -> String {
-    if let Ok(h) = std::env::var("T2E_HOST") {
-        if !h.trim().is_empty() {
-            return h.trim().to_string();
+    static HOST: std::sync::OnceLock<String> = std::sync::OnceLock::new();
+    HOST.get_or_init(|| {
+        if let Ok(h) = std::env::var("T2E_HOST") {
+            if !h.trim().is_empty() {
+                return h.trim().to_string();
+            }
         }
-    }
-    std::fs::read_to_string("/proc/sys/kernel/hostname")
-        .map(|s| s.trim().to_string())
-        .ok()
-        .filter(|s| !s.is_empty())
-        .unwrap_or_else(|| "localhost".into())
+        std::fs::read_to_string("/proc/sys/kernel/hostname")
+            .map(|s| s.trim().to_string())
+            .ok()
+            .filter(|s| !s.is_empty())
+            .unwrap_or_else(|| "localhost".into())
+    })
+    .clone()
 }
 
 /// A database error that a later try can get past: the server is gone for

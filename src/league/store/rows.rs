@@ -325,6 +325,20 @@ pub struct SeatRow {
 }
 
 impl SeatRow {
+    /// Why the league stops, if one of `seats` failed.
+    pub fn first_failure(seats: &[SeatRow]) -> Option<String> {
+        seats
+            .iter()
+            .find(|s| s.state == SeatState::Failed)
+            .map(|f| {
+                format!(
+                    "seat {} failed: {}",
+                    f.name,
+                    f.reason.as_deref().unwrap_or("no reason recorded")
+                )
+            })
+    }
+
     /// Held by a worker whose lease has not expired at `now_ms`.
     pub fn held_at(&self, now_ms: i64) -> bool {
         self.holder.is_some() && self.lease_until_ms >= now_ms
