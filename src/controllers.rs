@@ -15,7 +15,11 @@ use std::sync::{Arc, OnceLock};
 #[derive(Clone, Debug, PartialEq)]
 pub enum ControllerSpec {
     Heuristic,
-    Greedy,
+    /// `greedy` or `greedy:K`: the ASZ-greedy captor marching on cells of
+    /// K x K map cells (1, the spec's, when not given).
+    Greedy {
+        coarsening: usize,
+    },
     Random,
     Still,
     /// `ckpt:PATH`: a trained policy (see `nn::checkpoint`).
@@ -61,7 +65,19 @@ impl FromStr for ControllerSpec {
     fn from_str(s: &str) -> Result<Self, String> {
         match s.trim() {
             "heuristic" | "rule" | "expert" => Ok(ControllerSpec::Heuristic),
-            "greedy" | "asz-greedy" => Ok(ControllerSpec::Greedy),
+            "greedy" | "asz-greedy" => Ok(ControllerSpec::Greedy { coarsening: 1 }),
+            other if other.starts_with("greedy:") => {
+                let k = &other["greedy:".len()..];
+                match k.parse::<usize>() {
+                    Ok(k) if (1..=AszGreedy::MAX_COARSENING).contains(&k) => {
+                        Ok(ControllerSpec::Greedy { coarsening: k })
+                    }
+                    _ => Err(format!(
+                        "'{other}': the ASZ-greedy coarsening must be a whole number of map cells from 1 to {} (greedy:2 marches on 0.10 m cells)",
+                        AszGreedy::MAX_COARSENING
+                    )),
+                }
+            }
             "random" => Ok(ControllerSpec::Random),
             "still" => Ok(ControllerSpec::Still),
             other if other.starts_with("ckpt:") => {
@@ -71,7 +87,7 @@ impl FromStr for ControllerSpec {
                 }
                 Ok(ControllerSpec::Checkpoint(CheckpointSpec::new(path)))
             }
-            other => Err(format!("unknown controller '{other}' (expected heuristic, greedy, random, still or ckpt:PATH)")),
+            other => Err(format!("unknown controller '{other}' (expected heuristic, greedy, greedy:K, random, still or ckpt:PATH)")),
         }
     }
 }
@@ -80,7 +96,8 @@ impl fmt::Display for ControllerSpec {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             ControllerSpec::Heuristic => f.write_str("heuristic"),
-            ControllerSpec::Greedy => f.write_str("greedy"),
+            ControllerSpec::Greedy { coarsening: 1 } => f.write_str("greedy"),
+            ControllerSpec::Greedy { coarsening } => write!(f, "greedy:{coarsening}"),
             ControllerSpec::Random => f.write_str("random"),
             ControllerSpec::Still => f.write_str("still"),
             ControllerSpec::Checkpoint(c) => write!(f, "ckpt:{}", c.path.display()),
@@ -93,10 +110,10 @@ impl ControllerSpec {
     pub fn build(&self, side: Side) -> Result<Box<dyn Controller>, String> {
         Ok(match self {
             ControllerSpec::Heuristic => Box::new(Heuristic),
-            ControllerSpec::Greedy if side == Side::Target => {
+            ControllerSpec::Greedy { .. } if side == Side::Target => {
                 return Err("'greedy' (ASZ-greedy) is a captor controller; the target can be heuristic, random, still or a checkpoint".into())
             }
-            ControllerSpec::Greedy => Box::new(AszGreedy::default()),
+            ControllerSpec::Greedy { coarsening } => Box::new(AszGreedy::new(*coarsening)),
             ControllerSpec::Random => Box::new(RandomActions::new()),
             ControllerSpec::Still => Box::new(Still),
             ControllerSpec::Checkpoint(c) => Box::new(

@@ -159,16 +159,25 @@ fn greedy_captor_picks_the_action_that_shrinks_the_asz_most() {
 
 #[test]
 fn controllers_are_named_and_checked_per_side() {
-    for name in ["heuristic", "greedy", "random", "still"] {
+    for name in ["heuristic", "greedy", "greedy:2", "random", "still"] {
         let spec: ControllerSpec = name.parse().unwrap();
         assert_eq!(spec.to_string(), name);
         assert!(spec.build(Side::Captors).is_ok());
     }
-    assert!(ControllerSpec::Greedy
+    assert!(ControllerSpec::Greedy { coarsening: 1 }
         .build(Side::Target)
         .err()
         .unwrap()
         .contains("captor controller"));
+    for bad in ["greedy:0", "greedy:9", "greedy:x", "greedy:"] {
+        assert!(
+            bad.parse::<ControllerSpec>()
+                .unwrap_err()
+                .contains("coarsening"),
+            "{bad}"
+        );
+    }
+    assert!("greedy:1".parse::<ControllerSpec>().unwrap().to_string() == "greedy");
     assert!("magic"
         .parse::<ControllerSpec>()
         .unwrap_err()

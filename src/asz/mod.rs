@@ -10,7 +10,102 @@
 //! captor-first cells". The march stops as soon as the target's front is
 //! closed in, so a nearly trapped target costs almost nothing.
 
+mod coarse;
+
+pub use coarse::CoarseLattice;
+
 use crate::map::{PreparedMap, CELL_AREA, CELL_SIZE};
+use std::sync::Arc;
+
+/// The square lattice a march runs on: the map's own 0.05 m cells
+/// (`PreparedMap`, the spec's ASZ) or a coarser one (`CoarseLattice`, for
+/// controllers that march many times per step).
+pub trait Lattice {
+    /// Unique per lattice, so the march's buffers know when it changed.
+    fn lattice_id(&self) -> u64;
+    /// Row stride of `obstacle`.
+    fn stride(&self) -> usize;
+    /// 1 = obstacle, padded so that every free cell's four neighbours exist.
+    fn obstacle(&self) -> &[u8];
+    /// Side of a cell in metres.
+    fn cell_size(&self) -> f64;
+    /// The free cell holding `p` (padded index) and its centre; None when
+    /// no front can start there.
+    fn locate(&self, p: [f64; 2]) -> Option<(usize, [f64; 2])>;
+    /// The cells a front from `p` starts in, each at its straight-line time
+    /// from `p`: by default the one cell holding it.
+    fn seeds(&self, p: [f64; 2]) -> Seeds {
+        let mut seeds = Seeds::default();
+        if let Some(s) = self.locate(p) {
+            seeds.push(s);
+        }
+        seeds
+    }
+}
+
+/// Up to four start cells of a front (padded index, centre).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Seeds {
+    cells: [(usize, [f64; 2]); 4],
+    len: usize,
+}
+
+impl Seeds {
+    pub fn push(&mut self, seed: (usize, [f64; 2])) {
+        self.cells[self.len] = seed;
+        self.len += 1;
+    }
+
+    pub fn as_slice(&self) -> &[(usize, [f64; 2])] {
+        &self.cells[..self.len]
+    }
+}
+
+impl Lattice for PreparedMap {
+    fn lattice_id(&self) -> u64 {
+        self.id
+    }
+    fn stride(&self) -> usize {
+        self.stride
+    }
+    fn obstacle(&self) -> &[u8] {
+        &self.obstacle
+    }
+    fn cell_size(&self) -> f64 {
+        CELL_SIZE
+    }
+    /// The spec's rule: a source on an obstacle cell starts no front.
+    fn locate(&self, p: [f64; 2]) -> Option<(usize, [f64; 2])> {
+        let (r, c) = self.grid.cell_of(p);
+        self.grid.is_free(r, c).then(|| {
+            (
+                self.padded_index(r, c),
+                self.grid.cell_center(r as usize, c as usize),
+            )
+        })
+    }
+}
+
+impl<L: Lattice + ?Sized> Lattice for Arc<L> {
+    fn lattice_id(&self) -> u64 {
+        (**self).lattice_id()
+    }
+    fn stride(&self) -> usize {
+        (**self).stride()
+    }
+    fn obstacle(&self) -> &[u8] {
+        (**self).obstacle()
+    }
+    fn cell_size(&self) -> f64 {
+        (**self).cell_size()
+    }
+    fn locate(&self, p: [f64; 2]) -> Option<(usize, [f64; 2])> {
+        (**self).locate(p)
+    }
+    fn seeds(&self, p: [f64; 2]) -> Seeds {
+        (**self).seeds(p)
+    }
+}
 
 /// A robot seen by the march: where it is and how fast it can go (m/s).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -176,18 +271,20 @@ impl FastMarching {
         FastMarching::default()
     }
 
-    fn prepare(&mut self, map: &PreparedMap) {
-        let n = map.stride * map.stride;
+    fn prepare<L: Lattice + ?Sized>(&mut self, map: &L) {
+        let n = map.stride() * map.stride();
         assert!(n < (1 << 24), "map too large for the march's queue keys");
-        if self.map_id != map.id {
-            self.map_id = map.id;
-            self.stride = map.stride;
+        if self.map_id != map.lattice_id() {
+            self.map_id = map.lattice_id();
+            self.stride = map.stride();
             self.cells.clear();
-            self.cells.extend(
-                map.obstacle
-                    .iter()
-                    .map(|&o| if o != 0 { Cell::WALL } else { Cell::FAR }),
-            );
+            self.cells.extend(map.obstacle().iter().map(|&o| {
+                if o != 0 {
+                    Cell::WALL
+                } else {
+                    Cell::FAR
+                }
+            }));
         } else {
             for &c in &self.touched {
                 self.cells[c as usize] = Cell::FAR;
@@ -258,36 +355,29 @@ impl FastMarching {
     /// With `stop_label`, stops as soon as no cell is pending for that label
     /// (its region is then complete). Returns the cells settled with `stop_label`
     /// (0 without one).
-    pub fn march(
+    pub fn march<L: Lattice + ?Sized>(
         &mut self,
-        map: &PreparedMap,
+        map: &L,
         sources: &[Source],
         stop_label: Option<u8>,
     ) -> usize {
         assert!(sources.len() < NO_LABEL as usize);
         self.prepare(map);
         let s = self.stride;
-        let costs: Vec<f32> = sources
-            .iter()
-            .map(|src| (CELL_SIZE / src.speed) as f32)
-            .collect();
+        let h = map.cell_size();
+        let costs: Vec<f32> = sources.iter().map(|src| (h / src.speed) as f32).collect();
         self.queue
-            .reset(costs.iter().copied().fold(CELL_SIZE as f32, f32::max));
+            .reset(costs.iter().copied().fold(h as f32, f32::max));
         let mut pending_stop = 0usize;
         let mut settled_stop = 0usize;
         for (i, src) in sources.iter().enumerate() {
-            let (r, c) = map.grid.cell_of(src.pos);
-            if !map.grid.is_free(r, c) {
-                continue;
+            for &(cell, centre) in map.seeds(src.pos).as_slice() {
+                let t = ((src.pos[0] - centre[0]).hypot(src.pos[1] - centre[1]) / src.speed) as f32;
+                self.offer(cell, t, i as u8, stop_label, &mut pending_stop);
             }
-            let cell = map.padded_index(r, c);
-            let centre = map.grid.cell_center(r as usize, c as usize);
-            let t = ((src.pos[0] - centre[0]).hypot(src.pos[1] - centre[1]) / src.speed) as f32;
-            self.offer(cell, t, i as u8, stop_label, &mut pending_stop);
         }
-        // Every cell the march settles is free, hence inside the grid and at
-        // least PAD cells from the edge of the padded array, so its four
-        // neighbours are valid indices.
+        // Every cell the march settles is free, and a lattice pads its free
+        // cells with obstacle, so its four neighbours are valid indices.
         while let Some((t, label, cell)) = self.queue.pop(&self.cells) {
             if stop_label.is_some() && pending_stop == 0 {
                 break;
@@ -349,7 +439,7 @@ impl FastMarching {
 
     /// Geodesic distance (m) from `from` to every free cell: one full march at
     /// unit speed. Read it with `time`.
-    pub fn distance_field(&mut self, map: &PreparedMap, from: [f64; 2]) {
+    pub fn distance_field<L: Lattice + ?Sized>(&mut self, map: &L, from: [f64; 2]) {
         self.march(
             map,
             &[Source {
@@ -363,7 +453,12 @@ impl FastMarching {
     /// |ASZ| in cells: the free cells the target reaches strictly before every
     /// captor, restricted to the part it reaches without crossing captor-first
     /// cells. Ties go to the captors; cells nobody reaches belong to nobody.
-    pub fn asz_cells(&mut self, map: &PreparedMap, target: Source, captors: &[Source]) -> usize {
+    pub fn asz_cells<L: Lattice + ?Sized>(
+        &mut self,
+        map: &L,
+        target: Source,
+        captors: &[Source],
+    ) -> usize {
         let mut sources: Vec<Source> = captors.to_vec();
         sources.push(target);
         self.march(map, &sources, Some(captors.len() as u8))

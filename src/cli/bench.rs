@@ -2,7 +2,6 @@
 //! printed as a table beside the reference implementation's figures.
 
 use crate::asz::FastMarching;
-use crate::controllers::ControllerSpec;
 use crate::env::{Action, Controller, EnvConfig, Side, TrapEnv, VecEnv, PATCH_LEN};
 use crate::heuristics::{target_action, Heuristic};
 use crate::map::{self, PreparedMap};
@@ -385,24 +384,6 @@ pub fn run(args: BenchArgs) -> Result<()> {
         }
     }
 
-    // The ASZ-greedy captor does 4 ASZ per captor per step.
-    let mut env = TrapEnv::new(cfg.clone(), maps.clone()).map_err(anyhow::Error::msg)?;
-    env.reset_state(11)?;
-    let mut greedy = ControllerSpec::Greedy
-        .build(Side::Captors)
-        .map_err(anyhow::Error::msg)?;
-    let mut acts = [Action::Stop; 3];
-    let per = measure(secs, || {
-        greedy.act(&env, Side::Captors, &mut acts);
-        1
-    });
-    rows.push(Row {
-        what: "ASZ-greedy decision for 3 captors".into(),
-        per_op: per,
-        unit: "decisions/s",
-        reference: None,
-    });
-
     println!(
         "maps for env rows: {env_spec}; {:.1} s per row; {threads} rayon threads\n",
         secs
@@ -425,5 +406,6 @@ pub fn run(args: BenchArgs) -> Result<()> {
             ratio
         );
     }
-    Ok(())
+    // The ASZ-greedy captor does 4 ASZ per captor per step.
+    super::bench_greedy::run(&cfg, &maps, &env_spec, secs)
 }

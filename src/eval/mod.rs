@@ -403,7 +403,10 @@ pub fn captors_learner(spec: &ControllerSpec) -> String {
             .map(|s| s.meta.algorithm.to_uppercase())
             .unwrap_or_else(|_| "unknown".into()),
         ControllerSpec::Heuristic => "expert heuristic".into(),
-        ControllerSpec::Greedy => "ASZ-greedy".into(),
+        ControllerSpec::Greedy { coarsening: 1 } => "ASZ-greedy".into(),
+        ControllerSpec::Greedy { coarsening } => {
+            format!("ASZ-greedy on {:.2} m cells", 0.05 * *coarsening as f64)
+        }
         other => other.to_string(),
     }
 }

@@ -2,11 +2,11 @@
 //! robots, each behind the one `Controller` trait. The names users give
 //! controllers live one level up, in `crate::controllers`.
 
-use crate::asz::{FastMarching, Source};
+use crate::asz::{CoarseLattice, FastMarching, Lattice, Source};
 use crate::env::physics::{self, dist};
 use crate::env::{Action, Controller, Side, TrapEnv};
 use crate::map::prepared::{ray_dirs, NUM_RAYS};
-use crate::map::PreparedMap;
+use crate::map::{PreparedMap, CELL_SIZE};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -120,10 +120,23 @@ impl Controller for Heuristic {
 /// version): try each of forward, backward, turn right, turn left for this
 /// captor alone, keep the one that leaves the smallest ASZ; when no action
 /// changes |ASZ|, the one that most shortens the geodesic distance to the target.
-#[derive(Default)]
+///
+/// `coarsening` 1 marches on the map's own 0.05 m cells, as the spec says.
+/// A larger factor marches on cells of that many map cells per side
+/// (`asz::CoarseLattice`): about factor^2 fewer cells per march, for a
+/// controller that plays many episodes (held-out panels, league members).
+/// The README's "ASZ-greedy on coarser cells" measures what it changes.
 pub struct AszGreedy {
+    coarsening: usize,
+    coarse: Option<CoarseLattice>,
     marching: FastMarching,
     distance: FastMarching,
+}
+
+impl Default for AszGreedy {
+    fn default() -> Self {
+        AszGreedy::new(1)
+    }
 }
 
 const GREEDY_ACTIONS: [Action; 4] = [
@@ -134,53 +147,117 @@ const GREEDY_ACTIONS: [Action; 4] = [
 ];
 
 impl AszGreedy {
+    /// The largest coarsening accepted: cells of 0.4 m, two robot diameters.
+    pub const MAX_COARSENING: usize = 8;
+
+    pub fn new(coarsening: usize) -> AszGreedy {
+        assert!(
+            (1..=Self::MAX_COARSENING).contains(&coarsening),
+            "ASZ-greedy coarsening {coarsening} outside 1..={}",
+            Self::MAX_COARSENING
+        );
+        AszGreedy {
+            coarsening,
+            coarse: None,
+            marching: FastMarching::new(),
+            distance: FastMarching::new(),
+        }
+    }
+
     pub fn captor_action(&mut self, env: &TrapEnv, i: usize) -> Action {
         let map = env.map();
-        let (mut captors, target) = env.asz_sources();
+        // Where each action takes captor i alone, with the others still.
         let spec = env.spec(i);
-        let mut sizes = [0usize; 4];
-        let mut moved = [[0.0; 2]; 4];
-        for (a, &action) in GREEDY_ACTIONS.iter().enumerate() {
+        let moved = GREEDY_ACTIONS.map(|action| {
             let mut alone = [env.robots[i]];
-            let mut travelled = [0.0];
             physics::step(
                 map,
                 &mut alone,
                 &[spec],
                 &[action],
                 env.cfg.drive_force,
-                &mut travelled,
+                &mut [0.0],
             );
-            moved[a] = alone[0].pos;
-            captors[i] = Source {
-                pos: alone[0].pos,
-                speed: spec.max_speed,
-            };
-            sizes[a] = self.marching.asz_cells(map, target, &captors);
-        }
-        if sizes.iter().any(|&s| s != sizes[0]) {
-            let best = (0..4).min_by_key(|&a| sizes[a]).unwrap();
-            return GREEDY_ACTIONS[best];
-        }
-        self.distance.distance_field(map, target.pos);
-        let geodesic = |p: [f64; 2]| {
-            let (r, c) = map.grid.cell_of(p);
-            if map.grid.is_free(r, c) {
-                self.distance.time(map.padded_index(r, c))
-            } else {
-                f32::INFINITY
+            alone[0].pos
+        });
+        let best = if self.coarsening == 1 {
+            greedy_choice(
+                &mut self.marching,
+                &mut self.distance,
+                &**map,
+                env,
+                i,
+                &moved,
+            )
+        } else {
+            if !self
+                .coarse
+                .as_ref()
+                .is_some_and(|c| c.covers(map, self.coarsening))
+            {
+                self.coarse = Some(CoarseLattice::new(map, self.coarsening));
             }
+            let lattice = self.coarse.as_ref().unwrap();
+            greedy_choice(
+                &mut self.marching,
+                &mut self.distance,
+                lattice,
+                env,
+                i,
+                &moved,
+            )
         };
-        let best = (0..4)
-            .min_by(|&a, &b| geodesic(moved[a]).total_cmp(&geodesic(moved[b])))
-            .unwrap();
         GREEDY_ACTIONS[best]
     }
 }
 
+/// The index of the greedy action, given where each action takes captor `i`.
+fn greedy_choice<L: Lattice>(
+    marching: &mut FastMarching,
+    distance: &mut FastMarching,
+    lattice: &L,
+    env: &TrapEnv,
+    i: usize,
+    moved: &[[f64; 2]; 4],
+) -> usize {
+    let (mut captors, target) = env.asz_sources();
+    let speed = env.spec(i).max_speed;
+    let sizes = moved.map(|pos| {
+        captors[i] = Source { pos, speed };
+        marching.asz_cells(lattice, target, &captors)
+    });
+    if sizes.iter().any(|&s| s != sizes[0]) {
+        return (0..4).min_by_key(|&a| sizes[a]).unwrap();
+    }
+    distance.distance_field(lattice, target.pos);
+    // On the map's own cells, the spec's: the distance of the cell holding
+    // the point. On coarser ones, through the nearest start cells, so that
+    // moves within one cell still differ.
+    let geodesic = |p: [f64; 2]| -> f64 {
+        if lattice.cell_size() <= CELL_SIZE {
+            return match lattice.locate(p) {
+                Some((cell, _)) => distance.time(cell) as f64,
+                None => f64::INFINITY,
+            };
+        }
+        lattice
+            .seeds(p)
+            .as_slice()
+            .iter()
+            .map(|&(cell, c)| distance.time(cell) as f64 + (p[0] - c[0]).hypot(p[1] - c[1]))
+            .fold(f64::INFINITY, f64::min)
+    };
+    (0..4)
+        .min_by(|&a, &b| geodesic(moved[a]).total_cmp(&geodesic(moved[b])))
+        .unwrap()
+}
+
 impl Controller for AszGreedy {
     fn name(&self) -> String {
-        "greedy".into()
+        match self.coarsening {
+            1 => "greedy".into(),
+            k => format!("greedy:{k}"),
+        }
     }
     fn act(&mut self, env: &TrapEnv, side: Side, out: &mut [Action]) {
         assert_eq!(

@@ -14,50 +14,19 @@ use super::dir::LeagueDir;
 use super::matchmaking::{
     choose_opponent, draw_seed, pick_slot, slot_seed, Candidate, MatchmakingConfig, Opponent,
 };
+use super::opponents::{OpponentNets, WorldOpponent};
 use super::players::{learner_name, Seat};
 use super::pool::{add_snapshot, SnapshotOutcome};
 use super::store::{BeatState, Kind, MatchRecord, NewPlayer, Player, Store};
 use super::supervision::{CannotStart, Outcome};
 use crate::controllers::ControllerSpec;
 use crate::env::{Action, Side, VecEnv};
-use crate::learn::acting::{gather_worlds, sample};
 use crate::learn::train::{RolloutHooks, Trainer};
-use crate::nn::stacked::{PreparedActor, StackedActors};
-use crate::nn::PolicySnapshot;
 use anyhow::{bail, Context, Result};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use std::collections::{BTreeMap, HashMap};
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::Arc;
 use std::time::Instant;
-use tch::{Device, Kind as TKind, Tensor};
-
-/// A loaded opponent network.
-struct Loaded {
-    snapshot: Arc<PolicySnapshot>,
-    /// The weights laid out for stacking with the other opponents in play.
-    prepared: PreparedActor,
-    last_used: u64,
-}
-
-/// Opponents in play that share one architecture, stacked for one pass.
-struct Stack {
-    ids: Vec<i64>,
-    actors: StackedActors,
-}
-
-/// Who plays the other side in one world, this episode.
-#[derive(Clone, Debug)]
-struct WorldOpponent {
-    player: i64,
-    /// Some(player) when a network plays (batched here), None for a
-    /// heuristic scripted inside the vector env.
-    network: Option<i64>,
-    /// Recurrent state of the network's robots in this world.
-    hidden: Vec<f32>,
-    speed: f64,
-}
 
 pub struct LeagueHooks<'a> {
     store: &'a Store,
@@ -75,24 +44,18 @@ pub struct LeagueHooks<'a> {
     candidates: Vec<Candidate>,
     main: Option<i64>,
     worlds: Vec<WorldOpponent>,
-    cache: HashMap<i64, Loaded>,
-    /// Rebuilt only when the set of network opponents in play changes.
-    stacks: Vec<Stack>,
+    /// The other side's networks in play: loaded, stacked, run.
+    pub nets: OpponentNets,
     /// This window's opponent slots (`MatchmakingConfig::slots`), the window
     /// they were drawn for, and vector-env steps so far (windows count them).
     slots: Vec<Opponent>,
     slots_window: Option<u64>,
     pub vector_steps: u64,
-    tick: u64,
     rng: ChaCha8Rng,
     pub curriculum: Curriculum,
     pub wins: u64,
     pub games: u64,
     pub matches_recorded: u64,
-    /// Time in opponent networks (gather, forward, sampling) and the robot
-    /// rows they acted for: the cost per row of batched opponent inference.
-    pub opponent_seconds: f64,
-    pub opponent_rows: u64,
 }
 
 impl<'a> LeagueHooks<'a> {
@@ -123,19 +86,15 @@ impl<'a> LeagueHooks<'a> {
             candidates: Vec::new(),
             main: None,
             worlds: Vec::new(),
-            cache: HashMap::new(),
-            stacks: Vec::new(),
+            nets: OpponentNets::new(side.other(), cfg.opponent_cache, cfg.greedy_opponents),
             slots: Vec::new(),
             slots_window: None,
             vector_steps: 0,
-            tick: 0,
             rng: ChaCha8Rng::seed_from_u64(cfg.seed ^ learner_id as u64 ^ 0x0990),
             curriculum: Curriculum::new(),
             wins: 0,
             games: 0,
             matches_recorded: 0,
-            opponent_seconds: 0.0,
-            opponent_rows: 0,
         };
         hooks.refresh()?;
         if side == Side::Captors && !seat.exploiter {
@@ -154,65 +113,34 @@ impl<'a> LeagueHooks<'a> {
     }
 
     fn other(&self) -> Side {
-        match self.side {
-            Side::Captors => Side::Target,
-            Side::Target => Side::Captors,
+        self.side.other()
+    }
+
+    fn seat(&self) -> Seat {
+        Seat {
+            side: self.side,
+            exploiter: self.exploiter,
         }
     }
 
     /// Re-reads the pool, this learner's record and the curriculum stage.
     pub fn refresh(&mut self) -> Result<()> {
-        let other = self.other();
-        let players = self.store.players()?;
-        self.members = players
-            .iter()
-            .filter(|p| p.side == other && p.quarantined.is_none())
-            .filter(|p| matches!(p.kind, Kind::Snapshot | Kind::Heuristic))
-            .cloned()
-            .collect();
-        let other_main_id = players
-            .iter()
-            .find(|p| p.name == learner_name(other))
-            .map(|p| p.id);
-        if self.exploiter {
-            // An exploiter's pool: the main learner's snapshots, and the
-            // heuristics to play until the main learner has one.
-            self.members.retain(|m| {
-                m.kind == Kind::Heuristic || (m.parent.is_some() && m.parent == other_main_id)
-            });
-        }
+        let playable = super::pool::playable(&self.store.players()?, self.seat());
+        self.members = playable.members;
+        self.main = playable.main;
         let payoff = self.store.payoff()?;
         self.candidates = self
             .members
             .iter()
             .map(|m| {
-                let (mut wins, mut games) = (0.0, 0.0);
-                for r in &payoff {
-                    let mine = match self.side {
-                        Side::Captors => r.captor == self.learner_id && r.target == m.id,
-                        Side::Target => r.target == self.learner_id && r.captor == m.id,
-                    };
-                    if mine {
-                        games += r.games as f64;
-                        wins += match self.side {
-                            Side::Captors => r.captor_wins as f64,
-                            Side::Target => (r.games - r.captor_wins) as f64,
-                        };
-                    }
-                }
+                let rec = super::payoff::record(&payoff, self.learner_id, self.side, Some(m.id));
                 Candidate {
                     player: m.id,
-                    wins,
-                    games,
+                    wins: rec.wins as f64,
+                    games: rec.games as f64,
                 }
             })
             .collect();
-        self.main = self
-            .members
-            .iter()
-            .filter(|m| m.kind == Kind::Snapshot && m.parent.is_some() && m.parent == other_main_id)
-            .max_by_key(|m| m.env_steps)
-            .map(|m| m.id);
         if let Some(change) = self.store.curriculum_history()?.last() {
             if change.stage != self.curriculum.stage {
                 self.curriculum.stage = change.stage;
@@ -286,7 +214,10 @@ impl<'a> LeagueHooks<'a> {
                 );
                 None
             }
-            _ => match self.load(&member) {
+            _ => match {
+                let in_use: Vec<i64> = self.worlds.iter().filter_map(|w| w.network).collect();
+                self.nets.load(&self.dir.root, &member, &in_use)
+            } {
                 Ok(hidden) => {
                     venv.script_world(e, other, None);
                     Some((member.id, hidden))
@@ -310,176 +241,18 @@ impl<'a> LeagueHooks<'a> {
             speed,
         })
     }
-
-    /// Keeps one stack per architecture over exactly the network opponents in
-    /// play (`ids`, sorted), restacking only the ones whose members changed.
-    fn restack(&mut self, ids: Vec<i64>) -> Result<()> {
-        let mut parts: Vec<Vec<i64>> = Vec::new();
-        for id in ids {
-            let p = &self
-                .cache
-                .get(&id)
-                .context("opponent network not loaded")?
-                .prepared;
-            match parts
-                .iter_mut()
-                .find(|ids| self.cache[&ids[0]].prepared.same_shape(p))
-            {
-                Some(part) => part.push(id),
-                None => parts.push(vec![id]),
-            }
-        }
-        let mut old = std::mem::take(&mut self.stacks);
-        for part in parts {
-            if let Some(i) = old.iter().position(|s| s.ids == part) {
-                self.stacks.push(old.swap_remove(i));
-                continue;
-            }
-            let prepared: Vec<&PreparedActor> =
-                part.iter().map(|id| &self.cache[id].prepared).collect();
-            let actors = StackedActors::new(&prepared).map_err(anyhow::Error::msg)?;
-            self.stacks.push(Stack { ids: part, actors });
-        }
-        Ok(())
-    }
-
-    /// Loads (or finds in the cache) a member's network; returns its hidden size.
-    fn load(&mut self, member: &Player) -> Result<usize> {
-        self.tick += 1;
-        if let Some(l) = self.cache.get_mut(&member.id) {
-            l.last_used = self.tick;
-            return Ok(l.prepared.net.hidden as usize);
-        }
-        let (rel, meta_sha) = member
-            .checkpoint
-            .clone()
-            .with_context(|| format!("{} has no checkpoint", member.name))?;
-        let dir = self.dir.root.join(&rel);
-        let got = crate::util::sha256_file(&dir.join("meta.json"))
-            .with_context(|| format!("{}: meta.json missing", dir.display()))?;
-        if got != meta_sha {
-            bail!(
-                "{}: meta.json does not match the sha256 the store recorded",
-                dir.display()
-            );
-        }
-        let snapshot = Arc::new(PolicySnapshot::load(&dir, self.other())?);
-        let (vs, actor) = snapshot.build_actor(Device::Cpu)?;
-        if self.cache.len() >= self.cfg.opponent_cache {
-            let in_use: Vec<i64> = self.worlds.iter().filter_map(|w| w.network).collect();
-            if let Some(evict) = self
-                .cache
-                .iter()
-                .filter(|(id, _)| !in_use.contains(id))
-                .min_by_key(|(_, l)| l.last_used)
-                .map(|(id, _)| *id)
-            {
-                self.cache.remove(&evict);
-            }
-        }
-        let hidden = actor.hidden as usize;
-        let prepared = PreparedActor::new(&actor, &snapshot.meta.net, snapshot.meta.vector_len());
-        drop((vs, actor));
-        self.cache.insert(
-            member.id,
-            Loaded {
-                snapshot,
-                prepared,
-                last_used: self.tick,
-            },
-        );
-        Ok(hidden)
-    }
 }
 
 impl RolloutHooks for LeagueHooks<'_> {
     fn before_step(&mut self, venv: &mut VecEnv, actions: &mut [Action]) -> Result<()> {
-        let other = self.other();
-        let k = self.cfg.num_captors;
-        let na = k + 1;
-        let team = other.agents(k).len();
-        let mut groups: BTreeMap<i64, Vec<usize>> = BTreeMap::new();
-        for (e, w) in self.worlds.iter().enumerate() {
-            if let Some(id) = w.network {
-                groups.entry(id).or_default().push(e);
-            }
-        }
         self.vector_steps += 1;
-        let started = Instant::now();
-        self.restack(groups.keys().copied().collect())?;
-        for stack in &self.stacks {
-            let first = &self.cache[&stack.ids[0]];
-            let net = &first.snapshot.meta.net;
-            let (g, h) = (stack.ids.len(), stack.actors.hidden as usize);
-            let (vl, pl) = (venv.cfg.vector_len(), net.input_len());
-            // Each opponent's rows padded to the most any of them plays.
-            let r = stack
-                .ids
-                .iter()
-                .map(|id| groups[id].len() * team)
-                .max()
-                .unwrap_or(0);
-            let mut vectors = vec![0f32; g * r * vl];
-            let mut patches = vec![0u8; g * r * pl];
-            let mut hidden = vec![0f32; g * r * h];
-            for (i, id) in stack.ids.iter().enumerate() {
-                let worlds = &groups[id];
-                let rows = worlds.len() * team;
-                gather_worlds(
-                    venv,
-                    &venv.vectors,
-                    &venv.patches,
-                    worlds,
-                    other,
-                    net,
-                    &mut vectors[i * r * vl..(i * r + rows) * vl],
-                    &mut patches[i * r * pl..(i * r + rows) * pl],
-                );
-                for (w, &e) in worlds.iter().enumerate() {
-                    let at = (i * r + w * team) * h;
-                    hidden[at..at + team * h].copy_from_slice(&self.worlds[e].hidden);
-                }
-            }
-            let side = net.input_side() as i64;
-            let (g64, r64) = (g as i64, r as i64);
-            let p = Tensor::from_slice(&patches).view([g64, r64, side, side]);
-            let v = Tensor::from_slice(&vectors).view([g64, r64, vl as i64]);
-            let h_in = Tensor::from_slice(&hidden).view([g64, r64, h as i64]);
-            let (logits, h_out) = tch::no_grad(|| stack.actors.step(&p, &v, &h_in));
-            let n = g * r;
-            let mut chosen = vec![0i64; n];
-            if self.cfg.greedy_opponents {
-                logits.argmax(2, false).copy_data(&mut chosen, n);
-            } else {
-                let probs = logits.softmax(-1, TKind::Float);
-                let mut pr = vec![0f32; n * Action::COUNT];
-                probs.copy_data(&mut pr, n * Action::COUNT);
-                for (i, id) in stack.ids.iter().enumerate() {
-                    for row in i * r..i * r + groups[id].len() * team {
-                        chosen[row] = sample(
-                            &pr[row * Action::COUNT..(row + 1) * Action::COUNT],
-                            &mut self.rng,
-                        ) as i64;
-                    }
-                }
-            }
-            let mut h_new = vec![0f32; n * h];
-            h_out.copy_data(&mut h_new, n * h);
-            for (i, id) in stack.ids.iter().enumerate() {
-                for (w, &e) in groups[id].iter().enumerate() {
-                    let row = i * r + w * team;
-                    self.worlds[e]
-                        .hidden
-                        .copy_from_slice(&h_new[row * h..(row + team) * h]);
-                    for (j, agent) in other.agents(k).enumerate() {
-                        actions[e * na + agent] = Action::from_index(chosen[row + j] as usize);
-                    }
-                }
-                self.opponent_rows += (groups[id].len() * team) as u64;
-            }
-        }
-        self.opponent_seconds += started.elapsed().as_secs_f64();
-        Ok(())
+        self.nets.act(
+            venv,
+            &mut self.worlds,
+            self.cfg.num_captors,
+            &mut self.rng,
+            actions,
+        )
     }
 
     fn after_step(&mut self, venv: &mut VecEnv) -> Result<()> {
@@ -957,12 +730,12 @@ fn train_learner(
     );
     let team = side.agents(cfg.num_captors).len() as f64;
     let own_rows = trained as f64 * team;
-    if own_rows > 0.0 && hooks.opponent_rows > 0 {
+    if own_rows > 0.0 && hooks.nets.rows > 0 {
         eprintln!(
             "{name}: inference per robot row: own networks (actor + critic, sampling) {:.2} us, opponent networks (actor, batched per opponent) {:.2} us over {} rows",
             1e6 * own_inference / own_rows,
-            1e6 * hooks.opponent_seconds / hooks.opponent_rows as f64,
-            hooks.opponent_rows
+            1e6 * hooks.nets.seconds / hooks.nets.rows as f64,
+            hooks.nets.rows
         );
     }
     Ok(outcome)

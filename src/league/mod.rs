@@ -33,6 +33,8 @@ pub mod learner;
 pub mod manager;
 pub mod matchmaking;
 pub mod open;
+pub mod opponents;
+pub mod payoff;
 pub mod players;
 pub mod pool;
 pub mod process;

@@ -14,13 +14,48 @@
 //!   league goes on without them.
 
 use super::dir::LeagueDir;
-use super::players::{heuristic_name, Seat};
-use super::store::{Kind, NewPlayer, Store};
+use super::players::{heuristic_name, learner_name, Seat};
+use super::store::{Kind, NewPlayer, Player, Store};
 use crate::env::Side;
 use crate::learn::train::Trainer;
 use crate::nn::checkpoint::{read_meta, PoolMembership};
 use crate::nn::PolicySnapshot;
 use anyhow::{Context, Result};
+
+/// What a learner may draw from the pool.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Playable {
+    /// The other side's members that play: snapshots and heuristics, not
+    /// quarantined.
+    pub members: Vec<Player>,
+    /// The other side's main learner's newest snapshot among them.
+    pub main: Option<i64>,
+}
+
+/// The members a learner of `seat` may draw. A main learner draws every
+/// playable member of the other side; an exploiter only the other main
+/// learner's snapshots, and the heuristics to play until there is one.
+pub fn playable(players: &[Player], seat: Seat) -> Playable {
+    let other = seat.side.other();
+    let other_main = players
+        .iter()
+        .find(|p| p.name == learner_name(other))
+        .map(|p| p.id);
+    let of_other_main = |m: &Player| m.parent.is_some() && m.parent == other_main;
+    let members: Vec<Player> = players
+        .iter()
+        .filter(|p| p.side == other && p.quarantined.is_none())
+        .filter(|p| matches!(p.kind, Kind::Snapshot | Kind::Heuristic))
+        .filter(|p| !seat.exploiter || p.kind == Kind::Heuristic || of_other_main(p))
+        .cloned()
+        .collect();
+    let main = members
+        .iter()
+        .filter(|m| m.kind == Kind::Snapshot && of_other_main(m))
+        .max_by_key(|m| m.env_steps)
+        .map(|m| m.id);
+    Playable { members, main }
+}
 
 /// The player name of `seat`'s snapshot at `env_steps`.
 pub fn snapshot_name(seat: Seat, env_steps: u64) -> String {
@@ -248,4 +283,76 @@ pub fn ensure_heuristic_members(store: &Store) -> Result<()> {
         })?;
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn player(
+        id: i64,
+        name: &str,
+        side: Side,
+        kind: Kind,
+        parent: Option<i64>,
+        env_steps: u64,
+    ) -> Player {
+        Player {
+            id,
+            name: name.into(),
+            side,
+            kind,
+            parent,
+            created_at_ms: 0,
+            env_steps,
+            curriculum_stage: 0,
+            checkpoint: None,
+            quarantined: None,
+        }
+    }
+
+    #[test]
+    fn a_main_learner_draws_every_playable_member_and_an_exploiter_only_the_main_line() {
+        use Side::*;
+        let mut players = vec![
+            player(1, "expert-captors", Captors, Kind::Heuristic, None, 0),
+            player(2, "rule-based-target", Target, Kind::Heuristic, None, 0),
+            player(3, "captors-main", Captors, Kind::Learner, None, 300),
+            player(4, "target-main", Target, Kind::Learner, None, 300),
+            player(5, "captors-exploiter", Captors, Kind::Exploiter, None, 100),
+            player(6, "captors-snap-100", Captors, Kind::Snapshot, Some(3), 100),
+            player(7, "captors-snap-200", Captors, Kind::Snapshot, Some(3), 200),
+            player(
+                8,
+                "captors-exploiter-snap-100",
+                Captors,
+                Kind::Snapshot,
+                Some(5),
+                100,
+            ),
+            player(9, "captors-snap-300", Captors, Kind::Snapshot, Some(3), 300),
+        ];
+        players[8].quarantined = Some("files gone".into());
+        let ids = |p: &Playable| p.members.iter().map(|m| m.id).collect::<Vec<_>>();
+
+        let main = playable(&players, Seat::main(Target));
+        assert_eq!(
+            ids(&main),
+            [1, 6, 7, 8],
+            "learners and quarantined members never play"
+        );
+        assert_eq!(main.main, Some(7), "the newest snapshot that plays");
+
+        let exploiter = playable(&players, Seat::exploiter(Target));
+        assert_eq!(ids(&exploiter), [1, 6, 7]);
+        assert_eq!(exploiter.main, Some(7));
+
+        // Before the other main learner has a snapshot: the heuristic only.
+        let early = playable(&players[..5], Seat::exploiter(Target));
+        assert_eq!(ids(&early), [1]);
+        assert_eq!(early.main, None);
+
+        let captors = playable(&players, Seat::main(Captors));
+        assert_eq!(ids(&captors), [2]);
+    }
 }

@@ -23,14 +23,17 @@
 //!   "payoff": [{ "captor", "target", "captor_wins", "games" }],
 //!   "crashes": [{ "learner", "exit_status", "message", "at_ms" }],
 //!   "seats": [{ "name", "state": "open"|"done"|"failed", "host": str|null,
-//!               "lease_left_s": float|null, "claims", "reason": str|null }] }
+//!               "lease_left_s": float|null, "claims", "reason": str|null }],
 //!                                          // leagues on workers only
+//!   "panel": [{ "member", "member_name", "opponent", "opponent_name",
+//!               "episodes", "member_wins", "win_rate",
+//!               "win_rate_low", "win_rate_high" }] }  // evaluator's episodes, 95% Wilson
 //! ```
 
 use super::config::LeagueConfig;
 use super::dir::LeagueDir;
 use super::ratings::{bradley_terry, PairRecord};
-use super::store::{host_name, now_ms, Heartbeat, Store};
+use super::store::{host_name, now_ms, Heartbeat, Kind, PairResult, Player, Store};
 use crate::env::Side;
 use anyhow::{bail, Context, Result};
 use serde::Serialize;
@@ -111,6 +114,59 @@ pub struct StatusReport {
     /// Seats as leases, for a league whose seats run on workers (empty
     /// otherwise).
     pub seats: Vec<SeatStatus>,
+    /// The evaluator's panel, per member: only its episodes, so members
+    /// compare whatever the matchmaker chose for them.
+    pub panel: Vec<PanelRow>,
+}
+
+/// One member's results against one panel opponent.
+#[derive(Clone, Debug, Serialize)]
+pub struct PanelRow {
+    pub member: i64,
+    pub member_name: String,
+    pub opponent: i64,
+    pub opponent_name: String,
+    pub episodes: u64,
+    /// Episodes the member won (captured as captors, escaped as target).
+    pub member_wins: u64,
+    pub win_rate: f64,
+    /// 95% Wilson interval of the win rate.
+    pub win_rate_low: f64,
+    pub win_rate_high: f64,
+}
+
+/// The panel rows from the evaluator's payoff: the member is the snapshot
+/// or learner, the opponent the panel member it played (the side's other
+/// party), newest members first.
+pub fn panel_rows(players: &[Player], evaluator_payoff: &[PairResult]) -> Vec<PanelRow> {
+    let find = |id: i64| players.iter().find(|p| p.id == id);
+    let mut rows: Vec<PanelRow> = evaluator_payoff
+        .iter()
+        .filter_map(|r| {
+            let (captor, target) = (find(r.captor)?, find(r.target)?);
+            // The panel is made of the heuristics: the other party is the member.
+            let (member, opponent, wins) =
+                if captor.kind == Kind::Heuristic && target.kind != Kind::Heuristic {
+                    (target, captor, r.games - r.captor_wins)
+                } else {
+                    (captor, target, r.captor_wins)
+                };
+            let (lo, hi) = crate::eval::wilson_interval(wins as usize, r.games as usize);
+            Some(PanelRow {
+                member: member.id,
+                member_name: member.name.clone(),
+                opponent: opponent.id,
+                opponent_name: opponent.name.clone(),
+                episodes: r.games,
+                member_wins: wins,
+                win_rate: wins as f64 / r.games.max(1) as f64,
+                win_rate_low: lo,
+                win_rate_high: hi,
+            })
+        })
+        .collect();
+    rows.sort_by_key(|r| (std::cmp::Reverse(r.member), r.opponent));
+    rows
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -191,16 +247,7 @@ pub fn report(dir: &LeagueDir) -> Result<StatusReport> {
         .iter()
         .enumerate()
         .map(|(i, p)| {
-            let (mut games, mut wins) = (0u64, 0u64);
-            for r in &payoff {
-                if r.captor == p.id {
-                    games += r.games;
-                    wins += r.captor_wins;
-                } else if r.target == p.id {
-                    games += r.games;
-                    wins += r.games - r.captor_wins;
-                }
-            }
+            let rec = super::payoff::record(&payoff, p.id, p.side, None);
             let rating = ratings.get(&p.id).copied().unwrap_or_default();
             PlayerRow {
                 id: p.id,
@@ -213,9 +260,9 @@ pub fn report(dir: &LeagueDir) -> Result<StatusReport> {
                 rating: rating.mu,
                 rating_sigma: rating.sigma,
                 bt_elo: bt[i],
-                games,
-                wins,
-                win_rate: (games > 0).then(|| wins as f64 / games as f64),
+                games: rec.games,
+                wins: rec.wins,
+                win_rate: rec.win_rate(),
                 quarantined: p.quarantined.clone(),
             }
         })
@@ -233,7 +280,9 @@ pub fn report(dir: &LeagueDir) -> Result<StatusReport> {
     let stage = history.last().map(|h| h.stage).unwrap_or(0);
     let now = now_ms();
     let panel_episodes = store.matches_recorded_by("evaluator")?;
+    let panel = panel_rows(&players, &store.payoff_recorded_by("evaluator")?);
     Ok(StatusReport {
+        panel,
         league: cfg.name.clone(),
         dir: dir.root.display().to_string(),
         matches: store.match_count()?,
@@ -421,6 +470,29 @@ pub fn render(r: &StatusReport) -> String {
     for t in &targets {
         let _ = writeln!(s, "  #{t} = {}", name(*t));
     }
+    if !r.panel.is_empty() {
+        let _ = writeln!(
+            s,
+            "\npanel (the evaluator's episodes only; the opponents are league members):"
+        );
+        let _ = writeln!(
+            s,
+            "  {:<30} {:<20} {:>8} {:>7}  95% interval",
+            "member", "opponent", "episodes", "win %"
+        );
+        for p in &r.panel {
+            let _ = writeln!(
+                s,
+                "  {:<30} {:<20} {:>8} {:>7.1}  [{:.1}, {:.1}]",
+                p.member_name,
+                p.opponent_name,
+                p.episodes,
+                100.0 * p.win_rate,
+                100.0 * p.win_rate_low,
+                100.0 * p.win_rate_high
+            );
+        }
+    }
     if !r.seats.is_empty() {
         let _ = writeln!(s, "\nseats (run by workers):");
         for seat in &r.seats {
@@ -567,31 +639,138 @@ pub fn best_player(r: &StatusReport, side: Side) -> Option<String> {
         .map(|p| p.name.clone())
 }
 
-/// `status --plot`: live ratings over the league's matches (one line per
-/// player, the heuristics and the main learners labelled) above the payoff
+/// One line of the ratings plot.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RatingLine {
+    /// Index into the players.
+    pub player: usize,
+    /// Colour group: a learner with its snapshots, or a heuristic.
+    pub group: usize,
+    /// 0 for a learner or heuristic; towards 0.7 for its older snapshots.
+    pub lightness: f64,
+    /// The legend's entry; empty for a snapshot folded into its group's
+    /// entry.
+    pub label: String,
+}
+
+/// Past this many legend entries, each learner's snapshots share one entry.
+const MAX_LEGEND: usize = 14;
+
+/// The ratings plot's lines, grouped: each learner (or heuristic) gets a
+/// colour, its snapshots lighter tints of it (the oldest lightest), and
+/// lines come learner first, then its snapshots by env steps. Every line is
+/// labelled (`captors-main @240k`) while the legend fits; past MAX_LEGEND
+/// entries a learner's snapshots share one (`captors-main snapshots (12)`).
+/// Players without rating points get no line.
+pub fn rating_lines(players: &[PlayerRow], has_points: &[bool]) -> Vec<RatingLine> {
+    let by_id = |id: i64| players.iter().position(|p| p.id == id);
+    // A snapshot's group is its parent's; a snapshot whose parent is not in
+    // the league (never in practice) heads a group of its own.
+    let head = |i: usize| match players[i].parent.and_then(by_id) {
+        Some(parent) if players[i].kind == "snapshot" => parent,
+        _ => i,
+    };
+    let mut heads: Vec<usize> = (0..players.len()).filter(|&i| head(i) == i).collect();
+    heads.sort_by_key(|&i| players[i].id);
+    let mut lines = Vec::new();
+    let drawn = |i: usize| has_points.get(i).copied().unwrap_or(false);
+    let groups: Vec<(usize, Vec<usize>)> = heads
+        .iter()
+        .enumerate()
+        .map(|(g, &h)| {
+            let mut snaps: Vec<usize> = (0..players.len())
+                .filter(|&i| i != h && head(i) == h && drawn(i))
+                .collect();
+            snaps.sort_by_key(|&i| (players[i].env_steps, players[i].id));
+            (g, snaps)
+        })
+        .collect();
+    let entries: usize = heads.iter().filter(|&&h| drawn(h)).count()
+        + groups.iter().map(|(_, s)| s.len()).sum::<usize>();
+    let fold = entries > MAX_LEGEND;
+    for (&h, (g, snaps)) in heads.iter().zip(&groups) {
+        if drawn(h) {
+            lines.push(RatingLine {
+                player: h,
+                group: *g,
+                lightness: 0.0,
+                label: players[h].name.clone(),
+            });
+        }
+        for (k, &i) in snaps.iter().enumerate() {
+            // Newest snapshot 0.25, oldest 0.7.
+            let age = if snaps.len() > 1 {
+                1.0 - k as f64 / (snaps.len() - 1) as f64
+            } else {
+                0.0
+            };
+            let label = if !fold {
+                format!("{} @{}", players[h].name, short_steps(players[i].env_steps))
+            } else if k == 0 {
+                format!("{} snapshots ({})", players[h].name, snaps.len())
+            } else {
+                String::new()
+            };
+            lines.push(RatingLine {
+                player: i,
+                group: *g,
+                lightness: 0.25 + 0.45 * age,
+                label,
+            });
+        }
+    }
+    lines
+}
+
+/// 240000 -> "240k", 1500000 -> "1.5M".
+fn short_steps(steps: u64) -> String {
+    if steps >= 1_000_000 {
+        let m = steps as f64 / 1e6;
+        if (m * 10.0).fract() == 0.0 && m.fract() != 0.0 {
+            format!("{m:.1}M")
+        } else if m.fract() == 0.0 {
+            format!("{m:.0}M")
+        } else {
+            format!("{m:.2}M")
+        }
+    } else if steps >= 1000 {
+        format!("{}k", steps / 1000)
+    } else {
+        steps.to_string()
+    }
+}
+
+/// `status --plot`: live ratings over the league's matches (one labelled
+/// line per player, snapshots in tints of their learner's colour) above the payoff
 /// matrix as a heat map (captor win rate, rows captors, columns targets).
 pub fn plot(dir: &LeagueDir, r: &StatusReport, path: &Path) -> Result<()> {
     use crate::render::plot::{line_plot, palette, save_png, Series};
     use crate::render::text::{draw_rect, draw_text, draw_text_centered, fill_rect};
     use image::{Rgb, RgbImage};
     let (_, store) = open(dir)?;
-    let mut series = Vec::new();
-    for (i, p) in r.players.iter().enumerate() {
+    let mut history = Vec::new();
+    for p in &r.players {
         let points: Vec<(f64, f64)> = store
             .rating_history(p.id)?
             .iter()
             .filter_map(|r| r.match_id.map(|m| (m as f64, r.mu)))
             .collect();
-        if points.is_empty() {
-            continue;
-        }
-        let label = if p.kind == "snapshot" {
-            String::new()
-        } else {
-            p.name.clone()
-        };
-        series.push(Series::new(label, points, palette(i)));
+        history.push(points);
     }
+    let has_points: Vec<bool> = history.iter().map(|h| !h.is_empty()).collect();
+    let series: Vec<Series> = rating_lines(&r.players, &has_points)
+        .into_iter()
+        .map(|line| {
+            let base = palette(line.group);
+            // Snapshots in lighter tints of their learner's colour, older lighter.
+            let tint = |c: u8| (c as f64 + (255.0 - c as f64) * line.lightness).round() as u8;
+            Series::new(
+                line.label,
+                std::mem::take(&mut history[line.player]),
+                base.map(tint),
+            )
+        })
+        .collect();
     let ratings = line_plot(
         &series,
         &format!("live ratings, league {}", r.league),
@@ -678,4 +857,164 @@ pub fn plot(dir: &LeagueDir, r: &StatusReport, path: &Path) -> Result<()> {
     image::imageops::replace(&mut img, &ratings, 0, 0);
     image::imageops::replace(&mut img, &heat, 0, ratings.height() as i64);
     save_png(&img, path)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn player(id: i64, name: &str, kind: &str, parent: Option<i64>, env_steps: u64) -> PlayerRow {
+        PlayerRow {
+            id,
+            name: name.into(),
+            side: if name.starts_with("captors") || name.starts_with("expert") {
+                "captors".into()
+            } else {
+                "target".into()
+            },
+            kind: kind.into(),
+            parent,
+            env_steps,
+            curriculum_stage: 0,
+            rating: 25.0,
+            rating_sigma: 8.0,
+            bt_elo: 0.0,
+            games: 1,
+            wins: 0,
+            win_rate: None,
+            quarantined: None,
+        }
+    }
+
+    #[test]
+    fn every_rating_line_is_labelled_and_snapshots_follow_their_learner() {
+        let players = vec![
+            player(1, "expert-captors", "heuristic", None, 0),
+            player(2, "rule-based-target", "heuristic", None, 0),
+            player(3, "captors-main", "learner", None, 240_000),
+            player(4, "target-main", "learner", None, 240_000),
+            player(5, "captors-main-snap-160000", "snapshot", Some(3), 160_000),
+            player(6, "captors-main-snap-80000", "snapshot", Some(3), 80_000),
+            player(7, "target-main-snap-80000", "snapshot", Some(4), 80_000),
+            player(8, "captors-main-snap-240000", "snapshot", Some(3), 240_000),
+        ];
+        let mut drawn = vec![true; players.len()];
+        drawn[1] = false; // no rating points yet: no line
+        let lines = rating_lines(&players, &drawn);
+        let labels: Vec<&str> = lines.iter().map(|l| l.label.as_str()).collect();
+        assert_eq!(
+            labels,
+            [
+                "expert-captors",
+                "captors-main",
+                "captors-main @80k",
+                "captors-main @160k",
+                "captors-main @240k",
+                "target-main",
+                "target-main @80k",
+            ]
+        );
+        let group_of = |name: &str| lines.iter().find(|l| l.label == name).unwrap().group;
+        assert_eq!(group_of("captors-main @80k"), group_of("captors-main"));
+        assert_eq!(group_of("target-main @80k"), group_of("target-main"));
+        assert_ne!(group_of("captors-main"), group_of("target-main"));
+        assert_ne!(group_of("captors-main"), group_of("expert-captors"));
+        // The learner in full colour, its oldest snapshot lightest.
+        let light = |name: &str| lines.iter().find(|l| l.label == name).unwrap().lightness;
+        assert_eq!(light("captors-main"), 0.0);
+        assert!(light("captors-main @80k") > light("captors-main @160k"));
+        assert!(light("captors-main @160k") > light("captors-main @240k"));
+        assert!(light("captors-main @240k") > 0.0);
+    }
+
+    #[test]
+    fn a_crowded_legend_folds_each_learners_snapshots_into_one_entry() {
+        let mut players = vec![player(1, "captors-main", "learner", None, 0)];
+        for k in 0..20u64 {
+            players.push(player(
+                2 + k as i64,
+                &format!("captors-main-snap-{}", (k + 1) * 80_000),
+                "snapshot",
+                Some(1),
+                (k + 1) * 80_000,
+            ));
+        }
+        let lines = rating_lines(&players, &vec![true; players.len()]);
+        assert_eq!(lines.len(), 21, "every player still gets its line");
+        let labelled: Vec<&str> = lines
+            .iter()
+            .map(|l| l.label.as_str())
+            .filter(|l| !l.is_empty())
+            .collect();
+        assert_eq!(labelled, ["captors-main", "captors-main snapshots (20)"]);
+        assert!(lines.iter().all(|l| l.group == 0));
+    }
+
+    #[test]
+    fn panel_rows_credit_the_member_whichever_side_it_plays() {
+        use crate::league::store::Player;
+        let member = |id: i64, name: &str, side: Side, kind: Kind| Player {
+            id,
+            name: name.into(),
+            side,
+            kind,
+            parent: None,
+            created_at_ms: 0,
+            checkpoint: None,
+            env_steps: 0,
+            curriculum_stage: 0,
+            quarantined: None,
+        };
+        let players = vec![
+            member(1, "expert-captors", Side::Captors, Kind::Heuristic),
+            member(2, "rule-based-target", Side::Target, Kind::Heuristic),
+            member(3, "captors-main-snap-80000", Side::Captors, Kind::Snapshot),
+            member(4, "target-main-snap-80000", Side::Target, Kind::Snapshot),
+        ];
+        let payoff = vec![
+            // The captors' snapshot caught the rule-based target 5 of 20 times.
+            PairResult {
+                captor: 3,
+                target: 2,
+                captor_wins: 5,
+                games: 20,
+            },
+            // The expert captors caught the target's snapshot 15 of 20 times.
+            PairResult {
+                captor: 1,
+                target: 4,
+                captor_wins: 15,
+                games: 20,
+            },
+        ];
+        let rows = panel_rows(&players, &payoff);
+        assert_eq!(rows.len(), 2);
+        let target = &rows[0];
+        assert_eq!((target.member, target.opponent), (4, 1));
+        assert_eq!((target.member_wins, target.episodes), (5, 20));
+        let captors = &rows[1];
+        assert_eq!((captors.member, captors.opponent), (3, 2));
+        assert_eq!(captors.member_wins, 5);
+        assert!((captors.win_rate - 0.25).abs() < 1e-12);
+        // Wilson 95% for 5 of 20: [0.112, 0.469].
+        assert!(
+            (captors.win_rate_low - 0.1119).abs() < 1e-3,
+            "{}",
+            captors.win_rate_low
+        );
+        assert!(
+            (captors.win_rate_high - 0.4687).abs() < 1e-3,
+            "{}",
+            captors.win_rate_high
+        );
+    }
+
+    #[test]
+    fn steps_are_shortened_for_labels() {
+        assert_eq!(short_steps(999), "999");
+        assert_eq!(short_steps(240_000), "240k");
+        assert_eq!(short_steps(1_500_000), "1.5M");
+        assert_eq!(short_steps(2_000_000), "2M");
+        assert_eq!(short_steps(1_234_567), "1.23M");
+    }
 }

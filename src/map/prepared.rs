@@ -46,6 +46,12 @@ pub struct PreparedMap {
 
 static NEXT_MAP_ID: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
 
+/// A new id from the counter prepared maps draw theirs from, for other
+/// structures that reusable buffers key on (`asz::CoarseLattice`).
+pub fn fresh_id() -> u64 {
+    NEXT_MAP_ID.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
+}
+
 impl PreparedMap {
     pub fn new(grid: Grid) -> PreparedMap {
         let side = grid.side();
@@ -75,7 +81,7 @@ impl PreparedMap {
             obstacle,
             clearance,
             spawn_cells,
-            id: NEXT_MAP_ID.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
+            id: fresh_id(),
         }
     }
 

@@ -793,6 +793,21 @@ impl Store {
         })
     }
 
+    /// The payoff of the matches one recorder wrote ("evaluator": the
+    /// panel's episodes, which the matchmaker's choices do not bias).
+    pub fn payoff_recorded_by(&self, recorder: &str) -> Result<Vec<PairResult>, StoreError> {
+        let pool = &self.pool;
+        self.run(move || async move {
+            sqlx::query_as(
+                "SELECT captor_player AS captor, target_player AS target, CAST(SUM(captured) AS BIGINT) AS captor_wins, COUNT(*) AS games FROM matches \
+                 WHERE recorded_by = $1 GROUP BY captor_player, target_player ORDER BY captor_player, target_player",
+            )
+            .bind(recorder)
+            .fetch_all(pool)
+            .await
+        })
+    }
+
     /// Each player's latest live rating (players without matches are absent).
     pub fn ratings(&self) -> Result<HashMap<i64, Rating>, StoreError> {
         let pool = &self.pool;

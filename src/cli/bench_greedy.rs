@@ -1,0 +1,106 @@
+//! The ASZ-greedy rows of `t2e-league bench`: one decision for 3 captors on
+//! the spec's 0.05 m cells and on coarser ones (`greedy:K`), over states
+//! taken from real episodes, and how often each coarsening picks the same
+//! action as the spec's cells.
+
+use crate::env::{Action, Controller, EnvConfig, Side, TrapEnv};
+use crate::heuristics::{AszGreedy, Heuristic};
+use crate::map::PreparedMap;
+use anyhow::Result;
+use std::sync::Arc;
+use std::time::Instant;
+
+/// Coarsenings timed, the spec's first.
+const COARSENINGS: [usize; 4] = [1, 2, 3, 4];
+
+/// States of episodes of the expert captors against the rule-based target:
+/// every 20th step of the first 200, over 8 episodes.
+fn episode_states(cfg: &EnvConfig, maps: &Arc<Vec<Arc<PreparedMap>>>) -> Result<Vec<TrapEnv>> {
+    let mut states = Vec::new();
+    let new_env = || TrapEnv::new(cfg.clone(), maps.clone()).map_err(anyhow::Error::msg);
+    let k = cfg.num_captors;
+    for seed in 0..8u64 {
+        let mut env = new_env()?;
+        env.reset_state(seed)?;
+        let mut played: Vec<Vec<Action>> = Vec::new();
+        for step in 0..200 {
+            if step % 20 == 0 {
+                // Replaying the episode's actions rebuilds the state: TrapEnv
+                // holds buffers that are not worth a Clone.
+                let mut copy = new_env()?;
+                copy.reset_state(seed)?;
+                let mut rewards = vec![0f32; k + 1];
+                for acts in &played {
+                    copy.step_state(acts, &mut rewards);
+                }
+                states.push(copy);
+            }
+            let mut acts = vec![Action::Stop; k + 1];
+            Heuristic.act(&env, Side::Captors, &mut acts[..k]);
+            Heuristic.act(&env, Side::Target, &mut acts[k..]);
+            let mut rewards = vec![0f32; k + 1];
+            env.step_state(&acts, &mut rewards);
+            played.push(acts);
+            if env.is_done() {
+                break;
+            }
+        }
+    }
+    Ok(states)
+}
+
+pub fn run(
+    cfg: &EnvConfig,
+    maps: &Arc<Vec<Arc<PreparedMap>>>,
+    env_spec: &str,
+    secs: f64,
+) -> Result<()> {
+    let states = episode_states(cfg, maps)?;
+    let k = cfg.num_captors;
+    let decide = |greedy: &mut AszGreedy, env: &TrapEnv| {
+        let mut acts = vec![Action::Stop; k];
+        greedy.act(env, Side::Captors, &mut acts);
+        acts
+    };
+    let mut spec_actions = Vec::new();
+    println!(
+        "\nASZ-greedy, one decision for {k} captors, over {} states of expert-captor episodes on {env_spec} (every 20th step of the first 200, 8 episodes), {secs:.1} s per row, 1 thread\n",
+        states.len()
+    );
+    println!("| controller | cell | time per decision | decisions/s | x greedy | same action as greedy |");
+    println!("|---|---|---|---|---|---|");
+    let mut first_rate = None;
+    for coarsening in COARSENINGS {
+        let mut greedy = AszGreedy::new(coarsening);
+        let actions: Vec<Vec<Action>> = states.iter().map(|env| decide(&mut greedy, env)).collect();
+        if coarsening == 1 {
+            spec_actions = actions.clone();
+        }
+        let same = actions
+            .iter()
+            .zip(&spec_actions)
+            .flat_map(|(a, b)| a.iter().zip(b))
+            .filter(|(a, b)| a == b)
+            .count();
+        let total = states.len() * k;
+        let start = Instant::now();
+        let mut decisions = 0usize;
+        while start.elapsed().as_secs_f64() < secs {
+            decide(&mut greedy, &states[decisions % states.len()]);
+            decisions += 1;
+        }
+        let per = start.elapsed().as_secs_f64() / decisions as f64;
+        let rate = 1.0 / per;
+        let base = *first_rate.get_or_insert(rate);
+        println!(
+            "| {} | {:.2} m | {:.2} ms | {:.0} | {:.1}x | {:.1}% ({same} of {total}) |",
+            greedy.name(),
+            0.05 * coarsening as f64,
+            per * 1e3,
+            rate,
+            rate / base,
+            100.0 * same as f64 / total as f64
+        );
+    }
+    Ok(())
+}
