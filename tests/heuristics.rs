@@ -133,7 +133,7 @@ fn greedy_captor_picks_the_action_that_shrinks_the_asz_most() {
                 pos: alone[0].pos,
                 speed: 1.0,
             };
-            fm.asz_cells(env.map(), target, &c)
+            fm.asz_cells(&**env.map(), target, &c)
         };
         let sizes: Vec<usize> = [
             Action::Forward,

@@ -8,7 +8,7 @@
 //! thickens walls, a robot hugging one can sit in a blocked coarse cell; its
 //! front then starts from the nearest free neighbour instead (`locate`).
 
-use super::{Lattice, Seeds};
+use super::{FastMarching, Lattice, Seeds};
 use crate::map::{PreparedMap, CELL_SIZE};
 
 pub struct CoarseLattice {
@@ -59,15 +59,6 @@ impl CoarseLattice {
     /// Whether this lattice was built from `map` with `factor`.
     pub fn covers(&self, map: &PreparedMap, factor: usize) -> bool {
         self.source_id == map.id && self.factor == factor
-    }
-
-    pub fn factor(&self) -> usize {
-        self.factor
-    }
-
-    /// Free coarse cells.
-    pub fn free_cells(&self) -> usize {
-        self.obstacle.iter().filter(|&&o| o == 0).count()
     }
 
     fn is_free(&self, row: isize, col: isize) -> bool {
@@ -171,12 +162,22 @@ impl Lattice for CoarseLattice {
         }
         seeds
     }
+
+    /// Through the start cells around `p`, so that points within one cell
+    /// still differ (a greedy captor compares moves shorter than a cell).
+    fn distance_at(&self, fm: &FastMarching, p: [f64; 2]) -> f64 {
+        self.seeds(p)
+            .as_slice()
+            .iter()
+            .map(|&(cell, c)| fm.time(cell) as f64 + (p[0] - c[0]).hypot(p[1] - c[1]))
+            .fold(f64::INFINITY, f64::min)
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::asz::{FastMarching, Source};
+    use crate::asz::Source;
     use crate::map::Grid;
 
     fn room_with_wall() -> PreparedMap {

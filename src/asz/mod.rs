@@ -15,7 +15,6 @@ mod coarse;
 pub use coarse::CoarseLattice;
 
 use crate::map::{PreparedMap, CELL_AREA, CELL_SIZE};
-use std::sync::Arc;
 
 /// The square lattice a march runs on: the map's own 0.05 m cells
 /// (`PreparedMap`, the spec's ASZ) or a coarser one (`CoarseLattice`, for
@@ -40,6 +39,14 @@ pub trait Lattice {
             seeds.push(s);
         }
         seeds
+    }
+    /// The geodesic distance (m) to `p` after `fm.distance_field` on this
+    /// lattice: by default that of the cell holding `p` (the spec's rule).
+    fn distance_at(&self, fm: &FastMarching, p: [f64; 2]) -> f64 {
+        match self.locate(p) {
+            Some((cell, _)) => fm.time(cell) as f64,
+            None => f64::INFINITY,
+        }
     }
 }
 
@@ -83,27 +90,6 @@ impl Lattice for PreparedMap {
                 self.grid.cell_center(r as usize, c as usize),
             )
         })
-    }
-}
-
-impl<L: Lattice + ?Sized> Lattice for Arc<L> {
-    fn lattice_id(&self) -> u64 {
-        (**self).lattice_id()
-    }
-    fn stride(&self) -> usize {
-        (**self).stride()
-    }
-    fn obstacle(&self) -> &[u8] {
-        (**self).obstacle()
-    }
-    fn cell_size(&self) -> f64 {
-        (**self).cell_size()
-    }
-    fn locate(&self, p: [f64; 2]) -> Option<(usize, [f64; 2])> {
-        (**self).locate(p)
-    }
-    fn seeds(&self, p: [f64; 2]) -> Seeds {
-        (**self).seeds(p)
     }
 }
 

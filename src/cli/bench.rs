@@ -358,7 +358,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
             let per = measure(secs, || {
                 let (c, t) = &starts[i % starts.len()];
                 i += 1;
-                std::hint::black_box(fm.asz_cells(&m, *t, c));
+                std::hint::black_box(fm.asz_cells(&*m, *t, c));
                 1
             });
             rows.push(Row {
@@ -372,7 +372,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
                 i += 1;
                 let mut sources = c.clone();
                 sources.push(*t);
-                fm.march(&m, &sources, None);
+                fm.march(&*m, &sources, None);
                 1
             });
             rows.push(Row {

@@ -343,6 +343,6 @@ impl TrapEnv {
     pub fn asz_cells(&mut self) -> usize {
         let (captors, target) = self.asz_sources();
         let fm = self.marching.get_or_insert_with(FastMarching::new);
-        fm.asz_cells(&self.map, target, &captors)
+        fm.asz_cells(&*self.map, target, &captors)
     }
 }

@@ -275,7 +275,7 @@ pub fn play_episode(
     let mut soa = Vec::new();
     let measure = |env: &TrapEnv, marching: &mut FastMarching| {
         let (c, t) = env.asz_sources();
-        cells_to_m2(marching.asz_cells(env.map(), t, &c))
+        cells_to_m2(marching.asz_cells(&**env.map(), t, &c))
     };
     if setting.soa_every > 0 {
         soa.push(measure(&env, marching));

@@ -6,7 +6,7 @@ use crate::asz::{CoarseLattice, FastMarching, Lattice, Source};
 use crate::env::physics::{self, dist};
 use crate::env::{Action, Controller, Side, TrapEnv};
 use crate::map::prepared::{ray_dirs, NUM_RAYS};
-use crate::map::{PreparedMap, CELL_SIZE};
+use crate::map::PreparedMap;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -230,23 +230,7 @@ fn greedy_choice<L: Lattice>(
         return (0..4).min_by_key(|&a| sizes[a]).unwrap();
     }
     distance.distance_field(lattice, target.pos);
-    // On the map's own cells, the spec's: the distance of the cell holding
-    // the point. On coarser ones, through the nearest start cells, so that
-    // moves within one cell still differ.
-    let geodesic = |p: [f64; 2]| -> f64 {
-        if lattice.cell_size() <= CELL_SIZE {
-            return match lattice.locate(p) {
-                Some((cell, _)) => distance.time(cell) as f64,
-                None => f64::INFINITY,
-            };
-        }
-        lattice
-            .seeds(p)
-            .as_slice()
-            .iter()
-            .map(|&(cell, c)| distance.time(cell) as f64 + (p[0] - c[0]).hypot(p[1] - c[1]))
-            .fold(f64::INFINITY, f64::min)
-    };
+    let geodesic = |p: [f64; 2]| lattice.distance_at(distance, p);
     (0..4)
         .min_by(|&a, &b| geodesic(moved[a]).total_cmp(&geodesic(moved[b])))
         .unwrap()

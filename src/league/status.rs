@@ -725,14 +725,8 @@ pub fn rating_lines(players: &[PlayerRow], has_points: &[bool]) -> Vec<RatingLin
 /// 240000 -> "240k", 1500000 -> "1.5M".
 fn short_steps(steps: u64) -> String {
     if steps >= 1_000_000 {
-        let m = steps as f64 / 1e6;
-        if (m * 10.0).fract() == 0.0 && m.fract() != 0.0 {
-            format!("{m:.1}M")
-        } else if m.fract() == 0.0 {
-            format!("{m:.0}M")
-        } else {
-            format!("{m:.2}M")
-        }
+        let m = format!("{:.2}", steps as f64 / 1e6);
+        format!("{}M", m.trim_end_matches('0').trim_end_matches('.'))
     } else if steps >= 1000 {
         format!("{}k", steps / 1000)
     } else {

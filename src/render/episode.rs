@@ -270,7 +270,7 @@ fn march_regions(fm: &mut FastMarching, env: &TrapEnv) -> usize {
     let k = captors.len() as u8;
     let mut sources = captors;
     sources.push(target);
-    fm.march(env.map(), &sources, None);
+    fm.march(&**env.map(), &sources, None);
     fm.settled().filter(|&(_, label)| label == k).count()
 }
 
