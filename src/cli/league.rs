@@ -104,6 +104,45 @@ pub struct ExportArgs {
 }
 
 #[derive(clap::Args, Debug)]
+pub struct ExploitArgs {
+    /// The frozen player: a name or id as `status` lists it, or a checkpoint
+    /// folder of this league (a snapshot or an `export`).
+    pub player: String,
+    /// League directory (with --store: the pool folder).
+    #[arg(long, default_value = "runs/league/default")]
+    pub dir: PathBuf,
+    /// The league's store when it is not league.db in --dir (as `run --store`).
+    #[arg(long, value_name = "URL")]
+    pub store: Option<String>,
+    /// How long the best response trains: env steps (200000) or training
+    /// wall-clock (90s, 10m, 2h).
+    #[arg(long, allow_hyphen_values = true)]
+    pub budget: String,
+    /// Seeds the best response's weights, its training episodes and the
+    /// evaluation's starts.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Evaluation map sets, comma-separated (as `eval --maps`); one row each.
+    #[arg(long, default_value = "small,medium,large", value_delimiter = ',')]
+    pub maps: Vec<String>,
+    /// Evaluation episodes per map set.
+    #[arg(long, default_value_t = 200)]
+    pub episodes: usize,
+    /// Steps before an evaluation episode counts as escaped (the paper tests on 500).
+    #[arg(long, default_value_t = 500)]
+    pub episode_length: u32,
+    /// v_e / v_p (default: the league's first curriculum stage).
+    #[arg(long)]
+    pub speed_ratio: Option<f64>,
+    /// Threads for libtorch and rayon alike.
+    #[arg(long, default_value_t = 1)]
+    pub threads: usize,
+    /// Hide the progress bars.
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+#[derive(clap::Args, Debug)]
 pub struct LearnerArgs {
     #[arg(long)]
     pub dir: PathBuf,
@@ -261,6 +300,42 @@ pub fn export(args: ExportArgs) -> Result<()> {
     status::export(&dir, &args.player, &args.out)?;
     println!("exported {} -> {}", args.player, args.out.display());
     Ok(())
+}
+
+pub fn exploit(args: ExploitArgs) -> Result<()> {
+    use crate::league::exploit::{self, Budget, ExploitOptions, ExploitOutcome};
+    let dir = league_dir(&args.dir, args.store.as_deref())?;
+    let opts = ExploitOptions {
+        budget: Budget::parse(&args.budget).map_err(anyhow::Error::msg)?,
+        seed: args.seed,
+        maps: args.maps.clone(),
+        episodes: args.episodes,
+        episode_length: args.episode_length,
+        speed_ratio: args.speed_ratio,
+        threads: args.threads,
+        progress: !args.quiet,
+    };
+    on_ctrl_c()?;
+    match exploit::run(&dir, &args.player, &opts, &STOP)? {
+        ExploitOutcome::Recorded {
+            rows,
+            player,
+            fresh,
+        } => {
+            if !fresh {
+                println!("already recorded in the store (the same player, weights, learner, budget, seed and evaluation):");
+            }
+            print!("{}", exploit::render(&rows, &player));
+            Ok(())
+        }
+        ExploitOutcome::Stopped { env_steps, folder } => {
+            eprintln!(
+                "stopped at {env_steps} env steps, nothing recorded; the same command resumes it from {}",
+                folder.display()
+            );
+            std::process::exit(130)
+        }
+    }
 }
 
 #[derive(clap::Args, Debug)]

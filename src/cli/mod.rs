@@ -60,6 +60,9 @@ pub enum Command {
     Status(league::StatusArgs),
     /// Write one league player as a self-contained checkpoint folder.
     Export(league::ExportArgs),
+    /// Train a fresh best response against one frozen league player for a
+    /// fixed budget; its win rate (95% interval) goes to the store and `status`.
+    Exploit(league::ExploitArgs),
     /// Run a league's seats on this host, taken from its store (a league
     /// started with `run --store URL --pool DIR`).
     Worker(league::WorkerArgs),
@@ -105,6 +108,7 @@ pub fn main() -> anyhow::Result<()> {
         Command::Run(a) => league::run(a),
         Command::Status(a) => league::status(a),
         Command::Export(a) => league::export(a),
+        Command::Exploit(a) => league::exploit(a),
         Command::Worker(a) => league::worker(a),
         Command::LeagueLearner(a) => league::learner(a),
         Command::LeagueEvaluator(a) => league::evaluator(a),

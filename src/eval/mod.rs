@@ -244,7 +244,9 @@ pub fn wilson_interval(successes: usize, n: usize) -> (f64, f64) {
     let denom = 1.0 + z * z / nf;
     let centre = (p + z * z / (2.0 * nf)) / denom;
     let half = z * (p * (1.0 - p) / nf + z * z / (4.0 * nf * nf)).sqrt() / denom;
-    ((centre - half).max(0.0), (centre + half).min(1.0))
+    // At 0 or n successes one bound is p exactly; rounding may put it a
+    // hair on the wrong side.
+    ((centre - half).clamp(0.0, p), (centre + half).clamp(p, 1.0))
 }
 
 /// Plays test episode `episode` of a setting: seed, map and placement come
@@ -502,6 +504,14 @@ mod tests {
         assert!((hi - 0.0714).abs() < 1e-3);
         let (lo, hi) = wilson_interval(50, 50);
         assert!((lo - 0.9286).abs() < 1e-3 && (hi - 1.0).abs() < 1e-12);
+        // The interval holds the observed rate exactly, at every n.
+        for n in 1..300 {
+            for k in [0, n] {
+                let (lo, hi) = wilson_interval(k, n);
+                let p = k as f64 / n as f64;
+                assert!(lo <= p && p <= hi, "{k}/{n}: [{lo}, {hi}]");
+            }
+        }
     }
 
     #[test]

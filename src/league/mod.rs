@@ -23,12 +23,15 @@
 //! - `evaluator`: its own process: every snapshot plays a fixed panel.
 //! - `manager`: `t2e-league run`: spawns and supervises the learners and
 //!   the evaluator.
+//! - `exploit`: `t2e-league exploit`: a fresh best response trained against
+//!   one frozen player, its win rate recorded in the store.
 //! - `status`: what `status` and `export` read from a league.
 
 pub mod config;
 pub mod curriculum;
 pub mod dir;
 pub mod evaluator;
+pub mod exploit;
 pub mod learner;
 pub mod manager;
 pub mod matchmaking;

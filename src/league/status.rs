@@ -27,13 +27,19 @@
 //!                                          // leagues on workers only
 //!   "panel": [{ "member", "member_name", "opponent", "opponent_name",
 //!               "episodes", "member_wins", "win_rate",
-//!               "win_rate_low", "win_rate_high" }] }  // evaluator's episodes, 95% Wilson
+//!               "win_rate_low", "win_rate_high" }],  // evaluator's episodes, 95% Wilson
+//!   "exploits": [{ "player", "player_name", "side", "best_response", "budget",
+//!                  "env_steps", "train_s", "seed", "maps", "speed_ratio",
+//!                  "episodes", "best_response_wins", "win_rate",
+//!                  "win_rate_low", "win_rate_high" }] }  // `exploit`: a fresh
+//!                                          // best response's wins against the
+//!                                          // frozen player, 95% Wilson
 //! ```
 
 use super::config::LeagueConfig;
 use super::dir::LeagueDir;
 use super::ratings::{bradley_terry, PairRecord};
-use super::store::{host_name, now_ms, Heartbeat, Kind, PairResult, Player, Store};
+use super::store::{host_name, now_ms, ExploitRecord, Heartbeat, Kind, PairResult, Player, Store};
 use crate::env::Side;
 use anyhow::{bail, Context, Result};
 use serde::Serialize;
@@ -117,6 +123,58 @@ pub struct StatusReport {
     /// The evaluator's panel, per member: only its episodes, so members
     /// compare whatever the matchmaker chose for them.
     pub panel: Vec<PanelRow>,
+    /// Approximate best responses (`t2e-league exploit`), oldest first.
+    pub exploits: Vec<ExploitRow>,
+}
+
+/// One map set of one exploit: how often a fresh best response beat the
+/// frozen player.
+#[derive(Clone, Debug, Serialize)]
+pub struct ExploitRow {
+    pub player: i64,
+    pub player_name: String,
+    pub side: String,
+    pub best_response: String,
+    pub budget: String,
+    pub env_steps: u64,
+    pub train_s: f64,
+    pub seed: u64,
+    pub maps: String,
+    pub speed_ratio: f64,
+    pub episodes: u64,
+    pub best_response_wins: u64,
+    pub win_rate: f64,
+    pub win_rate_low: f64,
+    pub win_rate_high: f64,
+}
+
+fn exploit_rows(players: &[Player], records: Vec<ExploitRecord>) -> Vec<ExploitRow> {
+    records
+        .into_iter()
+        .map(|r| {
+            let p = players.iter().find(|p| p.id == r.player);
+            let (lo, hi) = crate::eval::wilson_interval(r.wins as usize, r.episodes as usize);
+            ExploitRow {
+                player: r.player,
+                player_name: p
+                    .map(|p| p.name.clone())
+                    .unwrap_or_else(|| r.player.to_string()),
+                side: p.map(|p| p.side.name().to_string()).unwrap_or_default(),
+                best_response: r.best_response,
+                budget: r.budget,
+                env_steps: r.env_steps,
+                train_s: r.train_ms as f64 / 1000.0,
+                seed: r.seed,
+                maps: r.maps,
+                speed_ratio: r.speed_ratio,
+                episodes: r.episodes,
+                best_response_wins: r.wins,
+                win_rate: r.wins as f64 / r.episodes.max(1) as f64,
+                win_rate_low: lo,
+                win_rate_high: hi,
+            }
+        })
+        .collect()
 }
 
 /// One member's results against one panel opponent.
@@ -281,8 +339,10 @@ pub fn report(dir: &LeagueDir) -> Result<StatusReport> {
     let now = now_ms();
     let panel_episodes = store.matches_recorded_by("evaluator")?;
     let panel = panel_rows(&players, &store.payoff_recorded_by("evaluator")?);
+    let exploits = exploit_rows(&players, store.exploits()?);
     Ok(StatusReport {
         panel,
+        exploits,
         league: cfg.name.clone(),
         dir: dir.root.display().to_string(),
         matches: store.match_count()?,
@@ -390,6 +450,32 @@ pub fn render(r: &StatusReport) -> String {
                 .map(|q| format!("  QUARANTINED: {q}"))
                 .unwrap_or_default()
         );
+    }
+    if !r.exploits.is_empty() {
+        let _ = writeln!(
+            s,
+            "\nexploitability (`exploit`: a fresh best response trained against the frozen player; its win %):"
+        );
+        let _ = writeln!(
+            s,
+            "  {:<26} {:<14} {:<16} {:>11} {:<10} {:>8} {:>7}  95% interval",
+            "player", "best response", "budget", "env steps", "maps", "episodes", "win %"
+        );
+        for e in &r.exploits {
+            let _ = writeln!(
+                s,
+                "  {:<26} {:<14} {:<16} {:>11} {:<10} {:>8} {:>7.1}  [{:.1}, {:.1}]",
+                e.player_name,
+                e.best_response,
+                e.budget,
+                e.env_steps,
+                e.maps,
+                e.episodes,
+                100.0 * e.win_rate,
+                100.0 * e.win_rate_low,
+                100.0 * e.win_rate_high
+            );
+        }
     }
     let _ = writeln!(s, "\nlearners:");
     for l in &r.learners {

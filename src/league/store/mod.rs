@@ -22,10 +22,12 @@
 //!   write can be retried when the connection fails (`Store::run`).
 //! - A PostgreSQL URL's password is never printed (`StoreUrl`'s Display).
 
+mod exploits;
 mod leases;
 mod rows;
 pub mod url;
 
+pub use exploits::ExploitRecord;
 pub use leases::SeatLease;
 pub use rows::{
     inside_pool, BeatState, Crash, Heartbeat, Kind, MatchRecord, NewPlayer, PairResult, Player,
