@@ -13,6 +13,8 @@
 //!     learners/SIDE-main/  each main learner's run folder (state.json, checkpoints/)
 //!     players/NAME/        frozen snapshots in the pool (checkpoint folders)
 //!     logs/SIDE-main.log   each learner process's output
+//!     exploits/PLAYER-KEY/ `exploit`'s best responses: opponent/ (the
+//!                          frozen player), run/ (the best response's run)
 //! ```
 
 use super::config::LeagueConfig;

@@ -59,13 +59,6 @@ impl EvaluatorConfig {
     }
 }
 
-fn other(side: Side) -> Side {
-    match side {
-        Side::Captors => Side::Target,
-        Side::Target => Side::Captors,
-    }
-}
-
 /// Plays the panel games no one has recorded yet; returns how many it played.
 fn evaluate_pending(
     dir: &LeagueDir,
@@ -82,7 +75,7 @@ fn evaluate_pending(
     {
         let Some(panel) = players
             .iter()
-            .find(|p| p.name == heuristic_name(other(member.side)))
+            .find(|p| p.name == heuristic_name(member.side.other()))
         else {
             continue;
         };
