@@ -301,3 +301,75 @@ fn exploiters_play_the_main_learners_join_the_pool_and_start_again() {
         assert!(games > 0, "{} recorded no match", exploiter.name);
     }
 }
+
+#[test]
+fn held_out_opponents_play_every_snapshot_but_never_the_league() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = LeagueDir::new(tmp.path().join("league"));
+    let config = tmp.path().join("league.toml");
+    let text = CONFIG.replace(
+        "env_steps_per_learner = 9_600",
+        "env_steps_per_learner = 3_200",
+    ) + "held_out_captors = [\"random\"]\nheld_out_targets = [\"still\"]\n";
+    assert!(
+        text.trim_end().ends_with("held_out_targets = [\"still\"]") && text.contains("[evaluator]")
+    );
+    std::fs::write(&config, text).unwrap();
+    let out = Command::new(bin())
+        .args(["run", "--config"])
+        .arg(&config)
+        .arg("--dir")
+        .arg(&dir.root)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+
+    let store = Store::open(&dir.store).unwrap();
+    let players = store.players().unwrap();
+    assert!(
+        players
+            .iter()
+            .all(|p| p.name != "random" && p.name != "still"),
+        "a held-out opponent is no member: {players:?}"
+    );
+    let snapshots: Vec<_> = players
+        .iter()
+        .filter(|p| p.kind == Kind::Snapshot)
+        .collect();
+    assert!(snapshots.len() >= 2, "{players:?}");
+    // Every snapshot played its 3 panel episodes against the other side's
+    // heuristic (matches) and 3 against its held-out opponent (apart).
+    let episodes = 3 * snapshots.len() as u64;
+    assert_eq!(store.matches_recorded_by("evaluator").unwrap(), episodes);
+    assert_eq!(store.held_out_count().unwrap(), episodes);
+    let held_out = store.held_out_results().unwrap();
+    for s in &snapshots {
+        let want = match s.side {
+            Side::Captors => "still",
+            Side::Target => "random",
+        };
+        let rows: Vec<_> = held_out.iter().filter(|r| r.member == s.id).collect();
+        assert_eq!(rows.len(), 1, "{}: {rows:?}", s.name);
+        assert_eq!((rows[0].opponent.as_str(), rows[0].episodes), (want, 3));
+    }
+    drop(store);
+    let report = t2e::league::status::report(&dir).unwrap();
+    let marked: Vec<_> = report.panel.iter().filter(|r| r.held_out).collect();
+    assert_eq!(marked.len(), snapshots.len());
+    assert!(marked.iter().all(|r| r.opponent == 0 && r.episodes == 3));
+    let evaluator = report
+        .learners
+        .iter()
+        .find(|l| l.name == "evaluator")
+        .unwrap();
+    assert_eq!(evaluator.env_steps, 2 * episodes, "panel episodes counted");
+    let text = t2e::league::status::render(&report);
+    assert!(
+        text.contains("random (held out)") && text.contains("still (held out)"),
+        "{text}"
+    );
+}

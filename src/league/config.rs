@@ -377,6 +377,45 @@ mod tests {
         let err = LeagueConfig::parse("[evaluator]\nepisodes = 0\n").unwrap_err();
         assert!(err.starts_with("evaluator.episodes = 0"), "{err}");
         LeagueConfig::parse("[evaluator]\nenabled = false\nepisodes = 0\n").unwrap();
+        // Held-out opponents: controllers of the right side, never a member.
+        let cfg = LeagueConfig::parse(
+            "[evaluator]\nheld_out_captors = [\"greedy:2\", \"random\"]\nheld_out_targets = [\"still\"]\n",
+        )
+        .unwrap();
+        let names = |side| -> Vec<String> {
+            cfg.evaluator
+                .held_out(side)
+                .unwrap()
+                .into_iter()
+                .map(|(n, _)| n)
+                .collect()
+        };
+        assert_eq!(names(Side::Target), ["greedy:2", "random"]);
+        assert_eq!(names(Side::Captors), ["still"]);
+        for (text, says) in [
+            (
+                "held_out_captors = [\"greedy:x\"]",
+                "evaluator.held_out_captors = \"greedy:x\"",
+            ),
+            (
+                "held_out_captors = [\"heuristic\"]",
+                "permanent league member",
+            ),
+            ("held_out_targets = [\"rule\"]", "permanent league member"),
+            (
+                "held_out_targets = [\"greedy\"]",
+                "evaluator.held_out_targets = \"greedy\"",
+            ),
+            ("held_out_captors = [\"random\", \"random\"]", "named twice"),
+            ("held_out_captors = [\"ckpt:\"]", "needs a path"),
+        ] {
+            let err = LeagueConfig::parse(&format!("[evaluator]\n{text}\n")).unwrap_err();
+            assert!(err.contains(says), "{text}: {err}");
+        }
+        // Left out of the stored config while empty: leagues stored before
+        // the field existed compare equal to their config.toml.
+        let stored = toml::to_string(&LeagueConfig::default()).unwrap();
+        assert!(!stored.contains("held_out"), "{stored}");
         let shipped = Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/league-default.toml");
         LeagueConfig::load(&shipped).unwrap();
     }

@@ -1,14 +1,17 @@
 //! The league's evaluator, its own process (`t2e-league league-evaluator`,
 //! spawned by the manager): every snapshot plays a fixed panel, the other
-//! side's heuristic member, for a set number of greedy episodes at the first
-//! curriculum stage, so every member has a row that compares with every
-//! other's whatever the matchmaker chose for it. Bounded to a share of one
+//! side's heuristic member and the held-out opponents the config names, for
+//! a set number of greedy episodes at the first curriculum stage, so every
+//! member has a row that compares with every other's whatever the
+//! matchmaker chose for it. Held-out opponents are controllers, not
+//! members: their episodes go to their own table (`store::held_out`), never
+//! to the matches the ratings and the matchmaker read. Bounded to a share of one
 //! core: after each episode it sleeps in proportion to the episode's time.
 
 use super::config::LeagueConfig;
 use super::dir::LeagueDir;
 use super::players::{heuristic_name, learner_name, Seat};
-use super::store::{BeatState, Kind, MatchRecord, Store};
+use super::store::{BeatState, HeldOutEpisode, Kind, MatchRecord, Player, Store};
 use super::supervision::{CannotStart, Outcome};
 use crate::controllers::ControllerSpec;
 use crate::env::{CaptureRule, Side};
@@ -29,6 +32,18 @@ pub struct EvaluatorConfig {
     pub episodes: usize,
     /// Share of one core the evaluator may use (it sleeps the rest).
     pub cpu_share: f64,
+    /// Held-out opponents of the target snapshots: captor controllers
+    /// (`greedy:2`, `ckpt:PATH` of a team trained elsewhere) that play the
+    /// panel but never the league, so the league's target never trained
+    /// against them. Their episodes are kept apart from the matches (no
+    /// rating, no draw). Empty by default (an ASZ-greedy episode costs
+    /// seconds); stored only when set.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub held_out_captors: Vec<String>,
+    /// Held-out opponents of the captor snapshots (target controllers), as
+    /// `held_out_captors`.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub held_out_targets: Vec<String>,
 }
 
 impl Default for EvaluatorConfig {
@@ -37,6 +52,8 @@ impl Default for EvaluatorConfig {
             enabled: true,
             episodes: 20,
             cpu_share: 0.25,
+            held_out_captors: Vec::new(),
+            held_out_targets: Vec::new(),
         }
     }
 }
@@ -55,14 +72,61 @@ impl EvaluatorConfig {
         if self.episodes > 100_000 {
             return Err(format!("episodes = {}: at most 100000", self.episodes));
         }
+        for side in [Side::Captors, Side::Target] {
+            self.held_out(side)?;
+        }
         Ok(())
     }
+
+    /// The held-out opponents that play `member_side`'s snapshots, parsed.
+    pub fn held_out(&self, member_side: Side) -> Result<Vec<(String, ControllerSpec)>, String> {
+        let (field, names) = match member_side {
+            Side::Target => ("held_out_captors", &self.held_out_captors),
+            Side::Captors => ("held_out_targets", &self.held_out_targets),
+        };
+        let side = member_side.other();
+        let mut out: Vec<(String, ControllerSpec)> = Vec::new();
+        for name in names {
+            let spec: ControllerSpec = name
+                .parse()
+                .map_err(|e| format!("{field} = \"{name}\": {e}"))?;
+            if spec == ControllerSpec::Heuristic {
+                return Err(format!(
+                    "{field} = \"{name}\": the {} is a permanent league member, which the league trains against; a held-out opponent is one it never meets",
+                    match side {
+                        Side::Captors => "expert heuristic",
+                        Side::Target => "rule-based target",
+                    }
+                ));
+            }
+            // A checkpoint is loaded (and checked) when the evaluator starts.
+            if !spec.is_checkpoint() {
+                spec.build(side)
+                    .map_err(|e| format!("{field} = \"{name}\": {e}"))?;
+            }
+            let shown = spec.to_string();
+            if out.iter().any(|(n, _)| *n == shown) {
+                return Err(format!("{field}: \"{name}\" is named twice"));
+            }
+            out.push((shown, spec));
+        }
+        Ok(out)
+    }
+}
+
+/// Who a snapshot plays on the panel.
+enum PanelOpponent<'a> {
+    /// The other side's heuristic member: a match, in the payoff.
+    Member(&'a Player),
+    /// A held-out controller: its episodes are kept apart from the matches.
+    HeldOut(&'a str, &'a ControllerSpec),
 }
 
 /// Plays the panel games no one has recorded yet; returns how many it played.
 fn evaluate_pending(
     dir: &LeagueDir,
     cfg: &LeagueConfig,
+    held_out: &[(Side, Vec<(String, ControllerSpec)>)],
     maps: &Arc<Vec<Arc<PreparedMap>>>,
     store: &Store,
     stop: &AtomicBool,
@@ -73,74 +137,136 @@ fn evaluate_pending(
         .iter()
         .filter(|p| p.kind == Kind::Snapshot && p.quarantined.is_none())
     {
-        let Some(panel) = players
+        let mut opponents: Vec<PanelOpponent> = players
             .iter()
-            .find(|p| p.name == heuristic_name(member.side.other()))
-        else {
-            continue;
-        };
+            .filter(|p| p.name == heuristic_name(member.side.other()))
+            .map(PanelOpponent::Member)
+            .collect();
+        for (side, specs) in held_out {
+            if *side == member.side {
+                opponents.extend(specs.iter().map(|(n, s)| PanelOpponent::HeldOut(n, s)));
+            }
+        }
         let (rel, _) = member
             .checkpoint
             .as_ref()
             .context("snapshot without a checkpoint")?;
         let spec =
             ControllerSpec::Checkpoint(crate::controllers::CheckpointSpec::new(dir.root.join(rel)));
-        let (captors, target) = match member.side {
-            Side::Captors => (spec.clone(), ControllerSpec::Heuristic),
-            Side::Target => (ControllerSpec::Heuristic, spec.clone()),
-        };
-        let setting = EvalSetting {
-            captors,
-            target,
-            num_captors: cfg.num_captors,
-            speed_ratio: cfg.curriculum.stages[0],
-            episodes: cfg.evaluator.episodes,
-            episode_length: cfg.episode_length,
-            seed: cfg.seed ^ 0xE7A1,
-            capture_rule: CaptureRule::Fast,
-            soa_every: 0,
-        };
-        let mut marching = crate::asz::FastMarching::new();
-        for episode in 0..cfg.evaluator.episodes {
-            if stop.load(Ordering::SeqCst) {
-                return Ok(played);
-            }
-            let key = format!("evaluator/{}/{}/{episode}", member.name, panel.name);
-            if store.has_match(&key)? {
-                continue;
-            }
-            let started = Instant::now();
-            let record = match play_episode(&setting, maps, episode, &mut marching) {
-                Ok(r) => r,
-                Err(e) => {
-                    store.quarantine(member.id, &format!("evaluator could not play it: {e:#}"))?;
-                    break;
-                }
+        'opponents: for opponent in &opponents {
+            let other = match opponent {
+                PanelOpponent::Member(_) => ControllerSpec::Heuristic,
+                PanelOpponent::HeldOut(_, s) => (*s).clone(),
             };
-            let (captor_player, target_player) = match member.side {
-                Side::Captors => (member.id, panel.id),
-                Side::Target => (panel.id, member.id),
+            let (captors, target) = match member.side {
+                Side::Captors => (spec.clone(), other),
+                Side::Target => (other, spec.clone()),
             };
-            store.record_match(&MatchRecord {
-                key,
-                captor_player,
-                target_player,
-                map: record.map,
+            let setting = EvalSetting {
+                captors,
+                target,
                 num_captors: cfg.num_captors,
-                speed_ratio: setting.speed_ratio,
-                seed: record.seed,
-                captured: record.captured,
-                steps: record.steps,
-                final_asz_m2: None,
-                recorded_by: "evaluator".into(),
-            })?;
-            played += 1;
-            let busy = started.elapsed().as_secs_f64();
-            let idle = busy * (1.0 - cfg.evaluator.cpu_share) / cfg.evaluator.cpu_share;
-            std::thread::sleep(Duration::from_secs_f64(idle.min(10.0)));
+                speed_ratio: cfg.curriculum.stages[0],
+                episodes: cfg.evaluator.episodes,
+                episode_length: cfg.episode_length,
+                seed: cfg.seed ^ 0xE7A1,
+                capture_rule: CaptureRule::Fast,
+                soa_every: 0,
+            };
+            let mut marching = crate::asz::FastMarching::new();
+            for episode in 0..cfg.evaluator.episodes {
+                if stop.load(Ordering::SeqCst) {
+                    return Ok(played);
+                }
+                let recorded = match opponent {
+                    PanelOpponent::Member(panel) => store.has_match(&format!(
+                        "evaluator/{}/{}/{episode}",
+                        member.name, panel.name
+                    ))?,
+                    PanelOpponent::HeldOut(name, _) => store.has_held_out(&format!(
+                        "evaluator/held-out/{}/{name}/{episode}",
+                        member.name
+                    ))?,
+                };
+                if recorded {
+                    continue;
+                }
+                let started = Instant::now();
+                let record = match play_episode(&setting, maps, episode, &mut marching) {
+                    Ok(r) => r,
+                    Err(e) => {
+                        store.quarantine(
+                            member.id,
+                            &format!("evaluator could not play it: {e:#}"),
+                        )?;
+                        break 'opponents;
+                    }
+                };
+                match opponent {
+                    PanelOpponent::Member(panel) => {
+                        let (captor_player, target_player) = match member.side {
+                            Side::Captors => (member.id, panel.id),
+                            Side::Target => (panel.id, member.id),
+                        };
+                        store.record_match(&MatchRecord {
+                            key: format!("evaluator/{}/{}/{episode}", member.name, panel.name),
+                            captor_player,
+                            target_player,
+                            map: record.map,
+                            num_captors: cfg.num_captors,
+                            speed_ratio: setting.speed_ratio,
+                            seed: record.seed,
+                            captured: record.captured,
+                            steps: record.steps,
+                            final_asz_m2: None,
+                            recorded_by: "evaluator".into(),
+                        })?;
+                    }
+                    PanelOpponent::HeldOut(name, _) => {
+                        store.record_held_out(&HeldOutEpisode {
+                            key: format!("evaluator/held-out/{}/{name}/{episode}", member.name),
+                            member: member.id,
+                            opponent: name.to_string(),
+                            map: record.map,
+                            speed_ratio: setting.speed_ratio,
+                            seed: record.seed,
+                            captured: record.captured,
+                            steps: record.steps,
+                        })?;
+                    }
+                }
+                played += 1;
+                let busy = started.elapsed().as_secs_f64();
+                let idle = busy * (1.0 - cfg.evaluator.cpu_share) / cfg.evaluator.cpu_share;
+                std::thread::sleep(Duration::from_secs_f64(idle.min(10.0)));
+            }
         }
     }
     Ok(played)
+}
+
+/// The held-out opponents per member side, checkpoints loaded and checked
+/// against the league's game.
+fn held_out_panel(
+    cfg: &LeagueConfig,
+) -> Result<Vec<(Side, Vec<(String, ControllerSpec)>)>, String> {
+    let env = crate::env::EnvConfig {
+        num_captors: cfg.num_captors,
+        target_speed: cfg.curriculum.stages[0],
+        episode_length: cfg.episode_length,
+        ..crate::env::EnvConfig::default()
+    };
+    [Side::Captors, Side::Target]
+        .into_iter()
+        .map(|member_side| {
+            let specs = cfg.evaluator.held_out(member_side)?;
+            for (name, spec) in &specs {
+                spec.check(member_side.other(), &env)
+                    .map_err(|e| format!("evaluator held-out opponent \"{name}\": {e}"))?;
+            }
+            Ok((member_side, specs))
+        })
+        .collect()
 }
 
 /// Runs until Ctrl-C / SIGINT (`Outcome::Stopped`), or until both learners
@@ -173,11 +299,14 @@ pub fn run_evaluator(dir: &LeagueDir, stop: &AtomicBool) -> Result<Outcome> {
     let maps = crate::map::catalog::load_prepared(&cfg.maps)
         .with_context(|| format!("maps = \"{}\"", cfg.maps))
         .map_err(|e| anyhow::Error::new(CannotStart(format!("{e:#}"))))?;
+    let held_out = held_out_panel(&cfg).map_err(|e| {
+        anyhow::Error::new(CannotStart(format!("{}: {e}", dir.config_path().display())))
+    })?;
     // The count covers every evaluator process of this league, not only this one.
-    let mut total = store.matches_recorded_by("evaluator")?;
+    let mut total = store.matches_recorded_by("evaluator")? + store.held_out_count()?;
     store.heartbeat("evaluator", BeatState::Evaluating, total, None)?;
     while !stop.load(Ordering::SeqCst) {
-        let played = evaluate_pending(dir, &cfg, &maps, &store, stop)?;
+        let played = evaluate_pending(dir, &cfg, &held_out, &maps, &store, stop)?;
         total += played as u64;
         if played == 0 {
             let beats = store.heartbeats()?;
@@ -188,7 +317,7 @@ pub fn run_evaluator(dir: &LeagueDir, stop: &AtomicBool) -> Result<Outcome> {
             });
             if done {
                 // One more pass: a last snapshot may have landed since.
-                if evaluate_pending(dir, &cfg, &maps, &store, stop)? == 0 {
+                if evaluate_pending(dir, &cfg, &held_out, &maps, &store, stop)? == 0 {
                     break;
                 }
                 continue;

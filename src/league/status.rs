@@ -27,7 +27,9 @@
 //!                                          // leagues on workers only
 //!   "panel": [{ "member", "member_name", "opponent", "opponent_name",
 //!               "episodes", "member_wins", "win_rate",
-//!               "win_rate_low", "win_rate_high" }],  // evaluator's episodes, 95% Wilson
+//!               "win_rate_low", "win_rate_high",   // evaluator's episodes, 95% Wilson
+//!               "held_out": bool }],   // a held-out opponent: "opponent" 0,
+//!                                      // "opponent_name" its controller
 //!   "exploits": [{ "player", "player_name", "side", "best_response", "budget",
 //!                  "env_steps", "train_s", "seed", "maps", "speed_ratio",
 //!                  "episodes", "best_response_wins", "win_rate",
@@ -39,7 +41,9 @@
 use super::config::LeagueConfig;
 use super::dir::LeagueDir;
 use super::ratings::{bradley_terry, PairRecord};
-use super::store::{host_name, now_ms, ExploitRecord, Heartbeat, Kind, PairResult, Player, Store};
+use super::store::{
+    host_name, now_ms, ExploitRecord, Heartbeat, HeldOutResult, Kind, PairResult, Player, Store,
+};
 use crate::env::Side;
 use anyhow::{bail, Context, Result};
 use serde::Serialize;
@@ -191,12 +195,21 @@ pub struct PanelRow {
     /// 95% Wilson interval of the win rate.
     pub win_rate_low: f64,
     pub win_rate_high: f64,
+    /// The opponent is held out: a controller the league never plays
+    /// (`[evaluator] held_out_captors / held_out_targets`); `opponent` is
+    /// then 0 (no player) and `opponent_name` its controller.
+    pub held_out: bool,
 }
 
-/// The panel rows from the evaluator's payoff: the member is the snapshot
-/// or learner, the opponent the panel member it played (the side's other
-/// party), newest members first.
-pub fn panel_rows(players: &[Player], evaluator_payoff: &[PairResult]) -> Vec<PanelRow> {
+/// The panel rows from the evaluator's payoff and its held-out episodes:
+/// the member is the snapshot or learner, the opponent the panel member or
+/// held-out controller it played, newest members first, held-out
+/// opponents after the league's own.
+pub fn panel_rows(
+    players: &[Player],
+    evaluator_payoff: &[PairResult],
+    held_out: &[HeldOutResult],
+) -> Vec<PanelRow> {
     let find = |id: i64| players.iter().find(|p| p.id == id);
     let mut rows: Vec<PanelRow> = evaluator_payoff
         .iter()
@@ -220,10 +233,44 @@ pub fn panel_rows(players: &[Player], evaluator_payoff: &[PairResult]) -> Vec<Pa
                 win_rate: wins as f64 / r.games.max(1) as f64,
                 win_rate_low: lo,
                 win_rate_high: hi,
+                held_out: false,
             })
         })
         .collect();
-    rows.sort_by_key(|r| (std::cmp::Reverse(r.member), r.opponent));
+    rows.extend(held_out.iter().filter_map(|r| {
+        let member = find(r.member)?;
+        let wins = match member.side {
+            Side::Captors => r.captures,
+            Side::Target => r.episodes - r.captures,
+        };
+        let (lo, hi) = crate::eval::wilson_interval(wins as usize, r.episodes as usize);
+        Some(PanelRow {
+            member: member.id,
+            member_name: member.name.clone(),
+            opponent: 0,
+            opponent_name: r.opponent.clone(),
+            episodes: r.episodes,
+            member_wins: wins,
+            win_rate: wins as f64 / r.episodes.max(1) as f64,
+            win_rate_low: lo,
+            win_rate_high: hi,
+            held_out: true,
+        })
+    }));
+    rows.sort_by(|a, b| {
+        (
+            std::cmp::Reverse(a.member),
+            a.held_out,
+            a.opponent,
+            &a.opponent_name,
+        )
+            .cmp(&(
+                std::cmp::Reverse(b.member),
+                b.held_out,
+                b.opponent,
+                &b.opponent_name,
+            ))
+    });
     rows
 }
 
@@ -337,8 +384,12 @@ pub fn report(dir: &LeagueDir) -> Result<StatusReport> {
         .collect();
     let stage = history.last().map(|h| h.stage).unwrap_or(0);
     let now = now_ms();
-    let panel_episodes = store.matches_recorded_by("evaluator")?;
-    let panel = panel_rows(&players, &store.payoff_recorded_by("evaluator")?);
+    let panel_episodes = store.matches_recorded_by("evaluator")? + store.held_out_count()?;
+    let panel = panel_rows(
+        &players,
+        &store.payoff_recorded_by("evaluator")?,
+        &store.held_out_results()?,
+    );
     let exploits = exploit_rows(&players, store.exploits()?);
     Ok(StatusReport {
         panel,
@@ -559,7 +610,7 @@ pub fn render(r: &StatusReport) -> String {
     if !r.panel.is_empty() {
         let _ = writeln!(
             s,
-            "\npanel (the evaluator's episodes only; the opponents are league members):"
+            "\npanel (the evaluator's episodes only; the opponents are league members, or held out: never met in the league):"
         );
         let _ = writeln!(
             s,
@@ -571,7 +622,11 @@ pub fn render(r: &StatusReport) -> String {
                 s,
                 "  {:<30} {:<20} {:>8} {:>7.1}  [{:.1}, {:.1}]",
                 p.member_name,
-                p.opponent_name,
+                if p.held_out {
+                    format!("{} (held out)", p.opponent_name)
+                } else {
+                    p.opponent_name.clone()
+                },
                 p.episodes,
                 100.0 * p.win_rate,
                 100.0 * p.win_rate_low,
@@ -1067,7 +1122,46 @@ mod tests {
                 games: 20,
             },
         ];
-        let rows = panel_rows(&players, &payoff);
+        let held_out = vec![
+            // greedy:2 captors (held out) caught the target's snapshot 3 of 4 times.
+            HeldOutResult {
+                member: 4,
+                opponent: "greedy:2".into(),
+                captures: 3,
+                episodes: 4,
+            },
+            // The captors' snapshot caught a still target 4 of 4 times.
+            HeldOutResult {
+                member: 3,
+                opponent: "still".into(),
+                captures: 4,
+                episodes: 4,
+            },
+        ];
+        let all = panel_rows(&players, &payoff, &held_out);
+        assert_eq!(all.len(), 4);
+        let shown: Vec<_> = all
+            .iter()
+            .map(|r| {
+                (
+                    r.member,
+                    r.opponent_name.as_str(),
+                    r.held_out,
+                    r.member_wins,
+                )
+            })
+            .collect();
+        assert_eq!(
+            shown,
+            vec![
+                (4, "expert-captors", false, 5),
+                (4, "greedy:2", true, 1),
+                (3, "rule-based-target", false, 5),
+                (3, "still", true, 4),
+            ]
+        );
+        assert_eq!(all[1].opponent, 0);
+        let rows = panel_rows(&players, &payoff, &[]);
         assert_eq!(rows.len(), 2);
         let target = &rows[0];
         assert_eq!((target.member, target.opponent), (4, 1));

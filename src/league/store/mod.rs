@@ -1,5 +1,5 @@
 //! The league's store: players, matches, ratings, curriculum, heartbeats,
-//! crashes, seats and the config, through sqlx. Two backends behind one
+//! crashes, seats, the config, exploits and held-out panel episodes, through sqlx. Two backends behind one
 //! API (`url`): a SQLite file (`league.db` in the league directory, the
 //! embedded default) or a PostgreSQL database that workers on many hosts
 //! share. sqlx is async; its runtime lives here, inside `Store`, so the
@@ -23,11 +23,13 @@
 //! - A PostgreSQL URL's password is never printed (`StoreUrl`'s Display).
 
 mod exploits;
+mod held_out;
 mod leases;
 mod rows;
 pub mod url;
 
 pub use exploits::ExploitRecord;
+pub use held_out::{HeldOutEpisode, HeldOutResult};
 pub use leases::SeatLease;
 pub use rows::{
     inside_pool, BeatState, Crash, Heartbeat, Kind, MatchRecord, NewPlayer, PairResult, Player,
