@@ -214,6 +214,7 @@ fn table(evals: Vec<PathBuf>, out: Option<PathBuf>) -> anyhow::Result<()> {
         evals,
         out,
         latex: None,
+        cross: false,
     })
 }
 
@@ -282,7 +283,44 @@ fn table_refuses_two_results_for_one_cell_and_rows_of_mixed_settings() {
     let mut other = summary("shipped", 500, 500, 50.0);
     other.target = "random".into();
     let other = eval_folder(root.path(), "other", &[other]);
-    assert!(err_of(table(vec![other], None)).contains("belongs in the paper's tables"));
+    let err = err_of(table(vec![other.clone()], None));
+    assert!(
+        err.contains("belongs in the paper's tables") && err.contains("--cross"),
+        "{err}"
+    );
+    // Against a learned target, --cross lays out Table V: refused on maps
+    // other than the classes, and never as LaTeX (it is Markdown only).
+    let cross = |evals: Vec<PathBuf>, out: Option<PathBuf>, latex: Option<PathBuf>| {
+        t2e::cli::table::run(TableArgs {
+            evals,
+            out,
+            latex,
+            cross: true,
+        })
+    };
+    assert!(err_of(cross(vec![other], None, None)).contains("none of the 1 summaries"));
+    let mut learned = summary("medium", 500, 500, 40.0);
+    learned.target = "ckpt:runs/league/target".into();
+    let learned = eval_folder(root.path(), "learned", &[learned]);
+    let md = root.path().join("v.md");
+    let err = err_of(cross(
+        vec![learned.clone()],
+        None,
+        Some(root.path().join("v.tex")),
+    ));
+    assert!(err.contains("Markdown only"), "{err}");
+    assert!(!root.path().join("v.tex").exists());
+    cross(vec![first, learned], Some(md.clone()), None).unwrap();
+    let text = std::fs::read_to_string(&md).unwrap();
+    assert!(
+        text.contains("| vs rule-based | vs ckpt:runs/league/target |"),
+        "{text}"
+    );
+    // The rule-based column pools small (90.0) and medium (80.0): 85.0.
+    assert!(
+        text.contains(" | 85.0 [") && text.contains(" | 40.0 ["),
+        "{text}"
+    );
 }
 
 fn tiny_run(dir: &Path) -> PathBuf {

@@ -1,7 +1,8 @@
-//! `t2e-league table`: the paper's Tables II and III (Markdown, LaTeX) from
-//! the summaries of `eval` output folders.
+//! `t2e-league table`: the paper's Tables II and III (Markdown, LaTeX), or
+//! with `--cross` its Table V (Markdown), from the summaries of `eval`
+//! output folders.
 
-use crate::eval::{paper_table, Summary};
+use crate::eval::{cross_table, paper_table, Summary};
 use crate::nn::checkpoint::write_file_atomically;
 use anyhow::{bail, Context, Result};
 use std::path::PathBuf;
@@ -18,6 +19,11 @@ pub struct TableArgs {
     /// Also write the LaTeX tables here.
     #[arg(long)]
     pub latex: Option<PathBuf>,
+    /// Lay out the paper's Table V instead: each captors against each
+    /// target evaluated (the rule-based one, learned ones), per class and
+    /// pooled over the classes, with the paper's co-evolution cells beside.
+    #[arg(long)]
+    pub cross: bool,
 }
 
 /// Every summary of the given folders, in order, each with the file it was
@@ -107,12 +113,24 @@ pub fn run(args: TableArgs) -> Result<()> {
             );
         }
     }
+    if args.cross && args.latex.is_some() {
+        bail!("--latex with --cross: Table V is written as Markdown only (--out)");
+    }
     let summaries = read_summaries(&args.evals)?;
+    if args.cross {
+        let md = cross_table::markdown(&summaries).map_err(anyhow::Error::msg)?;
+        if let Some(p) = &args.out {
+            write_file_atomically(p, md.as_bytes())
+                .with_context(|| format!("cannot write {}", p.display()))?;
+        }
+        print!("{md}");
+        return Ok(());
+    }
     if summaries.iter().all(|(_, s)| {
         s.target != "heuristic" || !["small", "medium", "large"].contains(&s.maps.as_str())
     }) {
         bail!(
-            "none of the {} summaries belongs in the paper's tables: they need the rule-based target (--target heuristic) on the Gibson classes (--maps small,medium,large)",
+            "none of the {} summaries belongs in the paper's tables: they need the rule-based target (--target heuristic) on the Gibson classes (--maps small,medium,large); for captors against learned targets (the paper's Table V) add --cross",
             summaries.len()
         );
     }

@@ -8,6 +8,7 @@ use crate::env::vec_env::episode_seed;
 use crate::env::{Action, CaptureRule, EnvConfig, Side, TrapEnv};
 use crate::map::PreparedMap;
 
+pub mod cross_table;
 pub mod paper_table;
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;

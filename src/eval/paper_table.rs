@@ -71,7 +71,7 @@ fn parse_paper_tables(text: &str) -> Result<Vec<PaperCell>, String> {
     Ok(out)
 }
 
-const CLASSES: [&str; 3] = ["small", "medium", "large"];
+pub(super) const CLASSES: [&str; 3] = ["small", "medium", "large"];
 
 /// The paper's own cell for a row's learner against the rule-based target
 /// (Table II or III): (SR, Time) per class, or None where the paper has no
@@ -119,7 +119,7 @@ struct Row<'a> {
 
 /// What differs between two summaries (the fields a reader cannot see in
 /// the table), for conflict messages.
-fn differences(a: &Summary, b: &Summary) -> String {
+pub(super) fn differences(a: &Summary, b: &Summary) -> String {
     let mut d = Vec::new();
     let mut field = |name: &str, x: String, y: String| {
         if x != y {
