@@ -9,7 +9,10 @@ use common::postgres::{fresh_database, server, sql, with_database};
 use std::collections::{BTreeMap, BTreeSet};
 use std::sync::{Arc, Barrier, Mutex};
 use t2e::env::Side;
-use t2e::league::store::{BeatState, Kind, MatchRecord, NewPlayer, SeatState, Store, StoreUrl};
+use t2e::league::store::{
+    BeatState, ExploitRecord, HeldOutEpisode, Kind, MatchRecord, NewPlayer, SeatState, Store,
+    StoreUrl,
+};
 
 fn player(name: &str, side: Side, kind: Kind) -> NewPlayer {
     NewPlayer {
@@ -110,6 +113,59 @@ fn both_backends_keep_the_same_contract() {
             store.recent_outcomes(c, 1.0, 0, 2).unwrap(),
             vec![false, true]
         );
+        // An exploit (tests/exploit.rs runs it for real on SQLite): all its
+        // map sets at once, once; a player the store does not know refused.
+        let exploit = |maps: &str, wins: u64, player: i64| ExploitRecord {
+            exploit_key: "x1".into(),
+            player,
+            player_sha256: None,
+            best_response: "captors mappo".into(),
+            budget: "600000 env steps".into(),
+            env_steps: 600_000,
+            train_ms: 90_000,
+            seed: 0,
+            maps: maps.into(),
+            num_captors: 3,
+            speed_ratio: 1.0,
+            episodes: 100,
+            episode_length: 500,
+            wins,
+        };
+        let rows = [exploit("small", 68, t), exploit("medium", 36, t)];
+        assert!(store.record_exploit(&rows).unwrap(), "{url}");
+        assert!(
+            !store.record_exploit(&rows).unwrap(),
+            "{url}: recorded once"
+        );
+        assert_eq!(store.exploit("x1").unwrap(), rows.to_vec(), "{url}");
+        let mut stranger = exploit("small", 1, 999);
+        stranger.exploit_key = "x2".into();
+        assert!(store.record_exploit(&[stranger]).is_err(), "{url}");
+        assert!(store.exploit("x2").unwrap().is_empty(), "{url}");
+        // The evaluator's episodes against a held-out opponent: once per key.
+        let held_out = |key: &str, captured: bool| HeldOutEpisode {
+            key: key.into(),
+            member: t,
+            opponent: "greedy:2".into(),
+            map: "m".into(),
+            speed_ratio: 1.0,
+            seed: 7,
+            captured,
+            steps: 120,
+        };
+        assert!(store.record_held_out(&held_out("h/0", true)).unwrap());
+        assert!(!store.record_held_out(&held_out("h/0", false)).unwrap());
+        assert!(store.record_held_out(&held_out("h/1", false)).unwrap());
+        assert!(store.has_held_out("h/1").unwrap() && !store.has_held_out("h/2").unwrap());
+        let results = store.held_out_results().unwrap();
+        assert_eq!(
+            results
+                .iter()
+                .map(|r| (r.member, r.opponent.as_str(), r.captures, r.episodes))
+                .collect::<Vec<_>>(),
+            vec![(t, "greedy:2", 1, 2)],
+            "{url}"
+        );
         // What both backends read back must be the same, ids included.
         let players: Vec<_> = store
             .players()
@@ -123,6 +179,8 @@ fn both_backends_keep_the_same_contract() {
             store.curriculum_history().unwrap().len(),
             store.crashes().unwrap().len(),
             store.match_count().unwrap(),
+            store.exploits().unwrap(),
+            store.held_out_results().unwrap(),
         ));
     }
     assert_eq!(seen[0], seen[1], "SQLite and PostgreSQL disagree");
