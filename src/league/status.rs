@@ -875,14 +875,69 @@ fn short_steps(steps: u64) -> String {
     }
 }
 
+/// One line of the panel plot: one learner's snapshots against one panel
+/// opponent, as (the snapshot's env steps, its win %), oldest first.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PanelCurve {
+    pub label: String,
+    pub points: Vec<(f64, f64)>,
+}
+
+/// The evaluator's panel as learning curves: each member counts for the
+/// learner it was taken from (a snapshot's parent, else itself), so a line
+/// shows how that learner's snapshots fared against one opponent as it
+/// trained. Lines in the order of first appearance in `players`, league
+/// opponents before held-out ones.
+pub fn panel_curves(players: &[PlayerRow], panel: &[PanelRow]) -> Vec<PanelCurve> {
+    let find = |id: i64| players.iter().find(|p| p.id == id);
+    let mut keyed: Vec<((usize, bool, String), PanelCurve)> = Vec::new();
+    for row in panel {
+        let Some(member) = find(row.member) else {
+            continue;
+        };
+        let learner = member.parent.and_then(find).unwrap_or(member);
+        let order = players
+            .iter()
+            .position(|p| p.id == learner.id)
+            .unwrap_or(usize::MAX);
+        let key = (order, row.held_out, row.opponent_name.clone());
+        let point = (member.env_steps as f64, 100.0 * row.win_rate);
+        match keyed.iter_mut().find(|(k, _)| *k == key) {
+            Some((_, curve)) => curve.points.push(point),
+            None => keyed.push((
+                key,
+                PanelCurve {
+                    label: format!(
+                        "{} vs {}{}",
+                        learner.name,
+                        row.opponent_name,
+                        if row.held_out { " (held out)" } else { "" }
+                    ),
+                    points: vec![point],
+                },
+            )),
+        }
+    }
+    keyed.sort_by(|a, b| a.0.cmp(&b.0));
+    keyed
+        .into_iter()
+        .map(|(_, mut curve)| {
+            curve.points.sort_by(|a, b| a.0.total_cmp(&b.0));
+            curve
+        })
+        .collect()
+}
+
 /// `status --plot`: live ratings over the league's matches (one labelled
-/// line per player, snapshots in tints of their learner's colour) above the payoff
-/// matrix as a heat map (captor win rate, rows captors, columns targets).
+/// line per player, snapshots in tints of their learner's colour), the
+/// evaluator's panel as curves over the snapshots' env steps (when it has
+/// played), then the payoff matrix as a heat map (captor win rate, rows
+/// captors, columns targets).
 pub fn plot(dir: &LeagueDir, r: &StatusReport, path: &Path) -> Result<()> {
     use crate::render::plot::{line_plot, palette, save_png, Series};
     use crate::render::text::{draw_rect, draw_text, draw_text_centered, fill_rect};
     use image::{Rgb, RgbImage};
-    let (_, store) = open(dir)?;
+    let (cfg, store) = open(dir)?;
     let mut history = Vec::new();
     for p in &r.players {
         let points: Vec<(f64, f64)> = store
@@ -914,6 +969,26 @@ pub fn plot(dir: &LeagueDir, r: &StatusReport, path: &Path) -> Result<()> {
         900,
         420,
     );
+    let curves: Vec<Series> = panel_curves(&r.players, &r.panel)
+        .into_iter()
+        .enumerate()
+        .map(|(i, c)| Series::new(c.label, c.points, palette(i)))
+        .collect();
+    let panel = (!curves.is_empty()).then(|| {
+        line_plot(
+            &curves,
+            &format!(
+                "evaluator panel: each snapshot's win % against each opponent ({} maps, 1.0:{}, {}-step episodes)",
+                cfg.maps,
+                crate::eval::ratio_label(cfg.curriculum.stages[0]),
+                cfg.episode_length
+            ),
+            "env steps of the snapshot",
+            "win %",
+            900,
+            320,
+        )
+    });
     let captors: Vec<&PlayerRow> = r.players.iter().filter(|p| p.side == "captors").collect();
     let targets: Vec<&PlayerRow> = r.players.iter().filter(|p| p.side == "target").collect();
     let cell = 38i64;
@@ -984,13 +1059,20 @@ pub fn plot(dir: &LeagueDir, r: &StatusReport, path: &Path) -> Result<()> {
             draw_text(&mut heat, x as i32, y as i32, line, Rgb([60, 60, 60]), 1);
         }
     }
+    let parts: Vec<&RgbImage> = [Some(&ratings), panel.as_ref(), Some(&heat)]
+        .into_iter()
+        .flatten()
+        .collect();
     let mut img = RgbImage::from_pixel(
-        ratings.width().max(heat.width()),
-        ratings.height() + heat.height(),
+        parts.iter().map(|p| p.width()).max().unwrap_or(1),
+        parts.iter().map(|p| p.height()).sum(),
         Rgb([255, 255, 255]),
     );
-    image::imageops::replace(&mut img, &ratings, 0, 0);
-    image::imageops::replace(&mut img, &heat, 0, ratings.height() as i64);
+    let mut y = 0i64;
+    for part in parts {
+        image::imageops::replace(&mut img, part, 0, y);
+        y += part.height() as i64;
+    }
     save_png(&img, path)
 }
 
@@ -1019,6 +1101,58 @@ mod tests {
             win_rate: None,
             quarantined: None,
         }
+    }
+
+    #[test]
+    fn panel_curves_follow_each_learner_and_opponent_over_env_steps() {
+        let players = vec![
+            player(1, "expert-captors", "heuristic", None, 0),
+            player(2, "rule-based-target", "heuristic", None, 0),
+            player(3, "captors-main", "learner", None, 900_000),
+            player(4, "target-main", "learner", None, 900_000),
+            player(5, "target-snap-400", "snapshot", Some(4), 400_000),
+            player(6, "captors-snap-200", "snapshot", Some(3), 200_000),
+            player(7, "captors-snap-600", "snapshot", Some(3), 600_000),
+        ];
+        let row = |member: i64, opponent: &str, held_out: bool, win_rate: f64| PanelRow {
+            member,
+            member_name: String::new(),
+            opponent: if held_out { 0 } else { 2 },
+            opponent_name: opponent.into(),
+            episodes: 20,
+            member_wins: (20.0 * win_rate) as u64,
+            win_rate,
+            win_rate_low: 0.0,
+            win_rate_high: 1.0,
+            held_out,
+        };
+        // Newest first, as panel_rows gives them; an unknown member is skipped.
+        let panel = vec![
+            row(7, "rule-based-target", false, 0.5),
+            row(6, "rule-based-target", false, 0.25),
+            row(5, "greedy:2", true, 0.125),
+            row(5, "expert-captors", false, 0.75),
+            row(99, "rule-based-target", false, 1.0),
+        ];
+        let curves = panel_curves(&players, &panel);
+        assert_eq!(
+            curves,
+            vec![
+                PanelCurve {
+                    label: "captors-main vs rule-based-target".into(),
+                    points: vec![(200_000.0, 25.0), (600_000.0, 50.0)],
+                },
+                PanelCurve {
+                    label: "target-main vs expert-captors".into(),
+                    points: vec![(400_000.0, 75.0)],
+                },
+                PanelCurve {
+                    label: "target-main vs greedy:2 (held out)".into(),
+                    points: vec![(400_000.0, 12.5)],
+                },
+            ]
+        );
+        assert!(panel_curves(&players, &[]).is_empty());
     }
 
     #[test]
