@@ -131,6 +131,10 @@ pub struct AszGreedy {
     coarse: Option<CoarseLattice>,
     marching: FastMarching,
     distance: FastMarching,
+    /// The lattice and point `distance` holds the geodesic field of: the
+    /// captors of one decision share the target's field, so the fallback
+    /// marches it once per state, not once per captor.
+    distance_from: Option<(u64, [u64; 2])>,
 }
 
 impl Default for AszGreedy {
@@ -161,6 +165,7 @@ impl AszGreedy {
             coarse: None,
             marching: FastMarching::new(),
             distance: FastMarching::new(),
+            distance_from: None,
         }
     }
 
@@ -183,7 +188,7 @@ impl AszGreedy {
         let best = if self.coarsening == 1 {
             greedy_choice(
                 &mut self.marching,
-                &mut self.distance,
+                (&mut self.distance, &mut self.distance_from),
                 &**map,
                 env,
                 i,
@@ -200,7 +205,7 @@ impl AszGreedy {
             let lattice = self.coarse.as_ref().unwrap();
             greedy_choice(
                 &mut self.marching,
-                &mut self.distance,
+                (&mut self.distance, &mut self.distance_from),
                 lattice,
                 env,
                 i,
@@ -214,7 +219,7 @@ impl AszGreedy {
 /// The index of the greedy action, given where each action takes captor `i`.
 fn greedy_choice<L: Lattice>(
     marching: &mut FastMarching,
-    distance: &mut FastMarching,
+    (distance, distance_from): (&mut FastMarching, &mut Option<(u64, [u64; 2])>),
     lattice: &L,
     env: &TrapEnv,
     i: usize,
@@ -229,7 +234,11 @@ fn greedy_choice<L: Lattice>(
     if sizes.iter().any(|&s| s != sizes[0]) {
         return (0..4).min_by_key(|&a| sizes[a]).unwrap();
     }
-    distance.distance_field(lattice, target.pos);
+    let from = (lattice.lattice_id(), target.pos.map(f64::to_bits));
+    if *distance_from != Some(from) {
+        distance.distance_field(lattice, target.pos);
+        *distance_from = Some(from);
+    }
     let geodesic = |p: [f64; 2]| lattice.distance_at(distance, p);
     (0..4)
         .min_by(|&a, &b| geodesic(moved[a]).total_cmp(&geodesic(moved[b])))
