@@ -32,6 +32,22 @@ fn start(dir: &Path, config: &Path) -> Child {
         .unwrap()
 }
 
+/// Runs a league to its end in the foreground; its stderr on failure.
+fn run_to_the_end(dir: &Path, config: &Path) {
+    let out = Command::new(bin())
+        .args(["run", "--config"])
+        .arg(config)
+        .arg("--dir")
+        .arg(dir)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
 fn sigkill(pid: i64) {
     // SAFETY: signalling a process this test started (or its child).
     unsafe {
@@ -227,18 +243,7 @@ fn exploiters_play_the_main_learners_join_the_pool_and_start_again() {
         )
         + "[exploiters]\ncaptors = true\ntarget = true\nwin_rate = 0.99\ntimeout_env_steps = 960\n";
     std::fs::write(&config, text).unwrap();
-    let out = Command::new(bin())
-        .args(["run", "--config"])
-        .arg(&config)
-        .arg("--dir")
-        .arg(&dir.root)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    run_to_the_end(&dir.root, &config);
 
     let store = Store::open(&dir.store).unwrap();
     let players = store.players().unwrap();
@@ -315,18 +320,7 @@ fn held_out_opponents_play_every_snapshot_but_never_the_league() {
         text.trim_end().ends_with("held_out_targets = [\"still\"]") && text.contains("[evaluator]")
     );
     std::fs::write(&config, text).unwrap();
-    let out = Command::new(bin())
-        .args(["run", "--config"])
-        .arg(&config)
-        .arg("--dir")
-        .arg(&dir.root)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    run_to_the_end(&dir.root, &config);
 
     let store = Store::open(&dir.store).unwrap();
     let players = store.players().unwrap();

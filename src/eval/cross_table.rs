@@ -9,7 +9,7 @@
 //! co-evolved with. Pooling here is over the episodes actually played, so a
 //! pooled cell is one binomial sample with its own Wilson interval.
 
-use super::paper_table::{differences, paper_cells, Sourced, CLASSES};
+use super::paper_table::{differences, paper_cells, same_play, Sourced, CLASSES};
 use super::{ratio_label, wilson_interval, Summary};
 use crate::env::CaptureRule;
 use std::collections::BTreeMap;
@@ -109,9 +109,12 @@ fn pairs(summaries: &[Sourced]) -> Result<(Sections<'_>, usize), String> {
         let pairs = sections
             .entry((s.num_captors, s.speed_ratio.to_bits()))
             .or_default();
-        let at = pairs.iter().position(|p| {
-            p.captors == s.captors && p.protocol == s.protocol && p.target == s.target
-        });
+        // One pair per (captors, target), whatever the protocol says: two
+        // protocols under one name are refused below, not shown as two
+        // lines of which the grid would show one.
+        let at = pairs
+            .iter()
+            .position(|p| p.captors == s.captors && p.target == s.target);
         let i = at.unwrap_or_else(|| {
             pairs.push(Pair {
                 captors: s.captors.clone(),
@@ -130,6 +133,13 @@ fn pairs(summaries: &[Sourced]) -> Result<(Sections<'_>, usize), String> {
             s.protocol,
             target_name(&s.target)
         );
+        if pairs[i].protocol != s.protocol {
+            let (other_source, _) = pairs[i].cells.iter().flatten().next().expect("a cell");
+            return Err(format!(
+                "one table row ({what}) would pool results of players trained under the {} protocol ({other_source}) and the {} protocol ({source}): other weights behind one name; give one of them",
+                pairs[i].protocol, s.protocol
+            ));
+        }
         if let Some((other_source, other)) = pairs[i].cells[class] {
             if other == s {
                 continue;
@@ -141,15 +151,7 @@ fn pairs(summaries: &[Sourced]) -> Result<(Sections<'_>, usize), String> {
             ));
         }
         for (other_source, other) in pairs[i].cells.iter().flatten() {
-            let other_weights = matches!(
-                (&other.captors_sha256, &s.captors_sha256),
-                (Some(x), Some(y)) if x != y
-            );
-            if other.episode_length != s.episode_length
-                || other.capture_rule != s.capture_rule
-                || other.captors_learner != s.captors_learner
-                || other_weights
-            {
+            if !same_play(other, s) {
                 return Err(format!(
                     "one table row ({what}) would pool {} from {other_source} and {} from {source}, which differ in {}: pooled classes must be one setting; evaluate them alike",
                     other.maps,
@@ -434,6 +436,13 @@ mod tests {
             "{err}"
         );
         // Other episode counts per class pool fine: each episode once.
+        let mut paper = summary("ckpt:a", "heuristic", "medium", 10, 100);
+        paper.1.protocol = "paper".into();
+        let err = markdown(&[base.clone(), paper]).unwrap_err();
+        assert!(
+            err.contains("the held-out protocol") && err.contains("the paper protocol"),
+            "{err}"
+        );
         let fewer = summary("ckpt:a", "heuristic", "large", 10, 50);
         assert!(markdown(&[base, fewer])
             .unwrap()

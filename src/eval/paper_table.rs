@@ -159,6 +159,20 @@ pub(super) fn differences(a: &Summary, b: &Summary) -> String {
     d.join(", ")
 }
 
+/// Two summaries of one row (or one pooled pair) played by the same rules
+/// with the same captors: episode length, capture rule, learner, and the
+/// captor weights where both name them.
+pub(super) fn same_play(a: &Summary, b: &Summary) -> bool {
+    let other_weights = matches!(
+        (&a.captors_sha256, &b.captors_sha256),
+        (Some(x), Some(y)) if x != y
+    );
+    a.episode_length == b.episode_length
+        && a.capture_rule == b.capture_rule
+        && a.captors_learner == b.captors_learner
+        && !other_weights
+}
+
 /// Groups the summaries into the paper's rows. Summaries against anything
 /// but the rule-based target, or on maps other than the three classes, do
 /// not belong in these tables: they are counted in the second value.
@@ -221,16 +235,7 @@ fn rows(summaries: &[Sourced]) -> Result<(BTreeMap<usize, Vec<Row<'_>>>, usize),
             ));
         }
         for (other_source, other) in rows[i].cells.iter().flatten() {
-            let other_weights = matches!(
-                (&other.captors_sha256, &s.captors_sha256),
-                (Some(x), Some(y)) if x != y
-            );
-            if other.episodes != s.episodes
-                || other.episode_length != s.episode_length
-                || other.capture_rule != s.capture_rule
-                || other.captors_learner != s.captors_learner
-                || other_weights
-            {
+            if other.episodes != s.episodes || !same_play(other, s) {
                 return Err(format!(
                     "one table row ({}:1 at v_p:v_e 1.0:{}, captors {} ({})) would join {} from {other_source} and {} from {source}, which differ in {}: a row is one setting over the three classes; evaluate the classes alike",
                     s.num_captors,
