@@ -1,6 +1,6 @@
 //! The controller catalogue: every controller a user can name on the command
 //! line or in a config (`heuristic`, `greedy`, `random`, `still`,
-//! `ckpt:PATH`), parsed and built behind the one `env::Controller` trait. It
+//! `ckpt:PATH`, `sample:PATH`), parsed and built behind the one `env::Controller` trait. It
 //! sits above `heuristics` and `nn` because it names controllers of both.
 
 use crate::env::{Controller, EnvConfig, Side};
@@ -22,7 +22,8 @@ pub enum ControllerSpec {
     },
     Random,
     Still,
-    /// `ckpt:PATH`: a trained policy (see `nn::checkpoint`).
+    /// `ckpt:PATH`: a trained policy (see `nn::checkpoint`), played
+    /// greedily; `sample:PATH`: the same, sampling its actions.
     Checkpoint(CheckpointSpec),
 }
 
@@ -31,12 +32,15 @@ pub enum ControllerSpec {
 #[derive(Clone, Debug)]
 pub struct CheckpointSpec {
     pub path: PathBuf,
+    /// Sample each action from the policy (seeded by the episode) instead
+    /// of taking the most likely one, the paper's evaluation.
+    pub sampled: bool,
     loaded: Arc<OnceLock<Result<Arc<PolicySnapshot>, String>>>,
 }
 
 impl PartialEq for CheckpointSpec {
     fn eq(&self, other: &Self) -> bool {
-        self.path == other.path
+        self.path == other.path && self.sampled == other.sampled
     }
 }
 
@@ -44,7 +48,16 @@ impl CheckpointSpec {
     pub fn new(path: impl Into<PathBuf>) -> CheckpointSpec {
         CheckpointSpec {
             path: path.into(),
+            sampled: false,
             loaded: Arc::new(OnceLock::new()),
+        }
+    }
+
+    /// The same checkpoint, its actions sampled.
+    pub fn sampled(path: impl Into<PathBuf>) -> CheckpointSpec {
+        CheckpointSpec {
+            sampled: true,
+            ..CheckpointSpec::new(path)
         }
     }
 
@@ -87,7 +100,14 @@ impl FromStr for ControllerSpec {
                 }
                 Ok(ControllerSpec::Checkpoint(CheckpointSpec::new(path)))
             }
-            other => Err(format!("unknown controller '{other}' (expected heuristic, greedy, greedy:K, random, still or ckpt:PATH)")),
+            other if other.starts_with("sample:") => {
+                let path = &other["sample:".len()..];
+                if path.is_empty() {
+                    return Err("'sample:' needs a path: sample:runs/NAME (newest checkpoint) or sample:runs/NAME/checkpoints/SIDE-STEPS".into());
+                }
+                Ok(ControllerSpec::Checkpoint(CheckpointSpec::sampled(path)))
+            }
+            other => Err(format!("unknown controller '{other}' (expected heuristic, greedy, greedy:K, random, still, ckpt:PATH or sample:PATH)")),
         }
     }
 }
@@ -100,6 +120,7 @@ impl fmt::Display for ControllerSpec {
             ControllerSpec::Greedy { coarsening } => write!(f, "greedy:{coarsening}"),
             ControllerSpec::Random => f.write_str("random"),
             ControllerSpec::Still => f.write_str("still"),
+            ControllerSpec::Checkpoint(c) if c.sampled => write!(f, "sample:{}", c.path.display()),
             ControllerSpec::Checkpoint(c) => write!(f, "ckpt:{}", c.path.display()),
         }
     }
@@ -116,9 +137,10 @@ impl ControllerSpec {
             ControllerSpec::Greedy { coarsening } => Box::new(AszGreedy::new(*coarsening)),
             ControllerSpec::Random => Box::new(RandomActions::new()),
             ControllerSpec::Still => Box::new(Still),
-            ControllerSpec::Checkpoint(c) => Box::new(
-                CheckpointController::new(c.snapshot(side)?).map_err(|e| format!("{e:#}"))?,
-            ),
+            ControllerSpec::Checkpoint(c) => {
+                let ckpt = CheckpointController::new(c.snapshot(side)?).map_err(|e| format!("{e:#}"))?;
+                Box::new(if c.sampled { ckpt.sampling() } else { ckpt })
+            }
         })
     }
 

@@ -571,3 +571,39 @@ fn patch_matches_a_direct_rotation_on_a_floor_plan() {
         "{mismatches} of {total} pixels differ"
     );
 }
+
+#[test]
+fn the_asz_potential_rises_as_the_captors_close_in() {
+    // A 4 m x 4 m room, the target in its middle. Captors bunched in a
+    // corner leave it most of the room; captors around it leave it almost
+    // nothing; one captor moved from the corner to the target's side
+    // takes some of its zone away.
+    let m = maps(room(120, 200, 120, 200));
+    let at = |captors: [(f64, f64); 3]| {
+        let mut robots: Vec<Robot> = captors.iter().map(|&(x, y)| robot(x, y, 0.0)).collect();
+        robots.push(robot(0.0, 0.0, 0.0));
+        Potential::Asz.of(&env_with(cfg(3), m.clone(), robots))
+    };
+    let corner = at([(1.5, 1.5), (1.0, 1.5), (1.5, 1.0)]);
+    let one_closer = at([(1.5, 1.5), (1.0, 1.5), (0.7, 0.0)]);
+    let around = at([(0.45, 0.0), (-0.23, 0.39), (-0.23, -0.39)]);
+    assert!(0.0 < corner && corner < 0.5, "corner {corner}");
+    assert!(corner < one_closer, "{corner} then {one_closer}");
+    assert!(
+        one_closer < around && around > 0.95 && around <= 1.0,
+        "around {around}"
+    );
+    // The same state gives the same potential, whichever maps the thread saw between.
+    let other = maps(room(100, 220, 100, 220));
+    let _ = Potential::Asz.of(&env_with(
+        cfg(3),
+        other,
+        vec![
+            robot(1.0, 1.0, 0.0),
+            robot(-1.0, 1.0, 0.0),
+            robot(1.0, -1.0, 0.0),
+            robot(0.0, 0.0, 0.0),
+        ],
+    ));
+    assert_eq!(at([(1.5, 1.5), (1.0, 1.5), (1.5, 1.0)]), corner);
+}

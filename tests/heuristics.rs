@@ -182,6 +182,25 @@ fn controllers_are_named_and_checked_per_side() {
         .parse::<ControllerSpec>()
         .unwrap_err()
         .contains("unknown controller"));
+    for empty in ["ckpt:", "sample:"] {
+        assert!(
+            empty
+                .parse::<ControllerSpec>()
+                .unwrap_err()
+                .contains("needs a path"),
+            "{empty}"
+        );
+    }
+    // A checkpoint greedily and the same checkpoint sampled are two controllers.
+    let greedy: ControllerSpec = "ckpt:runs/x".parse().unwrap();
+    let sampled: ControllerSpec = "sample:runs/x".parse().unwrap();
+    assert_ne!(greedy, sampled);
+    assert_eq!(
+        (greedy.to_string(), sampled.to_string()),
+        ("ckpt:runs/x".into(), "sample:runs/x".into())
+    );
+    let missing = sampled.build(Side::Captors).err().unwrap();
+    assert!(missing.contains("runs/x"), "{missing}");
 }
 
 #[test]

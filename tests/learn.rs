@@ -37,6 +37,7 @@ fn chase_config(seed: u64) -> TrainConfig {
                 hidden: 32,
                 conv_channels: [4, 8],
                 patch_pool: 4,
+                ..Default::default()
             },
             ppo: t2e::learn::ppo::PpoConfig {
                 lr: 2e-3,
@@ -115,6 +116,29 @@ fn an_annealed_learning_rate_falls_linearly_over_the_run() {
     for (lr, expected) in lrs.iter().zip([2e-3, 1.5e-3, 1e-3, 0.5e-3]) {
         assert!((lr - expected).abs() < 1e-12, "{lrs:?}");
     }
+
+    // Under a clock budget (`train --for`) the schedule ends with the
+    // clock when that comes before the steps: a budget of 1 ns is spent by
+    // the first iteration; one of 1e9 s leaves the steps in charge.
+    cfg_clock(1e-9, &[2e-3, 0.0, 0.0]);
+    cfg_clock(1e9, &[2e-3, 1.5e-3, 1e-3]);
+}
+
+fn cfg_clock(seconds: f64, want: &[f64]) {
+    let mut cfg = chase_config(2);
+    cfg.total_env_steps = 4 * (cfg.num_envs * cfg.rollout_steps) as u64;
+    cfg.captors.ppo.lr_anneal = true;
+    let mut trainer = Trainer::new(cfg, chase_maps()).unwrap();
+    trainer.set_clock_budget(seconds);
+    let lrs: Vec<f64> = want
+        .iter()
+        .map(|_| trainer.iterate().unwrap().captor_lr.unwrap())
+        .collect();
+    for (lr, expected) in lrs.iter().zip(want) {
+        assert!((lr - expected).abs() < 1e-9, "budget {seconds} s: {lrs:?}");
+    }
+    let p = trainer.progress();
+    assert!((0.0..=1.0).contains(&p), "{p}");
 }
 
 #[test]
@@ -182,6 +206,24 @@ fn checkpoints_play_as_controllers_and_resume_exactly() {
     let (_, r2) = eval::run(&setting, &chase_maps(), "room", false).unwrap();
     assert_eq!(r1, r2);
     assert!(s1.captors.starts_with("ckpt:"));
+    // Sampled, it plays other episodes than greedily, the same ones again
+    // for the same seeds.
+    let sampled = EvalSetting {
+        captors: format!("sample:{}", run.display()).parse().unwrap(),
+        ..setting.clone()
+    };
+    assert_eq!(
+        sampled.captors.to_string(),
+        format!("sample:{}", run.display())
+    );
+    let (s3, r3) = eval::run(&sampled, &chase_maps(), "room", false).unwrap();
+    let (_, r4) = eval::run(&sampled, &chase_maps(), "room", false).unwrap();
+    assert_eq!(r3, r4);
+    assert_ne!(
+        r1, r3,
+        "a near-uniform policy sampled plays like its argmax"
+    );
+    assert!(s3.captors.starts_with("sample:"), "{}", s3.captors);
     // The greedy controller's first actions are the argmax of the network.
     let snap = PolicySnapshot::load(run, Side::Captors).unwrap();
     let (vs, _) = snap.build_actor(tch::Device::Cpu).unwrap();

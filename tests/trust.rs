@@ -204,6 +204,7 @@ fn learner_and_rollout() -> (PpoLearner, Rollout) {
         hidden: 16,
         conv_channels: [2, 4],
         patch_pool: 4,
+        ..Default::default()
     };
     let cfg = PpoConfig {
         epochs: 2,
@@ -295,6 +296,7 @@ fn tiny_config() -> TrainConfig {
                 hidden: 16,
                 conv_channels: [2, 4],
                 patch_pool: 4,
+                ..Default::default()
             },
             ppo: PpoConfig::default(),
             ..SideConfig::default()

@@ -12,10 +12,12 @@ use std::sync::Arc;
 
 #[derive(clap::Args, Debug)]
 pub struct EvalArgs {
-    /// Captor controller: heuristic (expert captors), greedy (ASZ-greedy), random, still.
+    /// Captor controller: heuristic (expert captors), greedy or greedy:K (ASZ-greedy),
+    /// random, still, ckpt:PATH (a trained policy, its most likely action, the
+    /// paper's evaluation) or sample:PATH (the same policy, sampling its actions).
     #[arg(long, default_value = "heuristic")]
     pub captors: ControllerSpec,
-    /// Target controller: heuristic (rule-based target), random, still.
+    /// Target controller: heuristic (rule-based target), random, still, ckpt:PATH or sample:PATH.
     #[arg(long, default_value = "heuristic")]
     pub target: ControllerSpec,
     /// Map sets, comma-separated: small, medium, large (Gibson classes), gibson,

@@ -13,10 +13,11 @@ pub struct RenderArgs {
     /// picks the map, as in `eval`.
     #[arg(long, default_value = "shipped", value_name = "SPEC")]
     pub maps: String,
-    /// Captor controller: heuristic (expert captors), greedy (ASZ-greedy), random, still.
+    /// Captor controller: heuristic (expert captors), greedy or greedy:K (ASZ-greedy),
+    /// random, still, ckpt:PATH (a trained policy, greedily) or sample:PATH (sampling).
     #[arg(long, default_value = "heuristic")]
     pub captors: ControllerSpec,
-    /// Target controller: heuristic (rule-based target), random, still.
+    /// Target controller: heuristic (rule-based target), random, still, ckpt:PATH or sample:PATH.
     #[arg(long, default_value = "heuristic")]
     pub target: ControllerSpec,
     /// Number of captors K.

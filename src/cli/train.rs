@@ -141,6 +141,9 @@ pub fn run(args: TrainArgs) -> Result<()> {
         let _ = std::fs::remove_file(run_dir.join("metrics.csv"));
         Trainer::new(cfg.clone(), maps)?
     };
+    if let Some(d) = run_for {
+        trainer.set_clock_budget(d.as_secs_f64());
+    }
     ctrlc::set_handler(|| {
         if STOP.swap(true, Ordering::SeqCst) {
             eprintln!("\nsecond Ctrl-C: quitting without a final checkpoint");

@@ -60,16 +60,4 @@ pub fn gather_worlds(
     }
 }
 
-/// Draws an action index from (unnormalised) probabilities, as every policy
-/// that samples does: learners while training, league opponents.
-pub fn sample(p: &[f32], rng: &mut rand_chacha::ChaCha8Rng) -> usize {
-    use rand::Rng;
-    let mut u = rng.gen::<f32>() * p.iter().sum::<f32>();
-    for (i, &x) in p.iter().enumerate() {
-        if u < x {
-            return i;
-        }
-        u -= x;
-    }
-    p.len() - 1
-}
+pub use crate::nn::sample;

@@ -58,8 +58,9 @@ pub struct PpoConfig {
     /// the MAPPO code's `use_linear_lr_decay`; the paper does not say; off
     /// by default, as in both). The schedule reads the run's current total:
     /// extending a run with `--total-env-steps` stretches what is left of it
-    /// (the rate steps up at the resume). Left out of the stored config,
-    /// and so of the config hash, while off.
+    /// (the rate steps up at the resume). Under `train --for D` it ends at
+    /// D of training instead, when that comes first (`Trainer::progress`).
+    /// Left out of the stored config, and so of the config hash, while off.
     #[serde(skip_serializing_if = "std::ops::Not::not")]
     pub lr_anneal: bool,
 }
@@ -875,6 +876,7 @@ mod tests {
             hidden: 16,
             conv_channels: [2, 4],
             patch_pool: 4,
+            ..Default::default()
         };
         let (steps, worlds, team, vl) = (6usize, 2usize, 3usize, 20usize);
         let rows = worlds * team;

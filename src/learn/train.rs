@@ -207,6 +207,10 @@ pub struct Trainer {
     pub env_steps: u64,
     /// Training time of earlier segments of a resumed run.
     pub wall_s: f64,
+    /// A wall-clock budget for this invocation (`train --for`): from
+    /// `wall_s` = .0, .1 seconds of training. Schedules (`lr_anneal`) then
+    /// end with whichever budget runs out first, steps or seconds.
+    clock_budget: Option<(f64, f64)>,
     config_hash: String,
 }
 
@@ -310,6 +314,7 @@ impl Trainer {
             iteration,
             env_steps: iteration * (cfg.num_envs * cfg.rollout_steps) as u64,
             wall_s: 0.0,
+            clock_budget: None,
             config_hash: cfg.hash(),
             device,
             venv,
@@ -605,11 +610,34 @@ impl Trainer {
         }
     }
 
+    /// How far the run is, from 0 to 1, for schedules: the share of
+    /// `total_env_steps` done, or of the clock budget when one is set and
+    /// further along.
+    pub fn progress(&self) -> f64 {
+        let by_steps = self.env_steps as f64 / self.cfg.total_env_steps as f64;
+        let by_clock = self
+            .clock_budget
+            .map_or(0.0, |(from, seconds)| (self.wall_s - from) / seconds);
+        by_steps.max(by_clock).clamp(0.0, 1.0)
+    }
+
+    /// Schedules end when `seconds` more of training have passed, or at
+    /// `total_env_steps` if that comes first (`train --for`). A schedule
+    /// that follows the clock depends on the machine's speed: two runs of
+    /// one seed then anneal at different steps and part ways.
+    pub fn set_clock_budget(&mut self, seconds: f64) {
+        assert!(
+            seconds > 0.0 && seconds.is_finite(),
+            "a clock budget of {seconds} s"
+        );
+        self.clock_budget = Some((self.wall_s, seconds));
+    }
+
     /// Every learning side's update on its rollout. A non-finite update is
     /// undone by the learner; `max_bad_updates` of them in a row stop the
     /// run.
     fn update(&mut self) -> Result<Vec<SideUpdate>> {
-        let done = self.env_steps as f64 / self.cfg.total_env_steps as f64;
+        let done = self.progress();
         let mut updates = Vec::new();
         for ls in &mut self.learners {
             ls.learner.set_progress(done);

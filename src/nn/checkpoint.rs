@@ -23,6 +23,8 @@ use super::{obs_tensors, pool_patch, Actor, NetConfig};
 use crate::env::{Action, Controller, EnvConfig, Side, TrapEnv, PATCH_LEN};
 use crate::util::sha256_file;
 use anyhow::{bail, Context, Result};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -717,9 +719,12 @@ impl PolicySnapshot {
 }
 
 /// A checkpoint playing one side, greedily (the most likely action), as in
-/// the paper's evaluation.
+/// the paper's evaluation, or sampling its actions (`sampling`).
 pub struct CheckpointController {
     snapshot: Arc<PolicySnapshot>,
+    /// Some when actions are sampled: drawn afresh from each episode's seed,
+    /// so the same seed plays the same episode.
+    sampler: Option<ChaCha8Rng>,
     _vs: nn::VarStore,
     actor: Actor,
     hidden: Option<Tensor>,
@@ -733,6 +738,7 @@ impl CheckpointController {
         let (vs, actor) = snapshot.build_actor(Device::Cpu)?;
         Ok(CheckpointController {
             snapshot,
+            sampler: None,
             _vs: vs,
             actor,
             hidden: None,
@@ -743,13 +749,30 @@ impl CheckpointController {
     }
 }
 
+impl CheckpointController {
+    /// Samples each action from the policy instead of taking the most likely.
+    pub fn sampling(mut self) -> CheckpointController {
+        self.sampler = Some(ChaCha8Rng::seed_from_u64(0));
+        self
+    }
+}
+
 impl Controller for CheckpointController {
     fn name(&self) -> String {
-        format!("ckpt:{}", self.snapshot.dir.display())
+        let how = if self.sampler.is_some() {
+            "sample"
+        } else {
+            "ckpt"
+        };
+        format!("{how}:{}", self.snapshot.dir.display())
     }
 
-    fn reset(&mut self, _env: &TrapEnv, _seed: u64) {
+    fn reset(&mut self, _env: &TrapEnv, seed: u64) {
         self.hidden = None;
+        if let Some(rng) = &mut self.sampler {
+            // Apart from the streams the environment draws from the seed.
+            *rng = ChaCha8Rng::seed_from_u64(seed ^ 0x5a4d_504c_4520_6163);
+        }
     }
 
     fn act(&mut self, env: &TrapEnv, side: Side, out: &mut [Action]) {
@@ -785,6 +808,15 @@ impl Controller for CheckpointController {
         );
         let (logits, h) = tch::no_grad(|| self.actor.step(&p, &v, &h));
         self.hidden = Some(h);
+        if let Some(rng) = &mut self.sampler {
+            let probs = logits.softmax(-1, Kind::Float);
+            let mut p = vec![0f32; n * Action::COUNT];
+            probs.copy_data(&mut p, n * Action::COUNT);
+            for (o, row) in out.iter_mut().zip(p.chunks_exact(Action::COUNT)) {
+                *o = Action::from_index(super::sample(row, rng));
+            }
+            return;
+        }
         let best = logits.argmax(1, false);
         let mut idx = vec![0i64; n];
         best.copy_data(&mut idx, n);

@@ -30,6 +30,12 @@ pub struct NetConfig {
     pub conv_channels: [i64; 2],
     /// Max-pooling of the 48x48 patch before the CNN (1: none, 2: 24x24).
     pub patch_pool: i64,
+    /// How the agent vector enters the network (see `VectorInput`). Left
+    /// out of the stored config while it is the reference's layer norm, so
+    /// the configs and checkpoints written before it existed keep their
+    /// hashes and load as they were trained.
+    #[serde(skip_serializing_if = "VectorInput::is_layer_norm")]
+    pub vector_input: VectorInput,
 }
 
 impl Default for NetConfig {
@@ -38,7 +44,110 @@ impl Default for NetConfig {
             hidden: 128,
             conv_channels: [16, 32],
             patch_pool: 2,
+            vector_input: VectorInput::LayerNorm,
         }
+    }
+}
+
+/// How the agent vector (spec §5: velocities, positions, headings) is fed
+/// to the vector MLP. The observation itself never changes; this is the
+/// network's first layer.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum VectorInput {
+    /// A learned layer norm over each row, as the MAPPO reference's
+    /// `feature_norm`. It normalises a row by its own mean and spread, so
+    /// the network sees the vector only up to a common scale and offset:
+    /// how far the target is, in metres, is mixed with every other number
+    /// of the row.
+    #[default]
+    LayerNorm,
+    /// Every feature kept apart: positions divided by 8 m (half the 16 m
+    /// map), velocities as they are (m/s, at most 1.4), and every heading as
+    /// its sine and cosine, so 0 and 2 pi read the same.
+    Scaled,
+}
+
+impl VectorInput {
+    pub fn is_layer_norm(&self) -> bool {
+        *self == VectorInput::LayerNorm
+    }
+}
+
+/// The fixed input map of `VectorInput::Scaled` for vectors of `agents`
+/// robots' observations concatenated, each in `write_vector`'s layout
+/// (own velocity, position, heading; then the N others' velocities,
+/// relative positions, relative headings: 5 + 5N numbers).
+#[derive(Debug)]
+pub(crate) struct ScaledVector {
+    /// Indices of the velocities and positions, and what each is multiplied by.
+    linear: Tensor,
+    scale: Tensor,
+    /// Indices of the headings.
+    angles: Tensor,
+    /// Width of the output: per robot, 4 + 4N linear numbers and 2 (1 + N) for the headings.
+    pub width: i64,
+}
+
+/// Metres by which positions are divided.
+const POSITION_SCALE: f32 = 8.0;
+
+impl ScaledVector {
+    pub(crate) fn new(vector_len: i64, agents: i64) -> ScaledVector {
+        assert!(
+            agents > 0 && vector_len % agents == 0,
+            "vector of {vector_len} numbers for {agents} robots"
+        );
+        let per = vector_len / agents;
+        assert!(
+            per >= 5 && (per - 5) % 5 == 0,
+            "a robot's vector has 5 + 5N numbers, not {per}"
+        );
+        let others = (per - 5) / 5;
+        let (mut linear, mut scale, mut angles) = (Vec::new(), Vec::new(), Vec::new());
+        for a in 0..agents {
+            let base = a * per;
+            let mut push = |i: i64, s: f32| {
+                linear.push(base + i);
+                scale.push(s);
+            };
+            push(0, 1.0);
+            push(1, 1.0);
+            push(2, 1.0 / POSITION_SCALE);
+            push(3, 1.0 / POSITION_SCALE);
+            for k in 0..2 * others {
+                push(5 + k, 1.0);
+            }
+            for k in 0..2 * others {
+                push(5 + 2 * others + k, 1.0 / POSITION_SCALE);
+            }
+            angles.push(base + 4);
+            angles.extend((0..others).map(|k| base + 5 + 4 * others + k));
+        }
+        let width = linear.len() as i64 + 2 * angles.len() as i64;
+        ScaledVector {
+            linear: Tensor::from_slice(&linear),
+            scale: Tensor::from_slice(&scale),
+            angles: Tensor::from_slice(&angles),
+            width,
+        }
+    }
+
+    /// The output width for `vector_len` numbers of `agents` robots.
+    fn width_of(vector_len: usize, agents: usize) -> usize {
+        let per = vector_len / agents.max(1);
+        let others = per.saturating_sub(5) / 5;
+        agents * (per + 1 + others)
+    }
+
+    /// `vectors` [..., vector_len] -> [..., width].
+    pub(crate) fn apply(&self, vectors: &Tensor) -> Tensor {
+        let dev = vectors.device();
+        let last = vectors.dim() as i64 - 1;
+        let lin =
+            vectors.index_select(last, &self.linear.to_device(dev)) * self.scale.to_device(dev);
+        let ang = vectors.index_select(last, &self.angles.to_device(dev));
+        Tensor::cat(&[lin, ang.sin(), ang.cos()], last)
     }
 }
 
@@ -84,6 +193,10 @@ impl NetConfig {
         let [c1, c2] = self.conv_channels.map(|c| c as f64);
         let (h, cin, v) = (self.hidden as f64, channels as f64, vector_len as f64);
         let conv = 2.0 * 9.0 * (s1 * s1 * c1 * cin + s2 * s2 * c2 * c1);
+        let v = match self.vector_input {
+            VectorInput::LayerNorm => v,
+            VectorInput::Scaled => ScaledVector::width_of(vector_len, channels) as f64,
+        };
         let linear = 2.0 * (c2 * s2 * s2 * h + v * h + 2.0 * h * h + h * outputs as f64);
         let gru = 2.0 * 2.0 * 3.0 * h * h;
         conv + linear + gru
@@ -97,13 +210,20 @@ impl NetConfig {
     }
 }
 
+/// The vector's first layer, as `VectorInput` says.
+#[derive(Debug)]
+pub(crate) enum VectorIn {
+    LayerNorm(nn::LayerNorm),
+    Scaled(ScaledVector),
+}
+
 /// Patch CNN + vector MLP, concatenated, then one MLP layer.
 #[derive(Debug)]
 struct Encoder {
     conv1: nn::Conv2D,
     conv2: nn::Conv2D,
     patch_fc: nn::Linear,
-    vector_norm: nn::LayerNorm,
+    vector_input: VectorIn,
     vector_fc: nn::Linear,
     merge_fc: nn::Linear,
 }
@@ -117,14 +237,29 @@ impl Encoder {
         let [c1, c2] = cfg.conv_channels;
         let side = cfg.conv_out_side();
         let h = cfg.hidden;
+        // Positions are metres in a 16 m map and headings are radians:
+        // either way, one learning rate must suit every input.
+        let (vector_input, width) = match cfg.vector_input {
+            VectorInput::LayerNorm => (
+                VectorIn::LayerNorm(nn::layer_norm(
+                    p / "vector_norm",
+                    vec![vector_len],
+                    Default::default(),
+                )),
+                vector_len,
+            ),
+            VectorInput::Scaled => {
+                let s = ScaledVector::new(vector_len, channels);
+                let w = s.width;
+                (VectorIn::Scaled(s), w)
+            }
+        };
         Encoder {
             conv1: nn::conv2d(p / "conv1", channels, c1, 3, conv),
             conv2: nn::conv2d(p / "conv2", c1, c2, 3, conv),
             patch_fc: nn::linear(p / "patch_fc", c2 * side * side, h, Default::default()),
-            // Positions are metres in a 16 m map and headings are radians:
-            // normalising lets one learning rate suit every input.
-            vector_norm: nn::layer_norm(p / "vector_norm", vec![vector_len], Default::default()),
-            vector_fc: nn::linear(p / "vector_fc", vector_len, h, Default::default()),
+            vector_input,
+            vector_fc: nn::linear(p / "vector_fc", width, h, Default::default()),
             merge_fc: nn::linear(p / "merge_fc", 2 * h, h, Default::default()),
         }
     }
@@ -141,10 +276,11 @@ impl Encoder {
             .flatten(1, -1)
             .apply(&self.patch_fc)
             .relu();
-        let v = vectors
-            .apply(&self.vector_norm)
-            .apply(&self.vector_fc)
-            .relu();
+        let v = match &self.vector_input {
+            VectorIn::LayerNorm(norm) => vectors.apply(norm),
+            VectorIn::Scaled(s) => s.apply(vectors),
+        };
+        let v = v.apply(&self.vector_fc).relu();
         Tensor::cat(&[x, v], 1).apply(&self.merge_fc).relu()
     }
 }
@@ -375,6 +511,21 @@ pub fn seed_torch(seed: u64) -> std::sync::MutexGuard<'static, ()> {
     held
 }
 
+/// Draws an action index from (unnormalised) probabilities, as every policy
+/// that samples does: learners while training, league opponents, sampled
+/// checkpoints.
+pub fn sample(p: &[f32], rng: &mut rand_chacha::ChaCha8Rng) -> usize {
+    use rand::Rng;
+    let mut u = rng.gen::<f32>() * p.iter().sum::<f32>();
+    for (i, &x) in p.iter().enumerate() {
+        if u < x {
+            return i;
+        }
+        u -= x;
+    }
+    p.len() - 1
+}
+
 /// Max-pools a 48x48 patch by `pool` into `out` ((48 / pool)^2 bytes): a
 /// pooled pixel is obstacle if any cell under it is. Done once per
 /// observation, outside the network, so training never re-pools.
@@ -471,11 +622,73 @@ mod tests {
             hidden: 64,
             conv_channels: [8, 16],
             patch_pool: 4,
+            ..Default::default()
         };
         let conv = 2.0 * 9.0 * (25.0 * 8.0 + 4.0 * 16.0 * 8.0);
         let linear = 2.0 * (16.0 * 4.0 * 64.0 + 20.0 * 64.0 + 2.0 * 64.0 * 64.0 + 64.0 * 5.0);
         let gru = 12.0 * 64.0 * 64.0;
         assert_eq!(cfg.forward_flops(1, 20, 5), conv + linear + gru);
+    }
+
+    #[test]
+    fn scaled_vector_by_hand() {
+        use std::f32::consts::{FRAC_PI_2, PI, TAU};
+        // One captor of 3:1: own velocity, position, heading; the 3 others'
+        // velocities, relative positions and relative headings.
+        let mut v = vec![0.5f32, -1.0, 4.0, -8.0, TAU];
+        v.extend([1., 2., 3., 4., 5., 6.]);
+        v.extend([8., 16., -8., 0., 24., 4.]);
+        v.extend([0., FRAC_PI_2, -PI]);
+        let want: Vec<f32> = vec![
+            0.5, -1.0, 0.5, -1.0, // own velocity, position / 8
+            1., 2., 3., 4., 5., 6., // velocities
+            1., 2., -1., 0., 3., 0.5, // relative positions / 8
+            0., 0., 1., 0., // sines of TAU, 0, pi/2, -pi
+            1., 1., 0., -1., // cosines
+        ];
+        let s = ScaledVector::new(20, 1);
+        assert_eq!((s.width, ScaledVector::width_of(20, 1)), (24, 24));
+        let got = Vec::<f32>::try_from(s.apply(&Tensor::from_slice(&v).view([1, 20])).view([-1]))
+            .unwrap();
+        for (i, (g, w)) in got.iter().zip(&want).enumerate() {
+            assert!((g - w).abs() < 1e-5, "feature {i}: {g} against {w}");
+        }
+        // A centralised critic's view: two robots' vectors side by side map
+        // robot by robot, linear parts first, then every sine, every cosine.
+        let two = ScaledVector::new(40, 2);
+        assert_eq!((two.width, ScaledVector::width_of(40, 2)), (48, 48));
+        let mut vv = v.clone();
+        vv.extend(v.iter().map(|x| -x));
+        let got =
+            Vec::<f32>::try_from(two.apply(&Tensor::from_slice(&vv).view([1, 40])).view([-1]))
+                .unwrap();
+        let neg: Vec<f32> = want.iter().map(|x| -x).collect();
+        assert_eq!(&got[..16], &want[..16]);
+        assert_eq!(&got[16..32], &neg[..16]);
+        // sin(-x) = -sin(x); cos(-x) = cos(x).
+        for k in 0..4 {
+            assert!((got[32 + k] - want[16 + k]).abs() < 1e-5);
+            assert!((got[36 + k] + want[16 + k]).abs() < 1e-5);
+            assert!((got[40 + k] - want[20 + k]).abs() < 1e-5);
+            assert!((got[44 + k] - want[20 + k]).abs() < 1e-5);
+        }
+        // It has no weights, and the layer norm's are gone with it.
+        let vs = nn::VarStore::new(Device::Cpu);
+        let cfg = NetConfig {
+            hidden: 8,
+            vector_input: VectorInput::Scaled,
+            ..NetConfig::default()
+        };
+        let _ = Actor::new(&vs.root(), &cfg, 20);
+        let names: Vec<String> = vs.variables().into_keys().collect();
+        assert!(
+            names.iter().all(|n| !n.contains("vector_norm")),
+            "{names:?}"
+        );
+        assert_eq!(
+            vs.variables()["encoder.vector_fc.weight"].size(),
+            vec![8, 24]
+        );
     }
 
     #[test]

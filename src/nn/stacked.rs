@@ -12,7 +12,7 @@
 //! Numerically this is the same network as `Actor::step` (a test checks it
 //! to 1e-5 against each opponent's own pass).
 
-use super::{Actor, NetConfig};
+use super::{Actor, NetConfig, ScaledVector, VectorIn};
 use crate::env::Action;
 use tch::{Kind, Tensor};
 
@@ -58,8 +58,18 @@ impl PreparedActor {
         let (vw, vb) = linear(&e.vector_fc);
         let (mw, mb) = linear(&e.merge_fc);
         let (hw, hb) = linear(&actor.head);
-        let norm_w = e.vector_norm.ws.as_ref().expect("affine layer norm");
-        let norm_b = e.vector_norm.bs.as_ref().expect("affine layer norm");
+        // A scaled vector has no weights of its own: ones and zeros keep the
+        // layout (and stack), and `step` does not read them.
+        let (norm_w, norm_b) = match &e.vector_input {
+            VectorIn::LayerNorm(norm) => (
+                norm.ws.as_ref().expect("affine layer norm").shallow_clone(),
+                norm.bs.as_ref().expect("affine layer norm").shallow_clone(),
+            ),
+            VectorIn::Scaled(_) => (
+                Tensor::ones([1], (Kind::Float, tch::Device::Cpu)),
+                Tensor::zeros([1], (Kind::Float, tch::Device::Cpu)),
+            ),
+        };
         let tensors = vec![
             e.conv1.ws.shallow_clone(),
             e.conv1.bs.as_ref().expect("conv bias").shallow_clone(),
@@ -101,6 +111,8 @@ pub struct StackedActors {
     pub hidden: i64,
     pub input_side: i64,
     pub vector_len: i64,
+    /// Set for `VectorInput::Scaled` networks, None for the layer norm.
+    scaled: Option<ScaledVector>,
     /// conv weights [G*c_out, c_in, 3, 3], biases [G*c_out]; the rest [G, ...].
     tensors: Vec<Tensor>,
 }
@@ -130,6 +142,10 @@ impl StackedActors {
             hidden: first.net.hidden,
             input_side: first.net.input_side() as i64,
             vector_len: first.vector_len,
+            scaled: match first.net.vector_input {
+                super::VectorInput::LayerNorm => None,
+                super::VectorInput::Scaled => Some(ScaledVector::new(first.vector_len, 1)),
+            },
             tensors,
         })
     }
@@ -153,14 +169,19 @@ impl StackedActors {
             .view([rows, g, -1])
             .transpose(0, 1);
         let x = t[PATCH_B].baddbmm(&x, &t[PATCH_W], 1, 1).relu();
-        let v = vectors.layer_norm(
-            [self.vector_len],
-            None::<Tensor>,
-            None::<Tensor>,
-            1e-5,
-            false,
-        );
-        let v = v * &t[NORM_W] + &t[NORM_B];
+        let v = match &self.scaled {
+            Some(s) => s.apply(vectors),
+            None => {
+                let v = vectors.layer_norm(
+                    [self.vector_len],
+                    None::<Tensor>,
+                    None::<Tensor>,
+                    1e-5,
+                    false,
+                );
+                v * &t[NORM_W] + &t[NORM_B]
+            }
+        };
         let v = t[VECTOR_B].baddbmm(&v, &t[VECTOR_W], 1, 1).relu();
         let x = Tensor::cat(&[x, v], 2);
         let x = t[MERGE_B].baddbmm(&x, &t[MERGE_W], 1, 1).relu();
@@ -184,11 +205,21 @@ mod tests {
 
     #[test]
     fn stacked_actors_match_each_actors_own_pass() {
+        stacked_pass_matches(crate::nn::VectorInput::LayerNorm);
+    }
+
+    #[test]
+    fn stacked_scaled_actors_match_each_actors_own_pass() {
+        stacked_pass_matches(crate::nn::VectorInput::Scaled);
+    }
+
+    fn stacked_pass_matches(vector_input: crate::nn::VectorInput) {
         let _seed = crate::nn::seed_torch(3);
         let cfg = NetConfig {
             hidden: 16,
             conv_channels: [4, 8],
             patch_pool: 2,
+            vector_input,
         };
         let vl = 20usize;
         let stores: Vec<(nn::VarStore, Actor)> = (0..3)

@@ -92,6 +92,7 @@ pub fn tiny_train_config(
                 hidden: 8,
                 conv_channels: [2, 2],
                 patch_pool: 4,
+                ..Default::default()
             },
             ..SideConfig::default()
         },
