@@ -624,7 +624,9 @@ impl Trainer {
     /// Schedules end when `seconds` more of training have passed, or at
     /// `total_env_steps` if that comes first (`train --for`). A schedule
     /// that follows the clock depends on the machine's speed: two runs of
-    /// one seed then anneal at different steps and part ways.
+    /// one seed then anneal at different steps and part ways. The budget is
+    /// this invocation's, as `--for` is: a run resumed with `--for D`
+    /// starts a new schedule over D from where the steps stand.
     pub fn set_clock_budget(&mut self, seconds: f64) {
         assert!(
             seconds > 0.0 && seconds.is_finite(),

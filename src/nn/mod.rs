@@ -124,7 +124,8 @@ impl ScaledVector {
             angles.push(base + 4);
             angles.extend((0..others).map(|k| base + 5 + 4 * others + k));
         }
-        let width = linear.len() as i64 + 2 * angles.len() as i64;
+        let width = Self::width_of(vector_len as usize, agents as usize) as i64;
+        debug_assert_eq!(width, linear.len() as i64 + 2 * angles.len() as i64);
         ScaledVector {
             linear: Tensor::from_slice(&linear),
             scale: Tensor::from_slice(&scale),
