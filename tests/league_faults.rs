@@ -125,20 +125,40 @@ fn child_pid(manager: u32, needle: &str) -> Option<i64> {
 /// Waits until both main learners have trained a step and are still at it
 /// (training, or waiting for the other under pacing: on a loaded machine
 /// the two are seldom both mid-iteration at one poll).
+///
+/// Callers give the league a budget it cannot finish in the wait (see
+/// `UNFINISHABLE`): without pacing, a learner that started first on a
+/// loaded machine could otherwise be done before the other one began.
 fn wait_both_training(l: &League, limit: Duration) {
-    wait_for("both learners training", limit, || {
-        Store::open_existing(&l.dir.store)
-            .and_then(|s| s.heartbeats())
-            .map(|b| {
-                b.iter()
+    let mut last_seen = String::from("no heartbeats yet");
+    let mut last_error = String::from("none");
+    let deadline = Instant::now() + limit;
+    loop {
+        match Store::open_existing(&l.dir.store).and_then(|s| s.heartbeats()) {
+            Ok(beats) => {
+                let working = beats
+                    .iter()
                     .filter(|b| b.learner != "evaluator")
                     .filter(|b| b.state.is_working() && b.env_steps > 0)
-                    .count()
-                    == 2
-            })
-            .unwrap_or(false)
-    });
+                    .count();
+                if working == 2 {
+                    return;
+                }
+                last_seen = format!("{beats:?}");
+            }
+            Err(e) => last_error = format!("{e}"),
+        }
+        assert!(
+            Instant::now() < deadline,
+            "timed out waiting for both learners training; last heartbeats: {last_seen}; last store error: {last_error}"
+        );
+        std::thread::sleep(Duration::from_millis(50));
+    }
 }
+
+/// An env-step budget no learner of these tiny leagues reaches within the
+/// tests' waits (they stop the league themselves).
+const UNFINISHABLE: u64 = 1_000_000_000;
 
 fn wait_for(what: &str, limit: Duration, mut ready: impl FnMut() -> bool) {
     let deadline = Instant::now() + limit;
@@ -567,7 +587,7 @@ fn every_learner_exit_has_an_outcome_and_every_line_reaches_a_redirected_log() {
 fn status_reports_the_dead_as_dead_and_the_finished_as_they_were() {
     let l = league(
         "status",
-        200_000,
+        UNFINISHABLE,
         "[evaluator]\nenabled = true\nepisodes = 2\ncpu_share = 1.0\n",
     );
     let text = std::fs::read_to_string(&l.config)
@@ -575,7 +595,7 @@ fn status_reports_the_dead_as_dead_and_the_finished_as_they_were() {
         .replace("[evaluator]\nenabled = false\n", "");
     std::fs::write(&l.config, text).unwrap();
     let mut manager = spawn_run(&l, Stdio::null());
-    wait_both_training(&l, Duration::from_secs(120));
+    wait_both_training(&l, Duration::from_secs(240));
     signal(manager.id() as i64, libc::SIGKILL);
     let _ = manager.wait();
     std::thread::sleep(Duration::from_millis(800));
@@ -895,9 +915,9 @@ fn a_file_that_is_not_this_leagues_store_is_refused_untouched() {
 
 #[test]
 fn sigterm_stops_the_league_as_ctrl_c_does() {
-    let l = league("sigterm", 200_000, "");
+    let l = league("sigterm", UNFINISHABLE, "");
     let mut manager = spawn_run(&l, Stdio::null());
-    wait_both_training(&l, Duration::from_secs(120));
+    wait_both_training(&l, Duration::from_secs(240));
     signal(manager.id() as i64, libc::SIGTERM);
     let status = wait_exit(&mut manager, Duration::from_secs(60));
     assert!(status.success(), "{status:?}");
