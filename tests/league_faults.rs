@@ -126,9 +126,10 @@ fn child_pid(manager: u32, needle: &str) -> Option<i64> {
 /// (training, or waiting for the other under pacing: on a loaded machine
 /// the two are seldom both mid-iteration at one poll).
 ///
-/// Callers give the league a budget it cannot finish in the wait (see
-/// `UNFINISHABLE`): without pacing, a learner that started first on a
-/// loaded machine could otherwise be done before the other one began.
+/// Callers give the league a budget it cannot finish (`UNFINISHABLE`),
+/// so "done" can never stand in for "not started yet". A timeout prints
+/// what the store last held: CI once timed out here at 120 s for a cause
+/// not reproduced on a quiet or a loaded machine.
 fn wait_both_training(l: &League, limit: Duration) {
     let mut last_seen = String::from("no heartbeats yet");
     let mut last_error = String::from("none");
