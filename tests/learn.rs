@@ -26,6 +26,7 @@ fn chase_config(seed: u64) -> TrainConfig {
         device: "cpu".into(),
         protocol: t2e::protocol::Protocol::HeldOut,
         maps: "unused".into(),
+        extra_maps: Default::default(),
         env: EnvConfig {
             num_captors: 1,
             episode_length: 40,

@@ -285,6 +285,7 @@ fn tiny_config() -> TrainConfig {
         device: "cpu".into(),
         protocol: t2e::protocol::Protocol::HeldOut,
         maps: "unused".into(),
+        extra_maps: Default::default(),
         env: EnvConfig {
             num_captors: 1,
             episode_length: 30,
@@ -505,6 +506,42 @@ fn test_maps_are_recognised_by_content_wherever_they_sit() {
         err.contains("Kettle_floor_trav_0_v3") && err.contains("test set"),
         "{err}"
     );
+}
+
+#[test]
+fn extra_maps_are_held_to_the_held_out_rule_and_mixed_by_share() {
+    // A copy of a test map is refused as an extra map, whatever it is called.
+    if let Some(gibson) = t2e::map::catalog::gibson_dir() {
+        let copy = tempfile::tempdir().unwrap();
+        std::fs::copy(
+            gibson.join("Kettle_floor_trav_0_v3.png"),
+            copy.path().join("extra.png"),
+        )
+        .unwrap();
+        let mut cfg = tiny_config();
+        cfg.extra_maps.maps = copy.path().join("extra.png").display().to_string();
+        let err = Trainer::new(cfg, tiny_maps()).err().unwrap().to_string();
+        assert!(
+            err.starts_with("extra_maps.maps") && err.contains("Kettle_floor_trav_0_v3"),
+            "{err}"
+        );
+    } else {
+        assert!(std::env::var_os("CI").is_none(), "Gibson maps missing in CI");
+    }
+    // Generated extra maps at a quarter of the episodes: over many episodes
+    // about a quarter of the worlds play a map that is not the tiny room.
+    let mut cfg = tiny_config();
+    cfg.extra_maps.maps = "generated:1:small".into();
+    cfg.extra_maps.share = 0.25;
+    let own = tiny_maps();
+    let own_name = own[0].grid.name.clone();
+    let t = Trainer::new(cfg.clone(), own.clone()).unwrap();
+    let maps = t.maps();
+    let extra = maps.iter().filter(|m| m.grid.name != own_name).count();
+    assert_eq!((maps.len(), extra), (4, 1), "1 own map 3 times, 1 extra once");
+    // Off, the list is the protocol's own maps.
+    cfg.extra_maps = Default::default();
+    assert_eq!(Trainer::new(cfg, own).unwrap().maps().len(), 1);
 }
 
 #[test]

@@ -166,6 +166,12 @@ impl TrapEnv {
         names
     }
 
+    /// The maps episodes draw from (uniformly; a map listed twice is drawn
+    /// twice as often).
+    pub fn maps(&self) -> &Arc<Vec<Arc<PreparedMap>>> {
+        &self.maps
+    }
+
     pub fn map(&self) -> &Arc<PreparedMap> {
         &self.map
     }

@@ -5,6 +5,7 @@
 use super::maac::MaacConfig;
 use super::maddpg::MaddpgConfig;
 use super::ppo::PpoConfig;
+use super::extra_maps::ExtraMapsConfig;
 use super::shaping::ShapingConfig;
 use super::Algorithm;
 use crate::controllers::ControllerSpec;
@@ -41,6 +42,10 @@ pub struct TrainConfig {
     /// makes N maps per size class with the project's generator; also
     /// `shipped` or a folder. Paper: `gibson`.
     pub maps: String,
+    /// Training-only extra maps beside `maps` (off by default; left out of
+    /// the stored config, and so of the config hash, while off).
+    #[serde(skip_serializing_if = "is_default")]
+    pub extra_maps: ExtraMapsConfig,
     pub env: EnvConfig,
     pub captors: SideConfig,
     pub target: SideConfig,
@@ -98,6 +103,7 @@ impl Default for TrainConfig {
             device: "auto".into(),
             protocol: Protocol::HeldOut,
             maps: "generated:20".into(),
+            extra_maps: ExtraMapsConfig::default(),
             env: EnvConfig::default(),
             captors: SideConfig {
                 play: "mappo".into(),
@@ -222,6 +228,9 @@ impl TrainConfig {
         env.validate().map_err(|e| format!("env.{e}"))?;
         validate_name(&self.name)?;
         check_rollout(self.num_envs, self.rollout_steps)?;
+        self.extra_maps
+            .validate()
+            .map_err(|e| format!("extra_maps.{e}"))?;
         let per_iteration = (self.num_envs * self.rollout_steps) as u64;
         if self.total_env_steps < per_iteration {
             return Err(format!(

@@ -6,6 +6,7 @@
 pub mod acting;
 pub mod adam;
 pub mod config;
+pub mod extra_maps;
 pub mod ippo;
 pub mod learner;
 pub mod maac;

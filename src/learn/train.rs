@@ -219,6 +219,12 @@ fn mix_seed(seed: u64, iteration: u64) -> u64 {
 }
 
 impl Trainer {
+    /// The maps the worlds draw their episodes from: the protocol's own,
+    /// and any extra maps mixed in by share (`extra_maps::mix`).
+    pub fn maps(&self) -> &Arc<Vec<Arc<PreparedMap>>> {
+        self.venv.env(0).maps()
+    }
+
     /// A fresh run on `maps`, starting at iteration `iteration` (0 unless resuming).
     pub fn new(cfg: TrainConfig, maps: Arc<Vec<Arc<PreparedMap>>>) -> Result<Trainer> {
         Trainer::starting_at(cfg, maps, 0)
@@ -233,6 +239,18 @@ impl Trainer {
         cfg.protocol
             .check_training_maps(&cfg.maps, &maps)
             .map_err(anyhow::Error::msg)?;
+        let maps = if cfg.extra_maps.is_off() {
+            maps
+        } else {
+            let spec = &cfg.extra_maps.maps;
+            let extra = crate::map::catalog::load_prepared(spec)
+                .with_context(|| format!("extra_maps.maps = \"{spec}\""))?;
+            // Extra maps are never tested on, under either protocol.
+            crate::protocol::Protocol::HeldOut
+                .check_training_maps(spec, &extra)
+                .map_err(|e| anyhow::anyhow!("extra_maps.{e}"))?;
+            super::extra_maps::mix(&maps, &extra, cfg.extra_maps.share)
+        };
         let device = cfg.device();
         if cfg.device == "cuda" && !tch::Cuda::is_available() {
             bail!("device = \"cuda\" but tch sees no CUDA device; use \"auto\" or \"cpu\"");

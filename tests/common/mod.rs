@@ -81,6 +81,7 @@ pub fn tiny_train_config(
         device: "cpu".into(),
         protocol,
         maps: maps.into(),
+        extra_maps: Default::default(),
         env: EnvConfig {
             num_captors: 2,
             episode_length: 20,
