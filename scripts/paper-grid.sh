@@ -6,11 +6,18 @@
 #
 #   BUDGET=30000000 EPISODES=500 scripts/paper-grid.sh          # the paper's budget
 #   BUDGET=150000 EPISODES=100 CELLS="3:1.0" scripts/paper-grid.sh   # a CPU sample
+#   FOR=4m JOBS=2 EPISODES=200 scripts/paper-grid.sh   # 4 minutes of one core per run
 #
 # Environment (defaults in brackets):
 #   BIN        the t2e-league binary [target/release/t2e-league]
 #   OUT        results folder [runs/paper-grid]
 #   BUDGET     env steps per training run [30000000]
+#   FOR        a wall-clock budget per training run instead (train --for:
+#              90s, 4m, 1h), ending at BUDGET if that comes first; the
+#              learning rate (lr_anneal) then anneals over the clock. Give
+#              the runs the cores alone: a clock budget measures contention
+#              as lost steps. A resumed run gets FOR again, so for a fair
+#              cell let each finish in one go []
 #   EPISODES   evaluation episodes per map class [500]
 #   CELLS      "K:RATIO ..." [3:1.0 3:1.2 3:1.4 4:1.0 4:1.2 4:1.4]
 #   LEARNERS   [mappo ippo maddpg maac]
@@ -34,6 +41,9 @@ PROTOCOLS=${PROTOCOLS:-paper}
 JOBS=${JOBS:-1}
 DEVICE=${DEVICE:-auto}
 ROLLOUT=${ROLLOUT:-100}
+FOR=${FOR:-}
+clock=()
+[ -n "$FOR" ] && clock=(--for "$FOR")
 mkdir -p "$OUT/configs"
 export OMP_NUM_THREADS=${OMP_NUM_THREADS:-1} RAYON_NUM_THREADS=${RAYON_NUM_THREADS:-1}
 
@@ -54,9 +64,9 @@ one() { # protocol learner k ratio
     # The CPU config's minibatches are PPO's; the others ignore the table.
     if [ ! -f "$OUT/runs/$name/.done" ]; then
         if [ -f "$OUT/runs/$name/state.json" ]; then
-            "$BIN" train --resume --out "$OUT/runs/$name" --total-env-steps "$BUDGET" --device "$DEVICE" --quiet
+            "$BIN" train --resume --out "$OUT/runs/$name" --total-env-steps "$BUDGET" "${clock[@]}" --device "$DEVICE" --quiet
         else
-            "$BIN" train --config "$cfg" --out "$OUT/runs/$name" --total-env-steps "$BUDGET" --device "$DEVICE" --quiet
+            "$BIN" train --config "$cfg" --out "$OUT/runs/$name" --total-env-steps "$BUDGET" "${clock[@]}" --device "$DEVICE" --quiet
         fi
         touch "$OUT/runs/$name/.done"
     fi
