@@ -158,8 +158,17 @@ pub fn run(args: TrainArgs) -> Result<()> {
         .iter()
         .map(|(s, a)| format!("{} {}", s.name(), a.name()))
         .collect();
+    let extra = if cfg.extra_maps.is_off() {
+        String::new()
+    } else {
+        format!(
+            " + extra maps {:?} for {:.0}% of the episodes (a training option: not the protocol's maps alone)",
+            cfg.extra_maps.maps,
+            100.0 * cfg.extra_maps.share
+        )
+    };
     eprintln!(
-        "training {} on maps {:?}, {} worlds, device {:?}, run folder {}",
+        "training {} on maps {:?}{extra}, {} worlds, device {:?}, run folder {}",
         learners.join(" + "),
         cfg.maps,
         cfg.num_envs,

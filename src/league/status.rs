@@ -54,8 +54,8 @@ use std::path::Path;
 pub struct PlayerRow {
     pub id: i64,
     pub name: String,
-    pub side: String,
-    pub kind: String,
+    pub side: Side,
+    pub kind: Kind,
     pub parent: Option<i64>,
     pub env_steps: u64,
     pub curriculum_stage: usize,
@@ -357,8 +357,8 @@ pub fn report(dir: &LeagueDir) -> Result<StatusReport> {
             PlayerRow {
                 id: p.id,
                 name: p.name.clone(),
-                side: p.side.name().to_string(),
-                kind: p.kind.name().to_string(),
+                side: p.side,
+                kind: p.kind,
                 parent: p.parent,
                 env_steps: p.env_steps,
                 curriculum_stage: p.curriculum_stage,
@@ -483,8 +483,8 @@ pub fn render(r: &StatusReport) -> String {
             "{:>3}  {:<26} {:<8} {:<9} {:>6} {:>11} {:>8.2} ± {:<4.2} {:>8.0} {:>6} {:>7}{}",
             p.id,
             p.name,
-            p.side,
-            p.kind,
+            p.side.name(),
+            p.kind.name(),
             p.parent
                 .map(|x| x.to_string())
                 .unwrap_or_else(|| "-".into()),
@@ -567,13 +567,13 @@ pub fn render(r: &StatusReport) -> String {
     let captors: Vec<i64> = r
         .players
         .iter()
-        .filter(|p| p.side == "captors")
+        .filter(|p| p.side == Side::Captors)
         .map(|p| p.id)
         .collect();
     let targets: Vec<i64> = r
         .players
         .iter()
-        .filter(|p| p.side == "target")
+        .filter(|p| p.side == Side::Target)
         .map(|p| p.id)
         .collect();
     let _ = writeln!(
@@ -774,7 +774,7 @@ pub fn best_player(r: &StatusReport, side: Side) -> Option<String> {
     r.players
         .iter()
         .filter(|p| {
-            p.side == side.name() && p.kind != "heuristic" && p.quarantined.is_none() && p.games > 0
+            p.side == side && p.kind != Kind::Heuristic && p.quarantined.is_none() && p.games > 0
         })
         .max_by(|a, b| a.bt_elo.total_cmp(&b.bt_elo))
         .map(|p| p.name.clone())
@@ -808,7 +808,7 @@ pub fn rating_lines(players: &[PlayerRow], has_points: &[bool]) -> Vec<RatingLin
     // A snapshot's group is its parent's; a snapshot whose parent is not in
     // the league (never in practice) heads a group of its own.
     let head = |i: usize| match players[i].parent.and_then(by_id) {
-        Some(parent) if players[i].kind == "snapshot" => parent,
+        Some(parent) if players[i].kind == Kind::Snapshot => parent,
         _ => i,
     };
     let mut heads: Vec<usize> = (0..players.len()).filter(|&i| head(i) == i).collect();
@@ -989,8 +989,8 @@ pub fn plot(dir: &LeagueDir, r: &StatusReport, path: &Path) -> Result<()> {
             320,
         )
     });
-    let captors: Vec<&PlayerRow> = r.players.iter().filter(|p| p.side == "captors").collect();
-    let targets: Vec<&PlayerRow> = r.players.iter().filter(|p| p.side == "target").collect();
+    let captors: Vec<&PlayerRow> = r.players.iter().filter(|p| p.side == Side::Captors).collect();
+    let targets: Vec<&PlayerRow> = r.players.iter().filter(|p| p.side == Side::Target).collect();
     let cell = 38i64;
     let (left, top) = (230i64, 70i64);
     let height = (top + cell * captors.len() as i64 + 40).max(200) as u32;
@@ -1085,11 +1085,11 @@ mod tests {
             id,
             name: name.into(),
             side: if name.starts_with("captors") || name.starts_with("expert") {
-                "captors".into()
+                Side::Captors
             } else {
-                "target".into()
+                Side::Target
             },
-            kind: kind.into(),
+            kind: Kind::try_from(kind.to_string()).unwrap(),
             parent,
             env_steps,
             curriculum_stage: 0,

@@ -210,11 +210,11 @@ impl Store {
                 let pool = &store.pool;
                 let n: i64 = store.run(move || async move {
                     sqlx::query(
-                        "SELECT COUNT(*) FROM information_schema.tables WHERE table_schema = current_schema() AND table_name = '_sqlx_migrations'",
+                        "SELECT COUNT(*) AS n FROM information_schema.tables WHERE table_schema = current_schema() AND table_name = '_sqlx_migrations'",
                     )
                     .fetch_one(pool)
                     .await?
-                    .try_get(0)
+                    .try_get("n")
                 })?;
                 Ok(if n > 0 {
                     Presence::Present
@@ -727,7 +727,7 @@ impl Store {
                 .bind(&m.key)
                 .fetch_one(&mut *tx)
                 .await?
-                .try_get(0)?;
+                .try_get("id")?;
             let mut current = [Rating::default(); 2];
             for (slot, player) in current.iter_mut().zip([m.captor_player, m.target_player]) {
                 if let Some(row) = sqlx::query(
@@ -738,8 +738,8 @@ impl Store {
                 .await?
                 {
                     *slot = Rating {
-                        mu: row.try_get(0)?,
-                        sigma: row.try_get(1)?,
+                        mu: row.try_get("mu")?,
+                        sigma: row.try_get("sigma")?,
                     };
                 }
             }
@@ -826,10 +826,10 @@ impl Store {
         rows.iter()
             .map(|r| {
                 Ok((
-                    r.try_get::<i64, _>(0)?,
+                    r.try_get::<i64, _>("player")?,
                     Rating {
-                        mu: r.try_get(1)?,
-                        sigma: r.try_get(2)?,
+                        mu: r.try_get("mu")?,
+                        sigma: r.try_get("sigma")?,
                     },
                 ))
             })

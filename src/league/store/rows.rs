@@ -6,7 +6,8 @@
 use crate::env::Side;
 
 /// What kind of member a player is.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
 pub enum Kind {
     /// A main learner (its row holds its latest checkpoint).
     Learner,
