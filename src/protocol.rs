@@ -93,6 +93,38 @@ impl Protocol {
     }
 }
 
+/// Checks training-only extra maps (`[extra_maps]`): never a Gibson test
+/// map nor a near-copy of one, under either protocol. `spec` is their
+/// `maps` value, for the message.
+pub fn check_extra_maps(spec: &str, maps: &[std::sync::Arc<PreparedMap>]) -> Result<(), String> {
+    use crate::map::testset::{gibson_class, gibson_name, resembled_test_map, NEAR_COPY_THRESHOLD};
+    use rayon::prelude::*;
+    const USE: &str = "extra maps are never test maps, under either protocol (protocol = \"paper\" trains on the 26 Gibson maps through `maps`); use generated:N, shipped or a folder of your own";
+    let errors: Vec<String> = maps
+        .par_iter()
+        .filter_map(|m| {
+            let name = &m.grid.name;
+            match gibson_name(&m.grid) {
+                Some(test) => Some(format!(
+                    "map '{name}' is the Gibson test map {test} ({}; recognised by its content): {USE}",
+                    gibson_class(test).map_or("no class", |c| c.name())
+                )),
+                None => resembled_test_map(&m.grid, NEAR_COPY_THRESHOLD).map(|r| {
+                    format!("map '{name}' is a near-copy of {r} (mirrored, turned, padded, shifted or a few pixels changed): {USE}")
+                }),
+            }
+        })
+        .collect();
+    match errors.split_first() {
+        None => Ok(()),
+        Some((first, [])) => Err(format!("maps = \"{spec}\": {first}")),
+        Some((first, rest)) => Err(format!(
+            "maps = \"{spec}\": {first} (and {} more of them are test maps)",
+            rest.len()
+        )),
+    }
+}
+
 impl fmt::Display for Protocol {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str(self.name())

@@ -245,9 +245,7 @@ impl Trainer {
             let spec = &cfg.extra_maps.maps;
             let extra = crate::map::catalog::load_prepared(spec)
                 .with_context(|| format!("extra_maps.maps = \"{spec}\""))?;
-            // Extra maps are never tested on, under either protocol.
-            crate::protocol::Protocol::HeldOut
-                .check_training_maps(spec, &extra)
+            crate::protocol::check_extra_maps(spec, &extra)
                 .map_err(|e| anyhow::anyhow!("extra_maps.{e}"))?;
             super::extra_maps::mix(&maps, &extra, cfg.extra_maps.share)
         };
