@@ -81,15 +81,11 @@ impl Protocol {
                 }
             })
             .collect();
-        match errors.split_first() {
-            None => Ok(()),
-            Some((first, [])) => Err(format!("maps = \"{spec}\": {first}")),
-            Some((first, rest)) => Err(format!(
-                "maps = \"{spec}\": {first} (and {} more of its maps do not fit protocol = \"{}\")",
-                rest.len(),
-                self.name()
-            )),
-        }
+        first_error(
+            spec,
+            &errors,
+            &format!("of its maps do not fit protocol = \"{}\"", self.name()),
+        )
     }
 }
 
@@ -115,11 +111,17 @@ pub fn check_extra_maps(spec: &str, maps: &[std::sync::Arc<PreparedMap>]) -> Res
             }
         })
         .collect();
+    first_error(spec, &errors, "of them are test maps")
+}
+
+/// The first of a map set's errors, and how many more there are (`more`
+/// says what they are).
+fn first_error(spec: &str, errors: &[String], more: &str) -> Result<(), String> {
     match errors.split_first() {
         None => Ok(()),
         Some((first, [])) => Err(format!("maps = \"{spec}\": {first}")),
         Some((first, rest)) => Err(format!(
-            "maps = \"{spec}\": {first} (and {} more of them are test maps)",
+            "maps = \"{spec}\": {first} (and {} more {more})",
             rest.len()
         )),
     }

@@ -528,7 +528,10 @@ fn extra_maps_are_held_to_the_held_out_rule_and_mixed_by_share() {
             "{err}"
         );
     } else {
-        assert!(std::env::var_os("CI").is_none(), "Gibson maps missing in CI");
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "Gibson maps missing in CI"
+        );
     }
     // Generated extra maps at a quarter of the episodes: over many episodes
     // about a quarter of the worlds play a map that is not the tiny room.
@@ -540,7 +543,11 @@ fn extra_maps_are_held_to_the_held_out_rule_and_mixed_by_share() {
     let t = Trainer::new(cfg.clone(), own.clone()).unwrap();
     let maps = t.maps();
     let extra = maps.iter().filter(|m| m.grid.name != own_name).count();
-    assert_eq!((maps.len(), extra), (4, 1), "1 own map 3 times, 1 extra once");
+    assert_eq!(
+        (maps.len(), extra),
+        (4, 1),
+        "1 own map 3 times, 1 extra once"
+    );
     // Off, the list is the protocol's own maps.
     cfg.extra_maps = Default::default();
     assert_eq!(Trainer::new(cfg, own).unwrap().maps().len(), 1);

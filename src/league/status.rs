@@ -989,8 +989,16 @@ pub fn plot(dir: &LeagueDir, r: &StatusReport, path: &Path) -> Result<()> {
             320,
         )
     });
-    let captors: Vec<&PlayerRow> = r.players.iter().filter(|p| p.side == Side::Captors).collect();
-    let targets: Vec<&PlayerRow> = r.players.iter().filter(|p| p.side == Side::Target).collect();
+    let captors: Vec<&PlayerRow> = r
+        .players
+        .iter()
+        .filter(|p| p.side == Side::Captors)
+        .collect();
+    let targets: Vec<&PlayerRow> = r
+        .players
+        .iter()
+        .filter(|p| p.side == Side::Target)
+        .collect();
     let cell = 38i64;
     let (left, top) = (230i64, 70i64);
     let height = (top + cell * captors.len() as i64 + 40).max(200) as u32;

@@ -2,10 +2,10 @@
 //! every learner's hyperparameters, the worlds and the budget, checked
 //! field by field with errors that name the file and the field.
 
+use super::extra_maps::ExtraMapsConfig;
 use super::maac::MaacConfig;
 use super::maddpg::MaddpgConfig;
 use super::ppo::PpoConfig;
-use super::extra_maps::ExtraMapsConfig;
 use super::shaping::ShapingConfig;
 use super::Algorithm;
 use crate::controllers::ControllerSpec;

@@ -120,7 +120,12 @@ mod tests {
 
     #[test]
     fn copies_come_close_when_they_cannot_be_exact() {
-        for (own, extra, share) in [(26, 300, 0.5), (26, 1500, 0.5), (26, 3000, 0.2), (7, 3, 0.9)] {
+        for (own, extra, share) in [
+            (26, 300, 0.5),
+            (26, 1500, 0.5),
+            (26, 3000, 0.2),
+            (7, 3, 0.9),
+        ] {
             let (r, q) = copies(own, extra, share);
             let got = (q * extra) as f64 / (q * extra + r * own) as f64;
             assert!((got - share).abs() < 0.001, "{own} {extra} {share}: {got}");
@@ -134,7 +139,10 @@ mod tests {
                 maps: "generated:20".into(),
                 share,
             };
-            assert!(cfg.validate().unwrap_err().starts_with("share = "), "{share}");
+            assert!(
+                cfg.validate().unwrap_err().starts_with("share = "),
+                "{share}"
+            );
         }
         let cfg = ExtraMapsConfig {
             maps: String::new(),
