@@ -4,6 +4,7 @@
 //! stage against the pool's targets; a share of episodes keeps replaying
 //! earlier stages so nothing is forgotten.
 
+use crate::env::Side;
 use serde::{Deserialize, Serialize};
 use std::collections::VecDeque;
 
@@ -18,6 +19,14 @@ pub struct CurriculumConfig {
     pub window: usize,
     /// Share of episodes played at an earlier stage (uniformly among them).
     pub replay_share: f64,
+    /// The captor learners' own replay share; unset, `replay_share`. The
+    /// captors are tested at the first stage's speed while the target is
+    /// made hard by the later ones, so a larger share here keeps the
+    /// captors practising the speeds they are judged at and leaves the
+    /// target's curriculum as it is. Promotion still counts only the main
+    /// captors' matches at the current stage.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub captors_replay_share: Option<f64>,
 }
 
 impl Default for CurriculumConfig {
@@ -27,11 +36,20 @@ impl Default for CurriculumConfig {
             promote_at: 0.6,
             window: 400,
             replay_share: 0.2,
+            captors_replay_share: None,
         }
     }
 }
 
 impl CurriculumConfig {
+    /// The replay share of one side's learners.
+    pub fn replay_share(&self, side: Side) -> f64 {
+        match side {
+            Side::Captors => self.captors_replay_share.unwrap_or(self.replay_share),
+            Side::Target => self.replay_share,
+        }
+    }
+
     pub fn validate(&self) -> Result<(), String> {
         if self.stages.is_empty() {
             return Err("stages = []: needs at least one speed ratio".into());
@@ -60,6 +78,13 @@ impl CurriculumConfig {
                 "replay_share = {}: must be in [0, 1)",
                 self.replay_share
             ));
+        }
+        if let Some(share) = self.captors_replay_share {
+            if !(share.is_finite() && (0.0..1.0).contains(&share)) {
+                return Err(format!(
+                    "captors_replay_share = {share}: must be in [0, 1) (the main captors must play the current stage for the league to move on)"
+                ));
+            }
         }
         Ok(())
     }
@@ -114,12 +139,14 @@ impl Curriculum {
         None
     }
 
-    /// The speed of one episode, from a uniform draw `u` in [0, 1): an
-    /// earlier stage with probability `replay_share` (once there is one).
-    pub fn sample_speed(&self, cfg: &CurriculumConfig, u: f64) -> f64 {
+    /// The speed of one episode of `side`'s learner, from a uniform draw `u`
+    /// in [0, 1): an earlier stage with that side's replay share (once there
+    /// is one).
+    pub fn sample_speed(&self, cfg: &CurriculumConfig, side: Side, u: f64) -> f64 {
         let stage = self.stage.min(cfg.stages.len() - 1);
-        if stage > 0 && u < cfg.replay_share {
-            let earlier = ((u / cfg.replay_share) * stage as f64) as usize;
+        let share = cfg.replay_share(side);
+        if stage > 0 && u < share {
+            let earlier = ((u / share) * stage as f64) as usize;
             return cfg.stages[earlier.min(stage - 1)];
         }
         cfg.stages[stage]
@@ -164,8 +191,8 @@ mod tests {
         assert_eq!(c.speed(&cfg), 1.2);
         assert!(c.recent.is_empty(), "a new stage starts a new window");
         // Stage 1: u < 0.2 replays stage 0, else plays 1.2.
-        assert_eq!(c.sample_speed(&cfg, 0.1), 1.0);
-        assert_eq!(c.sample_speed(&cfg, 0.5), 1.2);
+        assert_eq!(c.sample_speed(&cfg, Side::Target, 0.1), 1.0);
+        assert_eq!(c.sample_speed(&cfg, Side::Target, 0.5), 1.2);
         // The last stage stays.
         c.stage = 2;
         assert_eq!(c.record(&cfg, 1.4, true), None);
@@ -174,8 +201,8 @@ mod tests {
         }
         assert_eq!(c.stage, 2);
         // Stage 2 replays 1.0 and 1.2 evenly within the replay share.
-        assert_eq!(c.sample_speed(&cfg, 0.05), 1.0);
-        assert_eq!(c.sample_speed(&cfg, 0.15), 1.2);
+        assert_eq!(c.sample_speed(&cfg, Side::Target, 0.05), 1.0);
+        assert_eq!(c.sample_speed(&cfg, Side::Target, 0.15), 1.2);
     }
 
     #[test]
@@ -195,5 +222,43 @@ mod tests {
             ..Default::default()
         };
         assert!(bad.validate().unwrap_err().starts_with("replay_share"));
+        for share in [1.0, -0.1, f64::INFINITY] {
+            let bad = CurriculumConfig {
+                captors_replay_share: Some(share),
+                ..Default::default()
+            };
+            let err = bad.validate().unwrap_err();
+            assert!(err.starts_with("captors_replay_share"), "{err}");
+        }
+    }
+
+    #[test]
+    fn the_captors_replay_share_is_theirs_alone() {
+        let cfg = CurriculumConfig {
+            replay_share: 0.2,
+            captors_replay_share: Some(0.8),
+            ..Default::default()
+        };
+        let mut c = Curriculum::new();
+        // At the first stage there is nothing earlier: both sides play 1.0.
+        assert_eq!(c.sample_speed(&cfg, Side::Captors, 0.5), 1.0);
+        assert_eq!(c.sample_speed(&cfg, Side::Target, 0.5), 1.0);
+        c.stage = 2;
+        // u = 0.5: within the captors' 0.8, at 0.5 / 0.8 * 2 = 1.25 -> stage 1;
+        // past the target's 0.2 -> the current stage.
+        assert_eq!(c.sample_speed(&cfg, Side::Captors, 0.5), 1.2);
+        assert_eq!(c.sample_speed(&cfg, Side::Target, 0.5), 1.4);
+        // u = 0.3: 0.3 / 0.8 * 2 = 0.75 -> stage 0 for the captors.
+        assert_eq!(c.sample_speed(&cfg, Side::Captors, 0.3), 1.0);
+        assert_eq!(c.sample_speed(&cfg, Side::Captors, 0.85), 1.4);
+        // Unset, the captors use the common share.
+        let common = CurriculumConfig {
+            captors_replay_share: None,
+            ..cfg.clone()
+        };
+        assert_eq!(c.sample_speed(&common, Side::Captors, 0.5), 1.4);
+        // u = 0.05: 0.05 / 0.2 * 2 = 0.5 -> stage 0; u = 0.1 -> 1.0 -> stage 1.
+        assert_eq!(c.sample_speed(&common, Side::Captors, 0.05), 1.0);
+        assert_eq!(c.sample_speed(&common, Side::Captors, 0.1), 1.2);
     }
 }
