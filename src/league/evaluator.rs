@@ -10,7 +10,7 @@
 
 use super::config::LeagueConfig;
 use super::dir::LeagueDir;
-use super::players::{heuristic_name, learner_name, Seat};
+use super::players::{heuristic_name, learner_name, Seat, EVALUATOR};
 use super::store::{BeatState, HeldOutEpisode, Kind, MatchRecord, Player, Store};
 use super::supervision::{CannotStart, Outcome};
 use crate::controllers::ControllerSpec;
@@ -219,7 +219,7 @@ fn evaluate_pending(
                             captured: record.captured,
                             steps: record.steps,
                             final_asz_m2: None,
-                            recorded_by: "evaluator".into(),
+                            recorded_by: EVALUATOR.into(),
                         })?;
                     }
                     PanelOpponent::HeldOut(name, _) => {
@@ -303,8 +303,8 @@ pub fn run_evaluator(dir: &LeagueDir, stop: &AtomicBool) -> Result<Outcome> {
         anyhow::Error::new(CannotStart(format!("{}: {e}", dir.config_path().display())))
     })?;
     // The count covers every evaluator process of this league, not only this one.
-    let mut total = store.matches_recorded_by("evaluator")? + store.held_out_count()?;
-    store.heartbeat("evaluator", BeatState::Evaluating, total, None)?;
+    let mut total = store.matches_recorded_by(EVALUATOR)? + store.held_out_count()?;
+    store.heartbeat(EVALUATOR, BeatState::Evaluating, total, None)?;
     while !stop.load(Ordering::SeqCst) {
         let played = evaluate_pending(dir, &cfg, &held_out, &maps, &store, stop)?;
         total += played as u64;
@@ -324,7 +324,7 @@ pub fn run_evaluator(dir: &LeagueDir, stop: &AtomicBool) -> Result<Outcome> {
             }
             std::thread::sleep(Duration::from_secs(2));
         }
-        store.heartbeat("evaluator", BeatState::Evaluating, total, None)?;
+        store.heartbeat(EVALUATOR, BeatState::Evaluating, total, None)?;
     }
     let outcome = if stop.load(Ordering::SeqCst) {
         Outcome::Stopped
@@ -335,7 +335,7 @@ pub fn run_evaluator(dir: &LeagueDir, stop: &AtomicBool) -> Result<Outcome> {
         Outcome::Done => BeatState::Done,
         Outcome::Stopped => BeatState::Stopped,
     };
-    store.heartbeat("evaluator", state, total, None)?;
+    store.heartbeat(EVALUATOR, state, total, None)?;
     eprintln!("evaluator: {state}, {total} panel episodes played in this league");
     Ok(outcome)
 }

@@ -5,6 +5,10 @@
 
 use crate::env::Side;
 
+/// The evaluator's name: its heartbeat row and the recorder of the panel's
+/// matches. One name, so the status's filters and the processes agree.
+pub const EVALUATOR: &str = "evaluator";
+
 /// The player name of a side's main learner.
 pub fn learner_name(side: Side) -> String {
     format!("{}-main", side.name())

@@ -3,7 +3,7 @@
 //! that keep a seat from running twice on a host, and their logs.
 
 use super::dir::LeagueDir;
-use super::players::Seat;
+use super::players::{Seat, EVALUATOR};
 use super::store::StoreUrl;
 use crate::env::Side;
 use anyhow::{Context, Result};
@@ -55,13 +55,13 @@ impl Role {
     pub fn name(self) -> String {
         match self {
             Role::Learner(seat) => seat.name(),
-            Role::Evaluator => "evaluator".into(),
+            Role::Evaluator => EVALUATOR.into(),
         }
     }
 
     /// The role a seat name stands for.
     pub fn from_name(name: &str) -> Option<Role> {
-        if name == "evaluator" {
+        if name == EVALUATOR {
             return Some(Role::Evaluator);
         }
         [Side::Captors, Side::Target]

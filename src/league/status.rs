@@ -40,6 +40,7 @@
 
 use super::config::LeagueConfig;
 use super::dir::LeagueDir;
+use super::players::EVALUATOR;
 use super::ratings::{bradley_terry, PairRecord};
 use super::store::{
     host_name, now_ms, ExploitRecord, Heartbeat, HeldOutResult, Kind, PairResult, Player, Store,
@@ -384,10 +385,10 @@ pub fn report(dir: &LeagueDir) -> Result<StatusReport> {
         .collect();
     let stage = history.last().map(|h| h.stage).unwrap_or(0);
     let now = now_ms();
-    let panel_episodes = store.matches_recorded_by("evaluator")? + store.held_out_count()?;
+    let panel_episodes = store.matches_recorded_by(EVALUATOR)? + store.held_out_count()?;
     let panel = panel_rows(
         &players,
-        &store.payoff_recorded_by("evaluator")?,
+        &store.payoff_recorded_by(EVALUATOR)?,
         &store.held_out_results()?,
     );
     let exploits = exploit_rows(&players, store.exploits()?);
@@ -410,7 +411,7 @@ pub fn report(dir: &LeagueDir) -> Result<StatusReport> {
                 let age = (now - b.at_ms) as f64 / 1000.0;
                 // The evaluator beats after each pass; the store counts
                 // every panel episode the moment it is recorded.
-                let env_steps = if b.learner == "evaluator" {
+                let env_steps = if b.learner == EVALUATOR {
                     panel_episodes
                 } else {
                     b.env_steps
@@ -530,7 +531,7 @@ pub fn render(r: &StatusReport) -> String {
     }
     let _ = writeln!(s, "\nlearners:");
     for l in &r.learners {
-        if l.name == "evaluator" {
+        if l.name == EVALUATOR {
             let _ = writeln!(
                 s,
                 "  {:<14} {:<9} {:>11} panel episodes                last heartbeat {:.0} s ago (pid {} on {})",
