@@ -198,7 +198,9 @@ impl<'a> LeagueHooks<'a> {
             bail!("drawn member {player} is not in the pool");
         };
         let u: f64 = ChaCha8Rng::seed_from_u64(seed ^ 0x5BEED).gen();
-        let speed = self.curriculum.sample_speed(&self.cfg.curriculum, self.side, u);
+        let speed = self
+            .curriculum
+            .sample_speed(&self.cfg.curriculum, self.side, u);
         venv.set_world_speeds(e, 1.0, speed)
             .map_err(anyhow::Error::msg)?;
         let network = match member.kind {
