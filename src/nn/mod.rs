@@ -8,9 +8,11 @@
 //! teammates for MAPPO's centralised critic, just the robot for IPPO's.
 
 pub mod checkpoint;
+mod egocentric;
 pub mod stacked;
 
 pub use checkpoint::{CheckpointController, CheckpointMeta, PolicySnapshot};
+pub(crate) use egocentric::EgocentricVector;
 
 use crate::env::{Action, PATCH};
 use serde::{Deserialize, Serialize};
@@ -66,6 +68,11 @@ pub enum VectorInput {
     /// map), velocities as they are (m/s, at most 1.4), and every heading as
     /// its sine and cosine, so 0 and 2 pi read the same.
     Scaled,
+    /// Turned into the robot's own frame, as the patch already is: the
+    /// others' offsets and velocities as (forward, left), their distances
+    /// and bearings, headings as sines and cosines (`EgocentricVector`),
+    /// then the reference's learned layer norm over those features.
+    Egocentric,
 }
 
 impl VectorInput {
@@ -197,6 +204,7 @@ impl NetConfig {
         let v = match self.vector_input {
             VectorInput::LayerNorm => v,
             VectorInput::Scaled => ScaledVector::width_of(vector_len, channels) as f64,
+            VectorInput::Egocentric => EgocentricVector::width_of(vector_len, channels) as f64,
         };
         let linear = 2.0 * (c2 * s2 * s2 * h + v * h + 2.0 * h * h + h * outputs as f64);
         let gru = 2.0 * 2.0 * 3.0 * h * h;
@@ -216,6 +224,7 @@ impl NetConfig {
 pub(crate) enum VectorIn {
     LayerNorm(nn::LayerNorm),
     Scaled(ScaledVector),
+    Egocentric(EgocentricVector, nn::LayerNorm),
 }
 
 /// Patch CNN + vector MLP, concatenated, then one MLP layer.
@@ -254,6 +263,12 @@ impl Encoder {
                 let w = s.width;
                 (VectorIn::Scaled(s), w)
             }
+            VectorInput::Egocentric => {
+                let e = EgocentricVector::new(vector_len, channels);
+                let w = e.width;
+                let norm = nn::layer_norm(p / "vector_norm", vec![w], Default::default());
+                (VectorIn::Egocentric(e, norm), w)
+            }
         };
         Encoder {
             conv1: nn::conv2d(p / "conv1", channels, c1, 3, conv),
@@ -280,6 +295,7 @@ impl Encoder {
         let v = match &self.vector_input {
             VectorIn::LayerNorm(norm) => vectors.apply(norm),
             VectorIn::Scaled(s) => s.apply(vectors),
+            VectorIn::Egocentric(e, norm) => e.apply(vectors).apply(norm),
         };
         let v = v.apply(&self.vector_fc).relu();
         Tensor::cat(&[x, v], 1).apply(&self.merge_fc).relu()

@@ -12,7 +12,7 @@
 //! Numerically this is the same network as `Actor::step` (a test checks it
 //! to 1e-5 against each opponent's own pass).
 
-use super::{Actor, NetConfig, ScaledVector, VectorIn};
+use super::{Actor, EgocentricVector, NetConfig, ScaledVector, VectorIn};
 use crate::env::Action;
 use tch::{Kind, Tensor};
 
@@ -61,7 +61,7 @@ impl PreparedActor {
         // A scaled vector has no weights of its own: ones and zeros keep the
         // layout (and stack), and `step` does not read them.
         let (norm_w, norm_b) = match &e.vector_input {
-            VectorIn::LayerNorm(norm) => (
+            VectorIn::LayerNorm(norm) | VectorIn::Egocentric(_, norm) => (
                 norm.ws.as_ref().expect("affine layer norm").shallow_clone(),
                 norm.bs.as_ref().expect("affine layer norm").shallow_clone(),
             ),
@@ -104,6 +104,14 @@ impl PreparedActor {
     }
 }
 
+/// `VectorIn` without its weights (they are stacked with the others).
+#[derive(Debug)]
+enum StackedVectorIn {
+    LayerNorm,
+    Scaled(ScaledVector),
+    Egocentric(EgocentricVector),
+}
+
 /// G actors' weights stacked along a leading group axis.
 #[derive(Debug)]
 pub struct StackedActors {
@@ -111,8 +119,8 @@ pub struct StackedActors {
     pub hidden: i64,
     pub input_side: i64,
     pub vector_len: i64,
-    /// Set for `VectorInput::Scaled` networks, None for the layer norm.
-    scaled: Option<ScaledVector>,
+    /// What the vector goes through before the first linear layer.
+    vector_input: StackedVectorIn,
     /// conv weights [G*c_out, c_in, 3, 3], biases [G*c_out]; the rest [G, ...].
     tensors: Vec<Tensor>,
 }
@@ -142,9 +150,14 @@ impl StackedActors {
             hidden: first.net.hidden,
             input_side: first.net.input_side() as i64,
             vector_len: first.vector_len,
-            scaled: match first.net.vector_input {
-                super::VectorInput::LayerNorm => None,
-                super::VectorInput::Scaled => Some(ScaledVector::new(first.vector_len, 1)),
+            vector_input: match first.net.vector_input {
+                super::VectorInput::LayerNorm => StackedVectorIn::LayerNorm,
+                super::VectorInput::Scaled => {
+                    StackedVectorIn::Scaled(ScaledVector::new(first.vector_len, 1))
+                }
+                super::VectorInput::Egocentric => {
+                    StackedVectorIn::Egocentric(EgocentricVector::new(first.vector_len, 1))
+                }
             },
             tensors,
         })
@@ -169,18 +182,15 @@ impl StackedActors {
             .view([rows, g, -1])
             .transpose(0, 1);
         let x = t[PATCH_B].baddbmm(&x, &t[PATCH_W], 1, 1).relu();
-        let v = match &self.scaled {
-            Some(s) => s.apply(vectors),
-            None => {
-                let v = vectors.layer_norm(
-                    [self.vector_len],
-                    None::<Tensor>,
-                    None::<Tensor>,
-                    1e-5,
-                    false,
-                );
-                v * &t[NORM_W] + &t[NORM_B]
-            }
+        let norm = |v: &Tensor| {
+            let width = *v.size().last().expect("vectors have a last axis");
+            v.layer_norm([width], None::<Tensor>, None::<Tensor>, 1e-5, false) * &t[NORM_W]
+                + &t[NORM_B]
+        };
+        let v = match &self.vector_input {
+            StackedVectorIn::Scaled(s) => s.apply(vectors),
+            StackedVectorIn::LayerNorm => norm(vectors),
+            StackedVectorIn::Egocentric(e) => norm(&e.apply(vectors)),
         };
         let v = t[VECTOR_B].baddbmm(&v, &t[VECTOR_W], 1, 1).relu();
         let x = Tensor::cat(&[x, v], 2);
@@ -211,6 +221,11 @@ mod tests {
     #[test]
     fn stacked_scaled_actors_match_each_actors_own_pass() {
         stacked_pass_matches(crate::nn::VectorInput::Scaled);
+    }
+
+    #[test]
+    fn stacked_egocentric_actors_match_each_actors_own_pass() {
+        stacked_pass_matches(crate::nn::VectorInput::Egocentric);
     }
 
     fn stacked_pass_matches(vector_input: crate::nn::VectorInput) {
