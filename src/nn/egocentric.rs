@@ -41,16 +41,7 @@ pub(crate) struct EgocentricVector {
 
 impl EgocentricVector {
     pub(crate) fn new(vector_len: i64, agents: i64) -> EgocentricVector {
-        assert!(
-            agents > 0 && vector_len % agents == 0,
-            "vector of {vector_len} numbers for {agents} robots"
-        );
-        let per = vector_len / agents;
-        assert!(
-            per >= 5 && (per - 5) % 5 == 0,
-            "a robot's vector has 5 + 5N numbers, not {per}"
-        );
-        let n = (per - 5) / 5;
+        let (per, n) = super::vector_layout(vector_len, agents);
         let own = std::array::from_fn(|k| {
             Tensor::from_slice(&(0..agents).map(|a| a * per + k as i64).collect::<Vec<_>>())
         });

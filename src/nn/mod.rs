@@ -99,18 +99,25 @@ pub(crate) struct ScaledVector {
 /// Metres by which positions are divided.
 const POSITION_SCALE: f32 = 8.0;
 
+/// (numbers per robot, other robots N) of `vector_len` numbers holding
+/// `agents` robots' vectors in `write_vector`'s layout (5 + 5N each).
+/// Panics on any other length: the network's shape is fixed at build time.
+pub(crate) fn vector_layout(vector_len: i64, agents: i64) -> (i64, i64) {
+    assert!(
+        agents > 0 && vector_len % agents == 0,
+        "vector of {vector_len} numbers for {agents} robots"
+    );
+    let per = vector_len / agents;
+    assert!(
+        per >= 5 && (per - 5) % 5 == 0,
+        "a robot's vector has 5 + 5N numbers, not {per}"
+    );
+    (per, (per - 5) / 5)
+}
+
 impl ScaledVector {
     pub(crate) fn new(vector_len: i64, agents: i64) -> ScaledVector {
-        assert!(
-            agents > 0 && vector_len % agents == 0,
-            "vector of {vector_len} numbers for {agents} robots"
-        );
-        let per = vector_len / agents;
-        assert!(
-            per >= 5 && (per - 5) % 5 == 0,
-            "a robot's vector has 5 + 5N numbers, not {per}"
-        );
-        let others = (per - 5) / 5;
+        let (per, others) = vector_layout(vector_len, agents);
         let (mut linear, mut scale, mut angles) = (Vec::new(), Vec::new(), Vec::new());
         for a in 0..agents {
             let base = a * per;
