@@ -25,7 +25,8 @@
 #   ROLLOUT    rollout_steps per world and iteration [100]; every learner
 #              gets it. The base config is configs/cpu-3v1-1.0.toml, the CPU
 #              default (README, "Learning per CPU-minute"): its network for
-#              every learner, its PPO settings for MAPPO and IPPO
+#              every learner, its PPO settings for MAPPO and IPPO, its
+#              [captors.maddpg] and [captors.maac] tables for those two
 #   JOBS       runs in parallel, each with one thread [1]
 #   DEVICE     auto, cpu or cuda [auto]
 # Finished runs and evaluations are kept: run it again to resume.
@@ -61,7 +62,8 @@ one() { # protocol learner k ratio
         -e "s/^rollout_steps = .*/rollout_steps = $ROLLOUT/" \
         -e "s/^play = \"mappo\"/play = \"$learner\"/" \
         configs/cpu-3v1-1.0.toml > "$cfg"
-    # The CPU config's minibatches are PPO's; the others ignore the table.
+    # The CPU config's tables are per learner ([captors.ppo], [captors.maddpg],
+    # [captors.maac]); each learner reads its own and ignores the others.
     if [ ! -f "$OUT/runs/$name/.done" ]; then
         if [ -f "$OUT/runs/$name/state.json" ]; then
             "$BIN" train --resume --out "$OUT/runs/$name" --total-env-steps "$BUDGET" "${clock[@]}" --device "$DEVICE" --quiet
