@@ -201,12 +201,25 @@ pub struct PlotFrame {
     pub y_ticks: Vec<f64>,
 }
 
+/// Share of the tick span left empty beyond each outer tick.
+const X_MARGIN: f64 = 0.02;
+const Y_MARGIN: f64 = 0.04;
+
+fn widen_by(ticks: &[f64], margin: f64) -> (f64, f64) {
+    let (lo, hi) = (ticks[0], *ticks.last().unwrap());
+    let pad = (hi - lo) * margin;
+    (lo - pad, hi + pad)
+}
+
 impl PlotFrame {
+    // The axes reach a little past the outer ticks, so that a line at the
+    // last tick (an SR of 100% is common) is drawn inside the box, not on
+    // its border where it cannot be seen.
     fn x_range(&self) -> (f64, f64) {
-        (self.x_ticks[0], *self.x_ticks.last().unwrap())
+        widen_by(&self.x_ticks, X_MARGIN)
     }
     fn y_range(&self) -> (f64, f64) {
-        (self.y_ticks[0], *self.y_ticks.last().unwrap())
+        widen_by(&self.y_ticks, Y_MARGIN)
     }
     /// Pixel position (x, y) of the data point (x, y).
     pub fn to_pixel(&self, x: f64, y: f64) -> (f64, f64) {
@@ -521,6 +534,7 @@ mod tests {
     use super::*;
 
     const RED: [u8; 3] = [214, 39, 40];
+    const BLUE: [u8; 3] = [31, 119, 180];
 
     fn pixels_of(img: &RgbImage, c: [u8; 3]) -> Vec<(u32, u32)> {
         img.enumerate_pixels()
@@ -641,6 +655,37 @@ mod tests {
         assert!(img
             .enumerate_pixels()
             .any(|(_, y, p)| (y as i64) < f.top && *p == TEXT));
+    }
+
+    #[test]
+    fn a_line_at_the_top_tick_is_drawn_inside_the_box() {
+        // SR curves sit at 100% for long stretches: that line must not
+        // merge with the axes' border.
+        let pts: Vec<(f64, f64)> = (0..50).map(|i| (i as f64, 100.0)).collect();
+        let floor = vec![(0.0, 0.0), (49.0, 0.0)];
+        let series = [Series::new("", pts, RED), Series::new("", floor, BLUE)];
+        let f = plot_frame(&series, "sr", "min", "SR %", 640, 400);
+        assert_eq!(*f.y_ticks.last().unwrap(), 100.0);
+        assert_eq!(f.y_ticks[0], 0.0);
+        let img = line_plot(&series, "sr", "min", "SR %", 640, 400);
+        let red = pixels_of(&img, RED);
+        let blue = pixels_of(&img, BLUE);
+        assert!(!red.is_empty() && !blue.is_empty());
+        let gap = ((f.bottom - f.top) as f64 * 0.03) as i64;
+        assert!(
+            red.iter().all(|p| p.1 as i64 >= f.top + gap),
+            "the 100% line touches the top border (top {})",
+            f.top
+        );
+        assert!(
+            blue.iter().all(|p| (p.1 as i64) <= f.bottom - gap),
+            "the 0% line touches the bottom border (bottom {})",
+            f.bottom
+        );
+        // The first and last points stay off the left and right borders.
+        assert!(red
+            .iter()
+            .all(|p| p.0 as i64 > f.left + 2 && (p.0 as i64) < f.right - 2));
     }
 
     #[test]
