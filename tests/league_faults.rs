@@ -202,7 +202,7 @@ fn wait_both_training(l: &League, manager: &mut Child) -> Result<(), Stall> {
     let mut last_error = String::from("none");
     let mut store_seen = false;
     loop {
-        match Store::open_existing(&l.dir.store).and_then(|s| s.heartbeats()) {
+        match poll_heartbeats(&l) {
             Ok(beats) => {
                 store_seen = true;
                 let working = beats
@@ -267,6 +267,19 @@ fn proc_state(pid: u32) -> String {
     let mut out = vec![one(pid as i64)];
     out.extend(common::children_of(pid, "").into_iter().map(one));
     out.join("; ")
+}
+
+/// The heartbeats, read as `status` reads them while a league may still be
+/// creating its store. Not `Store::open_existing`: that one brings the
+/// schema up to date, so a poll landing between the manager's creating
+/// league.db and its last migration ran a second migrator beside the
+/// manager's, and either could fail; a manager that lost that race exited
+/// before starting any learner (a likely cause of the CI timeouts in the
+/// waits below, reproduced once in a fresh clone's full test run).
+fn poll_heartbeats(
+    l: &League,
+) -> Result<Vec<t2e::league::store::Heartbeat>, t2e::league::store::StoreError> {
+    Store::open_read_only(&l.dir.store).and_then(|s| s.heartbeats())
 }
 
 /// An env-step budget no learner of these tiny leagues reaches within the
@@ -662,7 +675,7 @@ fn every_learner_exit_has_an_outcome_and_every_line_reaches_a_redirected_log() {
         Duration::from_secs(120),
         || {
             target = child_pid(manager.id(), "--side target");
-            let beats = Store::open_existing(&l.dir.store).and_then(|s| s.heartbeats());
+            let beats = poll_heartbeats(&l);
             target.is_some()
                 && beats.is_ok_and(|b| {
                     b.iter().any(|b| {
