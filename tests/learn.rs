@@ -27,6 +27,7 @@ fn chase_config(seed: u64) -> TrainConfig {
         protocol: t2e::protocol::Protocol::HeldOut,
         maps: "unused".into(),
         extra_maps: Default::default(),
+        map_sampling: Default::default(),
         env: EnvConfig {
             num_captors: 1,
             episode_length: 40,
@@ -508,4 +509,80 @@ fn off_policy_checkpoints_keep_their_target_networks_resume_and_play() {
         err.contains("a maac checkpoint") && err.contains("maddpg"),
         "{err}"
     );
+}
+
+/// A learning target with a heavy heuristic prior (weight 20, the most
+/// accepted) plays the rule-based target: its PPO update sees the same
+/// logits it acted from (no KL between them), and its checkpoint, loaded as
+/// a controller, plays the rule-based target's episodes exactly.
+#[test]
+fn a_target_leaning_on_the_rule_based_one_plays_it_and_learns_from_its_own_logits() {
+    tch::set_num_threads(1);
+    let dir = tempfile::tempdir().unwrap();
+    let room_maps = || maps(room(60, 260, 60, 260));
+    let mut cfg = chase_config(6);
+    cfg.captors.play = "heuristic".into();
+    cfg.target = SideConfig {
+        play: "ippo".into(),
+        net: NetConfig {
+            heuristic_prior: 20.0,
+            ..cfg.captors.net.clone()
+        },
+        ppo: t2e::learn::ppo::PpoConfig {
+            epochs: 1,
+            minibatches: 1,
+            ..Default::default()
+        },
+        ..SideConfig::default()
+    };
+    let mut trainer = Trainer::new(cfg.clone(), room_maps()).unwrap();
+    let m = trainer.iterate().unwrap();
+    // Acting and the update both add the prior: the one gradient step's
+    // ratio is 1 (an update without it would see a logit gap of 20 undone).
+    assert!(
+        m.target_approx_kl.unwrap().abs() < 1e-4,
+        "{:?}",
+        m.target_approx_kl
+    );
+    assert!(m.target_entropy.unwrap() < 0.01, "{:?}", m.target_entropy);
+    trainer.save(dir.path()).unwrap();
+
+    let setting = |target: ControllerSpec| EvalSetting {
+        captors: ControllerSpec::Heuristic,
+        target,
+        num_captors: 1,
+        episodes: 4,
+        episode_length: 60,
+        soa_every: 0,
+        ..EvalSetting::default()
+    };
+    let learned: ControllerSpec = format!("ckpt:{}", dir.path().display()).parse().unwrap();
+    let (_, with_prior) = eval::run(&setting(learned), &room_maps(), "room", false).unwrap();
+    let (_, rule_based) = eval::run(
+        &setting(ControllerSpec::Heuristic),
+        &room_maps(),
+        "room",
+        false,
+    )
+    .unwrap();
+    assert_eq!(with_prior, rule_based);
+
+    // Without the prior, the same untrained network plays other episodes.
+    let mut plain = cfg.clone();
+    plain.target.net.heuristic_prior = 0.0;
+    let plain_dir = tempfile::tempdir().unwrap();
+    let mut t = Trainer::new(plain, room_maps()).unwrap();
+    t.iterate().unwrap();
+    t.save(plain_dir.path()).unwrap();
+    let unled: ControllerSpec = format!("ckpt:{}", plain_dir.path().display())
+        .parse()
+        .unwrap();
+    let (_, without) = eval::run(&setting(unled), &room_maps(), "room", false).unwrap();
+    assert_ne!(without, rule_based);
+
+    // The captors have no rule-based action to lean on.
+    let mut bad = chase_config(6);
+    bad.captors.net.heuristic_prior = 2.0;
+    let err = bad.validate().unwrap_err();
+    assert!(err.starts_with("captors.net.heuristic_prior"), "{err}");
 }

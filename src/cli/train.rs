@@ -167,8 +167,14 @@ pub fn run(args: TrainArgs) -> Result<()> {
             100.0 * cfg.extra_maps.share
         )
     };
+    let sampling = match cfg.map_sampling {
+        crate::learn::map_sampling::MapSampling::Uniform => "",
+        crate::learn::map_sampling::MapSampling::ClassBalanced => {
+            " drawn class-balanced (a training option: each size class a third of the episodes)"
+        }
+    };
     eprintln!(
-        "training {} on maps {:?}{extra}, {} worlds, device {:?}, run folder {}",
+        "training {} on maps {:?}{sampling}{extra}, {} worlds, device {:?}, run folder {}",
         learners.join(" + "),
         cfg.maps,
         cfg.num_envs,

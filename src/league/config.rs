@@ -277,6 +277,7 @@ impl LeagueConfig {
             protocol: self.protocol,
             maps: self.maps.clone(),
             extra_maps: Default::default(),
+            map_sampling: Default::default(),
             env: EnvConfig {
                 num_captors: self.num_captors,
                 target_speed: self.curriculum.stages.first().copied().unwrap_or(1.0),

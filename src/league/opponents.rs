@@ -7,6 +7,7 @@
 use super::store::Player;
 use crate::env::{Action, Side, VecEnv};
 use crate::learn::acting::{gather_worlds, sample};
+use crate::nn::prior::{add_prior, target_hint};
 use crate::nn::stacked::{PreparedActor, StackedActors};
 use crate::nn::PolicySnapshot;
 use anyhow::{bail, Context, Result};
@@ -219,6 +220,20 @@ impl OpponentNets {
             let v = Tensor::from_slice(&vectors).view([g64, r64, vl as i64]);
             let h_in = Tensor::from_slice(&hidden).view([g64, r64, h as i64]);
             let (logits, h_out) = tch::no_grad(|| stack.actors.step(&p, &v, &h_in));
+            // A stack shares one net config, so one prior; only a target
+            // (one robot per world) has one.
+            let logits = if net.heuristic_prior > 0.0 && team == 1 {
+                let mut hints = vec![0i64; g * r];
+                for (i, id) in stack.ids.iter().enumerate() {
+                    for (w, &e) in groups[id].iter().enumerate() {
+                        hints[i * r + w] = target_hint(venv.env(e));
+                    }
+                }
+                let hints = Tensor::from_slice(&hints).view([g64, r64]);
+                add_prior(logits, &hints, net.heuristic_prior)
+            } else {
+                logits
+            };
             let n = g * r;
             let mut chosen = vec![0i64; n];
             if self.greedy {

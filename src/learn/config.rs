@@ -5,6 +5,7 @@
 use super::extra_maps::ExtraMapsConfig;
 use super::maac::MaacConfig;
 use super::maddpg::MaddpgConfig;
+use super::map_sampling::MapSampling;
 use super::ppo::PpoConfig;
 use super::shaping::ShapingConfig;
 use super::Algorithm;
@@ -46,6 +47,11 @@ pub struct TrainConfig {
     /// the stored config, and so of the config hash, while off).
     #[serde(skip_serializing_if = "is_default")]
     pub extra_maps: ExtraMapsConfig,
+    /// "uniform" (every map equally often, the paper's) or
+    /// "class-balanced" (every size class equally often); a training
+    /// option, left out of the stored config while uniform.
+    #[serde(skip_serializing_if = "is_default")]
+    pub map_sampling: MapSampling,
     pub env: EnvConfig,
     pub captors: SideConfig,
     pub target: SideConfig,
@@ -104,6 +110,7 @@ impl Default for TrainConfig {
             protocol: Protocol::HeldOut,
             maps: "generated:20".into(),
             extra_maps: ExtraMapsConfig::default(),
+            map_sampling: MapSampling::Uniform,
             env: EnvConfig::default(),
             captors: SideConfig {
                 play: "mappo".into(),
@@ -258,6 +265,12 @@ impl TrainConfig {
                     side_cfg
                         .validate_learner(algorithm)
                         .map_err(|e| format!("{name}.{e}"))?;
+                    crate::nn::prior::check(
+                        side_cfg.net.heuristic_prior,
+                        side,
+                        !algorithm.off_policy(),
+                    )
+                    .map_err(|e| format!("{name}.net.{e}"))?;
                     let chunk_len = side_cfg.chunk_len(algorithm);
                     let field = if algorithm.off_policy() {
                         algorithm.name()

@@ -11,6 +11,7 @@ pub mod ippo;
 pub mod learner;
 pub mod maac;
 pub mod maddpg;
+pub mod map_sampling;
 pub mod mappo;
 pub mod offpolicy;
 pub mod persist;

@@ -9,6 +9,7 @@ use super::learner::{file, optimizer_file, restore_optimizers, Learner, NamedTen
 use super::rollout::{BadUpdate, Rollout, UpdateStats};
 use super::Algorithm;
 use crate::nn::checkpoint::{load_into, named_cpu_tensors};
+use crate::nn::prior::add_prior;
 use crate::nn::{Actor, Critic, NetConfig};
 use rand::seq::SliceRandom;
 use rand_chacha::ChaCha8Rng;
@@ -511,6 +512,7 @@ impl PpoLearner {
         let (c_patches, c_vectors) = self.view.critic_inputs(&patches, &vectors, self.team);
         let t = |v: &[f32]| Tensor::from_slice(v).to_device(dev);
         let actions = Tensor::from_slice(&ro.actions).to_device(dev);
+        let hints = Tensor::from_slice(&ro.hints).to_device(dev);
         let old_logp = t(&ro.logp);
         let adv = t(&adv);
         let targets = t(&targets);
@@ -547,6 +549,11 @@ impl PpoLearner {
                     &vectors.index_select(0, &idx),
                     &actor_h.index_select(0, &seq),
                     &m,
+                );
+                let logits = add_prior(
+                    logits,
+                    &hints.index_select(0, &idx),
+                    self.net.heuristic_prior,
                 );
                 let logp_all = logits.log_softmax(-1, Kind::Float);
                 let a = actions.index_select(0, &idx);

@@ -17,6 +17,9 @@ pub struct Rollout {
     pub patches: Vec<u8>,
     pub vectors: Vec<f32>,
     pub actions: Vec<i64>,
+    /// The rule-based target's action in each row's state, where the
+    /// network leans on it (`NetConfig::heuristic_prior`); 0 elsewhere.
+    pub hints: Vec<i64>,
     pub logp: Vec<f32>,
     /// Critic outputs (normalised units when value normalisation is on).
     pub values: Vec<f32>,
@@ -66,6 +69,7 @@ impl Rollout {
             patches: vec![0; n * net.input_len()],
             vectors: vec![0.0; n * vector_len],
             actions: vec![0; n],
+            hints: vec![0; n],
             logp: vec![0.0; n],
             values: vec![0.0; n],
             rewards: vec![0.0; n],

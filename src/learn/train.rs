@@ -27,6 +27,7 @@ use crate::nn::checkpoint::{
     checkpoint_name, clean_stale_temporaries, code_version, CheckpointMeta, FORMAT,
 };
 use crate::nn::obs_tensors;
+use crate::nn::prior::{add_prior, target_hint};
 use anyhow::{anyhow, bail, Context, Result};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -239,6 +240,7 @@ impl Trainer {
         cfg.protocol
             .check_training_maps(&cfg.maps, &maps)
             .map_err(anyhow::Error::msg)?;
+        let maps = super::map_sampling::sampling_list(&maps, cfg.map_sampling);
         let maps = if cfg.extra_maps.is_off() {
             maps
         } else {
@@ -493,8 +495,17 @@ impl Trainer {
                     .to_device(self.device)
                     .unsqueeze(1);
                 let lr = &ls.learner;
+                let prior = lr.net().heuristic_prior;
+                if prior > 0.0 {
+                    // Validated: only a target (one robot per world) leans on it.
+                    for (e, hint) in ro.hints[base..base + rows].iter_mut().enumerate() {
+                        *hint = target_hint(self.venv.env(e));
+                    }
+                }
+                let hints = Tensor::from_slice(&ro.hints[base..base + rows]);
                 let (probs, values, ha, hc) = tch::no_grad(|| {
                     let (logits, ha) = lr.actor().step(&p, &v, &(&ls.actor_h * &m));
+                    let logits = add_prior(logits, &hints, prior);
                     let (values, hc) = if critic_steps {
                         let (values, hc) = lr.critic_step(&p, &v, &(&ls.critic_h * &m));
                         (values.map(|v| v.to_device(Device::Cpu)), Some(hc))

@@ -807,6 +807,13 @@ impl Controller for CheckpointController {
             Device::Cpu,
         );
         let (logits, h) = tch::no_grad(|| self.actor.step(&p, &v, &h));
+        // A checkpoint's prior is validated to be a target's (one robot).
+        let logits = if net.heuristic_prior > 0.0 && side == Side::Target {
+            let hint = Tensor::from_slice(&[super::prior::target_hint(env)]);
+            super::prior::add_prior(logits, &hint, net.heuristic_prior)
+        } else {
+            logits
+        };
         self.hidden = Some(h);
         if let Some(rng) = &mut self.sampler {
             let probs = logits.softmax(-1, Kind::Float);

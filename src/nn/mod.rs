@@ -9,6 +9,7 @@
 
 pub mod checkpoint;
 mod egocentric;
+pub mod prior;
 pub mod stacked;
 
 pub use checkpoint::{CheckpointController, CheckpointMeta, PolicySnapshot};
@@ -38,6 +39,15 @@ pub struct NetConfig {
     /// hashes and load as they were trained.
     #[serde(skip_serializing_if = "VectorInput::is_layer_norm")]
     pub vector_input: VectorInput,
+    /// The target's policy leans on the rule-based target's action: this
+    /// weight is added to its logit (`prior.rs`; 0: off, the paper's).
+    /// Left out of the stored config while 0, as `vector_input`.
+    #[serde(skip_serializing_if = "is_zero")]
+    pub heuristic_prior: f64,
+}
+
+fn is_zero(x: &f64) -> bool {
+    *x == 0.0
 }
 
 impl Default for NetConfig {
@@ -47,6 +57,7 @@ impl Default for NetConfig {
             conv_channels: [16, 32],
             patch_pool: 2,
             vector_input: VectorInput::LayerNorm,
+            heuristic_prior: 0.0,
         }
     }
 }

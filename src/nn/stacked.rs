@@ -235,6 +235,7 @@ mod tests {
             conv_channels: [4, 8],
             patch_pool: 2,
             vector_input,
+            ..NetConfig::default()
         };
         let vl = 20usize;
         let stores: Vec<(nn::VarStore, Actor)> = (0..3)
