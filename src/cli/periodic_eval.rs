@@ -102,7 +102,7 @@ impl PeriodicEval {
             };
             let log = std::fs::File::create(out.join("eval.log"))
                 .with_context(|| format!("cannot write {}", out.join("eval.log").display()))?;
-            let mut cmd = Command::new(std::env::current_exe()?);
+            let mut cmd = crate::util::own_command()?;
             cmd.args(["eval", "--captors", captors, "--target", target])
                 .args(["--k", &self.plan.num_captors.to_string()])
                 .args(["--speed-ratio", &self.plan.speed_ratio.to_string()])

@@ -136,13 +136,13 @@ pub fn die_with_parent(cmd: &mut Command) {
 /// in its environment (`T2E_STORE`), never on its command line, where any
 /// user of the host could read the password.
 pub fn spawn(dir: &LeagueDir, role: Role, logs: &Path, host: Option<&str>) -> Result<Child> {
-    let exe = std::env::current_exe().context("cannot find this program to spawn learners")?;
     std::fs::create_dir_all(logs).with_context(|| format!("cannot create {}", logs.display()))?;
     let log = std::fs::OpenOptions::new()
         .create(true)
         .append(true)
         .open(role.log_path(logs))?;
-    let mut cmd = Command::new(exe);
+    let mut cmd =
+        crate::util::own_command().context("cannot find this program to spawn learners")?;
     match role {
         Role::Learner(seat) => {
             cmd.arg("league-learner")

@@ -10,19 +10,19 @@ use super::process::Role;
 use super::store::{SeatRow, SeatState, Store, StoreUrl};
 use anyhow::{bail, Context, Result};
 use std::path::Path;
-use std::process::{Child, Command, Stdio};
+use std::process::{Child, Stdio};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 /// Starts a worker for the league in `dir` as a child of this process.
 pub fn spawn_worker(dir: &LeagueDir, logs: &Path, index: usize) -> Result<Child> {
-    let exe = std::env::current_exe().context("cannot find this program to spawn workers")?;
     std::fs::create_dir_all(logs).with_context(|| format!("cannot create {}", logs.display()))?;
     let log = std::fs::OpenOptions::new()
         .create(true)
         .append(true)
         .open(logs.join(format!("worker-{index}.log")))?;
-    let mut cmd = Command::new(exe);
+    let mut cmd =
+        crate::util::own_command().context("cannot find this program to spawn workers")?;
     cmd.arg("worker")
         .arg("--pool")
         .arg(&dir.root)

@@ -1001,7 +1001,15 @@ pub fn plot(dir: &LeagueDir, r: &StatusReport, path: &Path) -> Result<()> {
         .filter(|p| p.side == Side::Target)
         .collect();
     let cell = 38i64;
-    let (left, top) = (230i64, 70i64);
+    // Row labels whole, with the id the columns use: an exploiter's
+    // snapshots share their first 27 characters ("captors-exploiter-snap-0000").
+    let row_label = |c: &PlayerRow| format!("#{} {}", c.id, c.name);
+    let longest = captors
+        .iter()
+        .map(|c| row_label(c).chars().count())
+        .max()
+        .unwrap_or(0) as i64;
+    let (left, top) = ((16 + 8 * longest).max(230), 70i64);
     let height = (top + cell * captors.len() as i64 + 40).max(200) as u32;
     let width = 900u32.max((left + cell * targets.len() as i64 + 20) as u32);
     let mut heat = RgbImage::from_pixel(width, height, Rgb([255, 255, 255]));
@@ -1026,7 +1034,7 @@ pub fn plot(dir: &LeagueDir, r: &StatusReport, path: &Path) -> Result<()> {
     }
     for (i, c) in captors.iter().enumerate() {
         let y = top + cell * i as i64;
-        let name: String = c.name.chars().take(27).collect();
+        let name = row_label(c);
         draw_text(
             &mut heat,
             8,
