@@ -286,6 +286,7 @@ fn tiny_config() -> TrainConfig {
         protocol: t2e::protocol::Protocol::HeldOut,
         maps: "unused".into(),
         extra_maps: Default::default(),
+        map_sampling: Default::default(),
         env: EnvConfig {
             num_captors: 1,
             episode_length: 30,
