@@ -512,7 +512,9 @@ impl PpoLearner {
         let (c_patches, c_vectors) = self.view.critic_inputs(&patches, &vectors, self.team);
         let t = |v: &[f32]| Tensor::from_slice(v).to_device(dev);
         let actions = Tensor::from_slice(&ro.actions).to_device(dev);
-        let hints = Tensor::from_slice(&ro.hints).to_device(dev);
+        // Only a target with a heuristic prior stored hints.
+        let prior = self.net.heuristic_prior;
+        let hints = (prior > 0.0).then(|| Tensor::from_slice(&ro.hints).to_device(dev));
         let old_logp = t(&ro.logp);
         let adv = t(&adv);
         let targets = t(&targets);
@@ -550,11 +552,10 @@ impl PpoLearner {
                     &actor_h.index_select(0, &seq),
                     &m,
                 );
-                let logits = add_prior(
-                    logits,
-                    &hints.index_select(0, &idx),
-                    self.net.heuristic_prior,
-                );
+                let logits = match &hints {
+                    Some(hints) => add_prior(logits, &hints.index_select(0, &idx), prior),
+                    None => logits,
+                };
                 let logp_all = logits.log_softmax(-1, Kind::Float);
                 let a = actions.index_select(0, &idx);
                 let new_logp = logp_all.gather(1, &a.unsqueeze(1), false).squeeze_dim(1);

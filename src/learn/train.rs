@@ -496,16 +496,19 @@ impl Trainer {
                     .unsqueeze(1);
                 let lr = &ls.learner;
                 let prior = lr.net().heuristic_prior;
-                if prior > 0.0 {
-                    // Validated: only a target (one robot per world) leans on it.
+                // Validated: only a target (one robot per world) leans on it.
+                let hints = (prior > 0.0).then(|| {
                     for (e, hint) in ro.hints[base..base + rows].iter_mut().enumerate() {
                         *hint = target_hint(self.venv.env(e));
                     }
-                }
-                let hints = Tensor::from_slice(&ro.hints[base..base + rows]);
+                    Tensor::from_slice(&ro.hints[base..base + rows])
+                });
                 let (probs, values, ha, hc) = tch::no_grad(|| {
                     let (logits, ha) = lr.actor().step(&p, &v, &(&ls.actor_h * &m));
-                    let logits = add_prior(logits, &hints, prior);
+                    let logits = match &hints {
+                        Some(hints) => add_prior(logits, hints, prior),
+                        None => logits,
+                    };
                     let (values, hc) = if critic_steps {
                         let (values, hc) = lr.critic_step(&p, &v, &(&ls.critic_h * &m));
                         (values.map(|v| v.to_device(Device::Cpu)), Some(hc))
