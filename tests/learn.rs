@@ -586,3 +586,84 @@ fn a_target_leaning_on_the_rule_based_one_plays_it_and_learns_from_its_own_logit
     let err = bad.validate().unwrap_err();
     assert!(err.starts_with("captors.net.heuristic_prior"), "{err}");
 }
+
+/// A target trained with a KL towards the rule-based target
+/// (`ppo.heuristic_kl`) takes the rule-based action in more of the states
+/// the rule-based target visits than the same target trained without it
+/// (same seed, same rollouts to start from): the penalty pulls the policy
+/// towards that action while it learns. The captors may not have one.
+#[test]
+fn a_kl_towards_the_rule_based_target_pulls_the_learned_target_to_its_actions() {
+    use t2e::env::controller::Controller;
+    use t2e::heuristics::{expert_captor_action, target_action};
+    use t2e::nn::checkpoint::CheckpointController;
+    tch::set_num_threads(1);
+    let room_maps = || maps(room(60, 260, 60, 260));
+    let trained = |kl: f64| {
+        let mut cfg = chase_config(8);
+        cfg.captors.play = "heuristic".into();
+        cfg.target = SideConfig {
+            play: "ippo".into(),
+            net: cfg.captors.net.clone(),
+            ppo: t2e::learn::ppo::PpoConfig {
+                lr: 2e-3,
+                epochs: 4,
+                minibatches: 2,
+                heuristic_kl: kl,
+                ..Default::default()
+            },
+            ..SideConfig::default()
+        };
+        let dir = tempfile::tempdir().unwrap();
+        let mut t = Trainer::new(cfg, room_maps()).unwrap();
+        for _ in 0..20 {
+            t.iterate().unwrap();
+        }
+        t.save(dir.path()).unwrap();
+        dir
+    };
+    // Share of the rule-based target's states (against the expert captor)
+    // where the checkpoint's most likely action is the rule-based one.
+    let agreement = |dir: &Path| {
+        let snap = Arc::new(PolicySnapshot::load(dir, Side::Target).unwrap());
+        let mut ckpt = CheckpointController::new(snap).unwrap();
+        let cfg = EnvConfig {
+            num_captors: 1,
+            episode_length: 40,
+            ..EnvConfig::default()
+        };
+        let mut env = TrapEnv::new(cfg, room_maps()).unwrap();
+        let (mut same, mut states) = (0, 0);
+        for seed in 0..8 {
+            env.reset(seed).unwrap();
+            ckpt.reset(&env, seed);
+            for _ in 0..40 {
+                let mut learned = [t2e::env::Action::Stop];
+                ckpt.act(&env, Side::Target, &mut learned);
+                let rule = target_action(&env);
+                same += usize::from(learned[0] == rule);
+                states += 1;
+                let actions = [expert_captor_action(&env, 0), rule];
+                if env.step(&actions).terminations.iter().any(|&t| t) {
+                    break;
+                }
+            }
+        }
+        same as f64 / states as f64
+    };
+    let with_kl = agreement(trained(20.0).path());
+    let without = agreement(trained(0.0).path());
+    eprintln!("agreement with the rule-based action: kl {with_kl:.3}, none {without:.3}");
+    assert!(
+        with_kl > 0.5 && with_kl > without + 0.2,
+        "kl {with_kl}, none {without}"
+    );
+
+    let mut bad = chase_config(8);
+    bad.captors.ppo.heuristic_kl = 1.0;
+    let err = bad.validate().unwrap_err();
+    assert!(err.starts_with("captors.ppo.heuristic_kl"), "{err}");
+    bad.captors.ppo.heuristic_kl = f64::NAN;
+    let err = bad.validate().unwrap_err();
+    assert!(err.starts_with("captors.ppo.heuristic_kl"), "{err}");
+}

@@ -271,6 +271,12 @@ impl TrainConfig {
                         !algorithm.off_policy(),
                     )
                     .map_err(|e| format!("{name}.net.{e}"))?;
+                    crate::nn::prior::check_kl(
+                        side_cfg.ppo.heuristic_kl,
+                        side,
+                        !algorithm.off_policy(),
+                    )
+                    .map_err(|e| format!("{name}.ppo.{e}"))?;
                     let chunk_len = side_cfg.chunk_len(algorithm);
                     let field = if algorithm.off_policy() {
                         algorithm.name()

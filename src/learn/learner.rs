@@ -19,6 +19,12 @@ pub type NamedTensors = Vec<(String, Tensor)>;
 pub trait Learner {
     fn algorithm(&self) -> Algorithm;
     fn net(&self) -> &NetConfig;
+    /// Whether the rollout must hold the rule-based target's action for
+    /// each row (`Rollout::hints`): a target with a heuristic prior or a
+    /// KL towards the rule-based target.
+    fn wants_hints(&self) -> bool {
+        false
+    }
     /// The policy every robot of the side acts with (and that eval, render
     /// and the league's pools load from `actor.safetensors`).
     fn actor(&self) -> &Actor;

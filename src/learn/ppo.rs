@@ -64,6 +64,20 @@ pub struct PpoConfig {
     /// Left out of the stored config, and so of the config hash, while off.
     #[serde(skip_serializing_if = "std::ops::Not::not")]
     pub lr_anneal: bool,
+    /// A target's penalty for leaving the rule-based target: this weight
+    /// times KL(rule-based || policy) = -log pi(the rule-based action),
+    /// averaged over the minibatch (AlphaStar keeps its agents near the
+    /// supervised policy with such a KL). `heuristic_prior` moves where
+    /// the policy starts; this keeps pulling it back while it learns, so
+    /// it leaves the rule-based action only where the advantage outweighs
+    /// the penalty. The target only; 0: off (the paper's). Left out of the
+    /// stored config while 0.
+    #[serde(skip_serializing_if = "is_zero")]
+    pub heuristic_kl: f64,
+}
+
+fn is_zero(x: &f64) -> bool {
+    *x == 0.0
 }
 
 impl Default for PpoConfig {
@@ -85,6 +99,7 @@ impl Default for PpoConfig {
             normalize_advantages: true,
             max_bad_updates: 3,
             lr_anneal: false,
+            heuristic_kl: 0.0,
         }
     }
 }
@@ -110,6 +125,7 @@ impl PpoConfig {
         within("value_coef", self.value_coef, 0.0, 100.0, false)?;
         within("huber_delta", self.huber_delta, 0.0, 1e6, true)?;
         within("max_grad_norm", self.max_grad_norm, 0.0, 1e6, true)?;
+        within("heuristic_kl", self.heuristic_kl, 0.0, 100.0, false)?;
         for (name, v) in [
             ("epochs", self.epochs),
             ("minibatches", self.minibatches),
@@ -512,9 +528,11 @@ impl PpoLearner {
         let (c_patches, c_vectors) = self.view.critic_inputs(&patches, &vectors, self.team);
         let t = |v: &[f32]| Tensor::from_slice(v).to_device(dev);
         let actions = Tensor::from_slice(&ro.actions).to_device(dev);
-        // Only a target with a heuristic prior stored hints.
+        // Only a target that leans on the rule-based one stored hints.
         let prior = self.net.heuristic_prior;
-        let hints = (prior > 0.0).then(|| Tensor::from_slice(&ro.hints).to_device(dev));
+        let hints = self
+            .wants_hints()
+            .then(|| Tensor::from_slice(&ro.hints).to_device(dev));
         let old_logp = t(&ro.logp);
         let adv = t(&adv);
         let targets = t(&targets);
@@ -552,8 +570,9 @@ impl PpoLearner {
                     &actor_h.index_select(0, &seq),
                     &m,
                 );
-                let logits = match &hints {
-                    Some(hints) => add_prior(logits, &hints.index_select(0, &idx), prior),
+                let mb_hints = hints.as_ref().map(|h| h.index_select(0, &idx));
+                let logits = match &mb_hints {
+                    Some(hints) => add_prior(logits, hints, prior),
                     None => logits,
                 };
                 let logp_all = logits.log_softmax(-1, Kind::Float);
@@ -574,8 +593,15 @@ impl PpoLearner {
                 );
                 let value_loss = huber(&v, &targets.index_select(0, &idx), cfg.huber_delta);
 
-                let loss =
+                let mut loss =
                     &policy_loss - cfg.entropy_coef * &entropy + cfg.value_coef * &value_loss;
+                if cfg.heuristic_kl > 0.0 {
+                    let hints = mb_hints.as_ref().expect("wants_hints covers heuristic_kl");
+                    let kl = -logp_all
+                        .gather(1, &hints.unsqueeze(1), false)
+                        .mean(Kind::Float);
+                    loss = loss + cfg.heuristic_kl * kl;
+                }
                 let loss_value = loss.double_value(&[]);
                 if !loss_value.is_finite() {
                     return Err(BadUpdate(format!(
@@ -628,6 +654,9 @@ impl Learner for PpoLearner {
     }
     fn net(&self) -> &NetConfig {
         &self.net
+    }
+    fn wants_hints(&self) -> bool {
+        self.net.heuristic_prior > 0.0 || self.cfg.heuristic_kl > 0.0
     }
     fn actor(&self) -> &Actor {
         &self.actor

@@ -497,7 +497,7 @@ impl Trainer {
                 let lr = &ls.learner;
                 let prior = lr.net().heuristic_prior;
                 // Validated: only a target (one robot per world) leans on it.
-                let hints = (prior > 0.0).then(|| {
+                let hints = lr.wants_hints().then(|| {
                     for (e, hint) in ro.hints[base..base + rows].iter_mut().enumerate() {
                         *hint = target_hint(self.venv.env(e));
                     }

@@ -13,6 +13,12 @@
 //! environment, the observation and the rule-based target are the spec's:
 //! this is part of the network, and every checkpoint that uses it carries
 //! it in its net config, so it plays the same wherever it is loaded.
+//!
+//! `ppo.heuristic_kl` is the training-side companion (the PPO update adds
+//! it times -log pi(rule-based action)): the prior sets where the policy
+//! starts, the KL keeps pulling it back while it learns. Both read the same
+//! hints (`Rollout::hints`, `Learner::wants_hints`); `check_kl` is its
+//! side and learner check.
 
 use crate::env::{Action, Side, TrapEnv};
 use tch::{Kind, Tensor};
@@ -55,6 +61,23 @@ pub fn check(weight: f64, side: Side, ppo: bool) -> Result<(), String> {
     if weight > 0.0 && !ppo {
         return Err(format!(
             "heuristic_prior = {weight}: only MAPPO and IPPO read it; drop it or play mappo / ippo"
+        ));
+    }
+    Ok(())
+}
+
+/// Checks a side's `ppo.heuristic_kl` (the penalty for leaving the
+/// rule-based target's action): the target's alone. Its range is
+/// `PpoConfig::validate`'s.
+pub fn check_kl(weight: f64, side: Side, ppo: bool) -> Result<(), String> {
+    if weight > 0.0 && !ppo {
+        return Err(format!(
+            "heuristic_kl = {weight}: only MAPPO and IPPO read it; drop it or play mappo / ippo"
+        ));
+    }
+    if weight > 0.0 && side == Side::Captors {
+        return Err(format!(
+            "heuristic_kl = {weight}: only the target has one (a KL towards the rule-based target); set it under [target.ppo]"
         ));
     }
     Ok(())
@@ -103,5 +126,17 @@ mod tests {
                 "{w}"
             );
         }
+    }
+
+    #[test]
+    fn a_kl_for_the_captors_or_an_off_policy_learner_is_refused() {
+        assert!(check_kl(0.0, Side::Captors, false).is_ok());
+        assert!(check_kl(0.5, Side::Target, true).is_ok());
+        assert!(check_kl(0.5, Side::Captors, true)
+            .unwrap_err()
+            .contains("only the target"));
+        assert!(check_kl(0.5, Side::Target, false)
+            .unwrap_err()
+            .contains("MAPPO and IPPO"));
     }
 }
