@@ -53,31 +53,48 @@ pub fn check(weight: f64, side: Side, ppo: bool) -> Result<(), String> {
             "heuristic_prior = {weight}: must be in [0, {MAX_WEIGHT}] (0: off)"
         ));
     }
-    if weight > 0.0 && side == Side::Captors {
-        return Err(format!(
-            "heuristic_prior = {weight}: only the target has one (the rule-based target's action); set it under [target.net]"
-        ));
-    }
-    if weight > 0.0 && !ppo {
-        return Err(format!(
-            "heuristic_prior = {weight}: only MAPPO and IPPO read it; drop it or play mappo / ippo"
-        ));
-    }
-    Ok(())
+    target_and_ppo_only(
+        "heuristic_prior",
+        weight,
+        side,
+        ppo,
+        "the rule-based target's action",
+        "[target.net]",
+    )
 }
 
 /// Checks a side's `ppo.heuristic_kl` (the penalty for leaving the
-/// rule-based target's action): the target's alone. Its range is
-/// `PpoConfig::validate`'s.
+/// rule-based target's action): the target's alone, as the prior. Its
+/// range is `PpoConfig::validate`'s.
 pub fn check_kl(weight: f64, side: Side, ppo: bool) -> Result<(), String> {
-    if weight > 0.0 && !ppo {
-        return Err(format!(
-            "heuristic_kl = {weight}: only MAPPO and IPPO read it; drop it or play mappo / ippo"
-        ));
-    }
+    target_and_ppo_only(
+        "heuristic_kl",
+        weight,
+        side,
+        ppo,
+        "a KL towards the rule-based target",
+        "[target.ppo]",
+    )
+}
+
+/// The rule both options share: on (> 0) only for a target trained by
+/// MAPPO or IPPO.
+fn target_and_ppo_only(
+    field: &str,
+    weight: f64,
+    side: Side,
+    ppo: bool,
+    what: &str,
+    section: &str,
+) -> Result<(), String> {
     if weight > 0.0 && side == Side::Captors {
         return Err(format!(
-            "heuristic_kl = {weight}: only the target has one (a KL towards the rule-based target); set it under [target.ppo]"
+            "{field} = {weight}: only the target has one ({what}); set it under {section}"
+        ));
+    }
+    if weight > 0.0 && !ppo {
+        return Err(format!(
+            "{field} = {weight}: only MAPPO and IPPO read it; drop it or play mappo / ippo"
         ));
     }
     Ok(())
