@@ -367,3 +367,52 @@ fn held_out_opponents_play_every_snapshot_but_never_the_league() {
         "{text}"
     );
 }
+
+#[test]
+fn extra_heuristic_members_join_the_pool_and_play_the_learners() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = LeagueDir::new(tmp.path().join("league"));
+    let config = tmp.path().join("league.toml");
+    let text = CONFIG
+        .replace(
+            "env_steps_per_learner = 9_600",
+            "env_steps_per_learner = 3_200",
+        )
+        .replace(
+            "[evaluator]\nepisodes = 3",
+            "[evaluator]\nenabled = false\nepisodes = 3",
+        )
+        + "[members]\ncaptors = [\"greedy:4\"]\ntarget = [\"still\"]\n";
+    std::fs::write(&config, text).unwrap();
+    run_to_the_end(&dir.root, &config);
+
+    let store = Store::open(&dir.store).unwrap();
+    let players = store.players().unwrap();
+    let payoff = store.payoff().unwrap();
+    for (name, side, learner) in [
+        ("greedy:4-captors", Side::Captors, "target-main"),
+        ("still-target", Side::Target, "captors-main"),
+    ] {
+        let member = players
+            .iter()
+            .find(|p| p.name == name)
+            .unwrap_or_else(|| panic!("no {name} in {players:?}"));
+        assert_eq!((member.kind, member.side), (Kind::Heuristic, side));
+        let learner = players.iter().find(|p| p.name == learner).unwrap();
+        let games: u64 = payoff
+            .iter()
+            .filter(|r| match side {
+                Side::Captors => r.captor == member.id && r.target == learner.id,
+                Side::Target => r.target == member.id && r.captor == learner.id,
+            })
+            .map(|r| r.games)
+            .sum();
+        assert!(games > 0, "{} never played {name}", learner.name);
+    }
+    // The config names the members: a store's stored config keeps them.
+    let stored = std::fs::read_to_string(dir.root.join("config.toml")).unwrap();
+    assert!(
+        stored.contains("[members]") && stored.contains("greedy:4"),
+        "{stored}"
+    );
+}

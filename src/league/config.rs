@@ -6,6 +6,7 @@
 use super::curriculum::CurriculumConfig;
 use super::evaluator::EvaluatorConfig;
 use super::matchmaking::MatchmakingConfig;
+use super::members::MembersConfig;
 use super::players::Seat;
 use crate::env::{EnvConfig, Side};
 use crate::learn::maac::MaacConfig;
@@ -63,6 +64,9 @@ pub struct LeagueConfig {
     pub exploiters: ExploiterConfig,
     pub curriculum: CurriculumConfig,
     pub evaluator: EvaluatorConfig,
+    /// Extra permanent heuristic members (stored only when set).
+    #[serde(skip_serializing_if = "MembersConfig::is_empty")]
+    pub members: MembersConfig,
 }
 
 /// One main learner.
@@ -190,6 +194,7 @@ impl Default for LeagueConfig {
             exploiters: ExploiterConfig::default(),
             curriculum: CurriculumConfig::default(),
             evaluator: EvaluatorConfig::default(),
+            members: MembersConfig::default(),
         }
     }
 }
@@ -299,6 +304,23 @@ impl LeagueConfig {
         self.evaluator
             .validate()
             .map_err(|e| format!("evaluator.{e}"))?;
+        let held_out = [Side::Target, Side::Captors]
+            .into_iter()
+            .map(|member_side| {
+                let specs = self.evaluator.held_out(member_side)?;
+                Ok((member_side.other(), specs))
+            })
+            .collect::<Result<Vec<_>, String>>()
+            .map_err(|e| format!("evaluator.{e}"))?;
+        self.members
+            .validate(&held_out)
+            .map_err(|e| format!("members.{e}"))?;
+        if self.matchmaking.members_share > 0.0 && self.members.is_empty() {
+            return Err(format!(
+                "matchmaking.members_share = {}: the league has no extra members to give it to (add [members])",
+                self.matchmaking.members_share
+            ));
+        }
         if !(self.snapshots.win_rate.is_finite() && (0.0..=1.0).contains(&self.snapshots.win_rate))
         {
             return Err(format!(
@@ -418,6 +440,26 @@ mod tests {
         // the field existed compare equal to their config.toml.
         let stored = toml::to_string(&LeagueConfig::default()).unwrap();
         assert!(!stored.contains("held_out"), "{stored}");
+        assert!(!stored.contains("members"), "{stored}");
+        // Extra members: named by their field, never also held out.
+        let err = LeagueConfig::parse("[members]\ncaptors = [\"greedy:99\"]\n").unwrap_err();
+        assert!(err.starts_with("members.captors = \"greedy:99\""), "{err}");
+        let err = LeagueConfig::parse(
+            "[members]\ncaptors = [\"greedy:2\"]\n[evaluator]\nheld_out_captors = [\"greedy:2\"]\n",
+        )
+        .unwrap_err();
+        assert!(
+            err.starts_with("members.captors = \"greedy:2\" is also a held-out"),
+            "{err}"
+        );
+        let err = LeagueConfig::parse("[members]\ncaptor = [\"greedy:4\"]\n").unwrap_err();
+        assert!(err.contains("captor"), "{err}");
+        let err = LeagueConfig::parse("[matchmaking]\nmembers_share = 0.2\n").unwrap_err();
+        assert!(err.starts_with("matchmaking.members_share = 0.2"), "{err}");
+        let cfg = LeagueConfig::parse("[members]\ncaptors = [\"greedy:4\"]\n").unwrap();
+        assert!(toml::to_string(&cfg)
+            .unwrap()
+            .contains("captors = [\"greedy:4\"]"));
         let shipped = Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/league-default.toml");
         LeagueConfig::load(&shipped).unwrap();
     }

@@ -15,11 +15,10 @@ use super::matchmaking::{
     choose_opponent, draw_seed, pick_slot, slot_seed, Candidate, MatchmakingConfig, Opponent,
 };
 use super::opponents::{OpponentNets, WorldOpponent};
-use super::players::{learner_name, Seat};
+use super::players::{heuristic_name, learner_name, Seat};
 use super::pool::{add_snapshot, SnapshotOutcome};
 use super::store::{BeatState, Kind, MatchRecord, NewPlayer, Player, Store};
 use super::supervision::{CannotStart, Outcome};
-use crate::controllers::ControllerSpec;
 use crate::env::{Action, Side, VecEnv};
 use crate::learn::train::{RolloutHooks, Trainer};
 use anyhow::{bail, Context, Result};
@@ -42,6 +41,8 @@ pub struct LeagueHooks<'a> {
     /// The other side's playable members, and this learner's record against each.
     members: Vec<Player>,
     candidates: Vec<Candidate>,
+    /// The other side's extra heuristic members (`[members]`), by id.
+    extras: Vec<i64>,
     main: Option<i64>,
     worlds: Vec<WorldOpponent>,
     /// The other side's networks in play: loaded, stacked, run.
@@ -72,6 +73,7 @@ impl<'a> LeagueHooks<'a> {
             // Always the main learner once it has a snapshot; the pool
             // (heuristics first) until then.
             matchmaking.main_share = 1.0;
+            matchmaking.members_share = 0.0;
         }
         let mut hooks = LeagueHooks {
             store,
@@ -84,6 +86,7 @@ impl<'a> LeagueHooks<'a> {
             matchmaking,
             members: Vec::new(),
             candidates: Vec::new(),
+            extras: Vec::new(),
             main: None,
             worlds: Vec::new(),
             nets: OpponentNets::new(side.other(), cfg.opponent_cache, cfg.greedy_opponents),
@@ -128,6 +131,13 @@ impl<'a> LeagueHooks<'a> {
         let playable = super::pool::playable(&self.store.players()?, self.seat());
         self.members = playable.members;
         self.main = playable.main;
+        let default_member = heuristic_name(self.side.other());
+        self.extras = self
+            .members
+            .iter()
+            .filter(|m| m.kind == Kind::Heuristic && m.name != default_member)
+            .map(|m| m.id)
+            .collect();
         let payoff = self.store.payoff()?;
         self.candidates = self
             .members
@@ -167,14 +177,14 @@ impl<'a> LeagueHooks<'a> {
         let seed = draw_seed(self.cfg.seed, self.learner_id, e, venv.env(e).seed);
         let mm = &self.matchmaking;
         let pick = if mm.slots == 0 {
-            choose_opponent(&self.candidates, self.main, mm, seed)
+            choose_opponent(&self.candidates, self.main, &self.extras, mm, seed)
         } else {
             let window = self.vector_steps / self.cfg.episode_length as u64;
             if self.slots_window != Some(window) {
                 self.slots = (0..mm.slots)
                     .filter_map(|s| {
                         let seed = slot_seed(self.cfg.seed, self.learner_id, s, window);
-                        choose_opponent(&self.candidates, self.main, mm, seed)
+                        choose_opponent(&self.candidates, self.main, &self.extras, mm, seed)
                     })
                     .collect();
                 self.slots_window = Some(window);
@@ -205,14 +215,16 @@ impl<'a> LeagueHooks<'a> {
             .map_err(anyhow::Error::msg)?;
         let network = match member.kind {
             Kind::Heuristic => {
+                let Some(spec) = self.cfg.members.spec_of(other, &member.name) else {
+                    bail!(
+                        "{} is a heuristic member the league's config does not name ([members])",
+                        member.name
+                    );
+                };
                 venv.script_world(
                     e,
                     other,
-                    Some(
-                        ControllerSpec::Heuristic
-                            .build(other)
-                            .map_err(anyhow::Error::msg)?,
-                    ),
+                    Some(spec.build(other).map_err(anyhow::Error::msg)?),
                 );
                 None
             }

@@ -156,7 +156,7 @@ pub fn run_with(
             id
         }
     };
-    ensure_heuristic_members(&store)?;
+    ensure_heuristic_members(&store, &cfg.members)?;
     let found = reconcile(dir, &store, &league_id)?;
     for r in &found.removed_temporaries {
         eprintln!("removed {r}: a temporary its writer left when it was killed");

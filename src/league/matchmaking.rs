@@ -31,6 +31,12 @@ pub struct MatchmakingConfig {
     pub p: f64,
     /// Share of episodes against the other side's current main learner.
     pub main_share: f64,
+    /// Share of episodes against the other side's extra heuristic members
+    /// (`[members]`), drawn uniformly: PFSP alone would rarely draw a
+    /// member the learner mostly beats. 0 (the default, left out of the
+    /// stored config) leaves every draw as it was.
+    #[serde(skip_serializing_if = "is_zero")]
+    pub members_share: f64,
     /// Share of the PFSP probability spread evenly over all members, so no
     /// member starves (a member never drawn never gets a win rate).
     pub floor: f64,
@@ -56,10 +62,15 @@ impl Default for MatchmakingConfig {
             weighting: Weighting::Hard,
             p: 2.0,
             main_share: 0.35,
+            members_share: 0.0,
             floor: 0.05,
             slots: 1,
         }
     }
+}
+
+fn is_zero(x: &f64) -> bool {
+    *x == 0.0
 }
 
 impl MatchmakingConfig {
@@ -67,10 +78,20 @@ impl MatchmakingConfig {
         if !(self.p.is_finite() && self.p > 0.0 && self.p <= 16.0) {
             return Err(format!("p = {}: must be in (0, 16]", self.p));
         }
-        for (name, v) in [("main_share", self.main_share), ("floor", self.floor)] {
+        for (name, v) in [
+            ("main_share", self.main_share),
+            ("members_share", self.members_share),
+            ("floor", self.floor),
+        ] {
             if !(v.is_finite() && (0.0..=1.0).contains(&v)) {
                 return Err(format!("{name} = {v}: must be in [0, 1]"));
             }
+        }
+        if self.main_share + self.members_share > 1.0 {
+            return Err(format!(
+                "members_share = {}: with main_share = {} the shares exceed 1",
+                self.members_share, self.main_share
+            ));
         }
         if self.slots > 64 {
             return Err(format!(
@@ -164,9 +185,12 @@ pub fn pick_slot(slots: usize, seed: u64) -> usize {
 
 /// Draws an opponent for one episode. `main` is None when the other side
 /// has no main learner snapshot yet; an empty pool plays the main learner.
+/// `extras`: the other side's extra heuristic members, drawn uniformly in
+/// `members_share` of the episodes (by PFSP in the rest, like any member).
 pub fn choose_opponent(
     pool: &[Candidate],
     main: Option<i64>,
+    extras: &[i64],
     cfg: &MatchmakingConfig,
     seed: u64,
 ) -> Option<Opponent> {
@@ -174,6 +198,11 @@ pub fn choose_opponent(
     let u: f64 = rng.gen();
     if main.is_some() && (pool.is_empty() || u < cfg.main_share) {
         return Some(Opponent::Main);
+    }
+    if !extras.is_empty() && (cfg.main_share..cfg.main_share + cfg.members_share).contains(&u) {
+        let v: f64 = rng.gen();
+        let i = ((v * extras.len() as f64) as usize).min(extras.len() - 1);
+        return Some(Opponent::Member(extras[i]));
     }
     let probs = pfsp_probabilities(pool, cfg);
     if probs.is_empty() {
@@ -254,8 +283,11 @@ mod tests {
             vec![0.5, 0.5]
         );
         assert!(pfsp_probabilities(&[], &cfg).is_empty());
-        assert_eq!(choose_opponent(&[], None, &cfg, 1), None);
-        assert_eq!(choose_opponent(&[], Some(7), &cfg, 1), Some(Opponent::Main));
+        assert_eq!(choose_opponent(&[], None, &[], &cfg, 1), None);
+        assert_eq!(
+            choose_opponent(&[], Some(7), &[], &cfg, 1),
+            Some(Opponent::Main)
+        );
     }
 
     #[test]
@@ -267,9 +299,9 @@ mod tests {
         let n = 40_000;
         for episode in 0..n {
             let seed = draw_seed(9, 2, 3, episode);
-            let o = choose_opponent(&pool, Some(99), &cfg, seed).unwrap();
+            let o = choose_opponent(&pool, Some(99), &[], &cfg, seed).unwrap();
             assert_eq!(
-                choose_opponent(&pool, Some(99), &cfg, seed),
+                choose_opponent(&pool, Some(99), &[], &cfg, seed),
                 Some(o),
                 "replays"
             );
@@ -298,6 +330,45 @@ mod tests {
     }
 
     #[test]
+    fn extra_members_get_their_share_and_zero_changes_no_draw() {
+        // Member 3 is the extra heuristic: 0.35 main, 0.25 uniform over
+        // the extras, and the rest (0.40) by PFSP over all three.
+        let pool = [cand(1, 1.0, 4.0), cand(2, 3.0, 4.0), cand(3, 4.0, 4.0)];
+        let cfg = MatchmakingConfig {
+            members_share: 0.25,
+            ..MatchmakingConfig::default()
+        };
+        let p = pfsp_probabilities(&pool, &cfg);
+        let n = 40_000;
+        let mut counts = [0usize; 4];
+        for episode in 0..n {
+            let seed = draw_seed(9, 2, 3, episode);
+            counts[match choose_opponent(&pool, Some(99), &[3], &cfg, seed).unwrap() {
+                Opponent::Main => 0,
+                Opponent::Member(id) => id as usize,
+            }] += 1;
+            // Without a share, the extras change nothing: the same draw as
+            // a league without them.
+            let plain = MatchmakingConfig::default();
+            assert_eq!(
+                choose_opponent(&pool, Some(99), &[3], &plain, seed),
+                choose_opponent(&pool, Some(99), &[], &plain, seed)
+            );
+        }
+        let share = |c: usize| c as f64 / n as f64;
+        assert!((share(counts[0]) - 0.35).abs() < 0.01, "{counts:?}");
+        // The learner beats member 3 every time: PFSP gives it only the floor.
+        let want3 = 0.25 + 0.40 * p[2];
+        assert!((share(counts[3]) - want3).abs() < 0.01, "{counts:?} {p:?}");
+        assert!((share(counts[1]) - 0.40 * p[0]).abs() < 0.01, "{counts:?}");
+        let bad = MatchmakingConfig {
+            members_share: 0.7,
+            ..MatchmakingConfig::default()
+        };
+        assert!(bad.validate().unwrap_err().contains("exceed 1"));
+    }
+
+    #[test]
     fn slots_keep_the_marginal_and_bound_the_opponents_in_play() {
         let pool = [cand(1, 1.0, 4.0), cand(2, 3.0, 4.0), cand(3, 0.0, 0.0)];
         let cfg = MatchmakingConfig {
@@ -310,7 +381,7 @@ mod tests {
         for window in 0..windows {
             let slots: Vec<Opponent> = (0..cfg.slots)
                 .map(|s| {
-                    choose_opponent(&pool, Some(99), &cfg, slot_seed(9, 2, s, window)).unwrap()
+                    choose_opponent(&pool, Some(99), &[], &cfg, slot_seed(9, 2, s, window)).unwrap()
                 })
                 .collect();
             let mut in_play = std::collections::HashSet::new();

@@ -7,6 +7,8 @@
 //! - `open`: opening a league directory, every check before any write
 //!   (identity, store, config).
 //! - `players`: who plays, by name (`Seat`, main and heuristic names).
+//! - `members`: the permanent heuristic members, the default ones and the
+//!   extra ones a config adds (`[members]`).
 //! - `pool`: snapshot folders and their rows (written once, adopted,
 //!   quarantined, never deleted).
 //! - `supervision`: the one outcome of every process exit, the crash budget.
@@ -35,6 +37,7 @@ pub mod exploit;
 pub mod learner;
 pub mod manager;
 pub mod matchmaking;
+pub mod members;
 pub mod open;
 pub mod opponents;
 pub mod payoff;

@@ -14,13 +14,14 @@
 //!   league goes on without them.
 
 use super::dir::LeagueDir;
-use super::players::{heuristic_name, learner_name, Seat};
+use super::members::MembersConfig;
+use super::players::{learner_name, Seat};
 use super::store::{Kind, NewPlayer, Player, Store};
 use crate::env::Side;
 use crate::learn::train::Trainer;
 use crate::nn::checkpoint::{read_meta, PoolMembership};
 use crate::nn::PolicySnapshot;
-use anyhow::{Context, Result};
+use anyhow::{anyhow, Context, Result};
 
 /// What a learner may draw from the pool.
 #[derive(Clone, Debug, PartialEq)]
@@ -270,17 +271,21 @@ fn adopt(
     Ok(())
 }
 
-pub fn ensure_heuristic_members(store: &Store) -> Result<()> {
+/// Adds each side's permanent heuristic members (the default one and the
+/// config's extras) to the store, once.
+pub fn ensure_heuristic_members(store: &Store, members: &MembersConfig) -> Result<()> {
     for side in [Side::Captors, Side::Target] {
-        store.add_player(&NewPlayer {
-            name: heuristic_name(side),
-            side,
-            kind: Kind::Heuristic,
-            parent: None,
-            env_steps: 0,
-            curriculum_stage: 0,
-            checkpoint: None,
-        })?;
+        for (name, _) in members.of(side).map_err(|e| anyhow!("members.{e}"))? {
+            store.add_player(&NewPlayer {
+                name,
+                side,
+                kind: Kind::Heuristic,
+                parent: None,
+                env_steps: 0,
+                curriculum_stage: 0,
+                checkpoint: None,
+            })?;
+        }
     }
     Ok(())
 }
