@@ -131,14 +131,12 @@ impl ControllerSpec {
     pub fn build(&self, side: Side) -> Result<Box<dyn Controller>, String> {
         Ok(match self {
             ControllerSpec::Heuristic => Box::new(Heuristic),
-            ControllerSpec::Greedy { .. } if side == Side::Target => {
-                return Err("'greedy' (ASZ-greedy) is a captor controller; the target can be heuristic, random, still or a checkpoint".into())
-            }
             ControllerSpec::Greedy { coarsening } => Box::new(AszGreedy::new(*coarsening)),
             ControllerSpec::Random => Box::new(RandomActions::new()),
             ControllerSpec::Still => Box::new(Still),
             ControllerSpec::Checkpoint(c) => {
-                let ckpt = CheckpointController::new(c.snapshot(side)?).map_err(|e| format!("{e:#}"))?;
+                let ckpt =
+                    CheckpointController::new(c.snapshot(side)?).map_err(|e| format!("{e:#}"))?;
                 Box::new(if c.sampled { ckpt.sampling() } else { ckpt })
             }
         })

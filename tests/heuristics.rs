@@ -158,17 +158,70 @@ fn greedy_captor_picks_the_action_that_shrinks_the_asz_most() {
 }
 
 #[test]
+fn greedy_target_picks_the_action_that_keeps_the_largest_asz() {
+    // Captors on the target's left, open room on its right, the target
+    // facing away from them: forward and backward leave it different ASZs.
+    let g = room(60, 260, 60, 260);
+    let robots = vec![
+        robot(-1.5, 0.5, 0.0),
+        robot(-1.5, -0.5, 0.0),
+        robot(-2.0, 0.0, 0.0),
+        robot(0.0, 0.0, 0.0),
+    ];
+    let env = env_in(3, g, robots);
+    let t = env.target_index();
+    let (captors, target) = env.asz_sources();
+    let mut fm = t2e::asz::FastMarching::new();
+    let actions = [
+        Action::Forward,
+        Action::Backward,
+        Action::TurnRight,
+        Action::TurnLeft,
+    ];
+    let sizes: Vec<usize> = actions
+        .iter()
+        .map(|&a| {
+            let mut alone = [env.robots[t]];
+            physics::step(
+                env.map(),
+                &mut alone,
+                &[env.spec(t)],
+                &[a],
+                env.cfg.drive_force,
+                &mut [0.0],
+            );
+            let moved = Source {
+                pos: alone[0].pos,
+                speed: target.speed,
+            };
+            fm.asz_cells(&**env.map(), moved, &captors)
+        })
+        .collect();
+    let best = *sizes.iter().max().unwrap();
+    assert!(
+        sizes.iter().any(|&s| s != best),
+        "the actions must differ here: {sizes:?}"
+    );
+    let chosen = AszGreedy::default().target_action(&env);
+    let i = actions.iter().position(|&a| a == chosen).unwrap();
+    assert_eq!(sizes[i], best, "chose {chosen:?} among {sizes:?}");
+    // On coarse cells it still moves away from the captors.
+    let mut out = [Action::Stop];
+    AszGreedy::new(2).act(&env, Side::Target, &mut out);
+    assert_ne!(out[0], Action::Stop);
+}
+
+#[test]
 fn controllers_are_named_and_checked_per_side() {
     for name in ["heuristic", "greedy", "greedy:2", "random", "still"] {
         let spec: ControllerSpec = name.parse().unwrap();
         assert_eq!(spec.to_string(), name);
         assert!(spec.build(Side::Captors).is_ok());
     }
-    assert!(ControllerSpec::Greedy { coarsening: 1 }
+    // The ASZ-greedy rule plays either side (the target keeps its largest ASZ).
+    assert!(ControllerSpec::Greedy { coarsening: 2 }
         .build(Side::Target)
-        .err()
-        .unwrap()
-        .contains("captor controller"));
+        .is_ok());
     for bad in ["greedy:0", "greedy:9", "greedy:x", "greedy:"] {
         assert!(
             bad.parse::<ControllerSpec>()

@@ -120,6 +120,8 @@ impl Controller for Heuristic {
 /// version): try each of forward, backward, turn right, turn left for this
 /// captor alone, keep the one that leaves the smallest ASZ; when no action
 /// changes |ASZ|, the one that most shortens the geodesic distance to the target.
+/// Playing the target, the same rule mirrored (`target_action`): the
+/// largest ASZ, else the rule-based target's action.
 ///
 /// `coarsening` 1 marches on the map's own 0.05 m cells, as the spec says.
 /// A larger factor marches on cells of that many map cells per side
@@ -169,14 +171,13 @@ impl AszGreedy {
         }
     }
 
-    pub fn captor_action(&mut self, env: &TrapEnv, i: usize) -> Action {
-        let map = env.map();
-        // Where each action takes captor i alone, with the others still.
+    /// Where each of `GREEDY_ACTIONS` takes robot `i` alone, the others still.
+    fn moves_of(env: &TrapEnv, i: usize) -> [[f64; 2]; 4] {
         let spec = env.spec(i);
-        let moved = GREEDY_ACTIONS.map(|action| {
+        GREEDY_ACTIONS.map(|action| {
             let mut alone = [env.robots[i]];
             physics::step(
-                map,
+                env.map(),
                 &mut alone,
                 &[spec],
                 &[action],
@@ -184,7 +185,55 @@ impl AszGreedy {
                 &mut [0.0],
             );
             alone[0].pos
-        });
+        })
+    }
+
+    /// The target's mirror of the captors' rule (not in the spec, which has
+    /// only the rule-based target): the action that leaves the target the
+    /// largest ASZ; when no action changes |ASZ|, the rule-based target's.
+    pub fn target_action(&mut self, env: &TrapEnv) -> Action {
+        let moved = Self::moves_of(env, env.target_index());
+        let (captors, target) = env.asz_sources();
+        let sizes = if self.coarsening == 1 {
+            target_asz_sizes(
+                &mut self.marching,
+                &**env.map(),
+                &captors,
+                target.speed,
+                &moved,
+            )
+        } else {
+            self.lattice(env);
+            let lattice = self.coarse.as_ref().unwrap();
+            target_asz_sizes(&mut self.marching, lattice, &captors, target.speed, &moved)
+        };
+        if sizes.iter().all(|&s| s == sizes[0]) {
+            return target_action(env);
+        }
+        // The first of equals, as the captors' rule takes it.
+        let best = (0..4)
+            .rev()
+            .max_by_key(|&a| sizes[a])
+            .expect("four actions");
+        GREEDY_ACTIONS[best]
+    }
+
+    /// The coarse lattice of the current map, built when the map changes.
+    fn lattice(&mut self, env: &TrapEnv) -> &CoarseLattice {
+        let map = env.map();
+        if !self
+            .coarse
+            .as_ref()
+            .is_some_and(|c| c.covers(map, self.coarsening))
+        {
+            self.coarse = Some(CoarseLattice::new(map, self.coarsening));
+        }
+        self.coarse.as_ref().unwrap()
+    }
+
+    pub fn captor_action(&mut self, env: &TrapEnv, i: usize) -> Action {
+        let map = env.map();
+        let moved = Self::moves_of(env, i);
         let best = if self.coarsening == 1 {
             greedy_choice(
                 &mut self.marching,
@@ -195,13 +244,7 @@ impl AszGreedy {
                 &moved,
             )
         } else {
-            if !self
-                .coarse
-                .as_ref()
-                .is_some_and(|c| c.covers(map, self.coarsening))
-            {
-                self.coarse = Some(CoarseLattice::new(map, self.coarsening));
-            }
+            self.lattice(env);
             let lattice = self.coarse.as_ref().unwrap();
             greedy_choice(
                 &mut self.marching,
@@ -214,6 +257,17 @@ impl AszGreedy {
         };
         GREEDY_ACTIONS[best]
     }
+}
+
+/// |ASZ| of the target at each of the positions its actions take it to.
+fn target_asz_sizes<L: Lattice + ?Sized>(
+    marching: &mut FastMarching,
+    lattice: &L,
+    captors: &[Source],
+    speed: f64,
+    moved: &[[f64; 2]; 4],
+) -> [usize; 4] {
+    moved.map(|pos| marching.asz_cells(lattice, Source { pos, speed }, captors))
 }
 
 /// The index of the greedy action, given where each action takes captor `i`.
@@ -253,13 +307,13 @@ impl Controller for AszGreedy {
         }
     }
     fn act(&mut self, env: &TrapEnv, side: Side, out: &mut [Action]) {
-        assert_eq!(
-            side,
-            Side::Captors,
-            "the ASZ-greedy controller plays captors"
-        );
-        for (i, a) in out.iter_mut().enumerate() {
-            *a = self.captor_action(env, i);
+        match side {
+            Side::Captors => {
+                for (i, a) in out.iter_mut().enumerate() {
+                    *a = self.captor_action(env, i);
+                }
+            }
+            Side::Target => out[0] = self.target_action(env),
         }
     }
 }

@@ -427,8 +427,8 @@ mod tests {
             ),
             ("held_out_targets = [\"rule\"]", "permanent league member"),
             (
-                "held_out_targets = [\"greedy\"]",
-                "evaluator.held_out_targets = \"greedy\"",
+                "held_out_targets = [\"greedy:9\"]",
+                "evaluator.held_out_targets = \"greedy:9\"",
             ),
             ("held_out_captors = [\"random\", \"random\"]", "named twice"),
             ("held_out_captors = [\"ckpt:\"]", "needs a path"),

@@ -159,7 +159,7 @@ mod tests {
                 members(&["greedy:4", "greedy:4"], &[]),
                 "captors: \"greedy:4\" is named twice",
             ),
-            (members(&[], &["greedy"]), "target = \"greedy\""),
+            (members(&[], &["greedy:9"]), "target = \"greedy:9\""),
             (members(&["expert"], &[]), "already a member"),
             (
                 members(&["ckpt:runs/x"], &[]),

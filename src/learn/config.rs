@@ -374,7 +374,7 @@ mod tests {
         cfg.captors.play = "heuristic".into();
         assert!(cfg.validate().unwrap_err().contains("nothing to train"));
         let mut cfg = TrainConfig::default();
-        cfg.target.play = "greedy".into();
+        cfg.target.play = "greedy:9".into();
         assert!(cfg.validate().unwrap_err().starts_with("target.play"));
         let mut cfg = TrainConfig::default();
         cfg.captors.ppo.gamma = 1.5;
