@@ -103,6 +103,20 @@ fn expert_captors_ring_a_still_target_in_the_open() {
     assert!(env.steps < 100, "took {} steps", env.steps);
 }
 
+/// Robot `i` after one step of `a`, the others still.
+fn moved_alone(env: &TrapEnv, i: usize, a: Action) -> Robot {
+    let mut alone = [env.robots[i]];
+    physics::step(
+        env.map(),
+        &mut alone,
+        &[env.spec(i)],
+        &[a],
+        env.cfg.drive_force,
+        &mut [0.0],
+    );
+    alone[0]
+}
+
 #[test]
 fn greedy_captor_picks_the_action_that_shrinks_the_asz_most() {
     let g = room(60, 260, 60, 260);
@@ -119,15 +133,7 @@ fn greedy_captor_picks_the_action_that_shrinks_the_asz_most() {
     for i in 0..3 {
         let chosen = greedy.captor_action(&env, i);
         let asz_after = |a: Action, fm: &mut t2e::asz::FastMarching| {
-            let mut alone = [env.robots[i]];
-            physics::step(
-                env.map(),
-                &mut alone,
-                &[env.spec(i)],
-                &[a],
-                env.cfg.drive_force,
-                &mut [0.0],
-            );
+            let alone = [moved_alone(&env, i, a)];
             let mut c = captors.clone();
             c[i] = Source {
                 pos: alone[0].pos,
@@ -181,17 +187,8 @@ fn greedy_target_picks_the_action_that_keeps_the_largest_asz() {
     let sizes: Vec<usize> = actions
         .iter()
         .map(|&a| {
-            let mut alone = [env.robots[t]];
-            physics::step(
-                env.map(),
-                &mut alone,
-                &[env.spec(t)],
-                &[a],
-                env.cfg.drive_force,
-                &mut [0.0],
-            );
             let moved = Source {
-                pos: alone[0].pos,
+                pos: moved_alone(&env, t, a).pos,
                 speed: target.speed,
             };
             fm.asz_cells(&**env.map(), moved, &captors)

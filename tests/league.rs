@@ -227,12 +227,9 @@ fn killed_at_random_moments_the_league_loses_and_duplicates_nothing() {
     assert!(err.contains("already running"), "{err}");
 }
 
-#[test]
-fn exploiters_play_the_main_learners_join_the_pool_and_start_again() {
-    let tmp = tempfile::tempdir().unwrap();
-    let dir = LeagueDir::new(&tmp.path().join("league"));
-    let config = tmp.path().join("league.toml");
-    let text = CONFIG
+/// The tiny league cut to 3,200 env steps per learner, no evaluator.
+fn short_league_without_evaluator() -> String {
+    CONFIG
         .replace(
             "env_steps_per_learner = 9_600",
             "env_steps_per_learner = 3_200",
@@ -241,6 +238,14 @@ fn exploiters_play_the_main_learners_join_the_pool_and_start_again() {
             "[evaluator]\nepisodes = 3",
             "[evaluator]\nenabled = false\nepisodes = 3",
         )
+}
+
+#[test]
+fn exploiters_play_the_main_learners_join_the_pool_and_start_again() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = LeagueDir::new(&tmp.path().join("league"));
+    let config = tmp.path().join("league.toml");
+    let text = short_league_without_evaluator()
         + "[exploiters]\ncaptors = true\ntarget = true\nwin_rate = 0.99\ntimeout_env_steps = 960\n";
     std::fs::write(&config, text).unwrap();
     run_to_the_end(&dir.root, &config);
@@ -373,15 +378,7 @@ fn extra_heuristic_members_join_the_pool_and_play_the_learners() {
     let tmp = tempfile::tempdir().unwrap();
     let dir = LeagueDir::new(tmp.path().join("league"));
     let config = tmp.path().join("league.toml");
-    let text = CONFIG
-        .replace(
-            "env_steps_per_learner = 9_600",
-            "env_steps_per_learner = 3_200",
-        )
-        .replace(
-            "[evaluator]\nepisodes = 3",
-            "[evaluator]\nenabled = false\nepisodes = 3",
-        )
+    let text = short_league_without_evaluator()
         + "[members]\ncaptors = [\"greedy:4\"]\ntarget = [\"still\"]\n";
     std::fs::write(&config, text).unwrap();
     run_to_the_end(&dir.root, &config);
