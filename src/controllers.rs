@@ -158,4 +158,34 @@ impl ControllerSpec {
     pub fn is_checkpoint(&self) -> bool {
         matches!(self, ControllerSpec::Checkpoint(_))
     }
+
+    /// A config's list of controllers for `side` (`field = ["greedy:2",
+    /// ...]`): each must parse, pass `refuse` (None: accepted), build for the
+    /// side (a checkpoint is checked when it is loaded) and appear once.
+    /// Errors name the field and the entry.
+    pub fn parse_list(
+        field: &str,
+        names: &[String],
+        side: Side,
+        refuse: impl Fn(&ControllerSpec) -> Option<String>,
+    ) -> Result<Vec<ControllerSpec>, String> {
+        let mut out: Vec<ControllerSpec> = Vec::new();
+        for name in names {
+            let spec: ControllerSpec = name
+                .parse()
+                .map_err(|e| format!("{field} = \"{name}\": {e}"))?;
+            if let Some(why) = refuse(&spec) {
+                return Err(format!("{field} = \"{name}\": {why}"));
+            }
+            if !spec.is_checkpoint() {
+                spec.build(side)
+                    .map_err(|e| format!("{field} = \"{name}\": {e}"))?;
+            }
+            if out.contains(&spec) {
+                return Err(format!("{field}: \"{name}\" is named twice"));
+            }
+            out.push(spec);
+        }
+        Ok(out)
+    }
 }

@@ -85,32 +85,22 @@ impl EvaluatorConfig {
             Side::Captors => ("held_out_targets", &self.held_out_targets),
         };
         let side = member_side.other();
-        let mut out: Vec<(String, ControllerSpec)> = Vec::new();
-        for name in names {
-            let spec: ControllerSpec = name
-                .parse()
-                .map_err(|e| format!("{field} = \"{name}\": {e}"))?;
-            if spec == ControllerSpec::Heuristic {
-                return Err(format!(
-                    "{field} = \"{name}\": the {} is a permanent league member, which the league trains against; a held-out opponent is one it never meets",
+        // A checkpoint is loaded (and checked) when the evaluator starts.
+        let specs = ControllerSpec::parse_list(field, names, side, |spec| {
+            (*spec == ControllerSpec::Heuristic).then(|| {
+                format!(
+                    "the {} is a permanent league member, which the league trains against; a held-out opponent is one it never meets",
                     match side {
                         Side::Captors => "expert heuristic",
                         Side::Target => "rule-based target",
                     }
-                ));
-            }
-            // A checkpoint is loaded (and checked) when the evaluator starts.
-            if !spec.is_checkpoint() {
-                spec.build(side)
-                    .map_err(|e| format!("{field} = \"{name}\": {e}"))?;
-            }
-            let shown = spec.to_string();
-            if out.iter().any(|(n, _)| *n == shown) {
-                return Err(format!("{field}: \"{name}\" is named twice"));
-            }
-            out.push((shown, spec));
-        }
-        Ok(out)
+                )
+            })
+        })?;
+        Ok(specs
+            .into_iter()
+            .map(|spec| (spec.to_string(), spec))
+            .collect())
     }
 }
 

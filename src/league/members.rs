@@ -38,30 +38,24 @@ impl MembersConfig {
             Side::Captors => ("captors", &self.captors),
             Side::Target => ("target", &self.target),
         };
-        let mut out = vec![(heuristic_name(side), ControllerSpec::Heuristic)];
-        for name in names {
-            let spec: ControllerSpec = name
-                .parse()
-                .map_err(|e| format!("{field} = \"{name}\": {e}"))?;
-            if spec == ControllerSpec::Heuristic {
-                return Err(format!(
-                    "{field} = \"{name}\": {} is already a member of every league",
+        let extras = ControllerSpec::parse_list(field, names, side, |spec| {
+            if *spec == ControllerSpec::Heuristic {
+                Some(format!(
+                    "{} is already a member of every league",
                     heuristic_name(side)
-                ));
+                ))
+            } else if spec.is_checkpoint() {
+                Some("a member here is a heuristic (greedy:K, random, still); a trained team joins the pool as a snapshot".into())
+            } else {
+                None
             }
-            if spec.is_checkpoint() {
-                return Err(format!(
-                    "{field} = \"{name}\": a member here is a heuristic (greedy:K, random, still); a trained team joins the pool as a snapshot"
-                ));
-            }
-            spec.build(side)
-                .map_err(|e| format!("{field} = \"{name}\": {e}"))?;
-            let player = member_name(&spec, side);
-            if out.iter().any(|(n, _)| *n == player) {
-                return Err(format!("{field}: \"{name}\" is named twice"));
-            }
-            out.push((player, spec));
-        }
+        })?;
+        let mut out = vec![(heuristic_name(side), ControllerSpec::Heuristic)];
+        out.extend(
+            extras
+                .into_iter()
+                .map(|spec| (member_name(&spec, side), spec)),
+        );
         Ok(out)
     }
 
