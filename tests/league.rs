@@ -413,3 +413,104 @@ fn extra_heuristic_members_join_the_pool_and_play_the_learners() {
         "{stored}"
     );
 }
+
+/// A tiny trained captor team (K = 2, held-out protocol) saved under `runs`.
+fn tiny_captors(runs: &Path) -> std::path::PathBuf {
+    let shipped = t2e::map::catalog::load_prepared("shipped").unwrap();
+    let cfg = common::tiny_train_config("member", t2e::protocol::Protocol::HeldOut, "shipped");
+    let mut trainer = t2e::learn::train::Trainer::new(cfg, shipped).unwrap();
+    trainer.iterate().unwrap();
+    trainer.save(runs).unwrap().remove(0)
+}
+
+#[test]
+fn a_trained_team_joins_the_pool_as_a_frozen_member_and_a_paper_one_is_refused() {
+    tch::set_num_threads(1);
+    let tmp = tempfile::tempdir().unwrap();
+    let source = tiny_captors(&tmp.path().join("runs/coop"));
+    let dir = LeagueDir::new(tmp.path().join("league"));
+    let config = tmp.path().join("league.toml");
+    let text = short_league_without_evaluator()
+        + &format!(
+            "[matchmaking]\nmembers_share = 0.5\n[members]\ncaptors = [\"ckpt:{}\"]\n",
+            source.display()
+        );
+    std::fs::write(&config, &text).unwrap();
+    run_to_the_end(&dir.root, &config);
+
+    let name = format!(
+        "coop@{}-captors",
+        source.file_name().unwrap().to_string_lossy()
+    );
+    let store = Store::open(&dir.store).unwrap();
+    let players = store.players().unwrap();
+    let member = players
+        .iter()
+        .find(|p| p.name == name)
+        .unwrap_or_else(|| panic!("no {name} in {players:?}"));
+    // A snapshot without a learner behind it, its weights a copy of the source's.
+    assert_eq!(
+        (member.kind, member.side, member.parent),
+        (Kind::Snapshot, Side::Captors, None)
+    );
+    let (rel, sha) = member.checkpoint.clone().unwrap();
+    assert_eq!(rel, format!("players/{name}"));
+    for file in ["meta.json", "actor.safetensors"] {
+        assert_eq!(
+            std::fs::read(dir.root.join(&rel).join(file)).unwrap(),
+            std::fs::read(source.join(file)).unwrap(),
+            "{file}"
+        );
+    }
+    assert_eq!(
+        t2e::util::sha256_file(&source.join("meta.json")).unwrap(),
+        sha
+    );
+    let target_main = players.iter().find(|p| p.name == "target-main").unwrap();
+    let games: u64 = store
+        .payoff()
+        .unwrap()
+        .iter()
+        .filter(|r| r.captor == member.id && r.target == target_main.id)
+        .map(|r| r.games)
+        .sum();
+    assert!(games > 0, "target-main never played {name}");
+
+    // Started again without its source, the league keeps the copy it recorded.
+    std::fs::remove_dir_all(&source).unwrap();
+    run_to_the_end(&dir.root, &config);
+    let again = Store::open(&dir.store).unwrap().players().unwrap();
+    assert_eq!(again.iter().filter(|p| p.name == name).count(), 1);
+    assert_eq!(
+        again.iter().find(|p| p.name == name).unwrap().checkpoint,
+        Some((rel, sha))
+    );
+
+    // A team trained on the Gibson test maps cannot join a held-out league.
+    let paper = tiny_captors(&tmp.path().join("runs/paper"));
+    let meta = paper.join("meta.json");
+    let edited = std::fs::read_to_string(&meta)
+        .unwrap()
+        .replace("\"held-out\"", "\"paper\"");
+    std::fs::write(&meta, edited).unwrap();
+    let config = tmp.path().join("paper.toml");
+    std::fs::write(
+        &config,
+        short_league_without_evaluator()
+            + &format!("[members]\ncaptors = [\"ckpt:{}\"]\n", paper.display()),
+    )
+    .unwrap();
+    let out = Command::new(bin())
+        .args(["run", "--config"])
+        .arg(&config)
+        .arg("--dir")
+        .arg(tmp.path().join("paper-league"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "{err}");
+    assert!(
+        err.contains("members.captors = \"ckpt:") && err.contains("paper protocol"),
+        "{err}"
+    );
+}

@@ -15,7 +15,7 @@ use super::matchmaking::{
     choose_opponent, draw_seed, pick_slot, slot_seed, Candidate, MatchmakingConfig, Opponent,
 };
 use super::opponents::{OpponentNets, WorldOpponent};
-use super::players::{heuristic_name, learner_name, Seat};
+use super::players::{learner_name, Seat};
 use super::pool::{add_snapshot, SnapshotOutcome};
 use super::store::{BeatState, Kind, MatchRecord, NewPlayer, Player, Store};
 use super::supervision::{CannotStart, Outcome};
@@ -131,11 +131,11 @@ impl<'a> LeagueHooks<'a> {
         let playable = super::pool::playable(&self.store.players()?, self.seat());
         self.members = playable.members;
         self.main = playable.main;
-        let default_member = heuristic_name(self.side.other());
+        let extra_names = self.cfg.members.extra_names(self.side.other());
         self.extras = self
             .members
             .iter()
-            .filter(|m| m.kind == Kind::Heuristic && m.name != default_member)
+            .filter(|m| extra_names.contains(&m.name))
             .map(|m| m.id)
             .collect();
         let payoff = self.store.payoff()?;

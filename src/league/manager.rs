@@ -19,7 +19,7 @@ use super::config::LeagueConfig;
 use super::dir::{new_league_id, LeagueDir, LeagueIdentity};
 use super::open::{plan_start, StartPlan};
 use super::players::Seat;
-use super::pool::{ensure_heuristic_members, reconcile};
+use super::pool::{ensure_members, reconcile};
 use super::process::{interrupt, lock_holder, log_since, spawn, tail, try_lock, Role, Supervised};
 use super::store::{now_ms, Store};
 use super::supervision::{classify, decide, last_error_line, CrashBudget, Exit, Next};
@@ -156,7 +156,7 @@ pub fn run_with(
             id
         }
     };
-    ensure_heuristic_members(&store, &cfg.members)?;
+    ensure_members(dir, &store, &cfg)?;
     let found = reconcile(dir, &store, &league_id)?;
     for r in &found.removed_temporaries {
         eprintln!("removed {r}: a temporary its writer left when it was killed");

@@ -1,27 +1,31 @@
-//! The league's permanent heuristic members: each side's default one (the
+//! The league's permanent members: each side's default heuristic (the
 //! expert captors, the rule-based target) and the extra ones a config adds
-//! (`[members] captors = ["greedy:4"]`). A member is in every learner's
-//! pool, drawn by PFSP and rated like a snapshot, and never trains. Which
-//! heuristics are members and which are held out is a decision every table
-//! states: a member cannot also be a held-out opponent.
+//! (`[members] captors = ["greedy:4", "ckpt:runs/coop-s1"]`): heuristics,
+//! and trained teams imported once as frozen copies (`pool::ensure_members`).
+//! A member is in every learner's pool, drawn by PFSP and rated like a
+//! snapshot, and never trains. Which teams are members and which are held
+//! out is a decision every table states: a member cannot also be a held-out
+//! opponent.
 
 use super::players::heuristic_name;
 use crate::controllers::ControllerSpec;
 use crate::env::Side;
 use serde::{Deserialize, Serialize};
 
-/// Extra permanent heuristic members, per side, as controller names
-/// (`greedy:K`, `random`, `still`). Empty by default; stored only when set.
+/// Extra permanent members, per side, as controller names: heuristics
+/// (`greedy:K`, `random`, `still`) and trained teams (`ckpt:PATH`, a
+/// checkpoint or a run folder's latest). Empty by default; stored only when
+/// set.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct MembersConfig {
-    /// Heuristic captor teams the target learners train against, beside
-    /// the expert captors (an ASZ-greedy planner: `greedy:4` decides in
-    /// about 1 ms for 3 captors, `greedy:2` in 4 ms).
+    /// Captor teams the target learners train against, beside the expert
+    /// captors (an ASZ-greedy planner: `greedy:4` decides in about 1 ms for
+    /// 3 captors, `greedy:2` in 4 ms; or a trained team, `ckpt:PATH`).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub captors: Vec<String>,
-    /// Heuristic targets the captor learners train against, beside the
-    /// rule-based target.
+    /// Targets the captor learners train against, beside the rule-based
+    /// target.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub target: Vec<String>,
 }
@@ -31,8 +35,8 @@ impl MembersConfig {
         self.captors.is_empty() && self.target.is_empty()
     }
 
-    /// Every permanent heuristic member of `side`: (player name, controller),
-    /// the default one first. Errors name the field.
+    /// Every permanent member of `side`: (player name, controller), the
+    /// default heuristic first. Errors name the field.
     pub fn of(&self, side: Side) -> Result<Vec<(String, ControllerSpec)>, String> {
         let (field, names) = match side {
             Side::Captors => ("captors", &self.captors),
@@ -44,19 +48,31 @@ impl MembersConfig {
                     "{} is already a member of every league",
                     heuristic_name(side)
                 ))
-            } else if spec.is_checkpoint() {
-                Some("a member here is a heuristic (greedy:K, random, still); a trained team joins the pool as a snapshot".into())
+            } else if matches!(spec, ControllerSpec::Checkpoint(c) if c.sampled) {
+                Some("a trained member plays as the league's snapshots do (`greedy_opponents`): name it `ckpt:PATH`".into())
             } else {
                 None
             }
         })?;
         let mut out = vec![(heuristic_name(side), ControllerSpec::Heuristic)];
-        out.extend(
-            extras
-                .into_iter()
-                .map(|spec| (member_name(&spec, side), spec)),
-        );
+        for spec in extras {
+            let name = member_name(&spec, side);
+            if out.iter().any(|(n, _)| *n == name) {
+                return Err(format!(
+                    "{field} = \"{spec}\": its player name {name} is another member's (two checkpoints of one name: give one another folder)"
+                ));
+            }
+            out.push((name, spec));
+        }
         Ok(out)
+    }
+
+    /// The player names of `side`'s extra members (all but the default
+    /// heuristic): the ones `matchmaking.members_share` draws.
+    pub fn extra_names(&self, side: Side) -> Vec<String> {
+        self.of(side)
+            .map(|all| all.into_iter().skip(1).map(|(n, _)| n).collect())
+            .unwrap_or_default()
     }
 
     /// The controller of the heuristic member called `player`, if it is one.
@@ -97,9 +113,40 @@ impl MembersConfig {
 }
 
 /// An extra member's player name: its controller and side
-/// (`greedy:4-captors`).
+/// (`greedy:4-captors`); for a trained team, its folder
+/// (`ckpt:runs/coop-s1` is `coop-s1-captors`, a checkpoint inside a run's
+/// `checkpoints/` is `RUN@CHECKPOINT-captors`). A name is also the member's
+/// folder under `players/`, so anything but letters, digits, `.`, `_`, `-`
+/// and `@` becomes `_`.
 fn member_name(spec: &ControllerSpec, side: Side) -> String {
-    format!("{spec}-{}", side.name())
+    let stem = match spec {
+        ControllerSpec::Checkpoint(c) => {
+            let parts: Vec<String> = c
+                .path
+                .components()
+                .filter_map(|p| match p {
+                    std::path::Component::Normal(s) => Some(s.to_string_lossy().into_owned()),
+                    _ => None,
+                })
+                .collect();
+            let stem = match parts.as_slice() {
+                [.., run, dir, ckpt] if dir == "checkpoints" => format!("{run}@{ckpt}"),
+                [.., last] => last.clone(),
+                [] => "checkpoint".into(),
+            };
+            stem.chars()
+                .map(|c| {
+                    if c.is_ascii_alphanumeric() || "._-@".contains(c) {
+                        c
+                    } else {
+                        '_'
+                    }
+                })
+                .collect()
+        }
+        _ => spec.to_string(),
+    };
+    format!("{stem}-{}", side.name())
 }
 
 #[cfg(test)]
@@ -143,6 +190,31 @@ mod tests {
         );
         assert_eq!(m.spec_of(Side::Captors, "captors-main"), None);
         assert_eq!(MembersConfig::default().of(Side::Target).unwrap().len(), 1);
+        assert_eq!(m.extra_names(Side::Target), ["still-target"]);
+    }
+
+    #[test]
+    fn a_trained_member_is_named_by_its_folder() {
+        let m = members(
+            &[
+                "ckpt:runs/coop-s1",
+                "ckpt:../runs/coop-s2/checkpoints/captors-000004800000/",
+                "ckpt:/tmp/odd name!",
+            ],
+            &[],
+        );
+        assert_eq!(
+            m.extra_names(Side::Captors),
+            [
+                "coop-s1-captors",
+                "coop-s2@captors-000004800000-captors",
+                "odd_name_-captors"
+            ]
+        );
+        assert!(m
+            .spec_of(Side::Captors, "coop-s1-captors")
+            .unwrap()
+            .is_checkpoint());
     }
 
     #[test]
@@ -155,9 +227,10 @@ mod tests {
             ),
             (members(&[], &["greedy:9"]), "target = \"greedy:9\""),
             (members(&["expert"], &[]), "already a member"),
+            (members(&["sample:runs/x"], &[]), "name it `ckpt:PATH`"),
             (
-                members(&["ckpt:runs/x"], &[]),
-                "a trained team joins the pool",
+                members(&["ckpt:a/coop", "ckpt:b/coop"], &[]),
+                "its player name coop-captors is another member's",
             ),
             (members(&["nonsense"], &[]), "unknown controller"),
         ] {

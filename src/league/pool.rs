@@ -13,15 +13,17 @@
 //! - Rows whose files are missing or fail their hashes are quarantined: the
 //!   league goes on without them.
 
+use super::config::LeagueConfig;
 use super::dir::LeagueDir;
-use super::members::MembersConfig;
 use super::players::{learner_name, Seat};
 use super::store::{Kind, NewPlayer, Player, Store};
+use crate::controllers::ControllerSpec;
 use crate::env::Side;
 use crate::learn::train::Trainer;
 use crate::nn::checkpoint::{read_meta, PoolMembership};
 use crate::nn::PolicySnapshot;
-use anyhow::{anyhow, Context, Result};
+use crate::protocol::Protocol;
+use anyhow::{anyhow, bail, Context, Result};
 
 /// What a learner may draw from the pool.
 #[derive(Clone, Debug, PartialEq)]
@@ -271,22 +273,108 @@ fn adopt(
     Ok(())
 }
 
-/// Adds each side's permanent heuristic members (the default one and the
-/// config's extras) to the store, once.
-pub fn ensure_heuristic_members(store: &Store, members: &MembersConfig) -> Result<()> {
+/// Adds each side's permanent members (the default heuristic and the
+/// config's extras) to the store, once: a heuristic as a row; a trained
+/// team as a frozen copy in `players/` with a snapshot row that has no
+/// parent (`import_member`). A member already recorded is left as it was
+/// recorded, whatever its source folder holds now.
+pub fn ensure_members(dir: &LeagueDir, store: &Store, cfg: &LeagueConfig) -> Result<()> {
     for side in [Side::Captors, Side::Target] {
-        for (name, _) in members.of(side).map_err(|e| anyhow!("members.{e}"))? {
-            store.add_player(&NewPlayer {
-                name,
-                side,
-                kind: Kind::Heuristic,
-                parent: None,
-                env_steps: 0,
-                curriculum_stage: 0,
-                checkpoint: None,
-            })?;
+        let field = format!("members.{}", side.name());
+        let members = cfg.members.of(side).map_err(|e| anyhow!("members.{e}"))?;
+        for (name, spec) in members {
+            match &spec {
+                ControllerSpec::Checkpoint(c) => {
+                    if store.players()?.iter().all(|p| p.name != name) {
+                        import_member(dir, store, cfg, side, &name, &c.path)
+                            .with_context(|| format!("{field} = \"{spec}\""))?;
+                    }
+                }
+                _ => {
+                    store.add_player(&NewPlayer {
+                        name,
+                        side,
+                        kind: Kind::Heuristic,
+                        parent: None,
+                        env_steps: 0,
+                        curriculum_stage: 0,
+                        checkpoint: None,
+                    })?;
+                }
+            }
         }
     }
+    Ok(())
+}
+
+/// Copies a trained team into `players/NAME` and records it: its weights
+/// verified (hashes, finite), its side and K the league's, and trained under
+/// a protocol the league's allows (a held-out league never takes a team
+/// trained on the Gibson test maps). A copy a killed start left complete is
+/// taken if it is the same checkpoint; anything else there is refused.
+fn import_member(
+    dir: &LeagueDir,
+    store: &Store,
+    cfg: &LeagueConfig,
+    side: Side,
+    name: &str,
+    source: &std::path::Path,
+) -> Result<()> {
+    let snap = PolicySnapshot::load(source, side)?;
+    let env = cfg.train_config(side.other()).env;
+    snap.meta
+        .check_fits(side, &env)
+        .map_err(|e| anyhow!("{}: {e}", snap.dir.display()))?;
+    if cfg.protocol == Protocol::HeldOut && snap.meta.protocol != Protocol::HeldOut {
+        bail!(
+            "{}: trained under the {} protocol, on the Gibson maps a held-out league tests on",
+            snap.dir.display(),
+            snap.meta.protocol.name()
+        );
+    }
+    let target = dir.players_dir().join(name);
+    if target.exists() {
+        let same = crate::util::sha256_file(&target.join("meta.json"))
+            .is_ok_and(|sha| sha == snap.meta_sha256)
+            && PolicySnapshot::load(&target, side).is_ok();
+        if !same {
+            bail!(
+                "{} exists and is not this checkpoint: move it away",
+                target.display()
+            );
+        }
+    } else {
+        std::fs::create_dir_all(dir.players_dir())?;
+        crate::nn::checkpoint::write_new_dir_atomically(&target, |tmp| {
+            for e in std::fs::read_dir(&snap.dir)
+                .with_context(|| format!("cannot read {}", snap.dir.display()))?
+            {
+                let path = e?.path();
+                if path.is_file() {
+                    std::fs::copy(&path, tmp.join(path.file_name().unwrap()))?;
+                }
+            }
+            Ok(())
+        })?;
+        // The copy, not the source, is what the league plays.
+        PolicySnapshot::load(&target, side)?;
+    }
+    store.add_player(&NewPlayer {
+        name: name.to_string(),
+        side,
+        kind: Kind::Snapshot,
+        parent: None,
+        env_steps: snap.meta.env_steps,
+        curriculum_stage: 0,
+        checkpoint: Some((
+            dir.relative(&target),
+            crate::util::sha256_file(&target.join("meta.json"))?,
+        )),
+    })?;
+    eprintln!(
+        "{name}: {} joins the pool as a permanent member",
+        snap.dir.display()
+    );
     Ok(())
 }
 

@@ -38,7 +38,7 @@ pub fn check(dir: &LeagueDir) -> (u64, Vec<u64>) {
     let mut steps = BTreeSet::new();
     for s in &snapshots {
         assert!(
-            steps.insert((s.side.name(), s.env_steps)),
+            steps.insert((s.side.name(), s.parent, s.env_steps)),
             "two snapshots of one state: {s:?}"
         );
     }
