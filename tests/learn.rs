@@ -23,7 +23,7 @@ fn chase_config(seed: u64) -> TrainConfig {
         num_envs: 16,
         rollout_steps: 40,
         checkpoint_every: 1000,
-        device: "cpu".into(),
+        device: t2e::learn::config::DeviceChoice::Cpu,
         protocol: t2e::protocol::Protocol::HeldOut,
         maps: "unused".into(),
         extra_maps: Default::default(),

@@ -282,7 +282,7 @@ fn tiny_config() -> TrainConfig {
         num_envs: 4,
         rollout_steps: 20,
         checkpoint_every: 1000,
-        device: "cpu".into(),
+        device: t2e::learn::config::DeviceChoice::Cpu,
         protocol: t2e::protocol::Protocol::HeldOut,
         maps: "unused".into(),
         extra_maps: Default::default(),

@@ -35,7 +35,7 @@ pub struct BenchArgs {
     pub iterations: usize,
     /// Device for --train: auto, cpu or cuda.
     #[arg(long)]
-    pub device: Option<String>,
+    pub device: Option<crate::learn::config::DeviceChoice>,
     /// Instead of the environment table, time a league learner's opponent
     /// inference (one pass per opponent, and stacked) against its own, per
     /// robot row, over --envs worlds.
@@ -121,7 +121,7 @@ fn matmul_peak_flops() -> f64 {
 fn time_training(args: &BenchArgs, path: &std::path::Path) -> Result<TrainTiming> {
     let mut cfg = crate::learn::train::TrainConfig::load(path)?;
     if let Some(d) = &args.device {
-        cfg.device = d.clone();
+        cfg.device = *d;
     }
     let maps = map::catalog::load_prepared(&cfg.maps)?;
     let mut trainer = crate::learn::train::Trainer::new(cfg.clone(), maps)?;

@@ -26,7 +26,7 @@ pub struct TrainArgs {
     pub total_env_steps: Option<u64>,
     /// Override the device: auto, cpu or cuda.
     #[arg(long)]
-    pub device: Option<String>,
+    pub device: Option<crate::learn::config::DeviceChoice>,
     /// Hide the progress bar (logs one line per checkpoint instead).
     #[arg(long)]
     pub quiet: bool,
@@ -72,7 +72,7 @@ pub fn run(args: TrainArgs) -> Result<()> {
         cfg.total_env_steps = s;
     }
     if let Some(d) = &args.device {
-        cfg.device = d.clone();
+        cfg.device = *d;
         cfg.validate()
             .map_err(|e| anyhow::anyhow!("--device: {e}"))?;
     }

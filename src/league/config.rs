@@ -278,7 +278,7 @@ impl LeagueConfig {
             num_envs: self.num_envs,
             rollout_steps: self.rollout_steps,
             checkpoint_every: self.checkpoint_every,
-            device: "cpu".into(),
+            device: crate::learn::config::DeviceChoice::Cpu,
             protocol: self.protocol,
             maps: self.maps.clone(),
             extra_maps: Default::default(),

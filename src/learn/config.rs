@@ -34,7 +34,7 @@ pub struct TrainConfig {
     /// Write checkpoints every this many iterations (and at the end).
     pub checkpoint_every: u64,
     /// "auto" (CUDA when tch sees a GPU), "cpu" or "cuda".
-    pub device: String,
+    pub device: DeviceChoice,
     /// "held-out" (train on generated maps, test on the unseen Gibson maps)
     /// or "paper" (train on the 26 Gibson maps, as the paper did). A config
     /// file must name it; the training maps must fit it (checked by content).
@@ -106,7 +106,7 @@ impl Default for TrainConfig {
             num_envs: 32,
             rollout_steps: 100,
             checkpoint_every: 25,
-            device: "auto".into(),
+            device: DeviceChoice::Auto,
             protocol: Protocol::HeldOut,
             maps: "generated:20".into(),
             extra_maps: ExtraMapsConfig::default(),
@@ -248,12 +248,6 @@ impl TrainConfig {
         if self.checkpoint_every == 0 {
             return Err("checkpoint_every = 0: must be at least 1 iteration".into());
         }
-        if !["auto", "cpu", "cuda"].contains(&self.device.as_str()) {
-            return Err(format!(
-                "device = \"{}\": expected auto, cpu or cuda",
-                self.device
-            ));
-        }
         let mut learners = 0;
         for (name, side_cfg, side) in [
             ("captors", &self.captors, Side::Captors),
@@ -317,8 +311,13 @@ impl TrainConfig {
         let mut c = self.clone();
         c.name = String::new();
         c.total_env_steps = 0;
-        c.device = String::new();
-        let json = serde_json::to_string(&c).expect("config serialises");
+        c.device = DeviceChoice::Auto;
+        // Where the device sits, the hashed text has held "" since the
+        // field was a string: stored runs and checkpoints record hashes of
+        // that text, so it stays (the device never changes what is learnt).
+        let json = serde_json::to_string(&c)
+            .expect("config serialises")
+            .replacen(r#""device":"auto""#, r#""device":"""#, 1);
         let mut h: u64 = 0xcbf2_9ce4_8422_2325;
         for b in json.bytes() {
             h ^= b as u64;
@@ -328,12 +327,23 @@ impl TrainConfig {
     }
 
     pub fn device(&self) -> Device {
-        match self.device.as_str() {
-            "cpu" => Device::Cpu,
-            "cuda" => Device::Cuda(0),
-            _ => Device::cuda_if_available(),
+        match self.device {
+            DeviceChoice::Cpu => Device::Cpu,
+            DeviceChoice::Cuda => Device::Cuda(0),
+            DeviceChoice::Auto => Device::cuda_if_available(),
         }
     }
+}
+
+/// Where a run trains (`device = "auto" | "cpu" | "cuda"`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum DeviceChoice {
+    /// CUDA when tch sees a GPU, else the CPU.
+    #[default]
+    Auto,
+    Cpu,
+    Cuda,
 }
 
 /// A run name becomes the folder `runs/NAME`: it must stay one plain
@@ -385,5 +395,20 @@ mod tests {
             ..TrainConfig::default()
         };
         assert_ne!(other.hash(), TrainConfig::default().hash());
+    }
+
+    #[test]
+    fn the_hash_ignores_the_device_and_keeps_the_value_stored_runs_recorded() {
+        let on = |device: &str| {
+            toml::from_str::<TrainConfig>(&format!("device = \"{device}\""))
+                .unwrap()
+                .hash()
+        };
+        assert_eq!(on("cpu"), on("cuda"));
+        assert_eq!(on("cpu"), on("auto"));
+        // The default config's hash as the code before `Device` computed
+        // it: checkpoints and run folders record this value, and resume and
+        // eval compare against it, so the hashed text must not move.
+        assert_eq!(TrainConfig::default().hash(), "048076f336ea4704");
     }
 }

@@ -10,7 +10,7 @@
 //! a `--resume` continues from.
 
 use super::acting::{gather_side, gather_worlds, sample};
-pub use super::config::{check_rollout, Role, SideConfig, TrainConfig};
+pub use super::config::{check_rollout, DeviceChoice, Role, SideConfig, TrainConfig};
 use super::learner::Learner;
 use super::maac::MaacLearner;
 use super::maddpg::MaddpgLearner;
@@ -252,7 +252,7 @@ impl Trainer {
             super::extra_maps::mix(&maps, &extra, cfg.extra_maps.share)
         };
         let device = cfg.device();
-        if cfg.device == "cuda" && !tch::Cuda::is_available() {
+        if cfg.device == DeviceChoice::Cuda && !tch::Cuda::is_available() {
             bail!("device = \"cuda\" but tch sees no CUDA device; use \"auto\" or \"cpu\"");
         }
         let mut env_cfg = cfg.env.clone();

@@ -78,7 +78,7 @@ pub fn tiny_train_config(
         num_envs: 2,
         rollout_steps: 10,
         total_env_steps: 20,
-        device: "cpu".into(),
+        device: t2e::learn::config::DeviceChoice::Cpu,
         protocol,
         maps: maps.into(),
         extra_maps: Default::default(),
