@@ -14,6 +14,7 @@ use crate::learn::maddpg::MaddpgConfig;
 use crate::learn::ppo::PpoConfig;
 use crate::learn::shaping::ShapingConfig;
 use crate::learn::train::{SideConfig, TrainConfig};
+use crate::learn::Algorithm;
 use crate::nn::NetConfig;
 use crate::protocol::Protocol;
 use anyhow::{anyhow, Context, Result};
@@ -74,7 +75,7 @@ pub struct LeagueConfig {
 #[serde(deny_unknown_fields, default)]
 pub struct LearnerConfig {
     /// "mappo", "ippo", "maddpg" or "maac".
-    pub algorithm: String,
+    pub algorithm: Algorithm,
     pub ppo: PpoConfig,
     /// MADDPG's settings (stored only where they differ from the defaults).
     #[serde(skip_serializing_if = "is_default")]
@@ -95,7 +96,7 @@ fn is_default<T: Default + PartialEq>(x: &T) -> bool {
 impl Default for LearnerConfig {
     fn default() -> Self {
         LearnerConfig {
-            algorithm: "mappo".into(),
+            algorithm: Algorithm::Mappo,
             ppo: PpoConfig {
                 minibatches: 4,
                 ..PpoConfig::default()
@@ -252,7 +253,7 @@ impl LeagueConfig {
     pub fn train_config(&self, side: Side) -> TrainConfig {
         let learner = self.learner(side);
         let learn = SideConfig {
-            play: learner.algorithm.clone(),
+            play: learner.algorithm.name().into(),
             ppo: learner.ppo.clone(),
             maddpg: learner.maddpg.clone(),
             maac: learner.maac.clone(),
@@ -365,13 +366,6 @@ impl LeagueConfig {
             ));
         }
         for side in [Side::Captors, Side::Target] {
-            let algo = &self.learner(side).algorithm;
-            if crate::learn::Algorithm::parse(algo).is_none() {
-                return Err(format!(
-                    "{}.algorithm = \"{algo}\": expected mappo, ippo, maddpg or maac",
-                    side.name()
-                ));
-            }
             self.train_config(side).validate()?;
         }
         Ok(())
@@ -391,6 +385,11 @@ mod tests {
         assert!(err.starts_with("curriculum.stages[1]"), "{err}");
         let err = LeagueConfig::parse("[target.ppo]\nentropy_coef = nan\n").unwrap_err();
         assert!(err.contains("target.ppo.entropy_coef"), "{err}");
+        let err = LeagueConfig::parse("[target]\nalgorithm = \"mapo\"\n").unwrap_err();
+        assert!(
+            err.contains("algorithm = \"mapo\"") && err.contains("`mappo`"),
+            "{err}"
+        );
         let err = LeagueConfig::parse("env_steps_per_learner = 0\n").unwrap_err();
         assert!(err.starts_with("env_steps_per_learner = 0"), "{err}");
         // An impossible rollout is named as such, not blamed on the budget.
