@@ -500,17 +500,20 @@ fn a_trained_team_joins_the_pool_as_a_frozen_member_and_a_paper_one_is_refused()
             + &format!("[members]\ncaptors = [\"ckpt:{}\"]\n", paper.display()),
     )
     .unwrap();
+    let paper_league = tmp.path().join("paper-league");
     let out = Command::new(bin())
         .args(["run", "--config"])
         .arg(&config)
         .arg("--dir")
-        .arg(tmp.path().join("paper-league"))
+        .arg(&paper_league)
         .output()
         .unwrap();
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success(), "{err}");
     assert!(
-        err.contains("members.captors = \"ckpt:") && err.contains("paper protocol"),
+        err.contains("paper.toml: members.captors = \"ckpt:") && err.contains("paper protocol"),
         "{err}"
     );
+    // Refused before anything is written: the mended config can start there.
+    assert!(!paper_league.exists());
 }

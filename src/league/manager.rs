@@ -95,6 +95,8 @@ pub fn run_with(
             cfg.protocol
                 .check_training_maps(&cfg.maps, &maps)
                 .map_err(|e| anyhow::anyhow!("{origin}: {e}"))?;
+            super::pool::check_trained_members(&cfg)
+                .map_err(|e| anyhow::anyhow!("{origin}: {e:#}"))?;
             std::fs::create_dir_all(&dir.root)
                 .with_context(|| format!("cannot create {}", dir.root.display()))?;
             (cfg, None)

@@ -307,6 +307,44 @@ pub fn ensure_members(dir: &LeagueDir, store: &Store, cfg: &LeagueConfig) -> Res
     Ok(())
 }
 
+/// Checks every trained member of a league about to start, before
+/// anything is written: a bad one is refused while the config can still be
+/// mended (a started league keeps its config).
+pub fn check_trained_members(cfg: &LeagueConfig) -> Result<()> {
+    for side in [Side::Captors, Side::Target] {
+        for (_, spec) in cfg.members.of(side).map_err(|e| anyhow!("members.{e}"))? {
+            if let ControllerSpec::Checkpoint(c) = &spec {
+                verified_member(cfg, side, &c.path)
+                    .with_context(|| format!("members.{} = \"{spec}\"", side.name()))?;
+            }
+        }
+    }
+    Ok(())
+}
+
+/// A trained team loaded for `side` of this league: weights verified
+/// (hashes, finite), its side and K the league's, trained under a protocol
+/// the league's allows.
+fn verified_member(
+    cfg: &LeagueConfig,
+    side: Side,
+    source: &std::path::Path,
+) -> Result<PolicySnapshot> {
+    let snap = PolicySnapshot::load(source, side)?;
+    let env = cfg.train_config(side.other()).env;
+    snap.meta
+        .check_fits(side, &env)
+        .map_err(|e| anyhow!("{}: {e}", snap.dir.display()))?;
+    if cfg.protocol == Protocol::HeldOut && snap.meta.protocol != Protocol::HeldOut {
+        bail!(
+            "{}: trained under the {} protocol, on the Gibson maps a held-out league tests on",
+            snap.dir.display(),
+            snap.meta.protocol.name()
+        );
+    }
+    Ok(snap)
+}
+
 /// Copies a trained team into `players/NAME` and records it: its weights
 /// verified (hashes, finite), its side and K the league's, and trained under
 /// a protocol the league's allows (a held-out league never takes a team
@@ -320,18 +358,7 @@ fn import_member(
     name: &str,
     source: &std::path::Path,
 ) -> Result<()> {
-    let snap = PolicySnapshot::load(source, side)?;
-    let env = cfg.train_config(side.other()).env;
-    snap.meta
-        .check_fits(side, &env)
-        .map_err(|e| anyhow!("{}: {e}", snap.dir.display()))?;
-    if cfg.protocol == Protocol::HeldOut && snap.meta.protocol != Protocol::HeldOut {
-        bail!(
-            "{}: trained under the {} protocol, on the Gibson maps a held-out league tests on",
-            snap.dir.display(),
-            snap.meta.protocol.name()
-        );
-    }
+    let snap = verified_member(cfg, side, source)?;
     let target = dir.players_dir().join(name);
     if target.exists() {
         let same = crate::util::sha256_file(&target.join("meta.json"))
