@@ -323,8 +323,9 @@ pub fn check_trained_members(cfg: &LeagueConfig) -> Result<()> {
 }
 
 /// A trained team loaded for `side` of this league: weights verified
-/// (hashes, finite), its side and K the league's, trained under a protocol
-/// the league's allows.
+/// (hashes, finite), its side and K the league's, and trained under a
+/// protocol the league's allows (a held-out league never takes a team
+/// trained on the Gibson test maps).
 fn verified_member(
     cfg: &LeagueConfig,
     side: Side,
@@ -345,10 +346,8 @@ fn verified_member(
     Ok(snap)
 }
 
-/// Copies a trained team into `players/NAME` and records it: its weights
-/// verified (hashes, finite), its side and K the league's, and trained under
-/// a protocol the league's allows (a held-out league never takes a team
-/// trained on the Gibson test maps). A copy a killed start left complete is
+/// Copies a trained team (checked by `verified_member`) into
+/// `players/NAME` and records it. A copy a killed start left complete is
 /// taken if it is the same checkpoint; anything else there is refused.
 fn import_member(
     dir: &LeagueDir,
