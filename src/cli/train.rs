@@ -73,8 +73,6 @@ pub fn run(args: TrainArgs) -> Result<()> {
     }
     if let Some(d) = &args.device {
         cfg.device = *d;
-        cfg.validate()
-            .map_err(|e| anyhow::anyhow!("--device: {e}"))?;
     }
     if cfg.protocol == crate::protocol::Protocol::HeldOut {
         refuse_test_maps(&cfg.maps)?;

@@ -279,13 +279,14 @@ fn adopt(
 /// parent (`import_member`). A member already recorded is left as it was
 /// recorded, whatever its source folder holds now.
 pub fn ensure_members(dir: &LeagueDir, store: &Store, cfg: &LeagueConfig) -> Result<()> {
+    let recorded = store.players()?;
     for side in [Side::Captors, Side::Target] {
         let field = format!("members.{}", side.name());
         let members = cfg.members.of(side).map_err(|e| anyhow!("members.{e}"))?;
         for (name, spec) in members {
             match &spec {
                 ControllerSpec::Checkpoint(c) => {
-                    if store.players()?.iter().all(|p| p.name != name) {
+                    if recorded.iter().all(|p| p.name != name) {
                         import_member(dir, store, cfg, side, &name, &c.path)
                             .with_context(|| format!("{field} = \"{spec}\""))?;
                     }
@@ -370,17 +371,8 @@ fn import_member(
             );
         }
     } else {
-        std::fs::create_dir_all(dir.players_dir())?;
         crate::nn::checkpoint::write_new_dir_atomically(&target, |tmp| {
-            for e in std::fs::read_dir(&snap.dir)
-                .with_context(|| format!("cannot read {}", snap.dir.display()))?
-            {
-                let path = e?.path();
-                if path.is_file() {
-                    std::fs::copy(&path, tmp.join(path.file_name().unwrap()))?;
-                }
-            }
-            Ok(())
+            crate::nn::checkpoint::copy_files(&snap.dir, tmp)
         })?;
         // The copy, not the source, is what the league plays.
         PolicySnapshot::load(&target, side)?;

@@ -722,13 +722,7 @@ pub fn export(dir: &LeagueDir, player: &str, out: &Path) -> Result<()> {
     }
     crate::nn::checkpoint::write_dir_atomically(out, |tmp| {
         let mut manifest = String::new();
-        for e in std::fs::read_dir(&src)? {
-            let path = e?.path();
-            if path.is_file() {
-                let name = path.file_name().unwrap().to_owned();
-                std::fs::copy(&path, tmp.join(&name))?;
-            }
-        }
+        crate::nn::checkpoint::copy_files(&src, tmp)?;
         std::fs::write(
             tmp.join("league-config.toml"),
             toml::to_string_pretty(&cfg).context("cannot write the league's config")?,

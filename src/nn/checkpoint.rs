@@ -224,6 +224,22 @@ fn exchange(_a: &Path, _b: &Path) -> std::io::Result<()> {
     Err(std::io::Error::from(std::io::ErrorKind::Unsupported))
 }
 
+/// Copies the plain files of the checkpoint folder `src` into `dst` (a
+/// temporary that `write_dir_atomically` or `write_new_dir_atomically` is
+/// filling): a snapshot frozen for a best response, exported, or imported
+/// into a league's pool.
+pub fn copy_files(src: &Path, dst: &Path) -> Result<()> {
+    for e in std::fs::read_dir(src).with_context(|| format!("cannot read {}", src.display()))? {
+        let path = e?.path();
+        if path.is_file() {
+            let name = path.file_name().context("a file without a name")?;
+            std::fs::copy(&path, dst.join(name))
+                .with_context(|| format!("cannot copy {}", path.display()))?;
+        }
+    }
+    Ok(())
+}
+
 /// Writes a folder atomically: `fill` writes into a temporary sibling, whose
 /// files are synced before it takes `dir`'s place. An existing `dir` with the
 /// same content is left alone; one with other content is swapped with the
