@@ -21,10 +21,10 @@
 #   EPISODES   evaluation episodes per map class [500]
 #   CELLS      "K:RATIO ..." [3:1.0 3:1.2 3:1.4 4:1.0 4:1.2 4:1.4]
 #   LEARNERS   [mappo ippo maddpg maac]
-#   PROTOCOLS  [paper]; "held-out" runs MAPPO only (the minimum)
+#   PROTOCOLS  [paper]; "held-out" runs MAPPO only
 #   ROLLOUT    rollout_steps per world and iteration [100]; every learner
 #              gets it. The base config is configs/cpu-3v1-1.0.toml, the CPU
-#              default (README, "Learning per CPU-minute"): its network for
+#              default (docs/results/cpu-default.md): its network for
 #              every learner, its PPO settings for MAPPO and IPPO, its
 #              [captors.maddpg] and [captors.maac] tables for those two
 #   JOBS       runs in parallel, each with one thread [1]

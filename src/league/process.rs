@@ -156,8 +156,16 @@ pub fn spawn(dir: &LeagueDir, role: Role, logs: &Path, host: Option<&str>) -> Re
             cmd.arg("league-evaluator");
         }
     };
-    if let StoreUrl::Postgres(_) = &dir.store {
-        cmd.env("T2E_STORE", dir.store.secret());
+    // Any store but the default league.db in the pool folder reaches the
+    // child, or a worker's learner would look for one there and refuse.
+    match &dir.store {
+        StoreUrl::Postgres(_) => {
+            cmd.env("T2E_STORE", dir.store.secret());
+        }
+        StoreUrl::Sqlite(path) if dir.store != StoreUrl::in_dir(&dir.root) => {
+            cmd.env("T2E_STORE", path);
+        }
+        StoreUrl::Sqlite(_) => {}
     }
     if let Some(h) = host {
         cmd.env("T2E_HOST", h);

@@ -1,0 +1,239 @@
+//! Every relative link in README.md and docs/ resolves, every page of docs/
+//! is in docs/SUMMARY.md, and no page speaks of how the work was organised.
+
+use std::collections::BTreeSet;
+use std::path::{Path, PathBuf};
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// README.md and every Markdown file under docs/, sorted.
+pub fn pages() -> Vec<PathBuf> {
+    fn walk(dir: &Path, out: &mut Vec<PathBuf>) {
+        for entry in std::fs::read_dir(dir).unwrap() {
+            let path = entry.unwrap().path();
+            if path.is_dir() {
+                walk(&path, out);
+            } else if path.extension().is_some_and(|e| e == "md") {
+                out.push(path);
+            }
+        }
+    }
+    let mut out = vec![root().join("README.md")];
+    walk(&root().join("docs"), &mut out);
+    out.sort();
+    out
+}
+
+/// The text of a Markdown page outside fenced code blocks and inline code,
+/// where links are not links.
+fn prose(text: &str) -> String {
+    let mut out = String::new();
+    let mut fenced = false;
+    for line in text.lines() {
+        if line.trim_start().starts_with("```") {
+            fenced = !fenced;
+            out.push('\n');
+            continue;
+        }
+        if fenced {
+            out.push('\n');
+            continue;
+        }
+        let mut in_code = false;
+        for c in line.chars() {
+            if c == '`' {
+                in_code = !in_code;
+            } else if !in_code {
+                out.push(c);
+            }
+        }
+        out.push('\n');
+    }
+    out
+}
+
+/// Link targets: `[text](target)`, `![alt](target)`, `[label]: target` and
+/// HTML `src="target"` / `href="target"`.
+pub fn link_targets(text: &str) -> Vec<String> {
+    let text = prose(text);
+    let mut out = Vec::new();
+    let bytes = text.as_bytes();
+    let mut i = 0;
+    while let Some(at) = text[i..].find("](") {
+        let start = i + at + 2;
+        let mut depth = 1;
+        let mut end = start;
+        while end < bytes.len() && bytes[end] != b'\n' {
+            match bytes[end] {
+                b'(' => depth += 1,
+                b')' => {
+                    depth -= 1;
+                    if depth == 0 {
+                        break;
+                    }
+                }
+                _ => {}
+            }
+            end += 1;
+        }
+        let inner = text[start..end].trim();
+        // `[a](<path with spaces>)` and `[a](path "title")`
+        let target = if let Some(rest) = inner.strip_prefix('<') {
+            rest.split('>').next().unwrap_or("")
+        } else {
+            inner.split_whitespace().next().unwrap_or("")
+        };
+        out.push(target.to_string());
+        i = end.max(start);
+    }
+    for line in text.lines() {
+        let t = line.trim_start();
+        if t.starts_with('[') {
+            if let Some(pos) = t.find("]: ") {
+                if !t[..pos].contains("](") {
+                    out.push(t[pos + 3..].split_whitespace().next().unwrap_or("").to_string());
+                }
+            }
+        }
+        for attr in ["src=\"", "href=\""] {
+            let mut rest = line;
+            while let Some(p) = rest.find(attr) {
+                rest = &rest[p + attr.len()..];
+                out.push(rest.split('"').next().unwrap_or("").to_string());
+            }
+        }
+    }
+    out
+}
+
+fn is_external(target: &str) -> bool {
+    target.is_empty()
+        || target.starts_with('#')
+        || target.contains("://")
+        || target.starts_with("mailto:")
+}
+
+/// `target` as a path from the page's folder, without its anchor.
+fn resolve(page: &Path, target: &str) -> PathBuf {
+    let path = target.split('#').next().unwrap();
+    page.parent().unwrap().join(path)
+}
+
+#[test]
+fn every_relative_link_resolves() {
+    let mut broken = Vec::new();
+    let mut checked = 0;
+    for page in pages() {
+        let text = std::fs::read_to_string(&page).unwrap();
+        for target in link_targets(&text) {
+            if is_external(&target) {
+                continue;
+            }
+            checked += 1;
+            if !resolve(&page, &target).exists() {
+                broken.push(format!(
+                    "{}: {target}",
+                    page.strip_prefix(root()).unwrap().display()
+                ));
+            }
+        }
+    }
+    assert!(checked > 100, "only {checked} relative links found: is the parser broken?");
+    assert!(broken.is_empty(), "{} broken links:\n{}", broken.len(), broken.join("\n"));
+}
+
+#[test]
+fn every_page_is_in_the_summary_and_every_summary_entry_exists() {
+    let docs = root().join("docs");
+    let summary_path = docs.join("SUMMARY.md");
+    let summary = std::fs::read_to_string(&summary_path).expect("docs/SUMMARY.md");
+    let listed: BTreeSet<PathBuf> = link_targets(&summary)
+        .iter()
+        .filter(|t| !is_external(t))
+        .map(|t| normalise(&resolve(&summary_path, t)))
+        .collect();
+    let missing_files: Vec<_> = listed.iter().filter(|p| !p.exists()).collect();
+    assert!(missing_files.is_empty(), "SUMMARY.md lists pages that do not exist: {missing_files:?}");
+    let unlisted: Vec<String> = pages()
+        .into_iter()
+        .filter(|p| p.starts_with(&docs) && *p != summary_path)
+        .filter(|p| !listed.contains(&normalise(p)))
+        .map(|p| p.strip_prefix(root()).unwrap().display().to_string())
+        .collect();
+    assert!(unlisted.is_empty(), "pages missing from docs/SUMMARY.md:\n{}", unlisted.join("\n"));
+}
+
+fn normalise(path: &Path) -> PathBuf {
+    let mut out = PathBuf::new();
+    for part in path.components() {
+        match part {
+            std::path::Component::ParentDir => {
+                out.pop();
+            }
+            std::path::Component::CurDir => {}
+            other => out.push(other),
+        }
+    }
+    out
+}
+
+/// Words about how the work was organised, which mean nothing to a reader.
+pub fn process_words(text: &str) -> Vec<String> {
+    let lower = text.to_lowercase();
+    let mut found = Vec::new();
+    for word in ["stop", "stops", "issue", "issues", "goal"] {
+        let needle = format!("{word} ");
+        let mut from = 0;
+        while let Some(p) = lower[from..].find(&needle) {
+            let at = from + p;
+            let before = lower[..at].chars().next_back();
+            let after = &lower[at + needle.len()..];
+            let boundary = before.is_none_or(|c| !c.is_alphanumeric());
+            if boundary && after.starts_with(|c: char| c.is_ascii_digit()) {
+                let end = (at + needle.len() + 4).min(lower.len());
+                found.push(lower[at..end].to_string());
+            }
+            from = at + needle.len();
+        }
+    }
+    if lower.contains("session") {
+        found.push("session".to_string());
+    }
+    found
+}
+
+#[test]
+fn no_page_or_config_speaks_of_stops_issues_or_sessions() {
+    let mut files = pages();
+    for dir in ["configs", "docs"] {
+        fn walk(dir: &Path, out: &mut Vec<PathBuf>) {
+            for entry in std::fs::read_dir(dir).unwrap() {
+                let path = entry.unwrap().path();
+                if path.is_dir() {
+                    walk(&path, out);
+                } else if path.extension().is_some_and(|e| e == "toml" || e == "sh") {
+                    out.push(path);
+                }
+            }
+        }
+        walk(&root().join(dir), &mut files);
+    }
+    let mut hits = Vec::new();
+    for file in files {
+        let text = std::fs::read_to_string(&file).unwrap();
+        for word in process_words(&text) {
+            hits.push(format!("{}: {word}", file.strip_prefix(root()).unwrap().display()));
+        }
+    }
+    assert!(hits.is_empty(), "{} mentions:\n{}", hits.len(), hits.join("\n"));
+}
+
+#[test]
+fn the_parsers_find_what_they_should() {
+    let text = "see [a](x.md) and ![p](img/a.png \"t\"), `[no](code.md)`\n\
+                ```\n[no](fenced.md)\n```\n[ref]: y.md\n<img src=\"z.png\">";
+    assert_eq!(link_targets(text), vec!["x.md", "img/a.png", "y.md", "z.png"]);
+    assert_eq!(process_words("Stop 29's run; issue 17; non-stop 4; a session"), vec!["stop 29'", "issue 17", "session"]);
+}

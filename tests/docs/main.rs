@@ -1,0 +1,9 @@
+//! The documentation checked against the code: every relative link in
+//! README.md and docs/ resolves, every page is in docs/SUMMARY.md, the CLI
+//! reference is what the binary generates, the config references list every
+//! field, and the README's quick start runs.
+mod cli_reference;
+mod config_reference;
+mod configs;
+mod links;
+mod quickstart;
