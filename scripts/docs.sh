@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Builds the documentation: regenerates the CLI reference and the man page
+# Builds the documentation: regenerates the CLI reference and the man pages
 # from the binary's clap definitions, then builds the mdBook in docs/ into
 # target/book/ (open target/book/index.html). Installs mdbook with cargo if
 # it is missing.

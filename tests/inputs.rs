@@ -1,6 +1,7 @@
-//! Bad inputs and faults a new user meets in `maps`, `eval`, `table` and
-//! `render`: contradictory class lists, table cells given twice, an edited
-//! checkpoint sidecar, a render killed while writing, negative list values.
+//! Bad inputs and faults a new user meets in `maps`, `eval`, `table`,
+//! `render` and the league verbs: contradictory class lists, table cells
+//! given twice, an edited checkpoint sidecar, a render killed while writing,
+//! negative list values, a league folder not given, `--watch 5s`.
 //! Each test failed before its fix: the tool picked one input silently,
 //! relabelled results, lost a previous file or gave clap's error instead of
 //! ours.
@@ -567,4 +568,192 @@ fn train_for_a_wall_clock_budget_with_periodic_evaluation() {
         "the final checkpoint is evaluated too"
     );
     assert!(run.join("eval.png").exists());
+}
+
+// ---- The league verbs: where the league is, --pool, --watch ----------------
+
+/// The tiny league's config, as a league stores it.
+fn stored_config() -> String {
+    let cfg = t2e::league::config::LeagueConfig::parse(common::league::TINY_LEAGUE).unwrap();
+    toml::to_string_pretty(&cfg).unwrap()
+}
+
+/// A league store made by hand (the tiny league's config and an identity,
+/// no players): enough for `status`, and far cheaper than running one.
+fn league_store(store: &t2e::league::store::StoreUrl) {
+    let s = t2e::league::store::Store::open(store).unwrap();
+    s.config_once(&stored_config()).unwrap();
+    s.set_league_id_once("0123456789abcdef").unwrap();
+}
+
+/// A league folder at `root/rel`, as `run` leaves one (league.db and
+/// config.toml in it).
+fn league_folder(root: &Path, rel: &str) -> PathBuf {
+    let dir = root.join(rel);
+    std::fs::create_dir_all(&dir).unwrap();
+    league_store(&t2e::league::store::StoreUrl::in_dir(&dir));
+    std::fs::write(dir.join("config.toml"), stored_config()).unwrap();
+    dir
+}
+
+/// `t2e-league ARGS` run in `cwd`: (success, stdout, stderr).
+fn t2e_in(cwd: &Path, args: &[&str]) -> (bool, String, String) {
+    let out = Command::new(BIN)
+        .args(args)
+        .current_dir(cwd)
+        .output()
+        .unwrap();
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+#[test]
+fn without_dir_the_league_verbs_find_the_only_league_under_runs_league() {
+    let tmp = tempfile::tempdir().unwrap();
+    let root = tmp.path();
+    league_folder(root, "runs/league/kill-test");
+    // A folder without a league beside it is not a candidate.
+    std::fs::create_dir_all(root.join("runs/league/notes")).unwrap();
+    let (ok, out, err) = t2e_in(root, &["status", "--json"]);
+    assert!(ok, "{err}");
+    let json: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(json["league"], "kill-test");
+    assert_eq!(json["dir"], "runs/league/kill-test");
+    assert!(
+        err.contains("league folder: runs/league/kill-test"),
+        "{err}"
+    );
+    // export and exploit look in the same place: they get as far as the player.
+    for args in [
+        &["export", "nobody", "--out", "x"][..],
+        &["exploit", "nobody", "--budget", "1000"],
+    ] {
+        let (ok, _, err) = t2e_in(root, args);
+        assert!(!ok, "{args:?} succeeded");
+        assert!(
+            err.contains("league folder: runs/league/kill-test")
+                && err.contains("nobody")
+                && !err.contains("holds no league"),
+            "{args:?}: {err}"
+        );
+    }
+    // An explicit --dir wins, and says nothing of the search.
+    let (ok, _, err) = t2e_in(root, &["status", "--dir", "runs/league/kill-test"]);
+    assert!(ok && !err.contains("league folder:"), "{err}");
+}
+
+#[test]
+fn without_dir_several_leagues_or_none_are_listed_and_dir_asked_for() {
+    let tmp = tempfile::tempdir().unwrap();
+    let root = tmp.path();
+    let (ok, _, err) = t2e_in(root, &["status"]);
+    assert!(
+        !ok && err.contains("no runs/league/ folder") && err.contains("--dir"),
+        "{err}"
+    );
+    std::fs::create_dir_all(root.join("runs/league/notes")).unwrap();
+    let (ok, _, err) = t2e_in(root, &["status"]);
+    assert!(
+        !ok && err.contains("found only: runs/league/notes") && err.contains("--dir"),
+        "{err}"
+    );
+    league_folder(root, "runs/league/a");
+    league_folder(root, "runs/league/b");
+    for args in [
+        &["status"][..],
+        &["export", "captors-main", "--out", "x"],
+        &["exploit", "target-main", "--budget", "1000"],
+    ] {
+        let (ok, _, err) = t2e_in(root, args);
+        assert!(
+            !ok && err.contains("holds 2 league folders: runs/league/a, runs/league/b")
+                && err.contains("--dir"),
+            "{args:?}: {err}"
+        );
+    }
+}
+
+#[test]
+fn status_watch_takes_a_duration_as_for_does() {
+    use std::io::{BufRead, BufReader};
+    use std::process::Stdio;
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = league_folder(tmp.path(), "league");
+    let d = dir.to_str().unwrap();
+    let mut child = Command::new(BIN)
+        .args(["status", "--dir", d, "--watch", "5s"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // The first report comes at once; the next one 5 s later.
+    let stdout = child.stdout.take().unwrap();
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        for line in BufReader::new(stdout).lines().map_while(Result::ok) {
+            if tx.send(line).is_err() {
+                break;
+            }
+        }
+    });
+    let mut seen = false;
+    while let Ok(line) = rx.recv_timeout(std::time::Duration::from_secs(60)) {
+        if line.contains("league kill-test") {
+            seen = true;
+            break;
+        }
+    }
+    let still_running = child.try_wait().unwrap().is_none();
+    child.kill().ok();
+    let out = child.wait_with_output().unwrap();
+    assert!(
+        seen && still_running,
+        "status --watch 5s: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    for (watch, says) in [
+        ("0.2s", "--watch 0.2s: must be at least 0.5s"),
+        ("5x", "--watch 5x: unknown unit 'x'"),
+        ("soon", "--watch soon: expected a duration"),
+    ] {
+        let (ok, _, err) = t2e_in(tmp.path(), &["status", "--dir", d, "--watch", watch]);
+        assert!(!ok && err.contains(says), "--watch {watch}: {err}");
+    }
+}
+
+#[test]
+fn with_store_status_takes_the_shared_pool_as_pool_like_export() {
+    let tmp = tempfile::tempdir().unwrap();
+    let root = tmp.path();
+    // A store that is not league.db in a league folder: a SQLite file.
+    let db = root.join("shared.db");
+    league_store(&t2e::league::store::StoreUrl::Sqlite(db.clone()));
+    let pool = root.join("pool");
+    std::fs::create_dir_all(&pool).unwrap();
+    let (db, pool) = (db.to_str().unwrap(), pool.to_str().unwrap());
+    let (ok, out, err) = t2e_in(root, &["status", "--store", db, "--pool", pool, "--json"]);
+    assert!(ok, "{err}");
+    let json: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(json["league"], "kill-test");
+    assert_eq!(json["dir"], pool);
+    // Without --pool the report comes from the store alone.
+    let (ok, _, err) = t2e_in(root, &["status", "--store", db]);
+    assert!(ok, "{err}");
+    // --dir is the league folder, never the pool.
+    let (ok, _, err) = t2e_in(root, &["status", "--store", db, "--dir", pool]);
+    assert!(!ok && err.contains("--pool DIR"), "{err}");
+    // exploit and export need the pool, as --pool.
+    for args in [
+        &["exploit", "target-main", "--store", db, "--budget", "1000"][..],
+        &["export", "target-main", "--store", db, "--out", "x"],
+    ] {
+        let (ok, _, err) = t2e_in(root, args);
+        assert!(!ok && err.contains("give --pool DIR"), "{args:?}: {err}");
+    }
+    // --pool goes with --store.
+    let (ok, _, err) = t2e_in(root, &["status", "--pool", pool]);
+    assert!(!ok && err.contains("--pool goes with --store"), "{err}");
 }

@@ -147,6 +147,7 @@ fn degenerate_options_are_refused() {
             device: None,
             opponents: false,
             store: None,
+            threads: 0,
             writers: vec![1],
         };
         let err = t2e::cli::bench::run(args).unwrap_err().to_string();

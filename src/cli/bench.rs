@@ -25,8 +25,7 @@ pub struct BenchArgs {
     /// Instead of the environment table, time whole training iterations
     /// (rollout + update) of this training config, any learner, and print
     /// where the time goes and the network FLOP/s against the cores' peak.
-    /// Repeat it to compare configs side by side in one run (`--ppo` is the
-    /// older name).
+    /// Repeat it to compare configs side by side in one run.
     #[arg(long, alias = "ppo")]
     pub train: Vec<std::path::PathBuf>,
     /// Iterations to time, after warming up (one iteration; an off-policy
@@ -46,6 +45,11 @@ pub struct BenchArgs {
     /// writers: a postgres:// URL, or `sqlite` for a fresh SQLite file.
     #[arg(long, value_name = "URL")]
     pub store: Option<String>,
+    /// Threads for libtorch and rayon, at most 256. Default (0):
+    /// OMP_NUM_THREADS if set, else the cores the load average leaves free.
+    /// The table says which count it used.
+    #[arg(long, default_value_t = 0, value_name = "N")]
+    pub threads: usize,
     /// Concurrent writers for --store, comma-separated.
     #[arg(long, value_delimiter = ',', default_value = "1,4,8")]
     pub writers: Vec<usize>,
@@ -230,6 +234,26 @@ pub fn run(args: BenchArgs) -> Result<()> {
     }
     if args.iterations == 0 {
         anyhow::bail!("--iterations 0: needs at least one timed iteration");
+    }
+    if args.threads > 256 {
+        anyhow::bail!("--threads {}: at most 256", args.threads);
+    }
+    let (threads, why) = crate::util::thread_count(args.threads);
+    // An error means this process already started the pool (a library
+    // caller running a second command): that pool stays.
+    let _ = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build_global();
+    tch::set_num_threads(threads as i32);
+    eprintln!("bench: {threads} threads ({why})");
+    if let Some(load) = crate::util::load_average() {
+        // Timings on a shared machine measure the other processes too.
+        if load >= 0.5 {
+            eprintln!(
+                "warning: the machine is busy (load {load:.1} on {} cores): these timings will read low; compare ratios measured side by side",
+                crate::util::cores()
+            );
+        }
     }
     if !args.train.is_empty() {
         return train_table(&args, &args.train);

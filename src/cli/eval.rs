@@ -12,12 +12,18 @@ use std::sync::Arc;
 
 #[derive(clap::Args, Debug)]
 pub struct EvalArgs {
-    /// Captor controller: heuristic (expert captors), greedy or greedy:K (ASZ-greedy),
-    /// random, still, ckpt:PATH (a trained policy, its most likely action, the
-    /// paper's evaluation) or sample:PATH (the same policy, sampling its actions).
+    /// Captor controller: heuristic (expert captors), greedy (ASZ-greedy),
+    /// greedy:K (ASZ-greedy on K-cell squares, K from 1 to 8: greedy:2
+    /// marches on 0.10 m cells; K here is not --k), random, still, ckpt:PATH
+    /// (a trained policy, its most likely action, the paper's evaluation) or
+    /// sample:PATH (the same policy, sampling its actions).
     #[arg(long, default_value = "heuristic")]
     pub captors: ControllerSpec,
-    /// Target controller: heuristic (rule-based target), random, still, ckpt:PATH or sample:PATH.
+    /// Target controller: heuristic (rule-based target), greedy or greedy:K
+    /// (ASZ-greedy's mirror: the move that leaves the target the largest
+    /// ASZ; K as for --captors), random, still, ckpt:PATH (a trained policy,
+    /// its most likely action) or sample:PATH (the same policy, sampling its
+    /// actions).
     #[arg(long, default_value = "heuristic")]
     pub target: ControllerSpec,
     /// Map sets, comma-separated: small, medium, large (Gibson classes), gibson,
@@ -43,7 +49,7 @@ pub struct EvalArgs {
         allow_hyphen_values = true
     )]
     pub speed_ratio: Vec<f64>,
-    /// Test episodes per setting.
+    /// Test episodes per setting (500, the paper's protocol).
     #[arg(long, default_value_t = 500)]
     pub episodes: usize,
     /// Steps before an episode counts as failed.

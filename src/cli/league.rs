@@ -8,17 +8,19 @@ use crate::league::supervision::{CannotStart, Outcome};
 use crate::league::worker::WorkerOptions;
 use crate::league::{learner, manager, process, status};
 use anyhow::{bail, Context, Result};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 
 #[derive(clap::Args, Debug)]
 pub struct RunArgs {
     /// League config (TOML; see configs/league-*.toml). Needed to start a
-    /// league; a directory that holds one resumes it.
+    /// league; to resume one, --dir alone is enough.
     #[arg(long)]
     pub config: Option<PathBuf>,
-    /// League directory (default: runs/league/NAME, NAME from the config).
-    #[arg(long)]
+    /// League folder (default: runs/league/NAME, NAME from the config); give
+    /// it alone to resume that league. With --store: the folder of the local
+    /// workers' logs.
+    #[arg(long, value_name = "DIR")]
     pub dir: Option<PathBuf>,
     /// Stop after this long (e.g. 90s, 10m, 2h): every learner finishes its
     /// iteration and checkpoints. Without it, the league runs to its budget.
@@ -68,18 +70,24 @@ pub struct WorkerArgs {
 
 #[derive(clap::Args, Debug)]
 pub struct StatusArgs {
-    /// League directory (with --store: the pool folder, optional).
-    #[arg(long, default_value = "runs/league/default")]
-    pub dir: PathBuf,
-    /// The league's store when it is not league.db in --dir (as `run --store`).
+    /// League folder (default: the only league folder under runs/league/).
+    #[arg(long, value_name = "DIR")]
+    pub dir: Option<PathBuf>,
+    /// The league's store when it is not league.db in the league folder (as
+    /// `run --store`).
     #[arg(long, value_name = "URL")]
     pub store: Option<String>,
-    /// Print the documented JSON shape (see src/league/status.rs) instead of tables.
+    /// The pool folder every host shares (with --store, as `run --pool`;
+    /// optional here: the report comes from the store).
+    #[arg(long, value_name = "DIR")]
+    pub pool: Option<PathBuf>,
+    /// Print JSON instead of tables (fields: docs/reference/status-json.md).
     #[arg(long)]
     pub json: bool,
-    /// Redraw every this many seconds until Ctrl-C.
-    #[arg(long, value_name = "SECONDS")]
-    pub watch: Option<f64>,
+    /// Redraw every DURATION (e.g. 5s, 1m; a bare number is seconds; at
+    /// least 0.5s) until Ctrl-C.
+    #[arg(long, value_name = "DURATION", allow_hyphen_values = true)]
+    pub watch: Option<String>,
     /// Also draw ratings over time and the payoff matrix as a heat map (PNG).
     #[arg(long, value_name = "FILE.png")]
     pub plot: Option<PathBuf>,
@@ -89,17 +97,19 @@ pub struct StatusArgs {
 pub struct ExportArgs {
     /// Player name (as `status` lists it) or id.
     pub player: String,
-    /// League directory.
-    #[arg(long, default_value = "runs/league/default")]
-    pub dir: PathBuf,
-    /// The league's store when it is not league.db in --dir (as `run --store`).
+    /// League folder (default: the only league folder under runs/league/).
+    #[arg(long, value_name = "DIR")]
+    pub dir: Option<PathBuf>,
+    /// The league's store when it is not league.db in the league folder (as
+    /// `run --store`).
     #[arg(long, value_name = "URL")]
     pub store: Option<String>,
-    /// The pool folder (with --store): where the player's files are.
+    /// The pool folder every host shares (with --store, as `run --pool`):
+    /// where the player's files are.
     #[arg(long, value_name = "DIR")]
     pub pool: Option<PathBuf>,
     /// Folder to create: weights, sidecar, league config, rating history, SHA256SUMS.
-    #[arg(long)]
+    #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
 }
 
@@ -108,12 +118,17 @@ pub struct ExploitArgs {
     /// The frozen player: a name or id as `status` lists it, or a checkpoint
     /// folder of this league (a snapshot or an `export`).
     pub player: String,
-    /// League directory (with --store: the pool folder).
-    #[arg(long, default_value = "runs/league/default")]
-    pub dir: PathBuf,
-    /// The league's store when it is not league.db in --dir (as `run --store`).
+    /// League folder (default: the only league folder under runs/league/).
+    #[arg(long, value_name = "DIR")]
+    pub dir: Option<PathBuf>,
+    /// The league's store when it is not league.db in the league folder (as
+    /// `run --store`).
     #[arg(long, value_name = "URL")]
     pub store: Option<String>,
+    /// The pool folder every host shares (with --store, as `run --pool`):
+    /// the player's files, and where the best response is written.
+    #[arg(long, value_name = "DIR")]
+    pub pool: Option<PathBuf>,
     /// How long the best response trains: env steps (200000) or training
     /// wall-clock (90s, 10m, 2h).
     #[arg(long, allow_hyphen_values = true)]
@@ -125,8 +140,10 @@ pub struct ExploitArgs {
     /// Evaluation map sets, comma-separated (as `eval --maps`); one row each.
     #[arg(long, default_value = "small,medium,large", value_delimiter = ',')]
     pub maps: Vec<String>,
-    /// Evaluation episodes per map set.
-    #[arg(long, default_value_t = 200)]
+    /// Evaluation episodes per map set: 500, as `eval --episodes` (the
+    /// paper's protocol). The league results in docs/ give --episodes 100,
+    /// to fit two CPU cores.
+    #[arg(long, default_value_t = 500)]
     pub episodes: usize,
     /// Steps before an evaluation episode counts as escaped (the paper tests on 500).
     #[arg(long, default_value_t = 500)]
@@ -173,7 +190,7 @@ pub fn run(args: RunArgs) -> Result<()> {
         (None, Some(c)) => {
             let cfg = crate::league::config::LeagueConfig::load(c)?;
             let name = crate::util::safe_component(&cfg.name, 100);
-            PathBuf::from("runs/league").join(name)
+            PathBuf::from(LEAGUES).join(name)
         }
         (None, None) => bail!(
             "give --config configs/league-*.toml to start a league, or --dir DIR to resume one"
@@ -209,12 +226,104 @@ pub fn run(args: RunArgs) -> Result<()> {
     manager::run_with(&league, args.config.as_deref(), run_for, &STOP, &launch)
 }
 
-/// The league directory of `--dir` and `--store`: league.db in it by default.
-fn league_dir(dir: &std::path::Path, store: Option<&str>) -> Result<LeagueDir> {
-    Ok(match store {
-        None => LeagueDir::new(dir),
-        Some(s) => LeagueDir::with_store(dir, StoreUrl::parse(s).map_err(anyhow::Error::msg)?),
-    })
+/// Where status, export and exploit look for a league without --dir.
+pub const LEAGUES: &str = "runs/league";
+
+/// Whether `dir` holds a league: its store, config or identity.
+fn holds_league(dir: &Path) -> bool {
+    ["league.db", "config.toml", "league.json"]
+        .iter()
+        .any(|f| dir.join(f).is_file())
+}
+
+/// The league folder of status, export and exploit: `--dir` when given,
+/// else the one league folder under runs/league/ (said on stderr). None or
+/// several is an error that lists what is there.
+pub fn find_league_dir(dir: Option<&Path>) -> Result<PathBuf> {
+    if let Some(d) = dir {
+        return Ok(d.to_path_buf());
+    }
+    let base = Path::new(LEAGUES);
+    let Ok(entries) = std::fs::read_dir(base) else {
+        bail!(
+            "no --dir given, and there is no {LEAGUES}/ folder here: give --dir DIR, the league folder `run` made \
+             (`run --config C` makes {LEAGUES}/NAME, NAME from the config)"
+        );
+    };
+    let (mut leagues, mut others) = (Vec::new(), Vec::new());
+    for e in entries.flatten() {
+        let path = e.path();
+        if !path.is_dir() {
+            continue;
+        }
+        if holds_league(&path) {
+            leagues.push(path);
+        } else {
+            others.push(path);
+        }
+    }
+    leagues.sort();
+    others.sort();
+    let list = |paths: &[PathBuf]| {
+        paths
+            .iter()
+            .map(|p| p.display().to_string())
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    match leagues.len() {
+        1 => {
+            let d = leagues.remove(0);
+            eprintln!(
+                "league folder: {} (the only one under {LEAGUES}/; --dir picks another)",
+                d.display()
+            );
+            Ok(d)
+        }
+        0 if others.is_empty() => bail!(
+            "no --dir given, and {LEAGUES}/ holds no league folder: give --dir DIR, the league folder `run` made"
+        ),
+        0 => bail!(
+            "no --dir given, and no folder under {LEAGUES}/ holds a league (league.db, config.toml or league.json); \
+             found only: {}. Give --dir DIR, the league folder `run` made",
+            list(&others)
+        ),
+        n => bail!(
+            "no --dir given, and {LEAGUES}/ holds {n} league folders: {}. Give --dir with the one you mean",
+            list(&leagues)
+        ),
+    }
+}
+
+/// The league of status, export and exploit: with --store, the store and
+/// the shared pool (--pool, required when `pool_needed`); without, the
+/// league folder (`find_league_dir`) and league.db in it.
+fn locate_league(
+    dir: Option<&Path>,
+    store: Option<&str>,
+    pool: Option<&Path>,
+    pool_needed: &str,
+) -> Result<LeagueDir> {
+    let Some(store) = store else {
+        if pool.is_some() {
+            bail!("--pool goes with --store URL (a league whose store is not league.db in its folder)");
+        }
+        return Ok(LeagueDir::new(find_league_dir(dir)?));
+    };
+    let url = StoreUrl::parse(store).map_err(anyhow::Error::msg)?;
+    if dir.is_some() {
+        bail!("--dir with --store: give the shared pool folder as --pool DIR (as `run`, `export` and `worker` take it)");
+    }
+    match pool {
+        Some(p) => Ok(LeagueDir::with_store(p, url)),
+        None if pool_needed.is_empty() => {
+            // No pool: the report comes from the store alone; it names the
+            // store where it would name the folder.
+            let root = PathBuf::from(url.to_string());
+            Ok(LeagueDir::with_store(root, url))
+        }
+        None => bail!("--store: give --pool DIR too, the folder every host shares ({pool_needed})"),
+    }
 }
 
 pub fn worker(args: WorkerArgs) -> Result<()> {
@@ -256,11 +365,27 @@ pub fn worker(args: WorkerArgs) -> Result<()> {
 }
 
 pub fn status(args: StatusArgs) -> Result<()> {
-    let dir = league_dir(&args.dir, args.store.as_deref())?;
-    if let Some(w) = args.watch {
-        if !(w.is_finite() && w >= 0.5) {
-            bail!("--watch {w}: must be at least 0.5 seconds");
+    let watch = args
+        .watch
+        .as_deref()
+        .map(|t| crate::util::parse_duration("--watch", t))
+        .transpose()
+        .map_err(anyhow::Error::msg)?;
+    if let Some(w) = watch {
+        if w.as_secs_f64() < 0.5 {
+            bail!(
+                "--watch {}: must be at least 0.5s",
+                args.watch.as_deref().unwrap_or("")
+            );
         }
+    }
+    let dir = locate_league(
+        args.dir.as_deref(),
+        args.store.as_deref(),
+        args.pool.as_deref(),
+        "",
+    )?;
+    if watch.is_some() {
         on_ctrl_c()?;
     }
     loop {
@@ -271,13 +396,13 @@ pub fn status(args: StatusArgs) -> Result<()> {
         if args.json {
             println!("{}", serde_json::to_string_pretty(&r)?);
         } else {
-            if args.watch.is_some() {
+            if watch.is_some() {
                 print!("\x1b[2J\x1b[H");
             }
             print!("{}", status::render(&r));
         }
-        let Some(w) = args.watch else { break };
-        let until = std::time::Instant::now() + std::time::Duration::from_secs_f64(w);
+        let Some(w) = watch else { break };
+        let until = std::time::Instant::now() + w;
         while std::time::Instant::now() < until {
             if STOP.load(Ordering::SeqCst) {
                 return Ok(());
@@ -289,14 +414,12 @@ pub fn status(args: StatusArgs) -> Result<()> {
 }
 
 pub fn export(args: ExportArgs) -> Result<()> {
-    let dir = match (&args.store, &args.pool) {
-        (Some(_), None) => {
-            bail!("--store: give --pool DIR too, the folder that holds the players' files")
-        }
-        (Some(s), Some(pool)) => league_dir(pool, Some(s))?,
-        (None, Some(_)) => bail!("--pool goes with --store URL"),
-        (None, None) => LeagueDir::new(&args.dir),
-    };
+    let dir = locate_league(
+        args.dir.as_deref(),
+        args.store.as_deref(),
+        args.pool.as_deref(),
+        "it holds the players' files",
+    )?;
     status::export(&dir, &args.player, &args.out)?;
     println!("exported {} -> {}", args.player, args.out.display());
     Ok(())
@@ -304,7 +427,12 @@ pub fn export(args: ExportArgs) -> Result<()> {
 
 pub fn exploit(args: ExploitArgs) -> Result<()> {
     use crate::league::exploit::{self, Budget, ExploitOptions, ExploitOutcome};
-    let dir = league_dir(&args.dir, args.store.as_deref())?;
+    let dir = locate_league(
+        args.dir.as_deref(),
+        args.store.as_deref(),
+        args.pool.as_deref(),
+        "it holds the player's files, and the best response goes there",
+    )?;
     let opts = ExploitOptions {
         budget: Budget::parse(&args.budget).map_err(anyhow::Error::msg)?,
         seed: args.seed,

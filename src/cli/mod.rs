@@ -5,6 +5,7 @@ pub mod bench;
 mod bench_greedy;
 mod bench_opponents;
 mod bench_store;
+pub mod docs;
 pub mod eval;
 pub mod league;
 pub mod maps;
@@ -42,13 +43,17 @@ pub struct Cli {
 pub enum Command {
     /// List, show and generate maps.
     Maps(maps::MapsArgs),
-    /// Evaluate captors against a target with the paper's protocol (spec §8).
+    /// Evaluate captors against a target with the paper's protocol: success
+    /// rate, steps, path length and SoA over fixed episode seeds.
     Eval(eval::EvalArgs),
     /// Render one episode to an animated GIF.
     Render(render::RenderArgs),
     /// Train captors, the target or both with MAPPO, IPPO, MADDPG or MAAC from a config.
     Train(train::TrainArgs),
-    /// Measure environment, ASZ and observation speed and print a table.
+    /// Measure speed and print a table: the environment, ASZ and
+    /// observations (default), training iterations (--train CONFIG), a
+    /// league learner's opponent inference (--opponents) or the league
+    /// store's writes (--store URL).
     Bench(bench::BenchArgs),
     /// The paper's Tables II and III (Markdown, LaTeX) from eval folders,
     /// with the paper's numbers beside ours.
@@ -72,6 +77,9 @@ pub enum Command {
     /// A league's evaluator (spawned by `run`).
     #[command(hide = true)]
     LeagueEvaluator(league::EvaluatorArgs),
+    /// Write docs/reference/cli.md and the man pages from these definitions.
+    #[command(hide = true)]
+    GenerateDocs(docs::GenerateDocsArgs),
 }
 
 /// Keeps freed memory in the heap instead of returning it to the OS: PPO
@@ -112,5 +120,6 @@ pub fn main() -> anyhow::Result<()> {
         Command::Worker(a) => league::worker(a),
         Command::LeagueLearner(a) => league::learner(a),
         Command::LeagueEvaluator(a) => league::evaluator(a),
+        Command::GenerateDocs(a) => docs::run(a),
     }
 }

@@ -13,11 +13,17 @@ pub struct RenderArgs {
     /// picks the map, as in `eval`.
     #[arg(long, default_value = "shipped", value_name = "SPEC")]
     pub maps: String,
-    /// Captor controller: heuristic (expert captors), greedy or greedy:K (ASZ-greedy),
-    /// random, still, ckpt:PATH (a trained policy, greedily) or sample:PATH (sampling).
+    /// Captor controller: heuristic (expert captors), greedy (ASZ-greedy),
+    /// greedy:K (ASZ-greedy on K-cell squares, K from 1 to 8; K here is not
+    /// --k), random, still, ckpt:PATH (a trained policy, its most likely
+    /// action) or sample:PATH (the same policy, sampling its actions).
     #[arg(long, default_value = "heuristic")]
     pub captors: ControllerSpec,
-    /// Target controller: heuristic (rule-based target), random, still, ckpt:PATH or sample:PATH.
+    /// Target controller: heuristic (rule-based target), greedy or greedy:K
+    /// (ASZ-greedy's mirror: the move that leaves the target the largest
+    /// ASZ; K as for --captors), random, still, ckpt:PATH (a trained policy,
+    /// its most likely action) or sample:PATH (the same policy, sampling its
+    /// actions).
     #[arg(long, default_value = "heuristic")]
     pub target: ControllerSpec,
     /// Number of captors K.

@@ -27,6 +27,12 @@ pub struct TrainArgs {
     /// Override the device: auto, cpu or cuda.
     #[arg(long)]
     pub device: Option<crate::learn::config::DeviceChoice>,
+    /// Threads for libtorch and the environments' rayon pool, at most 256.
+    /// Default (0): OMP_NUM_THREADS if set, else the cores the load average
+    /// leaves free, so a run beside another busy process does not fight it
+    /// for every core.
+    #[arg(long, default_value_t = 0, value_name = "N")]
+    pub threads: usize,
     /// Hide the progress bar (logs one line per checkpoint instead).
     #[arg(long)]
     pub quiet: bool,
@@ -43,7 +49,8 @@ pub struct TrainArgs {
     /// Map sets of the periodic evaluation (as `eval --maps`).
     #[arg(long, default_value = "small,medium,large", value_delimiter = ',')]
     pub eval_maps: Vec<String>,
-    /// Episodes per map set of each periodic evaluation.
+    /// Episodes per map set of each periodic evaluation: 100, fewer than
+    /// `eval --episodes` (500), to keep the check cheap beside training.
     #[arg(long, default_value_t = 100)]
     pub eval_episodes: usize,
     /// Episode length of the periodic evaluation (the paper tests on 500).
@@ -61,6 +68,17 @@ pub fn run(args: TrainArgs) -> Result<()> {
             .transpose()
             .map_err(anyhow::Error::msg)
     };
+    if args.threads > 256 {
+        bail!("--threads {}: at most 256", args.threads);
+    }
+    let (threads, why) = crate::util::thread_count(args.threads);
+    // Before anything uses the global pool, so the environments get it too.
+    // An error means this process already started the pool (a library
+    // caller running a second command): that pool stays.
+    let _ = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build_global();
+    tch::set_num_threads(threads as i32);
     let run_for = duration("--for", &args.run_for)?;
     let eval_every = duration("--eval-every", &args.eval_every)?;
     let mut cfg = match (&args.config, &args.out, args.resume) {
@@ -172,7 +190,7 @@ pub fn run(args: TrainArgs) -> Result<()> {
         }
     };
     eprintln!(
-        "training {} on maps {:?}{sampling}{extra}, {} worlds, device {:?}, run folder {}",
+        "training {} on maps {:?}{sampling}{extra}, {} worlds, device {:?}, {threads} threads ({why}), run folder {}",
         learners.join(" + "),
         cfg.maps,
         cfg.num_envs,

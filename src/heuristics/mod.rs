@@ -127,7 +127,7 @@ impl Controller for Heuristic {
 /// A larger factor marches on cells of that many map cells per side
 /// (`asz::CoarseLattice`): about factor^2 fewer cells per march, for a
 /// controller that plays many episodes (held-out panels, league members).
-/// The README's "ASZ-greedy on coarser cells" measures what it changes.
+/// docs/guide/render-bench.md (the `greedy:K` decision timings) measures what it changes.
 pub struct AszGreedy {
     coarsening: usize,
     coarse: Option<CoarseLattice>,

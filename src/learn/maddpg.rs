@@ -45,7 +45,7 @@ use tch::{nn, Device, Kind, Tensor};
 /// on the chase task of tests/learn.rs to half the return in the same
 /// steps, 48 vs 106 after 200 iterations at lr 1e-3, at this game's
 /// reward scale). A rate of 3e-3 learns that task faster but did not get
-/// MADDPG to a capture on the 3:1, 1.0 grid cell in 150 k steps (README).
+/// MADDPG to a capture on the 3:1, 1.0 grid cell in 150 k steps (docs/algorithms/maddpg.md).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct MaddpgConfig {
@@ -72,7 +72,7 @@ pub struct MaddpgConfig {
     /// Default 1 (each step replayed once on average), a CPU budget: the
     /// original replayed about 10 (1024 transitions every 100). On the
     /// 3:1, 1.0 grid cell, 4 did not help within 117 k steps, and 10 got
-    /// the captors moving but to 1 capture in 150 k steps (README).
+    /// the captors moving but to 1 capture in 150 k steps (docs/algorithms/maddpg.md).
     pub replay_ratio: f64,
     /// Exploration while acting: this share of actions is uniform instead of
     /// the policy's, annealed linearly from `epsilon_start` to

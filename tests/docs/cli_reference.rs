@@ -53,7 +53,10 @@ fn the_man_pages_are_what_the_code_generates() {
     for (name, generated) in &pages {
         let committed = std::fs::read_to_string(dir.join(name)).unwrap_or_default();
         if &committed != generated {
-            stale.push(format!("{name} ({})", first_difference(&committed, generated)));
+            stale.push(format!(
+                "{name} ({})",
+                first_difference(&committed, generated)
+            ));
         }
     }
     // A page of a subcommand that no longer exists.
