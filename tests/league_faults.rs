@@ -1002,3 +1002,106 @@ fn sigterm_stops_the_league_as_ctrl_c_does() {
         assert_eq!(b.state, BeatState::Stopped, "{b:?}");
     }
 }
+
+/// Unmounts the small disk of `a_full_disk_is_named_in_the_crash_record`
+/// however the test ends.
+struct Mounted(PathBuf);
+
+impl Drop for Mounted {
+    fn drop(&mut self) {
+        Command::new("umount").arg("-l").arg(&self.0).status().ok();
+    }
+}
+
+#[test]
+fn a_full_disk_is_named_in_the_crash_record() {
+    // A real full disk: a small tmpfs holds the pool and the logs, the store
+    // lies outside it, so the crash can be recorded.
+    let l = league("diskfull", 100_000_000, "");
+    let disk = l.tmp.join("disk");
+    std::fs::create_dir_all(&disk).unwrap();
+    let mounted = Command::new("mount")
+        .args(["-t", "tmpfs", "-o", "size=48m", "tmpfs"])
+        .arg(&disk)
+        .output();
+    if !mounted.is_ok_and(|o| o.status.success()) {
+        eprintln!("skipped: mounting a tmpfs needs root");
+        return;
+    }
+    let _mounted = Mounted(disk.clone());
+    let db = l.tmp.join("store").join("league.db");
+    std::fs::create_dir_all(db.parent().unwrap()).unwrap();
+    let log = std::fs::File::create(l.manager_log()).unwrap();
+    let mut boss = Command::new(bin())
+        .args(["run", "--config"])
+        .arg(&l.config)
+        .arg("--dir")
+        .arg(disk.join("manager"))
+        .arg("--store")
+        .arg(&db)
+        .arg("--pool")
+        .arg(disk.join("pool"))
+        .args(["--workers", "2"])
+        .stdout(Stdio::null())
+        .stderr(Stdio::from(log))
+        .spawn()
+        .unwrap();
+    let url = t2e::league::store::StoreUrl::Sqlite(db.clone());
+    let open = || {
+        db.is_file()
+            .then(|| Store::open_read_only(&url).ok())
+            .flatten()
+    };
+    wait_for("both learners to train", Duration::from_secs(120), || {
+        open().is_some_and(|s| {
+            s.heartbeats()
+                .unwrap_or_default()
+                .iter()
+                .filter(|b| b.state == BeatState::Training && b.env_steps > 0)
+                .count()
+                == 2
+        })
+    });
+    // Fill the disk.
+    {
+        use std::io::Write;
+        let mut f = std::fs::File::create(disk.join("filler")).unwrap();
+        let block = vec![0u8; 1 << 20];
+        while f.write_all(&block).is_ok() {}
+    }
+    let mut said = String::new();
+    let full = "No space left on device";
+    wait_for("the full disk in the store", Duration::from_secs(180), || {
+        let Some(s) = open() else { return false };
+        said = s
+            .crashes()
+            .unwrap_or_default()
+            .iter()
+            .map(|c| format!("{} | {} | {}\n", c.learner, c.exit_status, c.message))
+            .chain(
+                s.seats()
+                    .unwrap_or_default()
+                    .iter()
+                    .filter_map(|x| x.reason.clone()),
+            )
+            .collect();
+        said.contains(full)
+    });
+    signal(boss.id() as i64, libc::SIGINT);
+    wait_exit(&mut boss, Duration::from_secs(120));
+    let s = open().unwrap();
+    for c in s.crashes().unwrap() {
+        assert!(
+            !c.exit_status.trim().is_empty() && c.exit_status != "exit code 101",
+            "a crash without its cause: {c:?}\n{said}"
+        );
+    }
+    // status says it too, and names the file.
+    let out = t2e(&["status", "--store", db.to_str().unwrap()]);
+    let text = String::from_utf8_lossy(&out.stdout).into_owned();
+    assert!(
+        text.contains(full) && text.contains(&disk.display().to_string()),
+        "{text}\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}

@@ -414,3 +414,42 @@ fn a_newer_schema_on_postgres_is_refused() {
         .to_string();
     assert!(err.contains("newer") && err.contains("9999"), "{err}");
 }
+
+#[test]
+fn one_manager_holds_a_league_at_a_time_by_the_stores_clock() {
+    use t2e::league::store::ManagerLease;
+    let (_tmp, urls) = both("manager");
+    for url in urls {
+        let s = Store::open(&url).unwrap();
+        let lease = |holder: &str, host: &str| ManagerLease {
+            holder: holder.into(),
+            host: host.into(),
+            pid: 7,
+            pool: "/pool".into(),
+            lease_until_ms: 0,
+            updated_at_ms: 0,
+        };
+        let a = lease("a", "host-a");
+        let b = lease("b", "host-b");
+        assert!(s.manager().unwrap().is_none());
+        assert_eq!(s.claim_manager(&a, 60_000, None).unwrap(), Ok(()));
+        assert_eq!(s.claim_manager(&a, 60_000, None).unwrap(), Ok(()), "{url}: again");
+        let held = s.claim_manager(&b, 60_000, None).unwrap().unwrap_err();
+        assert_eq!((held.holder.as_str(), held.host.as_str()), ("a", "host-a"));
+        assert!(s.renew_manager("a", 60_000).unwrap());
+        assert!(!s.renew_manager("b", 60_000).unwrap());
+        // A holder known dead is replaced at once; a live one never.
+        assert_eq!(s.claim_manager(&b, 60_000, Some("a")).unwrap(), Ok(()));
+        assert!(!s.renew_manager("a", 60_000).unwrap(), "{url}: a lost it");
+        // An expired lease is free, by the store's clock.
+        assert!(s.renew_manager("b", -1_000).unwrap());
+        assert_eq!(s.claim_manager(&a, 60_000, None).unwrap(), Ok(()));
+        let now = s.clock_ms().unwrap();
+        let local = t2e::league::store::now_ms();
+        assert!((now - local).abs() < 5_000, "{url}: clock {now} vs {local}");
+        s.release_manager("b").unwrap();
+        assert!(s.manager().unwrap().is_some(), "only its holder releases it");
+        s.release_manager("a").unwrap();
+        assert!(s.manager().unwrap().is_none());
+    }
+}

@@ -421,4 +421,178 @@ fn bad_input_gets_a_clear_error() {
         Some(&raw),
     ));
     assert!(e.contains("outside the league's pool folder"), "{e}");
+    // status lists the league and flags that one row, rather than refusing.
+    let out = run_cli(&["status", "--json", "--store", &raw], None);
+    assert!(out.status.success(), "{}", err(out));
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let evil = json["players"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|p| p["name"] == "evil")
+        .unwrap()
+        .clone();
+    assert!(
+        evil["quarantined"].as_str().unwrap().contains("outside"),
+        "{evil}"
+    );
+}
+
+fn status_json(raw: &str) -> serde_json::Value {
+    let out = Command::new(bin())
+        .args(["status", "--json", "--store", raw])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).unwrap()
+}
+
+fn snapshot_rows(url: &StoreUrl) -> usize {
+    store(url).map_or(0, |s| {
+        s.players()
+            .unwrap()
+            .iter()
+            .filter(|p| p.kind == Kind::Snapshot && p.checkpoint.is_some())
+            .count()
+    })
+}
+
+#[test]
+fn a_second_manager_never_changes_a_live_leagues_store() {
+    let tmp = tempfile::tempdir().unwrap();
+    let tmp = tmp.path();
+    std::fs::write(tmp.join("league.toml"), TINY_LEAGUE).unwrap();
+    let raw = fresh_database(server(), "second");
+    let url = StoreUrl::parse(&raw).unwrap();
+    let mut boss = manager(tmp, &raw, 3, true, &[]);
+    wait_until("a snapshot in the pool", Duration::from_secs(120), || {
+        snapshot_rows(&url) >= 1
+    });
+    let second = |pool: &Path, host: &str| -> Output {
+        Command::new(bin())
+            .arg("run")
+            .arg("--config")
+            .arg(tmp.join("league.toml"))
+            .arg("--dir")
+            .arg(tmp.join("second"))
+            .arg("--store")
+            .arg(&raw)
+            .arg("--pool")
+            .arg(pool)
+            .args(["--workers", "1", "--for", "5s"])
+            .env("T2E_HOST", host)
+            .output()
+            .unwrap()
+    };
+    // Another pool, empty or not there at all: refused, naming both.
+    let empty = tmp.join("empty-pool");
+    std::fs::create_dir_all(&empty).unwrap();
+    for pool in [empty.clone(), tmp.join("no-such-pool")] {
+        let out = second(&pool, "elsewhere");
+        let err = String::from_utf8_lossy(&out.stderr).into_owned();
+        assert!(!out.status.success(), "a foreign pool was accepted: {err}");
+        assert!(
+            err.contains(&pool.display().to_string()) && err.contains("not its pool"),
+            "{err}"
+        );
+        assert!(!err.contains("resuming"), "{err}");
+    }
+    assert_eq!(std::fs::read_dir(&empty).unwrap().count(), 0, "written to");
+    assert!(!tmp.join("no-such-pool").exists());
+    // The right pool from another host, while the first manager lives.
+    let out = second(&tmp.join("pool"), "elsewhere");
+    let err = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert!(!out.status.success(), "{err}");
+    assert!(err.contains("another manager runs this league"), "{err}");
+    let s = store(&url).unwrap();
+    let quarantined: Vec<_> = s
+        .players()
+        .unwrap()
+        .into_iter()
+        .filter(|p| p.quarantined.is_some())
+        .collect();
+    assert!(quarantined.is_empty(), "{quarantined:?}");
+    assert!(s.seats().unwrap().iter().all(|x| x.state != SeatState::Failed));
+    // The league runs on to its end, unharmed.
+    let status = wait_exit(&mut boss, "the first manager", Duration::from_secs(300));
+    assert!(status.success(), "{status:?}: see {}", tmp.display());
+    let (_, r) = check(&LeagueDir::with_store(tmp.join("pool"), url.clone()));
+    assert_eq!(r, vec![9_600, 9_600]);
+    assert!(store(&url).unwrap().manager().unwrap().is_none(), "lease kept");
+}
+
+#[test]
+fn a_deleted_seat_row_is_defined_again_and_the_league_finishes() {
+    let tmp = tempfile::tempdir().unwrap();
+    let tmp = tmp.path();
+    std::fs::write(tmp.join("league.toml"), TINY_LEAGUE).unwrap();
+    let raw = fresh_database(server(), "seatgone");
+    let url = StoreUrl::parse(&raw).unwrap();
+    let mut boss = manager(tmp, &raw, 0, true, &[]);
+    wait_until("the seats", Duration::from_secs(60), || {
+        store(&url).is_some_and(|s| s.seats().is_ok_and(|x| x.len() == 3))
+    });
+    let mut host = worker(tmp, &raw, "host-a", 3);
+    wait_until("captors-main to train", Duration::from_secs(90), || {
+        store(&url).unwrap().heartbeats().unwrap().iter().any(|b| {
+            b.learner == "captors-main" && b.state == BeatState::Training && b.env_steps > 0
+        })
+    });
+    common::postgres::sql(&raw, "DELETE FROM seats WHERE name = 'captors-main'");
+    let log = tmp.join("host-a").join("worker.log");
+    wait_until("the worker to notice", Duration::from_secs(30), || {
+        std::fs::read_to_string(&log).is_ok_and(|l| l.contains("captors-main"))
+            && std::fs::read_to_string(&log).unwrap().contains("seat row is gone")
+    });
+    let text = std::fs::read_to_string(&log).unwrap();
+    assert!(!text.contains("another worker"), "{text}");
+    let status = wait_exit(&mut boss, "the manager", Duration::from_secs(300));
+    assert!(status.success(), "{status:?}: see {}", tmp.display());
+    assert!(wait_exit(&mut host, "the worker", Duration::from_secs(30)).success());
+    let (_, r) = check(&LeagueDir::with_store(tmp.join("pool"), url.clone()));
+    assert_eq!(r, vec![9_600, 9_600], "both learners reach their budget");
+}
+
+#[test]
+fn status_shows_a_killed_workers_learners_dead() {
+    let tmp = tempfile::tempdir().unwrap();
+    let tmp = tmp.path();
+    std::fs::write(tmp.join("league.toml"), TINY_LEAGUE).unwrap();
+    let raw = fresh_database(server(), "orphans");
+    let url = StoreUrl::parse(&raw).unwrap();
+    let mut boss = manager(tmp, &raw, 0, true, &[]);
+    wait_until("the seats", Duration::from_secs(60), || {
+        store(&url).is_some_and(|s| s.seats().is_ok_and(|x| x.len() == 3))
+    });
+    let mut host = worker(tmp, &raw, "host-a", 3);
+    wait_until("both learners to train", Duration::from_secs(90), || {
+        store(&url)
+            .unwrap()
+            .heartbeats()
+            .unwrap()
+            .iter()
+            .filter(|b| b.state == BeatState::Training && b.env_steps > 0)
+            .count()
+            == 2
+    });
+    sigkill(&mut host);
+    // No worker takes the seats again; once the leases (4 s) have expired
+    // nothing of them runs, whatever the last heartbeats said.
+    std::thread::sleep(Duration::from_secs(6));
+    let json = status_json(&raw);
+    for l in json["learners"].as_array().unwrap() {
+        assert_ne!(l["state"], "training", "{l}");
+    }
+    let text = Command::new(bin())
+        .args(["status", "--store", &raw])
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&text.stdout).into_owned();
+    assert!(text.contains("captors-main   dead"), "{text}");
+    boss.kill().ok();
+    boss.wait().ok();
 }

@@ -20,7 +20,7 @@ use super::dir::{new_league_id, LeagueDir, LeagueIdentity};
 use super::open::{plan_start, StartPlan};
 use super::players::Seat;
 use super::pool::{ensure_members, reconcile};
-use super::process::{interrupt, lock_holder, log_since, spawn, tail, try_lock, Role, Supervised};
+use super::process::{interrupt, lock_holder, spawn, try_lock, Role, Supervised};
 use super::store::{now_ms, Store};
 use super::supervision::{classify, decide, last_error_line, CrashBudget, Exit, Next};
 use crate::env::Side;
@@ -36,7 +36,10 @@ use std::time::{Duration, Instant};
 /// stderr is redirected (indicatif draws nothing there, lines included).
 fn say(multi: &MultiProgress, line: impl AsRef<str>) {
     if multi.is_hidden() {
-        eprintln!("{}", line.as_ref());
+        // Not eprintln!: a redirected stderr on a full disk would panic the
+        // manager, the one process left to say what happened.
+        use std::io::Write;
+        let _ = writeln!(std::io::stderr(), "{}", line.as_ref());
     } else {
         multi.println(line.as_ref()).ok();
     }
@@ -71,18 +74,38 @@ pub fn run_with(
     stop: &AtomicBool,
     launch: &Launch,
 ) -> Result<()> {
-    let (plan, _lock) = {
+    let (plan, _lock, early) = {
         // The lock comes first (two managers must not both decide), but a
         // directory that does not exist yet is created only once the plan
         // says a league starts there.
-        let held = if dir.root.is_dir() {
+        // A store kept apart from the pool has its own guard (the manager
+        // lease, taken before any write), and a pool that turns out not to
+        // be the league's must not get even a league.lock: plan first there.
+        let external = dir.store != super::store::StoreUrl::in_dir(&dir.root);
+        let held = if dir.root.is_dir() && !external {
             Some(lock(dir)?)
         } else {
             None
         };
         let plan = plan_start(dir, config)?;
-        (plan, held)
+        // The store's manager lease before anything is written: a manager
+        // that is not the league's own (another host, another --pool)
+        // changes nothing.
+        let early = match &plan {
+            StartPlan::Resume { .. } => {
+                let store = Store::open_existing(&dir.store)?;
+                let guard = ManagerGuard::take(&store, dir)?;
+                Some((store, guard))
+            }
+            StartPlan::New(_) => None,
+        };
+        let held = match held {
+            None if external && dir.root.is_dir() => Some(lock(dir)?),
+            held => held,
+        };
+        (plan, held, early)
     };
+    let mut early = early;
     let (cfg, league_id) = match plan {
         StartPlan::New(cfg) => {
             // Refuse maps that do not fit the protocol here, with the file's
@@ -132,10 +155,32 @@ pub fn run_with(
         Some(l) => l,
         None => lock(dir)?,
     };
-    let store = match &league_id {
-        Some(_) => Store::open_existing(&dir.store)?,
-        None => Store::open(&dir.store)?,
+    let (store, mut guard) = match early.take() {
+        Some(held) => held,
+        None => {
+            let store = Store::open(&dir.store)?;
+            let guard = ManagerGuard::take(&store, dir)?;
+            (store, guard)
+        }
     };
+    let result = run_league(dir, &cfg, &store, league_id, &mut guard, run_for, stop, launch);
+    guard.release(&store);
+    result
+}
+
+/// The league once its store is open and this manager holds its lease.
+#[allow(clippy::too_many_arguments)]
+fn run_league(
+    dir: &LeagueDir,
+    cfg: &LeagueConfig,
+    store: &Store,
+    league_id: Option<String>,
+    guard: &mut ManagerGuard,
+    run_for: Option<Duration>,
+    stop: &AtomicBool,
+    launch: &Launch,
+) -> Result<()> {
+    let cfg = cfg.clone();
     let league_id = match league_id {
         Some(id) => id,
         None => {
@@ -158,8 +203,8 @@ pub fn run_with(
             id
         }
     };
-    ensure_members(dir, &store, &cfg)?;
-    let found = reconcile(dir, &store, &league_id)?;
+    ensure_members(dir, store, &cfg)?;
+    let found = reconcile(dir, store, &league_id)?;
     for r in &found.removed_temporaries {
         eprintln!("removed {r}: a temporary its writer left when it was killed");
     }
@@ -195,7 +240,7 @@ pub fn run_with(
     }
     if let Launch::Workers { local, logs } = launch {
         return super::seats::supervise_workers(
-            dir, &cfg, &store, &roles, *local, logs, run_for, stop,
+            dir, &cfg, store, &roles, *local, logs, run_for, stop, guard,
         );
     }
     let multi = MultiProgress::new();
@@ -244,7 +289,11 @@ pub fn run_with(
                     p.child = None;
                     use std::os::unix::process::ExitStatusExt;
                     let exit = classify(status.code(), status.signal());
-                    let log = log_since(&p.role.log_path(&logs), p.log_offset);
+                    let log = p.output.as_ref().map(|o| {
+                        o.wait_closed(Duration::from_secs(2));
+                        o.text()
+                    }).unwrap_or_default();
+                    let crash_text = p.output.as_ref().map(|o| o.crash_text(5)).unwrap_or_default();
                     let message = last_error_line(&log);
                     if p.started.elapsed() > Duration::from_secs(120) {
                         p.failures = 0;
@@ -266,7 +315,7 @@ pub fn run_with(
                     match next {
                         Next::Finished => p.finished = true,
                         Next::Restart { after, cause } => {
-                            record_crash(&multi, &store, &p.role.name(), &cause, &tail(&log, 5));
+                            record_crash(&multi, &store, &p.role.name(), &cause, &crash_text);
                             say(
                                 &multi,
                                 format!(
@@ -280,7 +329,7 @@ pub fn run_with(
                         }
                         Next::StopLeague { why } => {
                             if exit != Exit::CannotStart {
-                                record_crash(&multi, &store, &p.role.name(), &why, &tail(&log, 5));
+                                record_crash(&multi, &store, &p.role.name(), &why, &crash_text);
                             }
                             say(
                                 &multi,
@@ -295,10 +344,9 @@ pub fn run_with(
             if p.child.is_none() && !p.finished && !stopping {
                 if let Some(at) = p.restart_at {
                     if Instant::now() >= at {
-                        p.log_offset = std::fs::metadata(p.role.log_path(&logs))
-                            .map(|m| m.len())
-                            .unwrap_or(0);
-                        p.child = Some(spawn(dir, p.role, &logs, None)?);
+                        let (child, output) = spawn(dir, p.role, &logs, None)?;
+                        p.child = Some(child);
+                        p.output = Some(output);
                         p.started = Instant::now();
                         p.restart_at = None;
                     }
@@ -307,6 +355,9 @@ pub fn run_with(
             if stopping && p.child.is_none() {
                 p.finished = true;
             }
+        }
+        if let Err(e) = guard.renew(store) {
+            failure.get_or_insert(format!("{e:#}"));
         }
         if last_status.elapsed() >= Duration::from_secs(2) {
             last_status = Instant::now();
@@ -343,6 +394,129 @@ pub fn run_with(
         Some(why) => bail!("{why}"),
         None => Ok(()),
     }
+}
+
+/// How long the manager's lease in the store lasts without renewal, and how
+/// often it is renewed.
+const MANAGER_LEASE: Duration = Duration::from_secs(30);
+const MANAGER_RENEW: Duration = Duration::from_secs(5);
+
+/// This manager's lease in the store (`store::ManagerLease`): the flock on
+/// league.lock keeps a second manager out only where it sees the same
+/// folder on the same kernel, and a manager on another host, or given
+/// another --pool, reaches the same PostgreSQL store all the same.
+pub struct ManagerGuard {
+    holder: String,
+    pool: String,
+    renewed: Instant,
+}
+
+impl ManagerGuard {
+    /// Takes the lease, or says which live manager holds it. A lease left by
+    /// a manager of this host whose process is gone (kill -9) is taken at
+    /// once rather than after it expires.
+    pub fn take(store: &Store, dir: &LeagueDir) -> Result<ManagerGuard> {
+        let host = super::store::host_name();
+        let pid = std::process::id();
+        let me = super::store::ManagerLease {
+            holder: format!("{host}:{pid}:{}", &new_league_id()[..8]),
+            host: host.clone(),
+            pid: i64::from(pid),
+            pool: std::fs::canonicalize(&dir.root)
+                .unwrap_or_else(|_| dir.root.clone())
+                .display()
+                .to_string(),
+            lease_until_ms: 0,
+            updated_at_ms: 0,
+        };
+        let lease_ms = MANAGER_LEASE.as_millis() as i64;
+        let stale = store
+            .manager()?
+            .filter(|m| m.host == host && !is_manager_process(m.pid))
+            .map(|m| m.holder);
+        match store.claim_manager(&me, lease_ms, stale.as_deref())? {
+            Ok(()) => Ok(ManagerGuard {
+                holder: me.holder,
+                pool: me.pool,
+                renewed: Instant::now(),
+            }),
+            Err(other) => {
+                let now = store.clock_ms().unwrap_or(other.updated_at_ms);
+                bail!(
+                    "{}: another manager runs this league (pid {} on {}, pool {}; it renewed its lease {:.0} s ago). Nothing was changed. \
+                     Stop that manager first (Ctrl-C); a manager that was killed loses the lease {} s after its last renewal",
+                    store.url(),
+                    other.pid,
+                    other.host,
+                    other.pool,
+                    (now - other.updated_at_ms).max(0) as f64 / 1000.0,
+                    MANAGER_LEASE.as_secs()
+                )
+            }
+        }
+    }
+
+    /// Renews the lease when it is due. An error when another manager holds
+    /// it now (this one stalled past its lease and was replaced): two
+    /// managers must not both run the league. A store out of reach is
+    /// waited out by the next renewal.
+    pub fn renew(&mut self, store: &Store) -> Result<()> {
+        if self.renewed.elapsed() < MANAGER_RENEW {
+            return Ok(());
+        }
+        match store.renew_manager(&self.holder, MANAGER_LEASE.as_millis() as i64) {
+            Ok(true) => {
+                self.renewed = Instant::now();
+                Ok(())
+            }
+            Ok(false) => match store.manager() {
+                // The row was deleted by hand: nobody else holds the league.
+                Ok(None) => {
+                    self.renewed = Instant::now();
+                    let me = super::store::ManagerLease {
+                        holder: self.holder.clone(),
+                        host: super::store::host_name(),
+                        pid: i64::from(std::process::id()),
+                        pool: self.pool.clone(),
+                        lease_until_ms: 0,
+                        updated_at_ms: 0,
+                    };
+                    match store.claim_manager(&me, MANAGER_LEASE.as_millis() as i64, None) {
+                        Ok(Err(other)) => bail!(
+                            "{}: another manager took this league over (pid {} on {}); stopping this one",
+                            store.url(),
+                            other.pid,
+                            other.host
+                        ),
+                        _ => Ok(()),
+                    }
+                }
+                Ok(Some(other)) => bail!(
+                    "{}: another manager took this league over (pid {} on {}, pool {}); stopping this one",
+                    store.url(),
+                    other.pid,
+                    other.host,
+                    other.pool
+                ),
+                Err(_) => Ok(()),
+            },
+            Err(_) => Ok(()),
+        }
+    }
+
+    pub fn release(&self, store: &Store) {
+        store.release_manager(&self.holder).ok();
+    }
+}
+
+/// Whether `pid` on this host is a running `t2e-league run`.
+fn is_manager_process(pid: i64) -> bool {
+    if pid <= 0 {
+        return false;
+    }
+    std::fs::read(format!("/proc/{pid}/cmdline"))
+        .map(|cmd| cmd.split(|b| *b == 0).any(|arg| arg == b"run"))
+        .unwrap_or(false)
 }
 
 /// Records a crash in the store; a store that cannot take it (disk full)

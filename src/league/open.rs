@@ -150,6 +150,9 @@ pub fn plan_start(dir: &LeagueDir, given: Option<&Path>) -> Result<StartPlan> {
         },
     };
     check_pool_identity(dir, &identity.league_id, db)?;
+    if dir.store != StoreUrl::in_dir(&dir.root) {
+        check_pool_holds_league(dir, &store, file_identity.is_some())?;
+    }
     Ok(StartPlan::Resume {
         cfg: stored_cfg,
         restore_config: on_disk.is_none(),
@@ -210,6 +213,50 @@ pub fn open_read_only(dir: &LeagueDir) -> Result<(LeagueConfig, Store)> {
         );
     }
     Ok((stored_cfg, store))
+}
+
+/// A store kept apart from its pool (PostgreSQL, `--store FILE`) is reached
+/// from any folder, so a manager given the wrong `--pool` would otherwise
+/// resume there: restore config.toml and league.json into it and quarantine,
+/// in the store every host shares, each snapshot it cannot see. Unless the
+/// league never got as far as writing files (a start killed right after
+/// the store's identity), the pool must show it is this league's: its
+/// league.json, or at least one of the snapshot folders the store names.
+fn check_pool_holds_league(dir: &LeagueDir, store: &Store, has_identity: bool) -> Result<()> {
+    let pool = dir.root.display();
+    let db = store.url();
+    let snapshots: Vec<String> = store
+        .players()?
+        .into_iter()
+        .filter(|p| p.kind == super::store::Kind::Snapshot && p.quarantined.is_none())
+        .filter_map(|p| p.checkpoint.map(|(rel, _)| rel))
+        .collect();
+    let seen = snapshots
+        .iter()
+        .filter(|rel| dir.root.join(rel).exists())
+        .count();
+    let refuse = |what: String| -> anyhow::Error {
+        anyhow::anyhow!(
+            "{db} holds a league, but the pool folder {pool} is not its pool: {what}. Nothing was changed. \
+             Give the pool folder this league was started with (--pool, the folder every host shares)"
+        )
+    };
+    if !snapshots.is_empty() && seen == 0 {
+        return Err(refuse(format!(
+            "it holds none of the {} snapshot folders the store names (e.g. {})",
+            snapshots.len(),
+            snapshots[0]
+        )));
+    }
+    let started = !store.seats()?.is_empty() || store.match_count()? > 0 || !snapshots.is_empty();
+    if !has_identity && seen == 0 && started {
+        return Err(refuse(format!(
+            "{} is missing{}",
+            dir.identity_path().display(),
+            if dir.root.is_dir() { "" } else { " (the folder does not exist)" }
+        )));
+    }
+    Ok(())
 }
 
 /// Snapshots name their league: a pool of another league beside this store

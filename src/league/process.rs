@@ -9,8 +9,10 @@ use crate::env::Side;
 use anyhow::{Context, Result};
 use std::fs::{File, TryLockError};
 use std::path::{Path, PathBuf};
+use std::collections::VecDeque;
 use std::process::{Child, Command, Stdio};
-use std::time::Instant;
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
 
 /// An exclusive lock on `path`, held while the file stays open and released
 /// by the kernel when the process dies, however it dies. None if another
@@ -85,8 +87,8 @@ pub struct Supervised {
     pub restart_at: Option<Instant>,
     pub failures: u32,
     pub started: Instant,
-    /// Length of its log when it started: what it printed since is its own.
-    pub log_offset: u64,
+    /// What it printed since it started, kept by its parent.
+    pub output: Option<Output>,
     /// Its crashes: (at ms, cause), for the crash budget.
     pub crashes: Vec<(i64, String)>,
 }
@@ -101,7 +103,7 @@ impl Supervised {
             restart_at: Some(Instant::now()),
             failures: 0,
             started: Instant::now(),
-            log_offset: 0,
+            output: None,
             crashes: Vec::new(),
         }
     }
@@ -131,16 +133,78 @@ pub fn die_with_parent(cmd: &mut Command) {
     }
 }
 
+/// A child's output as its parent keeps it. The child writes into a pipe
+/// and the parent appends each line to the log: a child whose stderr is a
+/// file on a full disk panics in its first `eprintln!` and loses its
+/// message with it (exit 101, an empty log, an empty crash record), while
+/// a pipe never fills that way, and the parent still holds the last lines
+/// when the log cannot take them.
+#[derive(Clone)]
+pub struct Output(Arc<Mutex<OutputState>>);
+
+#[derive(Default)]
+struct OutputState {
+    lines: VecDeque<String>,
+    /// The first failure to write the log, naming it.
+    log_error: Option<String>,
+    /// The child's end of the pipe is closed: every line is in.
+    closed: bool,
+}
+
+/// Lines of a child's output kept in memory (the crash record takes the
+/// last few).
+const KEPT_LINES: usize = 200;
+
+impl Output {
+    /// Waits (up to `limit`) until every line the child wrote is read.
+    pub fn wait_closed(&self, limit: Duration) {
+        let until = Instant::now() + limit;
+        while Instant::now() < until && !self.0.lock().map(|s| s.closed).unwrap_or(true) {
+            std::thread::sleep(Duration::from_millis(20));
+        }
+    }
+
+    /// The lines kept, after a first line saying the log could not be
+    /// written (and why), if it could not: the child's own last error line
+    /// stays the one `last_error_line` finds, the log's failure the cause
+    /// only when the child said nothing.
+    pub fn text(&self) -> String {
+        let Ok(s) = self.0.lock() else {
+            return String::new();
+        };
+        let mut text = s
+            .log_error
+            .as_ref()
+            .map(|e| format!("error: {e}\n"))
+            .unwrap_or_default();
+        text.extend(s.lines.iter().map(|l| format!("{l}\n")));
+        text
+    }
+
+    /// The last `n` lines for a crash record, and the log's failure.
+    pub fn crash_text(&self, n: usize) -> String {
+        let Ok(s) = self.0.lock() else {
+            return String::new();
+        };
+        let skip = s.lines.len().saturating_sub(n);
+        let mut lines: Vec<String> = s.lines.iter().skip(skip).cloned().collect();
+        if let Some(e) = &s.log_error {
+            lines.push(format!("({e})"));
+        }
+        lines.join("\n")
+    }
+}
+
 /// Starts `role` for the league in `dir` as a child process, its output
-/// appended to its log in `logs`. A PostgreSQL store's URL reaches the child
+/// appended to its log in `logs` (through `Output`). A PostgreSQL store's URL reaches the child
 /// in its environment (`T2E_STORE`), never on its command line, where any
 /// user of the host could read the password.
-pub fn spawn(dir: &LeagueDir, role: Role, logs: &Path, host: Option<&str>) -> Result<Child> {
-    std::fs::create_dir_all(logs).with_context(|| format!("cannot create {}", logs.display()))?;
-    let log = std::fs::OpenOptions::new()
-        .create(true)
-        .append(true)
-        .open(role.log_path(logs))?;
+pub fn spawn(
+    dir: &LeagueDir,
+    role: Role,
+    logs: &Path,
+    host: Option<&str>,
+) -> Result<(Child, Output)> {
     let mut cmd =
         crate::util::own_command().context("cannot find this program to spawn learners")?;
     match role {
@@ -170,14 +234,81 @@ pub fn spawn(dir: &LeagueDir, role: Role, logs: &Path, host: Option<&str>) -> Re
     if let Some(h) = host {
         cmd.env("T2E_HOST", h);
     }
-    cmd.arg("--dir")
-        .arg(&dir.root)
-        .stdin(Stdio::null())
-        .stdout(log.try_clone()?)
-        .stderr(log);
-    die_with_parent(&mut cmd);
-    cmd.spawn()
+    cmd.arg("--dir").arg(&dir.root);
+    spawn_logged(cmd, &role.log_path(logs))
         .with_context(|| format!("cannot start the {}", role.name()))
+}
+
+/// Starts `cmd` (dying with this process) with its output going to the log
+/// at `log_path` through `Output`.
+pub fn spawn_logged(mut cmd: Command, log_path: &Path) -> Result<(Child, Output)> {
+    let log_path = log_path.to_path_buf();
+    let log = log_path
+        .parent()
+        .map_or(Ok(()), std::fs::create_dir_all)
+        .and_then(|_| {
+            std::fs::OpenOptions::new()
+                .create(true)
+                .append(true)
+                .open(&log_path)
+        })
+        .map_err(|e| format!("cannot open its log {}: {e}", log_path.display()));
+    let (reader, writer) = std::io::pipe().context("cannot make a pipe for a child's output")?;
+    cmd.stdin(Stdio::null())
+        .stdout(writer.try_clone()?)
+        .stderr(writer);
+    die_with_parent(&mut cmd);
+    let child = cmd.spawn()?;
+    // The parent's copies of the write end went with `cmd`: the reader sees
+    // the end of the output when the child exits.
+    drop(cmd);
+    let output = Output(Arc::new(Mutex::new(OutputState::default())));
+    let state = output.clone();
+    std::thread::spawn(move || copy_output(reader, log, log_path, state));
+    Ok((child, output))
+}
+
+/// Appends each line of a child's output to its log and keeps the last ones.
+fn copy_output(
+    reader: std::io::PipeReader,
+    log: std::result::Result<File, String>,
+    log_path: PathBuf,
+    state: Output,
+) {
+    use std::io::{BufRead, Write};
+    let (mut log, first_error) = match log {
+        Ok(f) => (Some(f), None),
+        Err(e) => (None, Some(e)),
+    };
+    if let Ok(mut s) = state.0.lock() {
+        s.log_error = first_error;
+    }
+    let mut reader = std::io::BufReader::new(reader);
+    let mut buf = Vec::new();
+    loop {
+        buf.clear();
+        match reader.read_until(b'\n', &mut buf) {
+            Ok(0) | Err(_) => break,
+            Ok(_) => {}
+        }
+        let line = String::from_utf8_lossy(&buf).trim_end().to_string();
+        let written = match &mut log {
+            Some(f) => f.write_all(&buf).map_err(|e| e.to_string()),
+            None => Ok(()),
+        };
+        let Ok(mut s) = state.0.lock() else { break };
+        if let Err(e) = written {
+            s.log_error
+                .get_or_insert_with(|| format!("cannot write its log {}: {e}", log_path.display()));
+        }
+        if s.lines.len() == KEPT_LINES {
+            s.lines.pop_front();
+        }
+        s.lines.push_back(line);
+    }
+    if let Ok(mut s) = state.0.lock() {
+        s.closed = true;
+    }
 }
 
 /// What a log holds from byte `offset` on.

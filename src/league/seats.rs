@@ -10,17 +10,12 @@ use super::process::Role;
 use super::store::{SeatRow, SeatState, Store, StoreUrl};
 use anyhow::{bail, Context, Result};
 use std::path::Path;
-use std::process::{Child, Stdio};
+use std::process::Child;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 /// Starts a worker for the league in `dir` as a child of this process.
 pub fn spawn_worker(dir: &LeagueDir, logs: &Path, index: usize) -> Result<Child> {
-    std::fs::create_dir_all(logs).with_context(|| format!("cannot create {}", logs.display()))?;
-    let log = std::fs::OpenOptions::new()
-        .create(true)
-        .append(true)
-        .open(logs.join(format!("worker-{index}.log")))?;
     let mut cmd =
         crate::util::own_command().context("cannot find this program to spawn workers")?;
     cmd.arg("worker")
@@ -34,11 +29,11 @@ pub fn spawn_worker(dir: &LeagueDir, logs: &Path, index: usize) -> Result<Child>
         StoreUrl::Postgres(_) => cmd.env("T2E_STORE", dir.store.secret()),
         StoreUrl::Sqlite(path) => cmd.env("T2E_STORE", path),
     };
-    cmd.stdin(Stdio::null())
-        .stdout(log.try_clone()?)
-        .stderr(log);
-    super::process::die_with_parent(&mut cmd);
-    cmd.spawn().context("cannot start a worker")
+    // Through a pipe: a worker whose log sits on a full disk would die in
+    // its first eprintln!.
+    super::process::spawn_logged(cmd, &logs.join(format!("worker-{index}.log")))
+        .map(|(child, _)| child)
+        .context("cannot start a worker")
 }
 
 /// Defines the seats, runs `local` workers, and waits for the league.
@@ -52,6 +47,7 @@ pub fn supervise_workers(
     logs: &Path,
     run_for: Option<Duration>,
     stop: &AtomicBool,
+    guard: &mut super::manager::ManagerGuard,
 ) -> Result<()> {
     let names: Vec<String> = roles.iter().map(|r| r.name()).collect();
     store.define_seats(&names)?;
@@ -89,8 +85,36 @@ pub fn supervise_workers(
         let mut all_done = false;
         if last_look.elapsed() >= Duration::from_secs(1) {
             last_look = Instant::now();
+            if let Err(e) = guard.renew(store) {
+                failure.get_or_insert(format!("{e:#}"));
+            }
             // A store out of reach for a moment is waited out (`Store::run`).
-            let seats = store.seats()?;
+            let mut seats = store.seats()?;
+            // A seat row deleted by hand would leave its learner unrun and
+            // the other one waiting for it forever: define it again, open,
+            // and a worker resumes it from its checkpoint.
+            let missing: Vec<String> = names
+                .iter()
+                .filter(|n| !seats.iter().any(|s| &s.name == *n))
+                .cloned()
+                .collect();
+            if !missing.is_empty() && !stopping {
+                store.define_seats(&missing)?;
+                eprintln!(
+                    "seat {} was missing from {} (its row deleted?); defined it again, open for a worker",
+                    missing.join(", "),
+                    store.url()
+                );
+                seats = store.seats()?;
+            }
+            if let Some(s) = seats.iter().find(|s| !names.contains(&s.name)) {
+                failure.get_or_insert(format!(
+                    "{}: holds seat {}, which is not one of this league's ({}); remove its row, or run the manager that defined it",
+                    store.url(),
+                    s.name,
+                    names.join(", ")
+                ));
+            }
             if let Some(why) = SeatRow::first_failure(&seats) {
                 failure.get_or_insert(why);
             }

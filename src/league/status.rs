@@ -30,7 +30,10 @@
 //!               "win_rate_low", "win_rate_high",   // evaluator's episodes, 95% Wilson
 //!               "held_out": bool }],   // a held-out opponent: "opponent" 0,
 //!                                      // "opponent_name" its controller
-//!   "exploits": [{ "player", "player_name", "side", "best_response", "budget",
+//!   "exploits": [{ "player", "player_name", "player_sha256": str|null,
+//!                  "player_env_steps": int|null,   // the frozen weights
+//!                  "outdated": bool,   // the player's weights are newer now
+//!                  "side", "best_response", "budget",
 //!                  "env_steps", "train_s", "seed", "maps", "speed_ratio",
 //!                  "episodes", "best_response_wins", "win_rate",
 //!                  "win_rate_low", "win_rate_high" }] }  // `exploit`: a fresh
@@ -138,6 +141,14 @@ pub struct StatusReport {
 pub struct ExploitRow {
     pub player: i64,
     pub player_name: String,
+    /// SHA-256 of the frozen weights' meta.json (null for a heuristic).
+    pub player_sha256: Option<String>,
+    /// The player's env steps when it was frozen (null when unknown: an
+    /// exploit recorded before they were, of a player trained on since).
+    pub player_env_steps: Option<u64>,
+    /// The result is against an older version of the player: its checkpoint
+    /// now is not the one frozen (a main learner that trained on).
+    pub outdated: bool,
     pub side: String,
     pub best_response: String,
     pub budget: String,
@@ -159,7 +170,17 @@ fn exploit_rows(players: &[Player], records: Vec<ExploitRecord>) -> Vec<ExploitR
         .map(|r| {
             let p = players.iter().find(|p| p.id == r.player);
             let (lo, hi) = crate::eval::wilson_interval(r.wins as usize, r.episodes as usize);
+            let now_sha = p.and_then(|p| p.checkpoint.as_ref().map(|(_, s)| s.as_str()));
+            let outdated = r.player_sha256.is_some() && r.player_sha256.as_deref() != now_sha;
+            // Weights that are still the player's are the player's env steps.
+            let player_env_steps = None::<u64>.or_else(|| {
+                p.filter(|_| !outdated && r.player_sha256.is_some())
+                    .map(|p| p.env_steps)
+            });
             ExploitRow {
+                player_sha256: r.player_sha256.clone(),
+                player_env_steps,
+                outdated,
                 player: r.player,
                 player_name: p
                     .map(|p| p.name.clone())
@@ -180,6 +201,21 @@ fn exploit_rows(players: &[Player], records: Vec<ExploitRecord>) -> Vec<ExploitR
             }
         })
         .collect()
+}
+
+/// The frozen weights of an exploit, as a table cell: the hash's first 12
+/// digits and the player's env steps then (`?` when not recorded).
+fn frozen_label(e: &ExploitRow) -> String {
+    match &e.player_sha256 {
+        None => "heuristic".into(),
+        Some(sha) => format!(
+            "{} @{}",
+            &sha[..sha.len().min(12)],
+            e.player_env_steps
+                .map(|n| n.to_string())
+                .unwrap_or_else(|| "?".into())
+        ),
+    }
 }
 
 /// One member's results against one panel opponent.
@@ -333,7 +369,7 @@ pub fn shown_state(beat: &Heartbeat, age_s: f64) -> String {
 
 pub fn report(dir: &LeagueDir) -> Result<StatusReport> {
     let (cfg, store) = open(dir)?;
-    let players = store.players()?;
+    let players = store.players_flagged()?;
     let ratings = store.ratings()?;
     let payoff = store.payoff()?;
     let index = |id: i64| players.iter().position(|p| p.id == id);
@@ -385,6 +421,13 @@ pub fn report(dir: &LeagueDir) -> Result<StatusReport> {
         .collect();
     let stage = history.last().map(|h| h.stage).unwrap_or(0);
     let now = now_ms();
+    let seats = store.seats()?;
+    // Leases are judged by the store's clock, as the workers write them.
+    let store_now = if seats.is_empty() {
+        now
+    } else {
+        store.clock_ms().unwrap_or(now)
+    };
     let panel_episodes = store.matches_recorded_by(EVALUATOR)? + store.held_out_count()?;
     let panel = panel_rows(
         &players,
@@ -416,8 +459,20 @@ pub fn report(dir: &LeagueDir) -> Result<StatusReport> {
                 } else {
                     b.env_steps
                 };
+                // On workers, a process runs only while its worker holds the
+                // seat's lease: without one (a worker killed, a seat row
+                // deleted) its last heartbeat's "training" is history.
+                let seated = seats.is_empty()
+                    || seats
+                        .iter()
+                        .any(|s| s.name == b.learner && s.held_at(store_now));
+                let state = if b.state.is_working() && !seated {
+                    "dead".to_string()
+                } else {
+                    shown_state(&b, age)
+                };
                 LearnerRow {
-                    state: shown_state(&b, age),
+                    state,
                     name: b.learner,
                     pid: b.pid,
                     host: b.host,
@@ -446,15 +501,14 @@ pub fn report(dir: &LeagueDir) -> Result<StatusReport> {
                 at_ms: c.at_ms,
             })
             .collect(),
-        seats: store
-            .seats()?
+        seats: seats
             .into_iter()
             .map(|s| SeatStatus {
                 state: s.state.name().into(),
-                host: s.held_at(now).then(|| s.host.clone()).flatten(),
+                host: s.held_at(store_now).then(|| s.host.clone()).flatten(),
                 lease_left_s: s
-                    .held_at(now)
-                    .then(|| (s.lease_until_ms - now) as f64 / 1000.0),
+                    .held_at(store_now)
+                    .then(|| (s.lease_until_ms - store_now) as f64 / 1000.0),
                 claims: s.claims,
                 reason: s.reason,
                 name: s.name,
@@ -510,14 +564,15 @@ pub fn render(r: &StatusReport) -> String {
         );
         let _ = writeln!(
             s,
-            "  {:<26} {:<14} {:<16} {:>11} {:<10} {:>8} {:>7}  95% interval",
-            "player", "best response", "budget", "env steps", "maps", "episodes", "win %"
+            "  {:<26} {:<26} {:<14} {:<16} {:>11} {:<10} {:>8} {:>7}  95% interval",
+            "player", "frozen weights", "best response", "budget", "BR steps", "maps", "episodes", "win %"
         );
         for e in &r.exploits {
             let _ = writeln!(
                 s,
-                "  {:<26} {:<14} {:<16} {:>11} {:<10} {:>8} {:>7.1}  [{:.1}, {:.1}]",
+                "  {:<26} {:<26} {:<14} {:<16} {:>11} {:<10} {:>8} {:>7.1}  [{:.1}, {:.1}]{}",
                 e.player_name,
+                frozen_label(e),
                 e.best_response,
                 e.budget,
                 e.env_steps,
@@ -525,7 +580,12 @@ pub fn render(r: &StatusReport) -> String {
                 e.episodes,
                 100.0 * e.win_rate,
                 100.0 * e.win_rate_low,
-                100.0 * e.win_rate_high
+                100.0 * e.win_rate_high,
+                if e.outdated {
+                    "  OLDER VERSION of the player"
+                } else {
+                    ""
+                }
             );
         }
     }
@@ -1090,6 +1150,52 @@ pub fn plot(dir: &LeagueDir, r: &StatusReport, path: &Path) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn two_exploits_of_one_player_name_their_weights_and_the_older_is_marked() {
+        let learner = Player {
+            id: 1,
+            name: "captors-main".into(),
+            side: Side::Captors,
+            kind: Kind::Learner,
+            parent: None,
+            created_at_ms: 0,
+            env_steps: 9_600,
+            curriculum_stage: 0,
+            checkpoint: Some(("learners/captors-main/checkpoints/x".into(), "b".repeat(64))),
+            quarantined: None,
+        };
+        let record = |key: &str, sha: char| ExploitRecord {
+            exploit_key: key.into(),
+            player: 1,
+            player_sha256: Some(sha.to_string().repeat(64)),
+            best_response: "target ippo".into(),
+            budget: "2000 env steps".into(),
+            env_steps: 2_000,
+            train_ms: 1_000,
+            seed: 0,
+            maps: "small".into(),
+            num_captors: 2,
+            speed_ratio: 1.0,
+            episodes: 10,
+            episode_length: 40,
+            wins: 3,
+        };
+        let rows = exploit_rows(
+            std::slice::from_ref(&learner),
+            vec![record("k1", 'a'), record("k2", 'b')],
+        );
+        assert_eq!(rows[0].player_sha256.as_deref(), Some("a".repeat(64).as_str()));
+        assert!(rows[0].outdated, "made against weights the player no longer has");
+        assert_eq!(rows[0].player_env_steps, None, "not recorded, not guessed");
+        assert!(!rows[1].outdated);
+        assert_eq!(rows[1].player_env_steps, Some(9_600), "the current weights'");
+        let json = serde_json::to_value(&rows[0]).unwrap();
+        assert_eq!(json["outdated"], true);
+        assert!(json["player_sha256"].is_string() && json.get("player_env_steps").is_some());
+        let text: Vec<String> = rows.iter().map(frozen_label).collect();
+        assert_eq!(text, ["aaaaaaaaaaaa @?", "bbbbbbbbbbbb @9600"]);
+    }
 
     fn player(id: i64, name: &str, kind: &str, parent: Option<i64>, env_steps: u64) -> PlayerRow {
         PlayerRow {

@@ -163,14 +163,19 @@ pub fn decide(
 /// The error line a process printed last (`error: ...`, or a panic), from
 /// the text of its log written since it started.
 pub fn last_error_line(log: &str) -> Option<String> {
-    log.lines()
-        .rev()
-        .map(str::trim)
-        .find(|l| l.starts_with("error:") || l.contains("panicked at"))
-        .map(|l| {
-            let l = l.strip_prefix("error:").unwrap_or(l).trim();
-            l.chars().take(400).collect()
-        })
+    let lines: Vec<&str> = log.lines().map(str::trim).collect();
+    let at = lines
+        .iter()
+        .rposition(|l| l.starts_with("error:") || l.contains("panicked at"))?;
+    let l = lines[at];
+    let mut line = l.strip_prefix("error:").unwrap_or(l).trim().to_string();
+    // A panic prints where on its own line and what on the next one.
+    if l.contains("panicked at") && l.ends_with(':') {
+        if let Some(what) = lines.get(at + 1).filter(|w| !w.is_empty()) {
+            line = format!("{line} {what}");
+        }
+    }
+    Some(line.chars().take(400).collect())
 }
 
 #[cfg(test)]
@@ -278,9 +283,9 @@ mod tests {
             Some("checkpoints/x: meta.json missing")
         );
         let panic = "thread 'main' panicked at src/x.rs:3:5:\nindex out of bounds\n";
-        assert!(last_error_line(panic)
-            .unwrap()
-            .contains("panicked at src/x.rs"));
+        let line = last_error_line(panic).unwrap();
+        assert!(line.contains("panicked at src/x.rs"), "{line}");
+        assert!(line.ends_with("index out of bounds"), "the panic's message: {line}");
         assert_eq!(last_error_line("all fine\n"), None);
     }
 }

@@ -17,7 +17,7 @@
 
 use super::dir::LeagueDir;
 use super::open::open_process;
-use super::process::{interrupt, log_since, spawn, tail, Role, Supervised};
+use super::process::{interrupt, spawn, Role, Supervised};
 use super::store::{now_ms, SeatLease, SeatRow, SeatState, Store};
 use super::supervision::{classify, decide, last_error_line, CrashBudget, Exit, Next};
 use anyhow::{bail, Result};
@@ -88,6 +88,32 @@ fn check_pool(dir: &LeagueDir, store: &Store) -> Result<()> {
     Ok(())
 }
 
+const GONE: &str =
+    "its seat row is gone from the store (deleted?); the manager defines it again";
+
+/// Why `renew_lease` failed, as the store shows it now.
+fn why_lost(store: &Store, lease: &SeatLease) -> String {
+    match store.seats() {
+        Err(e) => format!("the store cannot tell why: {e}"),
+        Ok(seats) => match seats.into_iter().find(|s| s.name == lease.seat) {
+            // Never taken since it was defined: the row this worker held was
+            // deleted and the manager has defined the seat anew.
+            None => GONE.into(),
+            Some(s) if s.holder.is_none() && s.claims == 0 => GONE.into(),
+            Some(s) if s.state != SeatState::Open => {
+                format!("the seat was ended ({}) by someone else", s.state.name())
+            }
+            Some(s) => match s.holder {
+                Some(h) => format!(
+                    "another worker ({h} on {}) holds it now",
+                    s.host.as_deref().unwrap_or("?")
+                ),
+                None => "the seat was given back by someone else and is free".into(),
+            },
+        },
+    }
+}
+
 /// Runs seats until every seat of the league is done (Ok), one fails (an
 /// error naming it), `run_for` passes or `stop` is set (Ok: seats given
 /// back for other workers or a later run).
@@ -149,8 +175,9 @@ pub fn run_worker(dir: &LeagueDir, opts: &WorkerOptions, stop: &AtomicBool) -> R
                     Ok(true) => {}
                     Ok(false) => {
                         eprintln!(
-                            "worker {holder}: lost the lease of {} (another worker holds it now); ending its process",
-                            h.lease.seat
+                            "worker {holder}: lost the lease of {} ({}); ending its process",
+                            h.lease.seat,
+                            why_lost(&store, &h.lease)
                         );
                         if let Some(mut c) = h.proc.child.take() {
                             c.kill().ok();
@@ -187,7 +214,11 @@ pub fn run_worker(dir: &LeagueDir, opts: &WorkerOptions, stop: &AtomicBool) -> R
                     p.child = None;
                     use std::os::unix::process::ExitStatusExt;
                     let exit = classify(status.code(), status.signal());
-                    let log = log_since(&p.role.log_path(&opts.logs), p.log_offset);
+                    let log = p.output.as_ref().map(|o| {
+                        o.wait_closed(Duration::from_secs(2));
+                        o.text()
+                    }).unwrap_or_default();
+                    let crash_text = p.output.as_ref().map(|o| o.crash_text(5)).unwrap_or_default();
                     let message = last_error_line(&log);
                     if p.started.elapsed() > Duration::from_secs(120) {
                         p.failures = 0;
@@ -216,7 +247,7 @@ pub fn run_worker(dir: &LeagueDir, opts: &WorkerOptions, stop: &AtomicBool) -> R
                         }
                         Next::Restart { after, cause } => {
                             store
-                                .record_crash(&name, &cause, &tail(&log, 5))
+                                .record_crash(&name, &cause, &crash_text)
                                 .unwrap_or_else(|e| eprintln!("cannot record a crash: {e}"));
                             eprintln!(
                                 "worker {holder}: {name} crashed ({cause}); restarting it in {} s",
@@ -226,7 +257,7 @@ pub fn run_worker(dir: &LeagueDir, opts: &WorkerOptions, stop: &AtomicBool) -> R
                         }
                         Next::StopLeague { why } => {
                             if exit != Exit::CannotStart {
-                                store.record_crash(&name, &why, &tail(&log, 5)).ok();
+                                store.record_crash(&name, &why, &crash_text).ok();
                             }
                             store.finish_seat(&h.lease, SeatState::Failed, Some(&why))?;
                             eprintln!("worker {holder}: {why}");
@@ -239,10 +270,9 @@ pub fn run_worker(dir: &LeagueDir, opts: &WorkerOptions, stop: &AtomicBool) -> R
             if p.child.is_none() && !p.finished && !stopping {
                 if let Some(at) = p.restart_at {
                     if Instant::now() >= at {
-                        p.log_offset = std::fs::metadata(p.role.log_path(&opts.logs))
-                            .map(|m| m.len())
-                            .unwrap_or(0);
-                        p.child = Some(spawn(dir, p.role, &opts.logs, Some(&opts.host))?);
+                        let (child, output) = spawn(dir, p.role, &opts.logs, Some(&opts.host))?;
+                        p.child = Some(child);
+                        p.output = Some(output);
                         p.started = Instant::now();
                         p.restart_at = None;
                     }

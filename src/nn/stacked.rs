@@ -276,7 +276,8 @@ mod tests {
             let dl = f64::try_from((got_logits - &want_logits).abs().max()).unwrap();
             let dh = f64::try_from((got_h - &want_h).abs().max()).unwrap();
             assert!(
-                dl < 1e-5 && dh < 1e-5,
+                // Grouped and plain kernels sum in different orders: allow f32 rounding.
+                dl < 1e-4 && dh < 1e-4,
                 "group {g}: logits differ by {dl}, state by {dh}"
             );
             assert!(

@@ -61,22 +61,24 @@ impl Store {
             Backend::Postgres => "FOR UPDATE SKIP LOCKED",
             Backend::Sqlite => "",
         };
+        // Times from the database's clock: a worker whose clock runs behind
+        // would otherwise write leases that others already see expired, and
+        // take live ones.
+        let now = self.now_sql();
         let sql = format!(
-            "UPDATE seats SET holder = $1, host = $2, lease_until_ms = $3, claims = claims + 1, updated_at_ms = $4 \
-             WHERE name = (SELECT name FROM seats WHERE state = 'open' AND (holder IS NULL OR lease_until_ms < $4) \
+            "UPDATE seats SET holder = $1, host = $2, lease_until_ms = {now} + $3, claims = claims + 1, updated_at_ms = {now} \
+             WHERE name = (SELECT name FROM seats WHERE state = 'open' AND (holder IS NULL OR lease_until_ms < {now}) \
                            ORDER BY name LIMIT 1 {lock}) \
-             AND state = 'open' AND (holder IS NULL OR lease_until_ms < $4) \
+             AND state = 'open' AND (holder IS NULL OR lease_until_ms < {now}) \
              RETURNING name, claims"
         );
         let sql = sql.as_str();
         let pool = &self.pool;
         let row = self.run(move || async move {
-            let now = now_ms();
             sqlx::query(sql)
                 .bind(holder)
                 .bind(host)
-                .bind(now + lease_ms)
-                .bind(now)
+                .bind(lease_ms)
                 .fetch_optional(pool)
                 .await
         })?;
@@ -97,13 +99,14 @@ impl Store {
     pub fn renew_lease(&self, lease: &SeatLease, lease_ms: i64) -> Result<bool, StoreError> {
         let pool = &self.pool;
         let (seat, holder) = (lease.seat.as_str(), lease.holder.as_str());
+        let now = self.now_sql();
+        let sql = format!(
+            "UPDATE seats SET lease_until_ms = {now} + $1, updated_at_ms = {now} WHERE name = $2 AND holder = $3 AND state = 'open'"
+        );
+        let sql = sql.as_str();
         self.run(move || async move {
-            let now = now_ms();
-            sqlx::query(
-                "UPDATE seats SET lease_until_ms = $1, updated_at_ms = $2 WHERE name = $3 AND holder = $4 AND state = 'open'",
-            )
-            .bind(now + lease_ms)
-            .bind(now)
+            sqlx::query(sql)
+            .bind(lease_ms)
             .bind(seat)
             .bind(holder)
             .execute(pool)
@@ -189,6 +192,122 @@ impl Store {
                 "SELECT name, state, holder, host, lease_until_ms, claims, reason FROM seats ORDER BY name",
             )
             .fetch_all(pool)
+            .await
+        })
+    }
+}
+
+/// The league's manager as the store records it (`manager_lease`).
+#[derive(Clone, Debug, PartialEq, Eq, sqlx::FromRow)]
+pub struct ManagerLease {
+    pub holder: String,
+    pub host: String,
+    pub pid: i64,
+    /// The pool folder it runs the league on, as that host names it.
+    pub pool: String,
+    pub lease_until_ms: i64,
+    pub updated_at_ms: i64,
+}
+
+impl Store {
+    /// The database's clock in Unix milliseconds: leases are written and
+    /// judged by this one clock, so hosts whose clocks disagree cannot
+    /// take a live lease for an expired one.
+    pub fn clock_ms(&self) -> Result<i64, StoreError> {
+        let pool = &self.pool;
+        let sql = format!("SELECT {} AS now", self.now_sql());
+        let sql = sql.as_str();
+        self.run(move || async move { sqlx::query(sql).fetch_one(pool).await?.try_get("now") })
+    }
+
+    fn now_sql(&self) -> &'static str {
+        match self.backend() {
+            Backend::Postgres => "CAST(EXTRACT(EPOCH FROM clock_timestamp()) * 1000 AS BIGINT)",
+            Backend::Sqlite => "CAST((julianday('now') - 2440587.5) * 86400000.0 AS INTEGER)",
+        }
+    }
+
+    /// Takes the manager's lease for `lease_ms`: when none is recorded, when
+    /// it expired, when `holder` has it already, or when it is `stale`'s
+    /// (a manager known dead: same host, its pid gone). Otherwise the live
+    /// manager's lease is returned and nothing is changed.
+    pub fn claim_manager(
+        &self,
+        me: &ManagerLease,
+        lease_ms: i64,
+        stale: Option<&str>,
+    ) -> Result<Result<(), ManagerLease>, StoreError> {
+        let now = self.now_sql();
+        let sql = format!(
+            "INSERT INTO manager_lease (id, holder, host, pid, pool, lease_until_ms, updated_at_ms) \
+             VALUES (1, $1, $2, $3, $4, {now} + $5, {now}) \
+             ON CONFLICT (id) DO UPDATE SET holder = $1, host = $2, pid = $3, pool = $4, \
+             lease_until_ms = {now} + $5, updated_at_ms = {now} \
+             WHERE manager_lease.lease_until_ms < {now} OR manager_lease.holder = $1 OR manager_lease.holder = $6 \
+             RETURNING holder"
+        );
+        let sql = sql.as_str();
+        let pool = &self.pool;
+        let taken = self.run(move || async move {
+            sqlx::query(sql)
+                .bind(&me.holder)
+                .bind(&me.host)
+                .bind(me.pid)
+                .bind(&me.pool)
+                .bind(lease_ms)
+                .bind(stale.unwrap_or(""))
+                .fetch_optional(pool)
+                .await
+                .map(|r| r.is_some())
+        })?;
+        if taken {
+            return Ok(Ok(()));
+        }
+        match self.manager()? {
+            Some(other) => Ok(Err(other)),
+            // Released between the two statements: try once more.
+            None => self.claim_manager(me, lease_ms, stale),
+        }
+    }
+
+    /// Extends the manager's lease; false when another manager holds it now.
+    pub fn renew_manager(&self, holder: &str, lease_ms: i64) -> Result<bool, StoreError> {
+        let now = self.now_sql();
+        let sql = format!(
+            "UPDATE manager_lease SET lease_until_ms = {now} + $1, updated_at_ms = {now} WHERE id = 1 AND holder = $2"
+        );
+        let sql = sql.as_str();
+        let pool = &self.pool;
+        self.run(move || async move {
+            sqlx::query(sql)
+                .bind(lease_ms)
+                .bind(holder)
+                .execute(pool)
+                .await
+                .map(|r| r.rows_affected() == 1)
+        })
+    }
+
+    /// Gives the manager's lease up (its manager is ending).
+    pub fn release_manager(&self, holder: &str) -> Result<(), StoreError> {
+        let pool = &self.pool;
+        self.run(move || async move {
+            sqlx::query("DELETE FROM manager_lease WHERE id = 1 AND holder = $1")
+                .bind(holder)
+                .execute(pool)
+                .await
+                .map(|_| ())
+        })
+    }
+
+    /// The manager's lease as recorded, live or not.
+    pub fn manager(&self) -> Result<Option<ManagerLease>, StoreError> {
+        let pool = &self.pool;
+        self.run(move || async move {
+            sqlx::query_as(
+                "SELECT holder, host, pid, pool, lease_until_ms, updated_at_ms FROM manager_lease WHERE id = 1",
+            )
+            .fetch_optional(pool)
             .await
         })
     }

@@ -30,7 +30,7 @@ pub mod url;
 
 pub use exploits::ExploitRecord;
 pub use held_out::{HeldOutEpisode, HeldOutResult};
-pub use leases::SeatLease;
+pub use leases::{ManagerLease, SeatLease};
 pub use rows::{
     inside_pool, BeatState, Crash, Heartbeat, Kind, MatchRecord, NewPlayer, PairResult, Player,
     RatingEntry, SeatRow, SeatState, StageChange,
@@ -147,13 +147,24 @@ pub fn host_name() -> String {
 fn transient(e: &sqlx::Error) -> bool {
     match e {
         sqlx::Error::Io(_) | sqlx::Error::PoolTimedOut | sqlx::Error::Tls(_) => true,
-        sqlx::Error::Database(d) => d.code().is_some_and(|c| {
-            // PostgreSQL: connection exceptions (08), the server shutting
-            // down or starting (57P01-57P03), too many connections (53300).
-            c.starts_with("08") || matches!(&*c, "57P01" | "57P02" | "57P03" | "53300")
-        }),
+        sqlx::Error::Database(d) => d.code().is_some_and(|c| transient_code(&c)),
         _ => false,
     }
+}
+
+/// A database error code that a later try of the same operation can get
+/// past.
+fn transient_code(code: &str) -> bool {
+    // PostgreSQL (five-character SQLSTATEs): connection exceptions (08),
+    // the server shutting down or starting (57P01-57P03), too many
+    // connections (53300).
+    code.starts_with("08")
+        || matches!(code, "57P01" | "57P02" | "57P03" | "53300")
+        // SQLite (numbers): SQLITE_BUSY and SQLITE_LOCKED with their
+        // extended codes. The busy timeout waits out most of them, but a
+        // transaction that read before another process wrote must start
+        // again (SQLITE_BUSY_SNAPSHOT, 517): SQLite answers it at once.
+        || matches!(code, "5" | "6" | "261" | "262" | "517" | "773")
 }
 
 /// How long a process keeps retrying a store that went away before it
@@ -685,6 +696,22 @@ impl Store {
             .collect()
     }
 
+    /// Every player, by id, for a report: a row naming a checkpoint outside
+    /// the pool is listed without it and flagged in `quarantined`, where
+    /// `players` refuses the whole read.
+    pub fn players_flagged(&self) -> Result<Vec<Player>, StoreError> {
+        let pool = &self.pool;
+        let rows: Vec<PlayerRow> = self.run(move || async move {
+            sqlx::query_as(
+                "SELECT id, name, side, kind, parent, created_at_ms, env_steps, curriculum_stage, checkpoint_path, checkpoint_sha256, quarantined \
+                 FROM players ORDER BY id",
+            )
+            .fetch_all(pool)
+            .await
+        })?;
+        Ok(rows.into_iter().map(PlayerRow::flagged).collect())
+    }
+
     /// Records a match and updates both players' live ratings, in one
     /// transaction. Returns false (and changes nothing) when a match with
     /// the same key is already recorded.
@@ -1028,6 +1055,18 @@ impl Drop for Store {
 mod tests {
     use super::*;
     use crate::env::Side;
+
+    #[test]
+    fn a_busy_sqlite_database_is_waited_out_and_a_wrong_query_is_not() {
+        // "(code: 5) database is locked" ended an exploit after its
+        // training; it is now retried like a server that went away.
+        for code in ["5", "517", "6", "08006", "57P01", "53300"] {
+            assert!(transient_code(code), "{code}");
+        }
+        for code in ["1", "19", "2067", "23505", "42P01", "22P02"] {
+            assert!(!transient_code(code), "{code}");
+        }
+    }
 
     fn player(name: &str, side: Side, kind: Kind) -> NewPlayer {
         NewPlayer {

@@ -153,7 +153,7 @@ pub struct Player {
 }
 
 /// The `players` row as stored.
-#[derive(sqlx::FromRow)]
+#[derive(Clone, sqlx::FromRow)]
 pub(super) struct PlayerRow {
     id: i64,
     name: String,
@@ -179,6 +179,30 @@ pub fn inside_pool(rel: &str) -> bool {
     use std::path::Component;
     let path = std::path::Path::new(rel);
     !rel.is_empty() && path.components().all(|c| matches!(c, Component::Normal(_)))
+}
+
+impl PlayerRow {
+    /// The row as a player, a checkpoint path outside the pool dropped and
+    /// said in `quarantined`: for a report, where one bad row must not hide
+    /// the whole league.
+    pub(super) fn flagged(self) -> Player {
+        let name = self.name.clone();
+        match Player::try_from(self.clone()) {
+            Ok(p) => p,
+            Err(why) => Player {
+                id: self.id,
+                name,
+                side: self.side.0,
+                kind: self.kind,
+                parent: self.parent,
+                created_at_ms: self.created_at_ms,
+                env_steps: self.env_steps,
+                curriculum_stage: self.curriculum_stage,
+                checkpoint: None,
+                quarantined: Some(why),
+            },
+        }
+    }
 }
 
 impl TryFrom<PlayerRow> for Player {
