@@ -119,6 +119,7 @@ fn both_backends_keep_the_same_contract() {
             exploit_key: "x1".into(),
             player,
             player_sha256: None,
+            player_env_steps: Some(1_280),
             best_response: "captors mappo".into(),
             budget: "600000 env steps".into(),
             env_steps: 600_000,

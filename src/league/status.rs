@@ -173,7 +173,7 @@ fn exploit_rows(players: &[Player], records: Vec<ExploitRecord>) -> Vec<ExploitR
             let now_sha = p.and_then(|p| p.checkpoint.as_ref().map(|(_, s)| s.as_str()));
             let outdated = r.player_sha256.is_some() && r.player_sha256.as_deref() != now_sha;
             // Weights that are still the player's are the player's env steps.
-            let player_env_steps = None::<u64>.or_else(|| {
+            let player_env_steps = r.player_env_steps.or_else(|| {
                 p.filter(|_| !outdated && r.player_sha256.is_some())
                     .map(|p| p.env_steps)
             });
@@ -1169,6 +1169,7 @@ mod tests {
             exploit_key: key.into(),
             player: 1,
             player_sha256: Some(sha.to_string().repeat(64)),
+            player_env_steps: None,
             best_response: "target ippo".into(),
             budget: "2000 env steps".into(),
             env_steps: 2_000,
