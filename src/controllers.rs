@@ -1,10 +1,10 @@
 //! The controller catalogue: every controller a user can name on the command
-//! line or in a config (`heuristic`, `greedy`, `random`, `still`,
+//! line or in a config (`heuristic`, `greedy`, `expert:SEED`, `random`, `still`,
 //! `ckpt:PATH`, `sample:PATH`), parsed and built behind the one `env::Controller` trait. It
 //! sits above `heuristics` and `nn` because it names controllers of both.
 
 use crate::env::{Controller, EnvConfig, Side};
-use crate::heuristics::{AszGreedy, Heuristic, RandomActions, Still};
+use crate::heuristics::{AszGreedy, Heuristic, RandomActions, RandomisedExpert, Still};
 use crate::nn::{CheckpointController, PolicySnapshot};
 use std::fmt;
 use std::path::PathBuf;
@@ -19,6 +19,11 @@ pub enum ControllerSpec {
     /// K x K map cells (1, the spec's, when not given).
     Greedy {
         coarsening: usize,
+    },
+    /// `expert:SEED`: expert captors with their constants drawn per
+    /// episode (`heuristics::RandomisedExpert`); captors only.
+    RandomisedExpert {
+        seed: u64,
     },
     Random,
     Still,
@@ -91,6 +96,12 @@ impl FromStr for ControllerSpec {
                     )),
                 }
             }
+            other if other.starts_with("expert:") => {
+                match other["expert:".len()..].parse::<u64>() {
+                    Ok(seed) => Ok(ControllerSpec::RandomisedExpert { seed }),
+                    Err(_) => Err(format!("'{other}': expert:SEED needs a whole number SEED (expert captors with randomised constants)")),
+                }
+            }
             "random" => Ok(ControllerSpec::Random),
             "still" => Ok(ControllerSpec::Still),
             other if other.starts_with("ckpt:") => {
@@ -107,7 +118,7 @@ impl FromStr for ControllerSpec {
                 }
                 Ok(ControllerSpec::Checkpoint(CheckpointSpec::sampled(path)))
             }
-            other => Err(format!("unknown controller '{other}' (expected heuristic, greedy, greedy:K, random, still, ckpt:PATH or sample:PATH)")),
+            other => Err(format!("unknown controller '{other}' (expected heuristic, greedy, greedy:K, expert:SEED, random, still, ckpt:PATH or sample:PATH)")),
         }
     }
 }
@@ -118,6 +129,7 @@ impl fmt::Display for ControllerSpec {
             ControllerSpec::Heuristic => f.write_str("heuristic"),
             ControllerSpec::Greedy { coarsening: 1 } => f.write_str("greedy"),
             ControllerSpec::Greedy { coarsening } => write!(f, "greedy:{coarsening}"),
+            ControllerSpec::RandomisedExpert { seed } => write!(f, "expert:{seed}"),
             ControllerSpec::Random => f.write_str("random"),
             ControllerSpec::Still => f.write_str("still"),
             ControllerSpec::Checkpoint(c) if c.sampled => write!(f, "sample:{}", c.path.display()),
@@ -132,6 +144,14 @@ impl ControllerSpec {
         Ok(match self {
             ControllerSpec::Heuristic => Box::new(Heuristic),
             ControllerSpec::Greedy { coarsening } => Box::new(AszGreedy::new(*coarsening)),
+            ControllerSpec::RandomisedExpert { seed } => match side {
+                Side::Captors => Box::new(RandomisedExpert::new(*seed)),
+                Side::Target => {
+                    return Err(format!(
+                        "expert:{seed} is a captor team (the expert captors with randomised constants); it cannot play the target"
+                    ))
+                }
+            },
             ControllerSpec::Random => Box::new(RandomActions::new()),
             ControllerSpec::Still => Box::new(Still),
             ControllerSpec::Checkpoint(c) => {

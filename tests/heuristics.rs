@@ -283,3 +283,59 @@ fn random_controller_replays_with_the_seed() {
         "all five actions occur in 30 draws"
     );
 }
+
+#[test]
+fn randomised_experts_draw_their_constants_per_episode_and_replay_with_the_seed() {
+    let g = room(60, 260, 60, 260);
+    let env = env_in(
+        3,
+        g,
+        vec![
+            robot(-1.0, 0.0, 0.0),
+            robot(1.0, 1.0, 0.0),
+            robot(1.0, -1.0, 0.0),
+            robot(3.0, 3.0, 0.7),
+        ],
+    );
+    let params = |team: u64, episode: u64| {
+        let mut e = RandomisedExpert::new(team);
+        e.reset(&env, episode);
+        e.params()
+    };
+    assert_eq!(params(1, 5), params(1, 5), "same team, same episode");
+    assert_ne!(params(1, 5), params(1, 6), "a new episode draws anew");
+    assert_ne!(params(1, 5), params(2, 5), "teams differ");
+    for episode in 0..200 {
+        let p = params(3, episode);
+        assert!((0.3..1.2).contains(&p.wall_weight), "{p:?}");
+        assert!((0.5..20.0).contains(&p.separation), "{p:?}");
+        assert!((0.0..1.0).contains(&p.lead_m), "{p:?}");
+        assert!((0.0..0.1).contains(&p.noise), "{p:?}");
+    }
+    // The spec's constants are the expert, decision for decision.
+    for i in 0..3 {
+        assert_eq!(
+            expert_captor_action_with(&env, i, &ExpertParams::SPEC),
+            expert_captor_action(&env, i)
+        );
+    }
+    // A lead far enough ahead turns the chase: aiming 1 m ahead of a target
+    // heading 0.7 rad changes at least one captor's action here, or the
+    // constants would not make another team.
+    let lead = ExpertParams {
+        lead_m: 1.0,
+        separation: 20.0,
+        ..ExpertParams::SPEC
+    };
+    assert!(
+        (0..3).any(|i| expert_captor_action_with(&env, i, &lead) != expert_captor_action(&env, i)),
+        "the constants change what the experts do"
+    );
+    // Named and refused as a target.
+    let spec: ControllerSpec = "expert:7".parse().unwrap();
+    assert_eq!(spec.to_string(), "expert:7");
+    assert!(spec.build(Side::Captors).is_ok());
+    let err = spec.build(Side::Target).err().unwrap();
+    assert!(err.contains("captor team"), "{err}");
+    assert!("expert:x".parse::<ControllerSpec>().unwrap_err().contains("expert:SEED"));
+}

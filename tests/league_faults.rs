@@ -1105,3 +1105,166 @@ fn a_full_disk_is_named_in_the_crash_record() {
         String::from_utf8_lossy(&out.stderr)
     );
 }
+
+/// The validation panel of the tests below: 3 episodes of each of two
+/// randomised expert teams on one generated map nobody trains on.
+const VALIDATION: &str = "episodes = 3\ncpu_share = 1.0\nvalidation_maps = \"generated:1@1001:small\"\nvalidation_captors = [\"expert:1\", \"expert:2\"]\n";
+
+fn validation_rows(l: &League) -> Vec<t2e::league::store::HeldOutResult> {
+    Store::open_existing(&l.dir.store)
+        .unwrap()
+        .held_out_results()
+        .unwrap()
+        .into_iter()
+        .filter(|r| r.panel == t2e::league::store::Panel::Validation)
+        .collect()
+}
+
+fn exported_player(folder: &Path) -> String {
+    let info: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(folder.join("player.json")).unwrap())
+            .unwrap();
+    info["player"].as_str().unwrap().to_string()
+}
+
+#[test]
+fn export_best_exports_the_validation_best_snapshot_of_a_store_made_by_hand() {
+    let l = league("best", 640, VALIDATION);
+    run_to_end(&l);
+    let store = Store::open_existing(&l.dir.store).unwrap();
+    let players = store.players().unwrap();
+    let main = players.iter().find(|p| p.name == "target-main").unwrap();
+    let mut snaps: Vec<_> = players
+        .iter()
+        .filter(|p| p.kind == Kind::Snapshot && p.parent == Some(main.id))
+        .collect();
+    snaps.sort_by_key(|p| p.env_steps);
+    assert!(snaps.len() >= 3, "{snaps:?}");
+    // By hand: the first snapshot is caught 3 of 3 times by each team; the
+    // second 1 of 3 and 2 of 3 (escapes 1/2 on average: the best whose
+    // games are all played); the third escaped every game, but played only
+    // 2 of its 3 against expert:2 (a validation cut short).
+    let mut record = |member: &t2e::league::store::Player, opponent: &str, episode: usize, captured: bool| {
+        store
+            .record_held_out(&t2e::league::store::HeldOutEpisode {
+                key: t2e::league::evaluator::panel_episode_key(
+                    t2e::league::store::Panel::Validation,
+                    &member.name,
+                    opponent,
+                    episode,
+                ),
+                panel: t2e::league::store::Panel::Validation,
+                member: member.id,
+                opponent: opponent.into(),
+                map: "generated-small-1001".into(),
+                speed_ratio: 1.0,
+                seed: episode as u64,
+                captured,
+                steps: if captured { 100 } else { 500 },
+            })
+            .unwrap()
+    };
+    for e in 0..3 {
+        record(snaps[0], "expert:1", e, true);
+        record(snaps[0], "expert:2", e, true);
+        record(snaps[1], "expert:1", e, e == 0);
+        record(snaps[1], "expert:2", e, e != 0);
+        record(snaps[2], "expert:1", e, false);
+        if e < 2 {
+            record(snaps[2], "expert:2", e, false);
+        }
+    }
+    drop(store);
+    let out = l.tmp.join("best-target");
+    let o = t2e(&[
+        "export",
+        "--best",
+        "target",
+        "--dir",
+        l.dir.root.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(exported_player(&out), snaps[1].name);
+    let said = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        said.contains(&snaps[1].name) && said.contains("50.0% won"),
+        "{said}"
+    );
+    // The captors have no validation panel: refused, saying what to set.
+    let o = t2e(&[
+        "export",
+        "--best",
+        "captors",
+        "--dir",
+        l.dir.root.to_str().unwrap(),
+        "--out",
+        l.tmp.join("best-captors").to_str().unwrap(),
+    ]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("validation_targets"), "{}", stderr(&o));
+    assert!(!l.tmp.join("best-captors").exists());
+}
+
+#[test]
+fn killed_during_validation_games_the_league_records_no_half_result() {
+    let l = league("validate", 960, VALIDATION);
+    let text = std::fs::read_to_string(&l.config)
+        .unwrap()
+        .replace("[evaluator]\nenabled = false\n", "[evaluator]\nenabled = true\n");
+    std::fs::write(&l.config, text).unwrap();
+    let mut manager = spawn_logged_run(&l);
+    // Kill the evaluator, then the manager, with SIGKILL as soon as the
+    // validation panel has some episodes but not all: mid-validation.
+    let mut evaluator = None;
+    wait_for("validation episodes", Duration::from_secs(300), || {
+        if let Ok(Some(s)) = manager.try_wait() {
+            panic!("the league ended before validation began ({s}): {}", l.manager_log_text());
+        }
+        if evaluator.is_none() {
+            evaluator = child_pid(manager.id(), "league-evaluator");
+        }
+        Store::open_existing(&l.dir.store)
+            .and_then(|s| s.held_out_results())
+            .map(|rows| rows.iter().any(|r| r.panel == t2e::league::store::Panel::Validation))
+            .unwrap_or(false)
+    });
+    signal(evaluator.expect("the evaluator runs"), libc::SIGKILL);
+    signal(manager.id() as i64, libc::SIGKILL);
+    wait_exit(&mut manager, Duration::from_secs(30));
+    std::thread::sleep(Duration::from_secs(2));
+    let rows = validation_rows(&l);
+    assert!(rows.iter().all(|r| r.episodes <= 3), "{rows:?}");
+    // No half result chooses: export --best picks a snapshot whose games
+    // are all played, or none.
+    let out = l.tmp.join("best-while-killed");
+    let o = t2e(&[
+        "export", "--best", "target", "--dir", l.dir.root.to_str().unwrap(),
+        "--out", out.to_str().unwrap(),
+    ]);
+    if o.status.success() {
+        let chosen = exported_player(&out);
+        let store = Store::open_existing(&l.dir.store).unwrap();
+        let id = store.players().unwrap().into_iter().find(|p| p.name == chosen).unwrap().id;
+        let complete: Vec<_> = rows.iter().filter(|r| r.member == id && r.episodes == 3).collect();
+        assert_eq!(complete.len(), 2, "{chosen} chosen on a half result: {rows:?}");
+    } else {
+        assert!(stderr(&o).contains("finished its validation games"), "{}", stderr(&o));
+    }
+    // Resumed, every target snapshot plays each team exactly 3 times: the
+    // episodes cut short are played again, none twice.
+    let o = run_dir(&l);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let store = Store::open_existing(&l.dir.store).unwrap();
+    let snaps: Vec<i64> = store
+        .players()
+        .unwrap()
+        .into_iter()
+        .filter(|p| p.kind == Kind::Snapshot && p.side == t2e::env::Side::Target)
+        .map(|p| p.id)
+        .collect();
+    let rows = validation_rows(&l);
+    assert_eq!(rows.len(), 2 * snaps.len(), "{rows:?}");
+    assert!(rows.iter().all(|r| r.episodes == 3 && snaps.contains(&r.member)), "{rows:?}");
+}

@@ -93,10 +93,32 @@ pub struct StatusArgs {
     pub plot: Option<PathBuf>,
 }
 
+/// A side, as the command line names it.
+#[derive(clap::ValueEnum, Clone, Copy, Debug)]
+pub enum SideArg {
+    Captors,
+    Target,
+}
+
+impl From<SideArg> for crate::env::Side {
+    fn from(s: SideArg) -> Self {
+        match s {
+            SideArg::Captors => crate::env::Side::Captors,
+            SideArg::Target => crate::env::Side::Target,
+        }
+    }
+}
+
 #[derive(clap::Args, Debug)]
 pub struct ExportArgs {
     /// Player name (as `status` lists it) or id.
-    pub player: String,
+    #[arg(required_unless_present = "best", conflicts_with = "best")]
+    pub player: Option<String>,
+    /// Export the main learner's snapshot of this side (captors or target)
+    /// that did best on the validation panel (`[evaluator] validation_*`),
+    /// among those whose validation games are all played.
+    #[arg(long, value_name = "SIDE")]
+    pub best: Option<SideArg>,
     /// League folder (default: the only league folder under runs/league/).
     #[arg(long, value_name = "DIR")]
     pub dir: Option<PathBuf>,
@@ -420,8 +442,24 @@ pub fn export(args: ExportArgs) -> Result<()> {
         args.pool.as_deref(),
         "it holds the players' files",
     )?;
-    status::export(&dir, &args.player, &args.out)?;
-    println!("exported {} -> {}", args.player, args.out.display());
+    let player = match (args.player, args.best) {
+        (Some(p), _) => p,
+        (None, Some(side)) => {
+            let chosen = status::best_validated(&dir, side.into())?;
+            println!(
+                "{}: the best of the validation panel ({}), {:.1}% won, {:.0} steps a game on average over {} episodes",
+                chosen.player.name,
+                chosen.opponents,
+                100.0 * chosen.win_rate,
+                chosen.mean_steps,
+                chosen.episodes
+            );
+            chosen.player.name
+        }
+        (None, None) => unreachable!("clap requires PLAYER or --best"),
+    };
+    status::export(&dir, &player, &args.out)?;
+    println!("exported {player} -> {}", args.out.display());
     Ok(())
 }
 

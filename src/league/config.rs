@@ -295,6 +295,54 @@ impl LeagueConfig {
         }
     }
 
+    /// Validation shares nothing with training: no validation map is a
+    /// training map (`maps`) and no validation team is a league member
+    /// (`[members]`). The test side (Gibson maps, `greedy:K`) is refused by
+    /// `EvaluatorConfig::validate`; the maps' content by the evaluator.
+    fn check_validation_apart(&self) -> Result<(), String> {
+        if let Some(spec) = &self.evaluator.validation_maps {
+            let shared = spec == &self.maps
+                || match (
+                    crate::map::catalog::generated_set(spec),
+                    crate::map::catalog::generated_set(&self.maps),
+                ) {
+                    (Some((vs, vc)), Some((ts, tc))) => {
+                        vs.start < ts.end && ts.start < vs.end && vc.iter().any(|c| tc.contains(c))
+                    }
+                    _ => false,
+                };
+            if shared {
+                return Err(format!(
+                    "evaluator.validation_maps = \"{spec}\": shares maps with the training maps (maps = \"{}\"); validation plays maps the league never trained on (generated:N@S with seeds past the training maps', e.g. generated:8@1001)",
+                    self.maps
+                ));
+            }
+        }
+        for member_side in [Side::Target, Side::Captors] {
+            let validation = self
+                .evaluator
+                .validation(member_side)
+                .map_err(|e| format!("evaluator.{e}"))?;
+            let members = self
+                .members
+                .of(member_side.other())
+                .map_err(|e| format!("members.{e}"))?;
+            if let Some((name, _)) = validation
+                .iter()
+                .find(|(_, v)| members.iter().any(|(_, m)| m == v))
+            {
+                return Err(format!(
+                    "evaluator.{} = \"{name}\": also a member of the league ([members]), which the league trains against; validation plays teams the league never meets",
+                    match member_side {
+                        Side::Target => "validation_captors",
+                        Side::Captors => "validation_targets",
+                    }
+                ));
+            }
+        }
+        Ok(())
+    }
+
     pub fn validate(&self) -> Result<(), String> {
         self.matchmaking
             .validate()
@@ -316,6 +364,7 @@ impl LeagueConfig {
         self.members
             .validate(&held_out)
             .map_err(|e| format!("members.{e}"))?;
+        self.check_validation_apart()?;
         if self.matchmaking.members_share > 0.0 && self.members.is_empty() {
             return Err(format!(
                 "matchmaking.members_share = {}: the league has no extra members to give it to (add [members])",
@@ -461,5 +510,74 @@ mod tests {
             .contains("captors = [\"greedy:4\"]"));
         let shipped = Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/league-default.toml");
         LeagueConfig::load(&shipped).unwrap();
+    }
+
+    #[test]
+    fn validation_shares_no_team_and_no_map_with_training_or_test() {
+        let ok = "maps = \"generated:20\"\n[evaluator]\nvalidation_maps = \"generated:4@1001\"\nvalidation_captors = [\"expert:1\", \"expert:2\"]\n";
+        let cfg = LeagueConfig::parse(ok).unwrap();
+        assert_eq!(cfg.evaluator.validation(Side::Target).unwrap().len(), 2);
+        for (text, says) in [
+            // A member of the league is not a team it never met.
+            (
+                "validation_maps = \"generated:4@1001\"\nvalidation_captors = [\"heuristic\"]",
+                "evaluator.validation_captors = \"heuristic\": the expert heuristic is a member",
+            ),
+            (
+                "validation_maps = \"generated:4@1001\"\nvalidation_targets = [\"rule\"]",
+                "evaluator.validation_targets = \"rule\": the rule-based target is a member",
+            ),
+            // The test planner's family.
+            (
+                "validation_maps = \"generated:4@1001\"\nvalidation_captors = [\"greedy:4\"]",
+                "evaluator.validation_captors = \"greedy:4\": the ASZ-greedy planner",
+            ),
+            // Also a held-out opponent.
+            (
+                "validation_maps = \"generated:4@1001\"\nvalidation_captors = [\"random\"]\nheld_out_captors = [\"random\"]",
+                "evaluator.validation_captors = \"random\": also a held-out opponent",
+            ),
+            // A test map.
+            (
+                "validation_maps = \"gibson\"\nvalidation_captors = [\"expert:1\"]",
+                "evaluator.validation_maps = \"gibson\": the Gibson maps are the test maps",
+            ),
+            (
+                "validation_maps = \"large\"\nvalidation_captors = [\"expert:1\"]",
+                "evaluator.validation_maps = \"large\": the Gibson maps are the test maps",
+            ),
+            // A training map.
+            (
+                "validation_maps = \"generated:4@18\"\nvalidation_captors = [\"expert:1\"]",
+                "evaluator.validation_maps = \"generated:4@18\": shares maps with the training maps",
+            ),
+            (
+                "validation_maps = \"generated:20:small\"\nvalidation_captors = [\"expert:1\"]",
+                "evaluator.validation_maps = \"generated:20:small\": shares maps",
+            ),
+            // Half a panel.
+            ("validation_captors = [\"expert:1\"]", "need validation_maps"),
+            ("validation_maps = \"generated:4@1001\"", "no validation team"),
+            ("validation_maps = \"generated:4@1001\"\nvalidation_targets = [\"expert:3\"]", "captor team"),
+        ] {
+            let err = LeagueConfig::parse(&format!("maps = \"generated:20\"\n[evaluator]\n{text}\n"))
+                .unwrap_err();
+            assert!(err.contains(says), "{text}:\n{err}");
+        }
+        // A validation team that the config also makes a member.
+        let err = LeagueConfig::parse(
+            "maps = \"generated:20\"\n[members]\ncaptors = [\"expert:5\"]\n[evaluator]\nvalidation_maps = \"generated:4@1001\"\nvalidation_captors = [\"expert:5\"]\n",
+        )
+        .unwrap_err();
+        assert!(
+            err.starts_with("evaluator.validation_captors = \"expert:5\": also a member of the league"),
+            "{err}"
+        );
+        // Other seeds and other classes of the generator are other maps.
+        LeagueConfig::parse("maps = \"generated:20:small\"\n[evaluator]\nvalidation_maps = \"generated:4:large\"\nvalidation_captors = [\"expert:1\"]\n").unwrap();
+        LeagueConfig::parse("maps = \"generated:20\"\n[evaluator]\nvalidation_maps = \"generated:4@21\"\nvalidation_captors = [\"expert:1\"]\n").unwrap();
+        // Left out of the stored config while unset.
+        let stored = toml::to_string(&LeagueConfig::default()).unwrap();
+        assert!(!stored.contains("validation"), "{stored}");
     }
 }

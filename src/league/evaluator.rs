@@ -11,7 +11,7 @@
 use super::config::LeagueConfig;
 use super::dir::LeagueDir;
 use super::players::{heuristic_name, learner_name, Seat, EVALUATOR};
-use super::store::{BeatState, HeldOutEpisode, Kind, MatchRecord, Player, Store};
+use super::store::{BeatState, HeldOutEpisode, Kind, MatchRecord, Panel, Player, Store};
 use super::supervision::{CannotStart, Outcome};
 use crate::controllers::ControllerSpec;
 use crate::env::{CaptureRule, Side};
@@ -44,6 +44,24 @@ pub struct EvaluatorConfig {
     /// `held_out_captors`.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub held_out_targets: Vec<String>,
+    /// The validation panel's maps (`generated:N@S`, a folder): never a
+    /// Gibson test map (under either protocol) and never a training map.
+    /// Validation chooses what `export --best` exports, so it shares no
+    /// map and no team with the test. Stored only when set.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub validation_maps: Option<String>,
+    /// The validation teams of the target snapshots: captor controllers
+    /// the league never meets and no test panel holds (`expert:SEED`, the
+    /// expert captors with randomised constants; `ckpt:PATH` of a team
+    /// trained elsewhere, such as a cooperative team of another seed or
+    /// naive co-evolution's captors). Not the expert (a member) and not
+    /// `greedy:K` (the test planner's family). Stored only when set.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub validation_captors: Vec<String>,
+    /// The validation opponents of the captor snapshots (target
+    /// controllers), as `validation_captors`.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub validation_targets: Vec<String>,
 }
 
 impl Default for EvaluatorConfig {
@@ -54,6 +72,9 @@ impl Default for EvaluatorConfig {
             cpu_share: 0.25,
             held_out_captors: Vec::new(),
             held_out_targets: Vec::new(),
+            validation_maps: None,
+            validation_captors: Vec::new(),
+            validation_targets: Vec::new(),
         }
     }
 }
@@ -74,8 +95,63 @@ impl EvaluatorConfig {
         }
         for side in [Side::Captors, Side::Target] {
             self.held_out(side)?;
+            let validation = self.validation(side)?;
+            let held_out = self.held_out(side)?;
+            if let Some((name, _)) = validation.iter().find(|(_, v)| held_out.iter().any(|(_, h)| h == v)) {
+                return Err(format!(
+                    "{} = \"{name}\": also a held-out opponent; validation shares no team with another panel",
+                    Self::validation_field(side)
+                ));
+            }
+        }
+        let teams = !(self.validation_captors.is_empty() && self.validation_targets.is_empty());
+        match &self.validation_maps {
+            None if teams => {
+                return Err("validation_captors / validation_targets need validation_maps: validation plays on maps that are neither trained on nor tested on (e.g. \"generated:8@1001\")".into())
+            }
+            Some(spec) if !teams => {
+                return Err(format!("validation_maps = \"{spec}\": no validation team to play there (set validation_captors or validation_targets)"))
+            }
+            Some(spec) => {
+                let source = spec.split(':').next().unwrap_or_default();
+                if matches!(source, "gibson" | "small" | "medium" | "large") {
+                    return Err(format!("validation_maps = \"{spec}\": the Gibson maps are the test maps under either protocol; validation never plays on a test map (use generated:N@S or a folder of your own)"));
+                }
+            }
+            None => {}
         }
         Ok(())
+    }
+
+    fn validation_field(member_side: Side) -> &'static str {
+        match member_side {
+            Side::Target => "validation_captors",
+            Side::Captors => "validation_targets",
+        }
+    }
+
+    /// The validation opponents of `member_side`'s snapshots, parsed.
+    pub fn validation(&self, member_side: Side) -> Result<Vec<(String, ControllerSpec)>, String> {
+        let names = match member_side {
+            Side::Target => &self.validation_captors,
+            Side::Captors => &self.validation_targets,
+        };
+        let side = member_side.other();
+        let specs = ControllerSpec::parse_list(Self::validation_field(member_side), names, side, |spec| match spec {
+            ControllerSpec::Heuristic => Some(format!(
+                "the {} is a member of the league, which it trains against; validation plays teams the league never meets",
+                match side {
+                    Side::Captors => "expert heuristic",
+                    Side::Target => "rule-based target",
+                }
+            )),
+            ControllerSpec::Greedy { .. } => Some(
+                "the ASZ-greedy planner (greedy:K) is the test panel's team; validation shares no team with the test (use expert:SEED or a trained team)"
+                    .into(),
+            ),
+            _ => None,
+        })?;
+        Ok(specs.into_iter().map(|spec| (spec.to_string(), spec)).collect())
     }
 
     /// The held-out opponents that play `member_side`'s snapshots, parsed.
@@ -108,15 +184,29 @@ impl EvaluatorConfig {
 enum PanelOpponent<'a> {
     /// The other side's heuristic member: a match, in the payoff.
     Member(&'a Player),
-    /// A held-out controller: its episodes are kept apart from the matches.
-    HeldOut(&'a str, &'a ControllerSpec),
+    /// A controller that is not a member (held out or validation): its
+    /// episodes are kept apart from the matches.
+    Controller(Panel, &'a str, &'a ControllerSpec),
+}
+
+/// The controllers of the held-out and validation panels, per member side.
+pub struct Panels {
+    pub held_out: Vec<(Side, Vec<(String, ControllerSpec)>)>,
+    pub validation: Vec<(Side, Vec<(String, ControllerSpec)>)>,
+    /// The validation maps (empty when there is no validation panel).
+    pub validation_maps: Arc<Vec<Arc<PreparedMap>>>,
+}
+
+/// The store key of a member's episode against a controller of a panel.
+pub fn panel_episode_key(panel: Panel, member: &str, opponent: &str, episode: usize) -> String {
+    format!("evaluator/{}/{member}/{opponent}/{episode}", panel.name())
 }
 
 /// Plays the panel games no one has recorded yet; returns how many it played.
 fn evaluate_pending(
     dir: &LeagueDir,
     cfg: &LeagueConfig,
-    held_out: &[(Side, Vec<(String, ControllerSpec)>)],
+    panels: &Panels,
     maps: &Arc<Vec<Arc<PreparedMap>>>,
     store: &Store,
     stop: &AtomicBool,
@@ -132,9 +222,15 @@ fn evaluate_pending(
             .filter(|p| p.name == heuristic_name(member.side.other()))
             .map(PanelOpponent::Member)
             .collect();
-        for (side, specs) in held_out {
-            if *side == member.side {
-                opponents.extend(specs.iter().map(|(n, s)| PanelOpponent::HeldOut(n, s)));
+        for (panel, list) in [(Panel::HeldOut, &panels.held_out), (Panel::Validation, &panels.validation)] {
+            for (side, specs) in list {
+                if *side == member.side {
+                    opponents.extend(
+                        specs
+                            .iter()
+                            .map(|(n, s)| PanelOpponent::Controller(panel, n, s)),
+                    );
+                }
             }
         }
         let (rel, _) = member
@@ -146,11 +242,20 @@ fn evaluate_pending(
         'opponents: for opponent in &opponents {
             let other = match opponent {
                 PanelOpponent::Member(_) => ControllerSpec::Heuristic,
-                PanelOpponent::HeldOut(_, s) => (*s).clone(),
+                PanelOpponent::Controller(_, _, s) => (*s).clone(),
             };
             let (captors, target) = match member.side {
                 Side::Captors => (spec.clone(), other),
                 Side::Target => (other, spec.clone()),
+            };
+            // Validation plays its own maps and the evaluation's episode
+            // length (the test's), so its Time compares with the test's.
+            let (panel_maps, episode_length) = match opponent {
+                PanelOpponent::Controller(Panel::Validation, ..) => (
+                    &panels.validation_maps,
+                    EvalSetting::default().episode_length,
+                ),
+                _ => (maps, cfg.episode_length),
             };
             let setting = EvalSetting {
                 captors,
@@ -158,7 +263,7 @@ fn evaluate_pending(
                 num_captors: cfg.num_captors,
                 speed_ratio: cfg.curriculum.stages[0],
                 episodes: cfg.evaluator.episodes,
-                episode_length: cfg.episode_length,
+                episode_length,
                 seed: cfg.seed ^ 0xE7A1,
                 capture_rule: CaptureRule::Fast,
                 soa_every: 0,
@@ -173,16 +278,15 @@ fn evaluate_pending(
                         "evaluator/{}/{}/{episode}",
                         member.name, panel.name
                     ))?,
-                    PanelOpponent::HeldOut(name, _) => store.has_held_out(&format!(
-                        "evaluator/held-out/{}/{name}/{episode}",
-                        member.name
-                    ))?,
+                    PanelOpponent::Controller(panel, name, _) => store.has_held_out(
+                        &panel_episode_key(*panel, &member.name, name, episode),
+                    )?,
                 };
                 if recorded {
                     continue;
                 }
                 let started = Instant::now();
-                let record = match play_episode(&setting, maps, episode, &mut marching) {
+                let record = match play_episode(&setting, panel_maps, episode, &mut marching) {
                     Ok(r) => r,
                     Err(e) => {
                         store.quarantine(
@@ -212,9 +316,10 @@ fn evaluate_pending(
                             recorded_by: EVALUATOR.into(),
                         })?;
                     }
-                    PanelOpponent::HeldOut(name, _) => {
+                    PanelOpponent::Controller(panel, name, _) => {
                         store.record_held_out(&HeldOutEpisode {
-                            key: format!("evaluator/held-out/{}/{name}/{episode}", member.name),
+                            key: panel_episode_key(*panel, &member.name, name, episode),
+                            panel: *panel,
                             member: member.id,
                             opponent: name.to_string(),
                             map: record.map,
@@ -235,28 +340,48 @@ fn evaluate_pending(
     Ok(played)
 }
 
-/// The held-out opponents per member side, checkpoints loaded and checked
-/// against the league's game.
-fn held_out_panel(
-    cfg: &LeagueConfig,
-) -> Result<Vec<(Side, Vec<(String, ControllerSpec)>)>, String> {
+/// The held-out and validation opponents per member side, checkpoints
+/// loaded and checked against the league's game, and the validation maps,
+/// checked to hold no test map.
+fn load_panels(cfg: &LeagueConfig) -> Result<Panels, String> {
     let env = crate::env::EnvConfig {
         num_captors: cfg.num_captors,
         target_speed: cfg.curriculum.stages[0],
         episode_length: cfg.episode_length,
         ..crate::env::EnvConfig::default()
     };
-    [Side::Captors, Side::Target]
-        .into_iter()
-        .map(|member_side| {
-            let specs = cfg.evaluator.held_out(member_side)?;
-            for (name, spec) in &specs {
-                spec.check(member_side.other(), &env)
-                    .map_err(|e| format!("evaluator held-out opponent \"{name}\": {e}"))?;
-            }
-            Ok((member_side, specs))
-        })
-        .collect()
+    let load = |panel: Panel| -> Result<Vec<(Side, Vec<(String, ControllerSpec)>)>, String> {
+        [Side::Captors, Side::Target]
+            .into_iter()
+            .map(|member_side| {
+                let specs = match panel {
+                    Panel::HeldOut => cfg.evaluator.held_out(member_side)?,
+                    Panel::Validation => cfg.evaluator.validation(member_side)?,
+                };
+                for (name, spec) in &specs {
+                    spec.check(member_side.other(), &env).map_err(|e| {
+                        format!("evaluator {} opponent \"{name}\": {e}", panel.name())
+                    })?;
+                }
+                Ok((member_side, specs))
+            })
+            .collect()
+    };
+    let validation_maps = match &cfg.evaluator.validation_maps {
+        None => Arc::new(Vec::new()),
+        Some(spec) => {
+            let maps = crate::map::catalog::load_prepared(spec)
+                .map_err(|e| format!("evaluator.validation_maps = \"{spec}\": {e:#}"))?;
+            crate::protocol::check_extra_maps(spec, &maps)
+                .map_err(|e| format!("evaluator.validation_maps: {e}"))?;
+            maps
+        }
+    };
+    Ok(Panels {
+        held_out: load(Panel::HeldOut)?,
+        validation: load(Panel::Validation)?,
+        validation_maps,
+    })
 }
 
 /// Runs until Ctrl-C / SIGINT (`Outcome::Stopped`), or until both learners
@@ -289,14 +414,14 @@ pub fn run_evaluator(dir: &LeagueDir, stop: &AtomicBool) -> Result<Outcome> {
     let maps = crate::map::catalog::load_prepared(&cfg.maps)
         .with_context(|| format!("maps = \"{}\"", cfg.maps))
         .map_err(|e| anyhow::Error::new(CannotStart(format!("{e:#}"))))?;
-    let held_out = held_out_panel(&cfg).map_err(|e| {
+    let panels = load_panels(&cfg).map_err(|e| {
         anyhow::Error::new(CannotStart(format!("{}: {e}", dir.config_path().display())))
     })?;
     // The count covers every evaluator process of this league, not only this one.
     let mut total = store.matches_recorded_by(EVALUATOR)? + store.held_out_count()?;
     store.heartbeat(EVALUATOR, BeatState::Evaluating, total, None)?;
     while !stop.load(Ordering::SeqCst) {
-        let played = evaluate_pending(dir, &cfg, &held_out, &maps, &store, stop)?;
+        let played = evaluate_pending(dir, &cfg, &panels, &maps, &store, stop)?;
         total += played as u64;
         if played == 0 {
             let beats = store.heartbeats()?;
@@ -307,7 +432,7 @@ pub fn run_evaluator(dir: &LeagueDir, stop: &AtomicBool) -> Result<Outcome> {
             });
             if done {
                 // One more pass: a last snapshot may have landed since.
-                if evaluate_pending(dir, &cfg, &held_out, &maps, &store, stop)? == 0 {
+                if evaluate_pending(dir, &cfg, &panels, &maps, &store, stop)? == 0 {
                     break;
                 }
                 continue;

@@ -22,7 +22,9 @@
 //! - `curriculum`: the speed-ratio stages and when to move on.
 //! - `learner`: one main learner's process: opponents per world, batched
 //!   network opponents, matches, snapshots.
-//! - `evaluator`: its own process: every snapshot plays a fixed panel.
+//! - `evaluator`: its own process: every snapshot plays a fixed panel
+//!   (members, held-out teams, validation teams on validation maps).
+//! - `selection`: the validation-best snapshot `export --best` exports.
 //! - `manager`: `t2e-league run`: spawns and supervises the learners and
 //!   the evaluator.
 //! - `exploit`: `t2e-league exploit`: a fresh best response trained against
@@ -46,6 +48,7 @@ pub mod pool;
 pub mod process;
 pub mod ratings;
 pub mod seats;
+pub mod selection;
 pub mod status;
 pub mod store;
 pub mod supervision;

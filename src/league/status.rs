@@ -46,7 +46,7 @@ use super::dir::LeagueDir;
 use super::players::EVALUATOR;
 use super::ratings::{bradley_terry, PairRecord};
 use super::store::{
-    host_name, now_ms, ExploitRecord, Heartbeat, HeldOutResult, Kind, PairResult, Player, Store,
+    host_name, now_ms, ExploitRecord, Heartbeat, HeldOutResult, Kind, PairResult, Panel, Player, Store,
 };
 use crate::env::Side;
 use anyhow::{bail, Context, Result};
@@ -233,9 +233,28 @@ pub struct PanelRow {
     pub win_rate_low: f64,
     pub win_rate_high: f64,
     /// The opponent is held out: a controller the league never plays
-    /// (`[evaluator] held_out_captors / held_out_targets`); `opponent` is
+    /// (`[evaluator] held_out_*` or `validation_*`); `opponent` is
     /// then 0 (no player) and `opponent_name` its controller.
     pub held_out: bool,
+    /// The opponent is on the validation panel (`[evaluator]
+    /// validation_*`, on the validation maps): what `export --best` reads.
+    pub validation: bool,
+    /// Mean episode length in steps (Time), where recorded (not for the
+    /// matches against members).
+    pub mean_steps: Option<f64>,
+}
+
+impl PanelRow {
+    /// The opponent as a table shows it, with its panel.
+    pub fn opponent_label(&self) -> String {
+        if self.validation {
+            format!("{} (validation)", self.opponent_name)
+        } else if self.held_out {
+            format!("{} (held out)", self.opponent_name)
+        } else {
+            self.opponent_name.clone()
+        }
+    }
 }
 
 /// The panel rows from the evaluator's payoff and its held-out episodes:
@@ -271,6 +290,8 @@ pub fn panel_rows(
                 win_rate_low: lo,
                 win_rate_high: hi,
                 held_out: false,
+                validation: false,
+                mean_steps: None,
             })
         })
         .collect();
@@ -292,18 +313,22 @@ pub fn panel_rows(
             win_rate_low: lo,
             win_rate_high: hi,
             held_out: true,
+            validation: r.panel == Panel::Validation,
+            mean_steps: Some(r.steps as f64 / r.episodes.max(1) as f64),
         })
     }));
     rows.sort_by(|a, b| {
         (
             std::cmp::Reverse(a.member),
             a.held_out,
+            a.validation,
             a.opponent,
             &a.opponent_name,
         )
             .cmp(&(
                 std::cmp::Reverse(b.member),
                 b.held_out,
+                b.validation,
                 b.opponent,
                 &b.opponent_name,
             ))
@@ -671,23 +696,19 @@ pub fn render(r: &StatusReport) -> String {
     if !r.panel.is_empty() {
         let _ = writeln!(
             s,
-            "\npanel (the evaluator's episodes only; the opponents are league members, or held out: never met in the league):"
+            "\npanel (the evaluator's episodes only; the opponents are league members, or held out: never met in the league; validation teams play the validation maps and choose `export --best`):"
         );
         let _ = writeln!(
             s,
-            "  {:<30} {:<20} {:>8} {:>7}  95% interval",
+            "  {:<30} {:<24} {:>8} {:>7}  95% interval",
             "member", "opponent", "episodes", "win %"
         );
         for p in &r.panel {
             let _ = writeln!(
                 s,
-                "  {:<30} {:<20} {:>8} {:>7.1}  [{:.1}, {:.1}]",
+                "  {:<30} {:<24} {:>8} {:>7.1}  [{:.1}, {:.1}]",
                 p.member_name,
-                if p.held_out {
-                    format!("{} (held out)", p.opponent_name)
-                } else {
-                    p.opponent_name.clone()
-                },
+                p.opponent_label(),
                 p.episodes,
                 100.0 * p.win_rate,
                 100.0 * p.win_rate_low,
@@ -824,6 +845,49 @@ pub fn export(dir: &LeagueDir, player: &str, out: &Path) -> Result<()> {
     Ok(())
 }
 
+/// The validation-best snapshot of a side's main learner, and the panel.
+pub struct BestValidated {
+    pub player: Player,
+    pub win_rate: f64,
+    pub mean_steps: f64,
+    pub episodes: u64,
+    /// The validation teams, comma-separated, and their maps.
+    pub opponents: String,
+}
+
+/// The main learner's snapshot of `side` that did best on the validation
+/// panel (`selection::rank_validated`), for `export --best`.
+pub fn best_validated(dir: &LeagueDir, side: Side) -> Result<BestValidated> {
+    let (cfg, store) = open(dir)?;
+    let opponents: Vec<String> = cfg
+        .evaluator
+        .validation(side)
+        .map_err(|e| anyhow::anyhow!("{}: evaluator.{e}", dir.config_path().display()))?
+        .into_iter()
+        .map(|(name, _)| name)
+        .collect();
+    let ranked = super::selection::rank_validated(
+        &store.players()?,
+        &store.held_out_results()?,
+        side,
+        &opponents,
+        cfg.evaluator.episodes as u64,
+    )
+    .map_err(|e| anyhow::anyhow!("{}: {e}", dir.root.display()))?;
+    let best = ranked.into_iter().next().expect("rank_validated never returns an empty list");
+    Ok(BestValidated {
+        player: best.player,
+        win_rate: best.win_rate,
+        mean_steps: best.mean_steps,
+        episodes: best.episodes,
+        opponents: format!(
+            "{} on {}",
+            opponents.join(", "),
+            cfg.evaluator.validation_maps.as_deref().unwrap_or("?")
+        ),
+    })
+}
+
 /// The best player of a side by the Bradley-Terry fit, among those with weights.
 pub fn best_player(r: &StatusReport, side: Side) -> Option<String> {
     r.players
@@ -945,7 +1009,7 @@ pub struct PanelCurve {
 /// opponents before held-out ones.
 pub fn panel_curves(players: &[PlayerRow], panel: &[PanelRow]) -> Vec<PanelCurve> {
     let find = |id: i64| players.iter().find(|p| p.id == id);
-    let mut keyed: Vec<((usize, bool, String), PanelCurve)> = Vec::new();
+    let mut keyed: Vec<((usize, bool, bool, String), PanelCurve)> = Vec::new();
     for row in panel {
         let Some(member) = find(row.member) else {
             continue;
@@ -955,19 +1019,14 @@ pub fn panel_curves(players: &[PlayerRow], panel: &[PanelRow]) -> Vec<PanelCurve
             .iter()
             .position(|p| p.id == learner.id)
             .unwrap_or(usize::MAX);
-        let key = (order, row.held_out, row.opponent_name.clone());
+        let key = (order, row.held_out, row.validation, row.opponent_name.clone());
         let point = (member.env_steps as f64, 100.0 * row.win_rate);
         match keyed.iter_mut().find(|(k, _)| *k == key) {
             Some((_, curve)) => curve.points.push(point),
             None => keyed.push((
                 key,
                 PanelCurve {
-                    label: format!(
-                        "{} vs {}{}",
-                        learner.name,
-                        row.opponent_name,
-                        if row.held_out { " (held out)" } else { "" }
-                    ),
+                    label: format!("{} vs {}", learner.name, row.opponent_label()),
                     points: vec![point],
                 },
             )),
@@ -1243,6 +1302,8 @@ mod tests {
             win_rate_low: 0.0,
             win_rate_high: 1.0,
             held_out,
+            validation: false,
+            mean_steps: None,
         };
         // Newest first, as panel_rows gives them; an unknown member is skipped.
         let panel = vec![
@@ -1378,16 +1439,20 @@ mod tests {
             // greedy:2 captors (held out) caught the target's snapshot 3 of 4 times.
             HeldOutResult {
                 member: 4,
+                panel: Panel::HeldOut,
                 opponent: "greedy:2".into(),
                 captures: 3,
                 episodes: 4,
+                steps: 400,
             },
             // The captors' snapshot caught a still target 4 of 4 times.
             HeldOutResult {
                 member: 3,
+                panel: Panel::HeldOut,
                 opponent: "still".into(),
                 captures: 4,
                 episodes: 4,
+                steps: 200,
             },
         ];
         let all = panel_rows(&players, &payoff, &held_out);

@@ -252,7 +252,9 @@ pub fn resolve(spec: &str) -> Result<Vec<MapEntry>> {
 /// The maps a user named, loaded and prepared in parallel: what an
 /// environment plays on.
 /// Also `generated:N` (N maps per size class from the project's generator,
-/// seeds 1..=N, made in memory) and `generated:N:CLASS`.
+/// seeds 1..=N, made in memory), `generated:N@S` (seeds S..S+N: other
+/// maps of the same generator, e.g. a validation set) and either with
+/// `:CLASS`.
 pub fn load_prepared(spec: &str) -> Result<Arc<Vec<Arc<PreparedMap>>>> {
     if let Some(rest) = spec.strip_prefix("generated:") {
         return generated(spec, rest);
@@ -263,6 +265,27 @@ pub fn load_prepared(spec: &str) -> Result<Arc<Vec<Arc<PreparedMap>>>> {
         .map(|e| Ok(Arc::new(PreparedMap::new(e.load()?))))
         .collect::<Result<Vec<_>>>()?;
     Ok(Arc::new(maps))
+}
+
+/// The generator seeds of `N` or `N@S`.
+fn generated_seeds(count: &str) -> Option<std::ops::Range<u64>> {
+    let (n, first) = match count.split_once('@') {
+        Some((n, s)) => (n, s.parse::<u64>().ok().filter(|&s| s >= 1)?),
+        None => (count, 1),
+    };
+    let n: u64 = n.parse().ok().filter(|&n| (1..=10_000).contains(&n))?;
+    Some(first..first.checked_add(n)?)
+}
+
+/// The generator seeds and classes a `generated:...` selection makes, or
+/// None for any other selection (checks that two sets share no map).
+pub fn generated_set(spec: &str) -> Option<(std::ops::Range<u64>, Vec<SizeClass>)> {
+    let rest = spec.strip_prefix("generated:")?;
+    let (count, classes) = match rest.split_once(':') {
+        Some((n, c)) => (n, vec![c.parse::<SizeClass>().ok()?]),
+        None => (rest, SizeClass::ALL.to_vec()),
+    };
+    Some((generated_seeds(count)?, classes))
 }
 
 fn generated(spec: &str, rest: &str) -> Result<Arc<Vec<Arc<PreparedMap>>>> {
@@ -276,15 +299,12 @@ fn generated(spec: &str, rest: &str) -> Result<Arc<Vec<Arc<PreparedMap>>>> {
         ),
         None => (rest, SizeClass::ALL.to_vec()),
     };
-    let count: u64 = count
-        .parse()
-        .ok()
-        .filter(|&n| (1..=10_000).contains(&n))
-        .with_context(|| format!("--maps '{spec}': expected generated:N with N in 1..=10000, optionally :small|medium|large"))?;
+    let seeds = generated_seeds(count)
+        .with_context(|| format!("--maps '{spec}': expected generated:N (seeds 1..=N) or generated:N@S (seeds S..S+N), N in 1..=10000, S >= 1, optionally :small|medium|large"))?;
     let cfg = GeneratorConfig::default();
     let jobs: Vec<(u64, SizeClass)> = classes
         .iter()
-        .flat_map(|&c| (1..=count).map(move |s| (s, c)))
+        .flat_map(|&c| seeds.clone().map(move |s| (s, c)))
         .collect();
     let maps = jobs
         .par_iter()

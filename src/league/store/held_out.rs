@@ -1,15 +1,48 @@
 //! The evaluator's episodes against held-out opponents: controllers named
 //! in the config that play league members but are never members
 //! themselves. They have their own table, so nothing a learner draws, and
-//! no rating, ever sees them.
+//! no rating, ever sees them. Each episode belongs to one panel: the
+//! held-out panel is watched; the validation panel chooses what `export
+//! --best` exports.
 
 use super::{now_ms, Store, StoreError};
+
+/// The evaluator's panels of controllers that are not members.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Panel {
+    /// `[evaluator] held_out_captors / held_out_targets` on the training maps.
+    HeldOut,
+    /// `[evaluator] validation_*` on the validation maps: chooses `export --best`.
+    Validation,
+}
+
+impl Panel {
+    pub fn name(self) -> &'static str {
+        match self {
+            Panel::HeldOut => "held-out",
+            Panel::Validation => "validation",
+        }
+    }
+
+    fn parse(s: &str) -> Result<Panel, sqlx::Error> {
+        match s {
+            "held-out" => Ok(Panel::HeldOut),
+            "validation" => Ok(Panel::Validation),
+            other => Err(sqlx::Error::ColumnDecode {
+                index: "panel".into(),
+                source: format!("unknown panel '{other}'").into(),
+            }),
+        }
+    }
+}
 
 /// One finished panel episode of a member against a held-out opponent.
 #[derive(Clone, Debug, PartialEq)]
 pub struct HeldOutEpisode {
     /// Names the episode: the same key is recorded once.
     pub key: String,
+    pub panel: Panel,
     pub member: i64,
     /// The opponent's controller, as the config names it.
     pub opponent: String,
@@ -20,15 +53,37 @@ pub struct HeldOutEpisode {
     pub steps: u32,
 }
 
-/// A member's episodes against one held-out opponent.
-#[derive(Clone, Debug, PartialEq, sqlx::FromRow)]
+/// A member's episodes against one opponent of one panel.
+#[derive(Clone, Debug, PartialEq)]
 pub struct HeldOutResult {
     pub member: i64,
+    pub panel: Panel,
     pub opponent: String,
-    #[sqlx(try_from = "i64")]
     pub captures: u64,
-    #[sqlx(try_from = "i64")]
     pub episodes: u64,
+    /// Steps of all its episodes together (Time is steps / episodes).
+    pub steps: u64,
+}
+
+impl<'r> sqlx::FromRow<'r, sqlx::any::AnyRow> for HeldOutResult {
+    fn from_row(r: &'r sqlx::any::AnyRow) -> Result<Self, sqlx::Error> {
+        use sqlx::Row;
+        let n = |col: &str| -> Result<u64, sqlx::Error> {
+            let v: i64 = r.try_get(col)?;
+            u64::try_from(v).map_err(|e| sqlx::Error::ColumnDecode {
+                index: col.into(),
+                source: Box::new(e),
+            })
+        };
+        Ok(HeldOutResult {
+            member: r.try_get("member")?,
+            panel: Panel::parse(&r.try_get::<String, _>("panel")?)?,
+            opponent: r.try_get("opponent")?,
+            captures: n("captures")?,
+            episodes: n("episodes")?,
+            steps: n("steps")?,
+        })
+    }
 }
 
 impl Store {
@@ -37,8 +92,8 @@ impl Store {
         let pool = &self.pool;
         self.run(move || async move {
             sqlx::query(
-                "INSERT INTO held_out_episodes (episode_key, member, opponent, map, speed_ratio, seed, captured, steps, recorded_at_ms) \
-                 VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9) ON CONFLICT (episode_key) DO NOTHING",
+                "INSERT INTO held_out_episodes (episode_key, member, opponent, map, speed_ratio, seed, captured, steps, recorded_at_ms, panel) \
+                 VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10) ON CONFLICT (episode_key) DO NOTHING",
             )
             .bind(&e.key)
             .bind(e.member)
@@ -49,6 +104,7 @@ impl Store {
             .bind(i64::from(e.captured))
             .bind(i64::from(e.steps))
             .bind(now_ms())
+            .bind(e.panel.name())
             .execute(pool)
             .await
             .map(|r| r.rows_affected() == 1)
@@ -78,13 +134,13 @@ impl Store {
         })
     }
 
-    /// Captures and episodes per (member, held-out opponent).
+    /// Captures, episodes and steps per (member, panel, opponent).
     pub fn held_out_results(&self) -> Result<Vec<HeldOutResult>, StoreError> {
         let pool = &self.pool;
         self.run(move || async move {
             sqlx::query_as(
-                "SELECT member, opponent, CAST(SUM(captured) AS BIGINT) AS captures, COUNT(*) AS episodes \
-                 FROM held_out_episodes GROUP BY member, opponent ORDER BY member, opponent",
+                "SELECT member, panel, opponent, CAST(SUM(captured) AS BIGINT) AS captures, COUNT(*) AS episodes, CAST(SUM(steps) AS BIGINT) AS steps \
+                 FROM held_out_episodes GROUP BY member, panel, opponent ORDER BY member, panel, opponent",
             )
             .fetch_all(pool)
             .await
@@ -115,6 +171,7 @@ mod tests {
             .unwrap();
         let episode = |i: u32, opponent: &str, captured: bool| HeldOutEpisode {
             key: format!("evaluator/held-out/{member}/{opponent}/{i}"),
+            panel: Panel::HeldOut,
             member,
             opponent: opponent.into(),
             map: "m".into(),
@@ -147,15 +204,19 @@ mod tests {
             vec![
                 HeldOutResult {
                     member,
+                    panel: Panel::HeldOut,
                     opponent: "greedy:2".into(),
                     captures: 2,
-                    episodes: 3
+                    episodes: 3,
+                    steps: 300,
                 },
                 HeldOutResult {
                     member,
+                    panel: Panel::HeldOut,
                     opponent: "random".into(),
                     captures: 0,
-                    episodes: 1
+                    episodes: 1,
+                    steps: 100,
                 },
             ]
         );

@@ -29,7 +29,7 @@ mod rows;
 pub mod url;
 
 pub use exploits::ExploitRecord;
-pub use held_out::{HeldOutEpisode, HeldOutResult};
+pub use held_out::{HeldOutEpisode, HeldOutResult, Panel};
 pub use leases::{ManagerLease, SeatLease};
 pub use rows::{
     inside_pool, BeatState, Crash, Heartbeat, Kind, MatchRecord, NewPlayer, PairResult, Player,
