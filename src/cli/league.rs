@@ -481,7 +481,17 @@ pub fn exploit(args: ExploitArgs) -> Result<()> {
         threads: args.threads,
         progress: !args.quiet,
     };
-    on_ctrl_c()?;
+    ctrlc::set_handler(|| {
+        if exploit::EVALUATING.load(Ordering::SeqCst) {
+            eprintln!("stopped during the evaluation, nothing recorded; the same command evaluates the trained best response again");
+            // _exit, not exit: the evaluation's threads are still running,
+            // and libtorch's static destructors under them abort the process.
+            // SAFETY: ends the process; nothing is left to flush or save.
+            unsafe { libc::_exit(130) }
+        }
+        STOP.store(true, Ordering::SeqCst)
+    })
+    .context("cannot install the Ctrl-C handler")?;
     match exploit::run(&dir, &args.player, &opts, &STOP)? {
         ExploitOutcome::Recorded {
             rows,
