@@ -757,3 +757,36 @@ fn with_store_status_takes_the_shared_pool_as_pool_like_export() {
     let (ok, _, err) = t2e_in(root, &["status", "--pool", pool]);
     assert!(!ok && err.contains("--pool goes with --store"), "{err}");
 }
+
+#[test]
+fn a_file_as_pool_and_seats_out_of_range_are_named() {
+    let tmp = tempfile::tempdir().unwrap();
+    let root = tmp.path();
+    let file = root.join("not-a-folder");
+    std::fs::write(&file, "x").unwrap();
+    let f = file.to_str().unwrap();
+    let db = root.join("s.db");
+    let db = db.to_str().unwrap();
+    let config = Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/league-default.toml");
+    let (ok, _, err) = t2e_in(
+        root,
+        &["run", "--config", config.to_str().unwrap(), "--store", db, "--pool", f],
+    );
+    assert!(!ok && err.contains("a file, not a folder") && err.contains(f), "{err}");
+    let (ok, _, err) = t2e_in(root, &["worker", "--store", db, "--pool", f, "--dir", "w"]);
+    assert!(!ok && err.contains("a file, not a folder"), "{err}");
+    for (seats, says) in [
+        ("-1", "-1 seats: a worker runs 1 to 256"),
+        ("0", "0 seats"),
+        ("257", "257 seats"),
+        ("two", "'two' is not a whole number of seats"),
+    ] {
+        let (ok, _, err) = t2e_in(
+            root,
+            &["worker", "--store", db, "--pool", "p", "--dir", "w", "--seats", seats],
+        );
+        assert!(!ok && err.contains(says), "--seats {seats}: {err}");
+    }
+    assert!(!root.join("w").exists() && !root.join("p").exists(), "nothing created");
+    assert!(!Path::new(db).exists(), "no store created");
+}

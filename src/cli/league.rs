@@ -53,8 +53,8 @@ pub struct WorkerArgs {
     /// A local folder for this worker's logs.
     #[arg(long, value_name = "DIR")]
     pub dir: PathBuf,
-    /// Seats to run at once on this host.
-    #[arg(long, default_value_t = 1)]
+    /// Seats to run at once on this host, 1 to 256.
+    #[arg(long, default_value_t = 1, allow_negative_numbers = true, value_parser = seats_in_range)]
     pub seats: usize,
     /// The name its leases and heartbeats record (default: the hostname).
     #[arg(long)]
@@ -229,6 +229,7 @@ pub fn run(args: RunArgs) -> Result<()> {
     let Some(pool) = &args.pool else {
         bail!("--store {url}: give --pool DIR too, the folder every host shares");
     };
+    refuse_file_as_pool(pool)?;
     let league = LeagueDir::with_store(pool, url);
     let seats = {
         let cfg = match &args.config {
@@ -348,7 +349,29 @@ fn locate_league(
     }
 }
 
+/// `--seats`: a whole number of seats a host can run.
+fn seats_in_range(text: &str) -> Result<usize, String> {
+    match text.parse::<i64>() {
+        Ok(n) if (1..=256).contains(&n) => Ok(n as usize),
+        Ok(n) => Err(format!("{n} seats: a worker runs 1 to 256 seats at once")),
+        Err(_) => Err(format!("'{text}' is not a whole number of seats (1 to 256)")),
+    }
+}
+
+/// A pool that is a file (a mistyped path) would fail later with the
+/// file system's words; say what it is instead.
+fn refuse_file_as_pool(pool: &Path) -> Result<()> {
+    if pool.exists() && !pool.is_dir() {
+        bail!(
+            "--pool {}: a file, not a folder; the pool is the folder every host shares (the league's snapshots and logs)",
+            pool.display()
+        );
+    }
+    Ok(())
+}
+
 pub fn worker(args: WorkerArgs) -> Result<()> {
+    refuse_file_as_pool(&args.pool)?;
     let store = match args
         .store
         .clone()

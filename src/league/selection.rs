@@ -136,7 +136,14 @@ pub fn rank_validated(
 mod tests {
     use super::*;
 
-    fn player(id: i64, name: &str, side: Side, kind: Kind, parent: Option<i64>, steps: u64) -> Player {
+    fn player(
+        id: i64,
+        name: &str,
+        side: Side,
+        kind: Kind,
+        parent: Option<i64>,
+        steps: u64,
+    ) -> Player {
         Player {
             id,
             name: name.into(),
@@ -151,7 +158,14 @@ mod tests {
         }
     }
 
-    fn result(member: i64, panel: Panel, opponent: &str, captures: u64, episodes: u64, steps: u64) -> HeldOutResult {
+    fn result(
+        member: i64,
+        panel: Panel,
+        opponent: &str,
+        captures: u64,
+        episodes: u64,
+        steps: u64,
+    ) -> HeldOutResult {
         HeldOutResult {
             member,
             panel,
@@ -165,14 +179,56 @@ mod tests {
     fn league() -> Vec<Player> {
         vec![
             player(1, "expert-captors", Side::Captors, Kind::Heuristic, None, 0),
-            player(2, "rule-based-target", Side::Target, Kind::Heuristic, None, 0),
+            player(
+                2,
+                "rule-based-target",
+                Side::Target,
+                Kind::Heuristic,
+                None,
+                0,
+            ),
             player(3, "captors-main", Side::Captors, Kind::Learner, None, 900),
             player(4, "target-main", Side::Target, Kind::Learner, None, 900),
-            player(5, "target-main-200", Side::Target, Kind::Snapshot, Some(4), 200),
-            player(6, "target-main-400", Side::Target, Kind::Snapshot, Some(4), 400),
-            player(7, "target-main-600", Side::Target, Kind::Snapshot, Some(4), 600),
-            player(8, "target-exploiter", Side::Target, Kind::Learner, None, 300),
-            player(9, "target-exploiter-300", Side::Target, Kind::Snapshot, Some(8), 300),
+            player(
+                5,
+                "target-main-200",
+                Side::Target,
+                Kind::Snapshot,
+                Some(4),
+                200,
+            ),
+            player(
+                6,
+                "target-main-400",
+                Side::Target,
+                Kind::Snapshot,
+                Some(4),
+                400,
+            ),
+            player(
+                7,
+                "target-main-600",
+                Side::Target,
+                Kind::Snapshot,
+                Some(4),
+                600,
+            ),
+            player(
+                8,
+                "target-exploiter",
+                Side::Target,
+                Kind::Learner,
+                None,
+                300,
+            ),
+            player(
+                9,
+                "target-exploiter-300",
+                Side::Target,
+                Kind::Snapshot,
+                Some(8),
+                300,
+            ),
         ]
     }
 
@@ -198,7 +254,10 @@ mod tests {
         ];
         let ranked = rank_validated(&league(), &results, Side::Target, &opponents, 10).unwrap();
         let names: Vec<_> = ranked.iter().map(|r| r.player.name.as_str()).collect();
-        assert_eq!(names, ["target-main-400", "target-main-200", "target-main-600"]);
+        assert_eq!(
+            names,
+            ["target-main-400", "target-main-200", "target-main-600"]
+        );
         assert!((ranked[0].win_rate - 0.5).abs() < 1e-12);
         assert!((ranked[1].win_rate - 0.3).abs() < 1e-12);
         // Mean of 100 and 200 steps per episode.
@@ -241,8 +300,22 @@ mod tests {
     #[test]
     fn ties_go_to_the_longer_game_for_a_target_and_the_shorter_for_captors() {
         let mut players = league();
-        players.push(player(10, "captors-main-100", Side::Captors, Kind::Snapshot, Some(3), 100));
-        players.push(player(11, "captors-main-200", Side::Captors, Kind::Snapshot, Some(3), 200));
+        players.push(player(
+            10,
+            "captors-main-100",
+            Side::Captors,
+            Kind::Snapshot,
+            Some(3),
+            100,
+        ));
+        players.push(player(
+            11,
+            "captors-main-200",
+            Side::Captors,
+            Kind::Snapshot,
+            Some(3),
+            200,
+        ));
         let v = Panel::Validation;
         let opponents = vec!["random".to_string()];
         let results = vec![
@@ -255,7 +328,10 @@ mod tests {
         let target = rank_validated(&players, &results, Side::Target, &opponents, 10).unwrap();
         // 400 and 600 tie on rate and length: the later one first.
         let names: Vec<_> = target.iter().map(|r| r.player.name.as_str()).collect();
-        assert_eq!(names, ["target-main-600", "target-main-400", "target-main-200"]);
+        assert_eq!(
+            names,
+            ["target-main-600", "target-main-400", "target-main-200"]
+        );
         let captors = rank_validated(&players, &results, Side::Captors, &opponents, 10).unwrap();
         assert_eq!(captors[0].player.name, "captors-main-100");
     }
