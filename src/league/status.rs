@@ -1092,10 +1092,17 @@ pub fn plot(dir: &LeagueDir, r: &StatusReport, path: &Path) -> Result<()> {
         line_plot(
             &curves,
             &format!(
-                "evaluator panel: each snapshot's win % against each opponent ({} maps, 1.0:{}, {}-step episodes)",
+                "panel: each snapshot's win % ({}, 1.0:{}, {} steps{})",
                 cfg.maps,
                 crate::eval::ratio_label(cfg.curriculum.stages[0]),
-                cfg.episode_length
+                cfg.episode_length,
+                match &cfg.evaluator.validation_maps {
+                    Some(v) => format!(
+                        "; validation: {v}, {} steps",
+                        crate::eval::EvalSetting::default().episode_length
+                    ),
+                    None => String::new(),
+                }
             ),
             "env steps of the snapshot",
             "win %",
