@@ -1144,7 +1144,7 @@ fn export_best_exports_the_validation_best_snapshot_of_a_store_made_by_hand() {
     // second 1 of 3 and 2 of 3 (escapes 1/2 on average: the best whose
     // games are all played); the third escaped every game, but played only
     // 2 of its 3 against expert:2 (a validation cut short).
-    let mut record = |member: &t2e::league::store::Player, opponent: &str, episode: usize, captured: bool| {
+    let record = |member: &t2e::league::store::Player, opponent: &str, episode: usize, captured: bool| {
         store
             .record_held_out(&t2e::league::store::HeldOutEpisode {
                 key: t2e::league::evaluator::panel_episode_key(

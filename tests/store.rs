@@ -10,8 +10,8 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::sync::{Arc, Barrier, Mutex};
 use t2e::env::Side;
 use t2e::league::store::{
-    BeatState, ExploitRecord, HeldOutEpisode, Kind, MatchRecord, NewPlayer, SeatState, Store,
-    StoreUrl,
+    BeatState, ExploitRecord, HeldOutEpisode, Kind, MatchRecord, NewPlayer, Panel, SeatState,
+    Store, StoreUrl,
 };
 
 fn player(name: &str, side: Side, kind: Kind) -> NewPlayer {
@@ -146,6 +146,7 @@ fn both_backends_keep_the_same_contract() {
         // The evaluator's episodes against a held-out opponent: once per key.
         let held_out = |key: &str, captured: bool| HeldOutEpisode {
             key: key.into(),
+            panel: Panel::HeldOut,
             member: t,
             opponent: "greedy:2".into(),
             map: "m".into(),
@@ -158,13 +159,21 @@ fn both_backends_keep_the_same_contract() {
         assert!(!store.record_held_out(&held_out("h/0", false)).unwrap());
         assert!(store.record_held_out(&held_out("h/1", false)).unwrap());
         assert!(store.has_held_out("h/1").unwrap() && !store.has_held_out("h/2").unwrap());
+        // A validation episode against the same controller is its own row.
+        let mut validation = held_out("v/0", false);
+        validation.panel = Panel::Validation;
+        validation.steps = 500;
+        assert!(store.record_held_out(&validation).unwrap());
         let results = store.held_out_results().unwrap();
         assert_eq!(
             results
                 .iter()
-                .map(|r| (r.member, r.opponent.as_str(), r.captures, r.episodes))
+                .map(|r| (r.member, r.panel, r.opponent.as_str(), r.captures, r.episodes, r.steps))
                 .collect::<Vec<_>>(),
-            vec![(t, "greedy:2", 1, 2)],
+            vec![
+                (t, Panel::HeldOut, "greedy:2", 1, 2, 240),
+                (t, Panel::Validation, "greedy:2", 0, 1, 500)
+            ],
             "{url}"
         );
         // What both backends read back must be the same, ids included.

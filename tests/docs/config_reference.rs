@@ -553,6 +553,8 @@ fn full_status_report() -> t2e::league::status::StatusReport {
             win_rate_low: 0.2,
             win_rate_high: 1.0,
             held_out: false,
+            validation: false,
+            mean_steps: Some(120.0),
         }],
         exploits: vec![ExploitRow {
             player: 3,
