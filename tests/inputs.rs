@@ -776,10 +776,10 @@ fn a_file_as_pool_and_seats_out_of_range_are_named() {
     let (ok, _, err) = t2e_in(root, &["worker", "--store", db, "--pool", f, "--dir", "w"]);
     assert!(!ok && err.contains("a file, not a folder"), "{err}");
     for (seats, says) in [
-        ("-1", "-1 seats: a worker runs 1 to 256"),
-        ("0", "0 seats"),
-        ("257", "257 seats"),
-        ("two", "'two' is not a whole number of seats"),
+        ("-1", "--seats -1: a worker runs 1 to 256"),
+        ("0", "--seats 0: a worker runs"),
+        ("257", "--seats 257: a worker runs"),
+        ("two", "--seats two: not a whole number of seats"),
     ] {
         let (ok, _, err) = t2e_in(
             root,

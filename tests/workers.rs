@@ -544,7 +544,7 @@ fn a_deleted_seat_row_is_defined_again_and_the_league_finishes() {
     });
     common::postgres::sql(&raw, "DELETE FROM seats WHERE name = 'captors-main'");
     let log = tmp.join("host-a").join("worker.log");
-    wait_until("the worker to notice", Duration::from_secs(30), || {
+    wait_until("the worker to notice", Duration::from_secs(120), || {
         std::fs::read_to_string(&log).is_ok_and(|l| l.contains("captors-main"))
             && std::fs::read_to_string(&log).unwrap().contains("seat row is gone")
     });

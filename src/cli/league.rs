@@ -353,8 +353,8 @@ fn locate_league(
 fn seats_in_range(text: &str) -> Result<usize, String> {
     match text.parse::<i64>() {
         Ok(n) if (1..=256).contains(&n) => Ok(n as usize),
-        Ok(n) => Err(format!("{n} seats: a worker runs 1 to 256 seats at once")),
-        Err(_) => Err(format!("'{text}' is not a whole number of seats (1 to 256)")),
+        Ok(n) => Err(format!("--seats {n}: a worker runs 1 to 256 seats at once")),
+        Err(_) => Err(format!("--seats {text}: not a whole number of seats (1 to 256)")),
     }
 }
 

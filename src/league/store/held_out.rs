@@ -68,13 +68,7 @@ pub struct HeldOutResult {
 impl<'r> sqlx::FromRow<'r, sqlx::any::AnyRow> for HeldOutResult {
     fn from_row(r: &'r sqlx::any::AnyRow) -> Result<Self, sqlx::Error> {
         use sqlx::Row;
-        let n = |col: &str| -> Result<u64, sqlx::Error> {
-            let v: i64 = r.try_get(col)?;
-            u64::try_from(v).map_err(|e| sqlx::Error::ColumnDecode {
-                index: col.into(),
-                source: Box::new(e),
-            })
-        };
+        let n = |col: &str| super::u64_column(r, col);
         Ok(HeldOutResult {
             member: r.try_get("member")?,
             panel: Panel::parse(&r.try_get::<String, _>("panel")?)?,

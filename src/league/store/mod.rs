@@ -81,6 +81,18 @@ pub enum StoreError {
     Invalid(String),
 }
 
+/// An integer column that holds a count or a seed: stored as BIGINT (both
+/// backends' integer), read back as u64, a negative value refused as
+/// corrupt rather than wrapped.
+pub(crate) fn u64_column(r: &sqlx::any::AnyRow, col: &str) -> Result<u64, sqlx::Error> {
+    use sqlx::Row;
+    let v: i64 = r.try_get(col)?;
+    u64::try_from(v).map_err(|e| sqlx::Error::ColumnDecode {
+        index: col.into(),
+        source: Box::new(e),
+    })
+}
+
 pub fn now_ms() -> i64 {
     std::time::SystemTime::now()
         .duration_since(std::time::UNIX_EPOCH)
