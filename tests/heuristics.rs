@@ -337,5 +337,8 @@ fn randomised_experts_draw_their_constants_per_episode_and_replay_with_the_seed(
     assert!(spec.build(Side::Captors).is_ok());
     let err = spec.build(Side::Target).err().unwrap();
     assert!(err.contains("captor team"), "{err}");
-    assert!("expert:x".parse::<ControllerSpec>().unwrap_err().contains("expert:SEED"));
+    assert!("expert:x"
+        .parse::<ControllerSpec>()
+        .unwrap_err()
+        .contains("expert:SEED"));
 }

@@ -770,9 +770,20 @@ fn a_file_as_pool_and_seats_out_of_range_are_named() {
     let config = Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/league-default.toml");
     let (ok, _, err) = t2e_in(
         root,
-        &["run", "--config", config.to_str().unwrap(), "--store", db, "--pool", f],
+        &[
+            "run",
+            "--config",
+            config.to_str().unwrap(),
+            "--store",
+            db,
+            "--pool",
+            f,
+        ],
     );
-    assert!(!ok && err.contains("a file, not a folder") && err.contains(f), "{err}");
+    assert!(
+        !ok && err.contains("a file, not a folder") && err.contains(f),
+        "{err}"
+    );
     let (ok, _, err) = t2e_in(root, &["worker", "--store", db, "--pool", f, "--dir", "w"]);
     assert!(!ok && err.contains("a file, not a folder"), "{err}");
     for (seats, says) in [
@@ -783,10 +794,15 @@ fn a_file_as_pool_and_seats_out_of_range_are_named() {
     ] {
         let (ok, _, err) = t2e_in(
             root,
-            &["worker", "--store", db, "--pool", "p", "--dir", "w", "--seats", seats],
+            &[
+                "worker", "--store", db, "--pool", "p", "--dir", "w", "--seats", seats,
+            ],
         );
         assert!(!ok && err.contains(says), "--seats {seats}: {err}");
     }
-    assert!(!root.join("w").exists() && !root.join("p").exists(), "nothing created");
+    assert!(
+        !root.join("w").exists() && !root.join("p").exists(),
+        "nothing created"
+    );
     assert!(!Path::new(db).exists(), "no store created");
 }

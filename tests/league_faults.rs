@@ -1071,22 +1071,26 @@ fn a_full_disk_is_named_in_the_crash_record() {
     }
     let mut said = String::new();
     let full = "No space left on device";
-    wait_for("the full disk in the store", Duration::from_secs(180), || {
-        let Some(s) = open() else { return false };
-        said = s
-            .crashes()
-            .unwrap_or_default()
-            .iter()
-            .map(|c| format!("{} | {} | {}\n", c.learner, c.exit_status, c.message))
-            .chain(
-                s.seats()
-                    .unwrap_or_default()
-                    .iter()
-                    .filter_map(|x| x.reason.clone()),
-            )
-            .collect();
-        said.contains(full)
-    });
+    wait_for(
+        "the full disk in the store",
+        Duration::from_secs(180),
+        || {
+            let Some(s) = open() else { return false };
+            said = s
+                .crashes()
+                .unwrap_or_default()
+                .iter()
+                .map(|c| format!("{} | {} | {}\n", c.learner, c.exit_status, c.message))
+                .chain(
+                    s.seats()
+                        .unwrap_or_default()
+                        .iter()
+                        .filter_map(|x| x.reason.clone()),
+                )
+                .collect();
+            said.contains(full)
+        },
+    );
     signal(boss.id() as i64, libc::SIGINT);
     wait_exit(&mut boss, Duration::from_secs(120));
     let s = open().unwrap();
@@ -1144,26 +1148,27 @@ fn export_best_exports_the_validation_best_snapshot_of_a_store_made_by_hand() {
     // second 1 of 3 and 2 of 3 (escapes 1/2 on average: the best whose
     // games are all played); the third escaped every game, but played only
     // 2 of its 3 against expert:2 (a validation cut short).
-    let record = |member: &t2e::league::store::Player, opponent: &str, episode: usize, captured: bool| {
-        store
-            .record_held_out(&t2e::league::store::HeldOutEpisode {
-                key: t2e::league::evaluator::panel_episode_key(
-                    t2e::league::store::Panel::Validation,
-                    &member.name,
-                    opponent,
-                    episode,
-                ),
-                panel: t2e::league::store::Panel::Validation,
-                member: member.id,
-                opponent: opponent.into(),
-                map: "generated-small-1001".into(),
-                speed_ratio: 1.0,
-                seed: episode as u64,
-                captured,
-                steps: if captured { 100 } else { 500 },
-            })
-            .unwrap()
-    };
+    let record =
+        |member: &t2e::league::store::Player, opponent: &str, episode: usize, captured: bool| {
+            store
+                .record_held_out(&t2e::league::store::HeldOutEpisode {
+                    key: t2e::league::evaluator::panel_episode_key(
+                        t2e::league::store::Panel::Validation,
+                        &member.name,
+                        opponent,
+                        episode,
+                    ),
+                    panel: t2e::league::store::Panel::Validation,
+                    member: member.id,
+                    opponent: opponent.into(),
+                    map: "generated-small-1001".into(),
+                    speed_ratio: 1.0,
+                    seed: episode as u64,
+                    captured,
+                    steps: if captured { 100 } else { 500 },
+                })
+                .unwrap()
+        };
     for e in 0..3 {
         record(snaps[0], "expert:1", e, true);
         record(snaps[0], "expert:2", e, true);
@@ -1210,9 +1215,10 @@ fn export_best_exports_the_validation_best_snapshot_of_a_store_made_by_hand() {
 #[test]
 fn killed_during_validation_games_the_league_records_no_half_result() {
     let l = league("validate", 960, VALIDATION);
-    let text = std::fs::read_to_string(&l.config)
-        .unwrap()
-        .replace("[evaluator]\nenabled = false\n", "[evaluator]\nenabled = true\n");
+    let text = std::fs::read_to_string(&l.config).unwrap().replace(
+        "[evaluator]\nenabled = false\n",
+        "[evaluator]\nenabled = true\n",
+    );
     std::fs::write(&l.config, text).unwrap();
     let mut manager = spawn_logged_run(&l);
     // Kill the evaluator, then the manager, with SIGKILL as soon as the
@@ -1220,14 +1226,20 @@ fn killed_during_validation_games_the_league_records_no_half_result() {
     let mut evaluator = None;
     wait_for("validation episodes", Duration::from_secs(300), || {
         if let Ok(Some(s)) = manager.try_wait() {
-            panic!("the league ended before validation began ({s}): {}", l.manager_log_text());
+            panic!(
+                "the league ended before validation began ({s}): {}",
+                l.manager_log_text()
+            );
         }
         if evaluator.is_none() {
             evaluator = child_pid(manager.id(), "league-evaluator");
         }
         Store::open_existing(&l.dir.store)
             .and_then(|s| s.held_out_results())
-            .map(|rows| rows.iter().any(|r| r.panel == t2e::league::store::Panel::Validation))
+            .map(|rows| {
+                rows.iter()
+                    .any(|r| r.panel == t2e::league::store::Panel::Validation)
+            })
             .unwrap_or(false)
     });
     signal(evaluator.expect("the evaluator runs"), libc::SIGKILL);
@@ -1240,17 +1252,39 @@ fn killed_during_validation_games_the_league_records_no_half_result() {
     // are all played, or none.
     let out = l.tmp.join("best-while-killed");
     let o = t2e(&[
-        "export", "--best", "target", "--dir", l.dir.root.to_str().unwrap(),
-        "--out", out.to_str().unwrap(),
+        "export",
+        "--best",
+        "target",
+        "--dir",
+        l.dir.root.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
     ]);
     if o.status.success() {
         let chosen = exported_player(&out);
         let store = Store::open_existing(&l.dir.store).unwrap();
-        let id = store.players().unwrap().into_iter().find(|p| p.name == chosen).unwrap().id;
-        let complete: Vec<_> = rows.iter().filter(|r| r.member == id && r.episodes == 3).collect();
-        assert_eq!(complete.len(), 2, "{chosen} chosen on a half result: {rows:?}");
+        let id = store
+            .players()
+            .unwrap()
+            .into_iter()
+            .find(|p| p.name == chosen)
+            .unwrap()
+            .id;
+        let complete: Vec<_> = rows
+            .iter()
+            .filter(|r| r.member == id && r.episodes == 3)
+            .collect();
+        assert_eq!(
+            complete.len(),
+            2,
+            "{chosen} chosen on a half result: {rows:?}"
+        );
     } else {
-        assert!(stderr(&o).contains("finished its validation games"), "{}", stderr(&o));
+        assert!(
+            stderr(&o).contains("finished its validation games"),
+            "{}",
+            stderr(&o)
+        );
     }
     // Resumed, every target snapshot plays each team exactly 3 times: the
     // episodes cut short are played again, none twice.
@@ -1266,5 +1300,9 @@ fn killed_during_validation_games_the_league_records_no_half_result() {
         .collect();
     let rows = validation_rows(&l);
     assert_eq!(rows.len(), 2 * snaps.len(), "{rows:?}");
-    assert!(rows.iter().all(|r| r.episodes == 3 && snaps.contains(&r.member)), "{rows:?}");
+    assert!(
+        rows.iter()
+            .all(|r| r.episodes == 3 && snaps.contains(&r.member)),
+        "{rows:?}"
+    );
 }

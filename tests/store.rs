@@ -168,7 +168,14 @@ fn both_backends_keep_the_same_contract() {
         assert_eq!(
             results
                 .iter()
-                .map(|r| (r.member, r.panel, r.opponent.as_str(), r.captures, r.episodes, r.steps))
+                .map(|r| (
+                    r.member,
+                    r.panel,
+                    r.opponent.as_str(),
+                    r.captures,
+                    r.episodes,
+                    r.steps
+                ))
                 .collect::<Vec<_>>(),
             vec![
                 (t, Panel::HeldOut, "greedy:2", 1, 2, 240),
@@ -443,7 +450,11 @@ fn one_manager_holds_a_league_at_a_time_by_the_stores_clock() {
         let b = lease("b", "host-b");
         assert!(s.manager().unwrap().is_none());
         assert_eq!(s.claim_manager(&a, 60_000, None).unwrap(), Ok(()));
-        assert_eq!(s.claim_manager(&a, 60_000, None).unwrap(), Ok(()), "{url}: again");
+        assert_eq!(
+            s.claim_manager(&a, 60_000, None).unwrap(),
+            Ok(()),
+            "{url}: again"
+        );
         let held = s.claim_manager(&b, 60_000, None).unwrap().unwrap_err();
         assert_eq!((held.holder.as_str(), held.host.as_str()), ("a", "host-a"));
         assert!(s.renew_manager("a", 60_000).unwrap());
@@ -458,7 +469,10 @@ fn one_manager_holds_a_league_at_a_time_by_the_stores_clock() {
         let local = t2e::league::store::now_ms();
         assert!((now - local).abs() < 5_000, "{url}: clock {now} vs {local}");
         s.release_manager("b").unwrap();
-        assert!(s.manager().unwrap().is_some(), "only its holder releases it");
+        assert!(
+            s.manager().unwrap().is_some(),
+            "only its holder releases it"
+        );
         s.release_manager("a").unwrap();
         assert!(s.manager().unwrap().is_none());
     }

@@ -516,13 +516,20 @@ fn a_second_manager_never_changes_a_live_leagues_store() {
         .filter(|p| p.quarantined.is_some())
         .collect();
     assert!(quarantined.is_empty(), "{quarantined:?}");
-    assert!(s.seats().unwrap().iter().all(|x| x.state != SeatState::Failed));
+    assert!(s
+        .seats()
+        .unwrap()
+        .iter()
+        .all(|x| x.state != SeatState::Failed));
     // The league runs on to its end, unharmed.
     let status = wait_exit(&mut boss, "the first manager", Duration::from_secs(300));
     assert!(status.success(), "{status:?}: see {}", tmp.display());
     let (_, r) = check(&LeagueDir::with_store(tmp.join("pool"), url.clone()));
     assert_eq!(r, vec![9_600, 9_600]);
-    assert!(store(&url).unwrap().manager().unwrap().is_none(), "lease kept");
+    assert!(
+        store(&url).unwrap().manager().unwrap().is_none(),
+        "lease kept"
+    );
 }
 
 #[test]
@@ -546,7 +553,9 @@ fn a_deleted_seat_row_is_defined_again_and_the_league_finishes() {
     let log = tmp.join("host-a").join("worker.log");
     wait_until("the worker to notice", Duration::from_secs(120), || {
         std::fs::read_to_string(&log).is_ok_and(|l| l.contains("captors-main"))
-            && std::fs::read_to_string(&log).unwrap().contains("seat row is gone")
+            && std::fs::read_to_string(&log)
+                .unwrap()
+                .contains("seat row is gone")
     });
     let text = std::fs::read_to_string(&log).unwrap();
     assert!(!text.contains("another worker"), "{text}");

@@ -354,7 +354,9 @@ fn seats_in_range(text: &str) -> Result<usize, String> {
     match text.parse::<i64>() {
         Ok(n) if (1..=256).contains(&n) => Ok(n as usize),
         Ok(n) => Err(format!("--seats {n}: a worker runs 1 to 256 seats at once")),
-        Err(_) => Err(format!("--seats {text}: not a whole number of seats (1 to 256)")),
+        Err(_) => Err(format!(
+            "--seats {text}: not a whole number of seats (1 to 256)"
+        )),
     }
 }
 

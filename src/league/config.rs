@@ -570,7 +570,9 @@ mod tests {
         )
         .unwrap_err();
         assert!(
-            err.starts_with("evaluator.validation_captors = \"expert:5\": also a member of the league"),
+            err.starts_with(
+                "evaluator.validation_captors = \"expert:5\": also a member of the league"
+            ),
             "{err}"
         );
         // Other seeds and other classes of the generator are other maps.

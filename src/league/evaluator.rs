@@ -97,7 +97,10 @@ impl EvaluatorConfig {
             self.held_out(side)?;
             let validation = self.validation(side)?;
             let held_out = self.held_out(side)?;
-            if let Some((name, _)) = validation.iter().find(|(_, v)| held_out.iter().any(|(_, h)| h == v)) {
+            if let Some((name, _)) = validation
+                .iter()
+                .find(|(_, v)| held_out.iter().any(|(_, h)| h == v))
+            {
                 return Err(format!(
                     "{} = \"{name}\": also a held-out opponent; validation shares no team with another panel",
                     Self::validation_field(side)
@@ -137,7 +140,12 @@ impl EvaluatorConfig {
             Side::Captors => &self.validation_targets,
         };
         let side = member_side.other();
-        let specs = ControllerSpec::parse_list(Self::validation_field(member_side), names, side, |spec| match spec {
+        let specs = ControllerSpec::parse_list(
+            Self::validation_field(member_side),
+            names,
+            side,
+            |spec| {
+                match spec {
             ControllerSpec::Heuristic => Some(format!(
                 "the {} is a member of the league, which it trains against; validation plays teams the league never meets",
                 match side {
@@ -150,8 +158,13 @@ impl EvaluatorConfig {
                     .into(),
             ),
             _ => None,
-        })?;
-        Ok(specs.into_iter().map(|spec| (spec.to_string(), spec)).collect())
+        }
+            },
+        )?;
+        Ok(specs
+            .into_iter()
+            .map(|spec| (spec.to_string(), spec))
+            .collect())
     }
 
     /// The held-out opponents that play `member_side`'s snapshots, parsed.
@@ -222,7 +235,10 @@ fn evaluate_pending(
             .filter(|p| p.name == heuristic_name(member.side.other()))
             .map(PanelOpponent::Member)
             .collect();
-        for (panel, list) in [(Panel::HeldOut, &panels.held_out), (Panel::Validation, &panels.validation)] {
+        for (panel, list) in [
+            (Panel::HeldOut, &panels.held_out),
+            (Panel::Validation, &panels.validation),
+        ] {
             for (side, specs) in list {
                 if *side == member.side {
                     opponents.extend(
@@ -278,9 +294,8 @@ fn evaluate_pending(
                         "evaluator/{}/{}/{episode}",
                         member.name, panel.name
                     ))?,
-                    PanelOpponent::Controller(panel, name, _) => store.has_held_out(
-                        &panel_episode_key(*panel, &member.name, name, episode),
-                    )?,
+                    PanelOpponent::Controller(panel, name, _) => store
+                        .has_held_out(&panel_episode_key(*panel, &member.name, name, episode))?,
                 };
                 if recorded {
                     continue;

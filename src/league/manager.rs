@@ -163,7 +163,9 @@ pub fn run_with(
             (store, guard)
         }
     };
-    let result = run_league(dir, &cfg, &store, league_id, &mut guard, run_for, stop, launch);
+    let result = run_league(
+        dir, &cfg, &store, league_id, &mut guard, run_for, stop, launch,
+    );
     guard.release(&store);
     result
 }
@@ -289,11 +291,19 @@ fn run_league(
                     p.child = None;
                     use std::os::unix::process::ExitStatusExt;
                     let exit = classify(status.code(), status.signal());
-                    let log = p.output.as_ref().map(|o| {
-                        o.wait_closed(Duration::from_secs(2));
-                        o.text()
-                    }).unwrap_or_default();
-                    let crash_text = p.output.as_ref().map(|o| o.crash_text(5)).unwrap_or_default();
+                    let log = p
+                        .output
+                        .as_ref()
+                        .map(|o| {
+                            o.wait_closed(Duration::from_secs(2));
+                            o.text()
+                        })
+                        .unwrap_or_default();
+                    let crash_text = p
+                        .output
+                        .as_ref()
+                        .map(|o| o.crash_text(5))
+                        .unwrap_or_default();
                     let message = last_error_line(&log);
                     if p.started.elapsed() > Duration::from_secs(120) {
                         p.failures = 0;

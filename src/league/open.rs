@@ -253,7 +253,11 @@ fn check_pool_holds_league(dir: &LeagueDir, store: &Store, has_identity: bool) -
         return Err(refuse(format!(
             "{} is missing{}",
             dir.identity_path().display(),
-            if dir.root.is_dir() { "" } else { " (the folder does not exist)" }
+            if dir.root.is_dir() {
+                ""
+            } else {
+                " (the folder does not exist)"
+            }
         )));
     }
     Ok(())

@@ -46,7 +46,8 @@ use super::dir::LeagueDir;
 use super::players::EVALUATOR;
 use super::ratings::{bradley_terry, PairRecord};
 use super::store::{
-    host_name, now_ms, ExploitRecord, Heartbeat, HeldOutResult, Kind, PairResult, Panel, Player, Store,
+    host_name, now_ms, ExploitRecord, Heartbeat, HeldOutResult, Kind, PairResult, Panel, Player,
+    Store,
 };
 use crate::env::Side;
 use anyhow::{bail, Context, Result};
@@ -590,7 +591,14 @@ pub fn render(r: &StatusReport) -> String {
         let _ = writeln!(
             s,
             "  {:<26} {:<26} {:<14} {:<16} {:>11} {:<10} {:>8} {:>7}  95% interval",
-            "player", "frozen weights", "best response", "budget", "BR steps", "maps", "episodes", "win %"
+            "player",
+            "frozen weights",
+            "best response",
+            "budget",
+            "BR steps",
+            "maps",
+            "episodes",
+            "win %"
         );
         for e in &r.exploits {
             let _ = writeln!(
@@ -874,7 +882,10 @@ pub fn best_validated(dir: &LeagueDir, side: Side) -> Result<BestValidated> {
         cfg.evaluator.episodes as u64,
     )
     .map_err(|e| anyhow::anyhow!("{}: {e}", dir.root.display()))?;
-    let best = ranked.into_iter().next().expect("rank_validated never returns an empty list");
+    let best = ranked
+        .into_iter()
+        .next()
+        .expect("rank_validated never returns an empty list");
     Ok(BestValidated {
         player: best.player,
         win_rate: best.win_rate,
@@ -1019,7 +1030,12 @@ pub fn panel_curves(players: &[PlayerRow], panel: &[PanelRow]) -> Vec<PanelCurve
             .iter()
             .position(|p| p.id == learner.id)
             .unwrap_or(usize::MAX);
-        let key = (order, row.held_out, row.validation, row.opponent_name.clone());
+        let key = (
+            order,
+            row.held_out,
+            row.validation,
+            row.opponent_name.clone(),
+        );
         let point = (member.env_steps as f64, 100.0 * row.win_rate);
         match keyed.iter_mut().find(|(k, _)| *k == key) {
             Some((_, curve)) => curve.points.push(point),
@@ -1252,11 +1268,21 @@ mod tests {
             std::slice::from_ref(&learner),
             vec![record("k1", 'a'), record("k2", 'b')],
         );
-        assert_eq!(rows[0].player_sha256.as_deref(), Some("a".repeat(64).as_str()));
-        assert!(rows[0].outdated, "made against weights the player no longer has");
+        assert_eq!(
+            rows[0].player_sha256.as_deref(),
+            Some("a".repeat(64).as_str())
+        );
+        assert!(
+            rows[0].outdated,
+            "made against weights the player no longer has"
+        );
         assert_eq!(rows[0].player_env_steps, None, "not recorded, not guessed");
         assert!(!rows[1].outdated);
-        assert_eq!(rows[1].player_env_steps, Some(9_600), "the current weights'");
+        assert_eq!(
+            rows[1].player_env_steps,
+            Some(9_600),
+            "the current weights'"
+        );
         let json = serde_json::to_value(&rows[0]).unwrap();
         assert_eq!(json["outdated"], true);
         assert!(json["player_sha256"].is_string() && json.get("player_env_steps").is_some());

@@ -285,7 +285,10 @@ mod tests {
         let panic = "thread 'main' panicked at src/x.rs:3:5:\nindex out of bounds\n";
         let line = last_error_line(panic).unwrap();
         assert!(line.contains("panicked at src/x.rs"), "{line}");
-        assert!(line.ends_with("index out of bounds"), "the panic's message: {line}");
+        assert!(
+            line.ends_with("index out of bounds"),
+            "the panic's message: {line}"
+        );
         assert_eq!(last_error_line("all fine\n"), None);
     }
 }

@@ -88,8 +88,7 @@ fn check_pool(dir: &LeagueDir, store: &Store) -> Result<()> {
     Ok(())
 }
 
-const GONE: &str =
-    "its seat row is gone from the store (deleted?); the manager defines it again";
+const GONE: &str = "its seat row is gone from the store (deleted?); the manager defines it again";
 
 /// Why `renew_lease` failed, as the store shows it now.
 fn why_lost(store: &Store, lease: &SeatLease) -> String {
@@ -214,11 +213,19 @@ pub fn run_worker(dir: &LeagueDir, opts: &WorkerOptions, stop: &AtomicBool) -> R
                     p.child = None;
                     use std::os::unix::process::ExitStatusExt;
                     let exit = classify(status.code(), status.signal());
-                    let log = p.output.as_ref().map(|o| {
-                        o.wait_closed(Duration::from_secs(2));
-                        o.text()
-                    }).unwrap_or_default();
-                    let crash_text = p.output.as_ref().map(|o| o.crash_text(5)).unwrap_or_default();
+                    let log = p
+                        .output
+                        .as_ref()
+                        .map(|o| {
+                            o.wait_closed(Duration::from_secs(2));
+                            o.text()
+                        })
+                        .unwrap_or_default();
+                    let crash_text = p
+                        .output
+                        .as_ref()
+                        .map(|o| o.crash_text(5))
+                        .unwrap_or_default();
                     let message = last_error_line(&log);
                     if p.started.elapsed() > Duration::from_secs(120) {
                         p.failures = 0;

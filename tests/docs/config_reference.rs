@@ -202,7 +202,10 @@ struct Fields<'a> {
 impl<'de, 'a> MapAccess<'de> for Fields<'a> {
     type Error = Error;
 
-    fn next_key_seed<K: DeserializeSeed<'de>>(&mut self, seed: K) -> Result<Option<K::Value>, Error> {
+    fn next_key_seed<K: DeserializeSeed<'de>>(
+        &mut self,
+        seed: K,
+    ) -> Result<Option<K::Value>, Error> {
         match self.fields.get(self.next) {
             None => Ok(None),
             Some(&name) => seed
@@ -294,7 +297,12 @@ fn fields_of<'de, T: Deserialize<'de>>() -> BTreeSet<String> {
         leaves: &leaves,
         record: true,
     })
-    .unwrap_or_else(|e| panic!("cannot walk the fields of {}: {e}", std::any::type_name::<T>()));
+    .unwrap_or_else(|e| {
+        panic!(
+            "cannot walk the fields of {}: {e}",
+            std::any::type_name::<T>()
+        )
+    });
     leaves.into_inner()
 }
 
@@ -357,7 +365,12 @@ fn documented(markdown: &str) -> BTreeSet<String> {
         if !(is_table && in_field_table) {
             continue;
         }
-        let first = line.trim_start_matches('|').split('|').next().unwrap_or("").trim();
+        let first = line
+            .trim_start_matches('|')
+            .split('|')
+            .next()
+            .unwrap_or("")
+            .trim();
         if let Some(path) = first
             .strip_prefix('`')
             .and_then(|rest| rest.strip_suffix('`'))
@@ -588,15 +601,21 @@ fn the_status_reference_lists_every_field_of_the_json() {
 #[test]
 fn the_status_example_parses_and_shows_only_documented_fields() {
     let page = reference("status-json.md");
-    let start = page.find("```json\n").expect("an example in a ```json block") + 8;
+    let start = page
+        .find("```json\n")
+        .expect("an example in a ```json block")
+        + 8;
     let end = start + page[start..].find("```").expect("the block ends");
     let example: serde_json::Value =
         serde_json::from_str(&page[start..end]).expect("the example is JSON");
     let fields = value_paths(&serde_json::to_value(full_status_report()).unwrap());
     for path in value_paths(&example) {
         // An empty list shows as its own name.
-        let known = fields.contains(&path)
-            || fields.iter().any(|f| f.starts_with(&format!("{path}[].")));
-        assert!(known, "the example shows {path}, which StatusReport has not");
+        let known =
+            fields.contains(&path) || fields.iter().any(|f| f.starts_with(&format!("{path}[].")));
+        assert!(
+            known,
+            "the example shows {path}, which StatusReport has not"
+        );
     }
 }

@@ -18,9 +18,13 @@ fn every_config_loads_and_its_header_names_its_protocol() {
         let text = std::fs::read_to_string(&path).unwrap();
         let league = text.lines().any(|l| l.starts_with("env_steps_per_learner"));
         let protocol = if league {
-            LeagueConfig::load(&path).unwrap_or_else(|e| panic!("{e:#}")).protocol
+            LeagueConfig::load(&path)
+                .unwrap_or_else(|e| panic!("{e:#}"))
+                .protocol
         } else {
-            TrainConfig::load(&path).unwrap_or_else(|e| panic!("{e:#}")).protocol
+            TrainConfig::load(&path)
+                .unwrap_or_else(|e| panic!("{e:#}"))
+                .protocol
         };
         let header: String = text
             .lines()

@@ -93,7 +93,13 @@ pub fn link_targets(text: &str) -> Vec<String> {
         if t.starts_with('[') {
             if let Some(pos) = t.find("]: ") {
                 if !t[..pos].contains("](") {
-                    out.push(t[pos + 3..].split_whitespace().next().unwrap_or("").to_string());
+                    out.push(
+                        t[pos + 3..]
+                            .split_whitespace()
+                            .next()
+                            .unwrap_or("")
+                            .to_string(),
+                    );
                 }
             }
         }
@@ -140,8 +146,16 @@ fn every_relative_link_resolves() {
             }
         }
     }
-    assert!(checked > 100, "only {checked} relative links found: is the parser broken?");
-    assert!(broken.is_empty(), "{} broken links:\n{}", broken.len(), broken.join("\n"));
+    assert!(
+        checked > 100,
+        "only {checked} relative links found: is the parser broken?"
+    );
+    assert!(
+        broken.is_empty(),
+        "{} broken links:\n{}",
+        broken.len(),
+        broken.join("\n")
+    );
 }
 
 #[test]
@@ -155,14 +169,21 @@ fn every_page_is_in_the_summary_and_every_summary_entry_exists() {
         .map(|t| normalise(&resolve(&summary_path, t)))
         .collect();
     let missing_files: Vec<_> = listed.iter().filter(|p| !p.exists()).collect();
-    assert!(missing_files.is_empty(), "SUMMARY.md lists pages that do not exist: {missing_files:?}");
+    assert!(
+        missing_files.is_empty(),
+        "SUMMARY.md lists pages that do not exist: {missing_files:?}"
+    );
     let unlisted: Vec<String> = pages()
         .into_iter()
         .filter(|p| p.starts_with(&docs) && *p != summary_path)
         .filter(|p| !listed.contains(&normalise(p)))
         .map(|p| p.strip_prefix(root()).unwrap().display().to_string())
         .collect();
-    assert!(unlisted.is_empty(), "pages missing from docs/SUMMARY.md:\n{}", unlisted.join("\n"));
+    assert!(
+        unlisted.is_empty(),
+        "pages missing from docs/SUMMARY.md:\n{}",
+        unlisted.join("\n")
+    );
 }
 
 fn normalise(path: &Path) -> PathBuf {
@@ -224,16 +245,30 @@ fn no_page_or_config_speaks_of_stops_issues_or_sessions() {
     for file in files {
         let text = std::fs::read_to_string(&file).unwrap();
         for word in process_words(&text) {
-            hits.push(format!("{}: {word}", file.strip_prefix(root()).unwrap().display()));
+            hits.push(format!(
+                "{}: {word}",
+                file.strip_prefix(root()).unwrap().display()
+            ));
         }
     }
-    assert!(hits.is_empty(), "{} mentions:\n{}", hits.len(), hits.join("\n"));
+    assert!(
+        hits.is_empty(),
+        "{} mentions:\n{}",
+        hits.len(),
+        hits.join("\n")
+    );
 }
 
 #[test]
 fn the_parsers_find_what_they_should() {
     let text = "see [a](x.md) and ![p](img/a.png \"t\"), `[no](code.md)`\n\
                 ```\n[no](fenced.md)\n```\n[ref]: y.md\n<img src=\"z.png\">";
-    assert_eq!(link_targets(text), vec!["x.md", "img/a.png", "y.md", "z.png"]);
-    assert_eq!(process_words("Stop 29's run; issue 17; non-stop 4; a session"), vec!["stop 29", "issue 17", "session"]);
+    assert_eq!(
+        link_targets(text),
+        vec!["x.md", "img/a.png", "y.md", "z.png"]
+    );
+    assert_eq!(
+        process_words("Stop 29's run; issue 17; non-stop 4; a session"),
+        vec!["stop 29", "issue 17", "session"]
+    );
 }

@@ -56,8 +56,14 @@ pub fn with_tiny_budgets(line: &str) -> String {
 #[test]
 fn the_quick_start_blocks_are_found_and_made_tiny() {
     let md = "# x\n\n## Quick start\n\ntext\n\n```sh\na --for 10m\n```\n\n```text\nno\n```\n\n```sh\nb --episodes 500 --out o\n```\n\n## Next\n\n```sh\nc\n```\n";
-    assert_eq!(sh_blocks(md, "## Quick start"), vec!["a --for 10m\n", "b --episodes 500 --out o\n"]);
-    assert_eq!(with_tiny_budgets("t --for 10m --episodes 500 --budget 200000 --out x"), "t --for 25s --episodes 2 --budget 3200 --out x");
+    assert_eq!(
+        sh_blocks(md, "## Quick start"),
+        vec!["a --for 10m\n", "b --episodes 500 --out o\n"]
+    );
+    assert_eq!(
+        with_tiny_budgets("t --for 10m --episodes 500 --budget 200000 --out x"),
+        "t --for 25s --episodes 2 --budget 3200 --out x"
+    );
 }
 
 fn link(from: &Path, to: &Path) {
@@ -68,14 +74,24 @@ fn link(from: &Path, to: &Path) {
 fn every_quick_start_command_runs() {
     let readme = std::fs::read_to_string(root().join("README.md")).unwrap();
     let blocks = sh_blocks(&readme, "## Quick start");
-    assert!(blocks.len() >= 4, "the quick start has {} sh blocks", blocks.len());
+    assert!(
+        blocks.len() >= 4,
+        "the quick start has {} sh blocks",
+        blocks.len()
+    );
     let script: String = blocks
         .iter()
         .flat_map(|b| b.lines())
         .map(|line| with_tiny_budgets(line) + "\n")
         .collect();
-    for command in ["eval", "train", "run", "status", "export", "exploit", "worker"] {
-        assert!(script.contains(&format!("t2e-league {command} ")) || script.contains(&format!("t2e-league {command}\n")), "the quick start no longer shows `{command}`");
+    for command in [
+        "eval", "train", "run", "status", "export", "exploit", "worker",
+    ] {
+        assert!(
+            script.contains(&format!("t2e-league {command} "))
+                || script.contains(&format!("t2e-league {command}\n")),
+            "the quick start no longer shows `{command}`"
+        );
     }
 
     let dir = tempfile::tempdir().unwrap();
@@ -83,7 +99,11 @@ fn every_quick_start_command_runs() {
         link(&root().join(name), &dir.path().join(name));
     }
     let bin = PathBuf::from(env!("CARGO_BIN_EXE_t2e-league"));
-    let path = format!("{}:{}", bin.parent().unwrap().display(), std::env::var("PATH").unwrap_or_default());
+    let path = format!(
+        "{}:{}",
+        bin.parent().unwrap().display(),
+        std::env::var("PATH").unwrap_or_default()
+    );
     let gibson = std::env::var("T2E_GIBSON_DIR")
         .map(PathBuf::from)
         .unwrap_or_else(|_| root().join("../shared/maps/gibson"));
@@ -102,9 +122,22 @@ fn every_quick_start_command_runs() {
         String::from_utf8_lossy(&out.stdout),
         String::from_utf8_lossy(&out.stderr)
     );
-    assert!(out.status.success(), "the quick start failed ({}):\n{text}", out.status);
+    assert!(
+        out.status.success(),
+        "the quick start failed ({}):\n{text}",
+        out.status
+    );
     // What the commands wrote, each read back by the command after it.
-    for written in ["runs/eval/heuristics", "runs/episode.gif", "runs/cpu-10min", "runs/league/default/league.db", "runs/export/target/meta.json"] {
-        assert!(dir.path().join(written).exists(), "the quick start did not write {written}:\n{text}");
+    for written in [
+        "runs/eval/heuristics",
+        "runs/episode.gif",
+        "runs/cpu-10min",
+        "runs/league/default/league.db",
+        "runs/export/target/meta.json",
+    ] {
+        assert!(
+            dir.path().join(written).exists(),
+            "the quick start did not write {written}:\n{text}"
+        );
     }
 }

@@ -106,12 +106,12 @@ impl Store {
         let sql = sql.as_str();
         self.run(move || async move {
             sqlx::query(sql)
-            .bind(lease_ms)
-            .bind(seat)
-            .bind(holder)
-            .execute(pool)
-            .await
-            .map(|r| r.rows_affected() == 1)
+                .bind(lease_ms)
+                .bind(seat)
+                .bind(holder)
+                .execute(pool)
+                .await
+                .map(|r| r.rows_affected() == 1)
         })
     }
 
