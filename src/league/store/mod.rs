@@ -691,16 +691,21 @@ impl Store {
         })
     }
 
-    pub fn players(&self) -> Result<Vec<Player>, StoreError> {
+    /// Every `players` row as stored, by id.
+    fn player_rows(&self) -> Result<Vec<PlayerRow>, StoreError> {
         let pool = &self.pool;
-        let rows: Vec<PlayerRow> = self.run(move || async move {
+        self.run(move || async move {
             sqlx::query_as(
                 "SELECT id, name, side, kind, parent, created_at_ms, env_steps, curriculum_stage, checkpoint_path, checkpoint_sha256, quarantined \
                  FROM players ORDER BY id",
             )
             .fetch_all(pool)
             .await
-        })?;
+        })
+    }
+
+    pub fn players(&self) -> Result<Vec<Player>, StoreError> {
+        let rows = self.player_rows()?;
         rows.into_iter()
             .map(|r| {
                 Player::try_from(r).map_err(|e| StoreError::Invalid(format!("{}: {e}", self.url)))
@@ -712,15 +717,7 @@ impl Store {
     /// the pool is listed without it and flagged in `quarantined`, where
     /// `players` refuses the whole read.
     pub fn players_flagged(&self) -> Result<Vec<Player>, StoreError> {
-        let pool = &self.pool;
-        let rows: Vec<PlayerRow> = self.run(move || async move {
-            sqlx::query_as(
-                "SELECT id, name, side, kind, parent, created_at_ms, env_steps, curriculum_stage, checkpoint_path, checkpoint_sha256, quarantined \
-                 FROM players ORDER BY id",
-            )
-            .fetch_all(pool)
-            .await
-        })?;
+        let rows = self.player_rows()?;
         Ok(rows.into_iter().map(PlayerRow::flagged).collect())
     }
 
