@@ -259,6 +259,32 @@ fn schema(url: &str) -> Schema {
     })
 }
 
+/// Processes that open a new league's store at once (the manager creating
+/// it, a worker joining, `status` polling) all come out with the whole
+/// schema; none fails on a migration another one applied first.
+#[test]
+fn many_openers_of_a_new_store_all_get_the_whole_schema() {
+    for round in 0..6 {
+        let (_dir, urls) = both(&format!("openers{round}"));
+        for url in urls {
+            let barrier = Arc::new(Barrier::new(6));
+            let opened: Vec<_> = (0..6)
+                .map(|_| {
+                    let (url, barrier) = (url.clone(), barrier.clone());
+                    std::thread::spawn(move || {
+                        barrier.wait();
+                        Store::open(&url).map(|s| s.players().map(|p| p.len()))
+                    })
+                })
+                .collect();
+            for h in opened {
+                let r = h.join().unwrap();
+                assert!(matches!(r, Ok(Ok(0))), "round {round}, {url:?}: {r:?}");
+            }
+        }
+    }
+}
+
 #[test]
 fn both_backends_have_the_same_schema() {
     let dir = tempfile::tempdir().unwrap();

@@ -432,7 +432,7 @@ impl Store {
             url: url.clone(),
         };
         if matches!(access, Access::Create | Access::Existing) {
-            match store.rt.block_on(store.migrator().run(&store.pool)) {
+            match store.migrate() {
                 Ok(()) => {}
                 Err(sqlx::migrate::MigrateError::VersionMissing(version)) => {
                     return Err(StoreError::NewerSchema {
@@ -449,6 +449,29 @@ impl Store {
             }
         }
         Ok(store)
+    }
+
+    /// Brings the schema up to date. PostgreSQL serialises migrators with
+    /// an advisory lock; SQLite has none, so two processes opening a new
+    /// league at once (a worker joining, `status` polling) may both try
+    /// the same migration, and the second fails on what the first just
+    /// added. Each migration is one transaction, so the loser rolled back
+    /// whole: running again finds it applied and goes on.
+    fn migrate(&self) -> Result<(), sqlx::migrate::MigrateError> {
+        let mut attempt = 0;
+        loop {
+            match self.rt.block_on(self.migrator().run(&self.pool)) {
+                Err(e)
+                    if attempt < 5
+                        && self.backend() == Backend::Sqlite
+                        && !matches!(e, sqlx::migrate::MigrateError::VersionMissing(_)) =>
+                {
+                    attempt += 1;
+                    std::thread::sleep(Duration::from_millis(100 * attempt));
+                }
+                done => return done,
+            }
+        }
     }
 
     /// Where the store is (a PostgreSQL URL with its password masked).
