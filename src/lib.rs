@@ -29,16 +29,14 @@
 //! // Same seed, same episode.
 //! assert_eq!(env.reset(42).unwrap(), first);
 //! ```
-pub mod asz;
 pub mod cli;
 pub mod controllers;
-pub mod env;
 pub mod eval;
-pub mod heuristics;
 pub mod league;
 pub mod learn;
-pub mod map;
 pub mod nn;
-pub mod protocol;
 pub mod render;
-pub mod util;
+
+// The floor below, in its own crate (no libtorch, no database), under the
+// names the rest of the code and its users know.
+pub use t2e_core::{asz, env, error, fs, heuristics, map, protocol, util, PROJECT_ROOT};

@@ -300,7 +300,15 @@ fn placement_respects_the_distances_and_fails_cleanly() {
     )
     .err()
     .unwrap();
-    assert!(e.contains("target_speed"), "{e}");
+    match &e {
+        t2e::error::EnvError::Config(c) => {
+            assert_eq!((c.field.as_str(), c.value.as_str()), ("target_speed", "-1"))
+        }
+        other => panic!("{other}"),
+    }
+    assert!(e.to_string().starts_with("target_speed = -1: "), "{e}");
+    let no_maps = TrapEnv::new(cfg(3), std::sync::Arc::new(Vec::new())).err();
+    assert_eq!(no_maps, Some(t2e::error::EnvError::NoMaps));
 }
 
 #[test]

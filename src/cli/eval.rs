@@ -188,7 +188,7 @@ fn write_setting(
         }
         w.flush()?;
     }
-    crate::nn::checkpoint::write_file_atomically(
+    crate::fs::write_file_atomically(
         &dir.join("setting.json"),
         serde_json::to_string_pretty(identity)?.as_bytes(),
     )?;
@@ -315,7 +315,7 @@ pub fn run(args: EvalArgs) -> Result<()> {
             serde_json::to_string_pretty(&summaries)?.into_bytes(),
         ),
     ] {
-        crate::nn::checkpoint::write_file_atomically(&args.out.join(name), &bytes)
+        crate::fs::write_file_atomically(&args.out.join(name), &bytes)
             .with_context(|| format!("cannot write {}", args.out.join(name).display()))?;
     }
     if curves.len() > 1 {

@@ -198,7 +198,7 @@ fn show(map: &str, out: &Path, scale: u32) -> Result<()> {
     let mut bytes = std::io::Cursor::new(Vec::new());
     img.write_to(&mut bytes, image::ImageFormat::Png)
         .with_context(|| format!("cannot encode {}", out.display()))?;
-    crate::nn::checkpoint::write_file_atomically(out, bytes.get_ref())
+    crate::fs::write_file_atomically(out, bytes.get_ref())
         .with_context(|| format!("cannot write {}", out.display()))?;
     let g = &prepared.grid;
     println!(
@@ -292,7 +292,7 @@ pub fn update_manifest(path: &Path, new: &[ManifestRow]) -> Result<()> {
     let bytes = writer
         .into_inner()
         .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
-    crate::nn::checkpoint::write_file_atomically(path, &bytes)
+    Ok(crate::fs::write_file_atomically(path, &bytes)?)
 }
 
 /// Most maps one `maps generate` writes (about 20 KB each).

@@ -215,7 +215,7 @@ fn write_rows(path: &Path, rows: &[EvalRow]) -> Result<()> {
         w.serialize(r)?;
     }
     let bytes = w.into_inner().map_err(|e| anyhow::anyhow!("{e}"))?;
-    crate::nn::checkpoint::write_file_atomically(path, &bytes)
+    Ok(crate::fs::write_file_atomically(path, &bytes)?)
 }
 
 /// SR per map set against wall-clock minutes (top) and env steps (bottom),

@@ -3,7 +3,7 @@
 //! output folders.
 
 use crate::eval::{cross_table, paper_table, Summary};
-use crate::nn::checkpoint::write_file_atomically;
+use crate::fs::write_file_atomically;
 use anyhow::{bail, Context, Result};
 use std::path::PathBuf;
 

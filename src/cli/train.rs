@@ -150,7 +150,7 @@ pub fn run(args: TrainArgs) -> Result<()> {
     } else {
         // Written whole and renamed: a run killed here leaves no half config
         // for --resume to read.
-        crate::nn::checkpoint::write_file_atomically(
+        crate::fs::write_file_atomically(
             &run_dir.join("config.toml"),
             toml::to_string_pretty(&cfg)?.as_bytes(),
         )?;

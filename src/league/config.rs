@@ -4,7 +4,7 @@
 //! that name the file and the field.
 
 use super::curriculum::CurriculumConfig;
-use super::evaluator::EvaluatorConfig;
+use super::evaluator_config::EvaluatorConfig;
 use super::matchmaking::MatchmakingConfig;
 use super::members::MembersConfig;
 use super::players::Seat;

@@ -104,10 +104,10 @@ impl LeagueDir {
     }
 
     pub fn write_identity(&self, id: &LeagueIdentity) -> Result<()> {
-        crate::nn::checkpoint::write_file_atomically(
+        Ok(crate::fs::write_file_atomically(
             &self.identity_path(),
             serde_json::to_string_pretty(id)?.as_bytes(),
-        )
+        )?)
     }
 
     /// What on disk shows that a league lived here, beside its store: the

@@ -20,11 +20,11 @@ use super::dir::{new_league_id, LeagueDir, LeagueIdentity};
 use super::open::{plan_start, StartPlan};
 use super::players::Seat;
 use super::pool::{ensure_members, reconcile};
-use super::process::{interrupt, lock_holder, spawn, try_lock, Role, Supervised};
-use super::store::{now_ms, Store};
-use super::supervision::{classify, decide, last_error_line, CrashBudget, Exit, Next};
+use super::process::{interrupt, lock_holder, spawn, try_lock, Ended, Role, Supervised};
+use super::store::Store;
+use super::supervision::{CrashBudget, Exit, Next};
 use crate::env::Side;
-use crate::nn::checkpoint::write_file_atomically;
+use crate::fs::write_file_atomically;
 use anyhow::{bail, Context, Result};
 use indicatif::{MultiProgress, ProgressBar, ProgressStyle};
 use std::fs::File;
@@ -232,7 +232,7 @@ fn run_league(
     }
     for seat in &seats {
         for sub in ["", "checkpoints"] {
-            crate::nn::checkpoint::clean_stale_temporaries(&dir.seat_dir(*seat).join(sub))?;
+            crate::fs::clean_stale_temporaries(&dir.seat_dir(*seat).join(sub))?;
         }
     }
 
@@ -286,68 +286,40 @@ fn run_league(
             }
         }
         for p in &mut procs {
-            if let Some(child) = &mut p.child {
-                if let Some(status) = child.try_wait()? {
-                    p.child = None;
-                    use std::os::unix::process::ExitStatusExt;
-                    let exit = classify(status.code(), status.signal());
-                    let log = p
-                        .output
-                        .as_ref()
-                        .map(|o| {
-                            o.wait_closed(Duration::from_secs(2));
-                            o.text()
-                        })
-                        .unwrap_or_default();
-                    let crash_text = p
-                        .output
-                        .as_ref()
-                        .map(|o| o.crash_text(5))
-                        .unwrap_or_default();
-                    let message = last_error_line(&log);
-                    if p.started.elapsed() > Duration::from_secs(120) {
-                        p.failures = 0;
+            // Ctrl-C reaches the learners and the manager at once: a
+            // learner that stopped on it was asked to.
+            let asked = stopping || stop.load(Ordering::SeqCst);
+            if let Some(Ended {
+                exit,
+                next,
+                crash_text,
+            }) = p.reap(asked, budget)?
+            {
+                match next {
+                    Next::Finished => p.finished = true,
+                    Next::Restart { after, cause } => {
+                        record_crash(&multi, &store, &p.role.name(), &cause, &crash_text);
+                        say(
+                            &multi,
+                            format!(
+                                "{} crashed ({cause}); restarting from its last checkpoint in {} s (log: {})",
+                                p.role.name(),
+                                after.as_secs(),
+                                p.role.log_path(&logs).display()
+                            ),
+                        );
+                        p.restart_at = Some(Instant::now() + after);
                     }
-                    p.failures += 1;
-                    // Ctrl-C reaches the learners and the manager at once:
-                    // a learner that stopped on it was asked to.
-                    let asked = stopping || stop.load(Ordering::SeqCst);
-                    let next = decide(
-                        &p.role.name(),
-                        &exit,
-                        message.as_deref(),
-                        asked,
-                        &mut p.crashes,
-                        now_ms(),
-                        p.failures,
-                        budget,
-                    );
-                    match next {
-                        Next::Finished => p.finished = true,
-                        Next::Restart { after, cause } => {
-                            record_crash(&multi, &store, &p.role.name(), &cause, &crash_text);
-                            say(
-                                &multi,
-                                format!(
-                                    "{} crashed ({cause}); restarting from its last checkpoint in {} s (log: {})",
-                                    p.role.name(),
-                                    after.as_secs(),
-                                    p.role.log_path(&logs).display()
-                                ),
-                            );
-                            p.restart_at = Some(Instant::now() + after);
+                    Next::StopLeague { why } => {
+                        if exit != Exit::CannotStart {
+                            record_crash(&multi, &store, &p.role.name(), &why, &crash_text);
                         }
-                        Next::StopLeague { why } => {
-                            if exit != Exit::CannotStart {
-                                record_crash(&multi, &store, &p.role.name(), &why, &crash_text);
-                            }
-                            say(
-                                &multi,
-                                format!("{why} (log: {})", p.role.log_path(&logs).display()),
-                            );
-                            p.finished = true;
-                            failure.get_or_insert(why);
-                        }
+                        say(
+                            &multi,
+                            format!("{why} (log: {})", p.role.log_path(&logs).display()),
+                        );
+                        p.finished = true;
+                        failure.get_or_insert(why);
                     }
                 }
             }

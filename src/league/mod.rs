@@ -35,6 +35,7 @@ pub mod config;
 pub mod curriculum;
 pub mod dir;
 pub mod evaluator;
+pub mod evaluator_config;
 pub mod exploit;
 pub mod learner;
 pub mod manager;

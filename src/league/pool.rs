@@ -144,7 +144,7 @@ pub struct Reconciled {
 pub fn reconcile(dir: &LeagueDir, store: &Store, league_id: &str) -> Result<Reconciled> {
     let mut out = Reconciled::default();
     let players_dir = dir.players_dir();
-    for p in crate::nn::checkpoint::clean_stale_temporaries(&players_dir)? {
+    for p in crate::fs::clean_stale_temporaries(&players_dir)? {
         out.removed_temporaries.push(dir.relative(&p));
     }
     for (rel, adopted) in adopt_unrecorded(dir, store, league_id, None)? {
@@ -371,8 +371,8 @@ fn import_member(
             );
         }
     } else {
-        crate::nn::checkpoint::write_new_dir_atomically(&target, |tmp| {
-            crate::nn::checkpoint::copy_files(&snap.dir, tmp)
+        crate::fs::write_new_dir_atomically(&target, |tmp| {
+            crate::fs::copy_files(&snap.dir, tmp)
         })?;
         // The copy, not the source, is what the league plays.
         PolicySnapshot::load(&target, side)?;

@@ -4,7 +4,8 @@
 
 use super::dir::LeagueDir;
 use super::players::{Seat, EVALUATOR};
-use super::store::StoreUrl;
+use super::store::{now_ms, StoreUrl};
+use super::supervision::{classify, decide, last_error_line, CrashBudget, Exit, Next};
 use crate::env::Side;
 use anyhow::{Context, Result};
 use std::collections::VecDeque;
@@ -93,7 +94,59 @@ pub struct Supervised {
     pub crashes: Vec<(i64, String)>,
 }
 
+/// How a supervised child ended, and what its supervisor does next.
+pub struct Ended {
+    pub exit: Exit,
+    pub next: Next,
+    /// The end of what it printed, for the crash record.
+    pub crash_text: String,
+}
+
 impl Supervised {
+    /// Reaps the child if it has exited and decides what comes next, by
+    /// the same rules for the manager and every worker (`supervision`).
+    /// None while it runs, or when there is no child. `asked`: its
+    /// supervisor had asked it to stop.
+    pub fn reap(&mut self, asked: bool, budget: CrashBudget) -> std::io::Result<Option<Ended>> {
+        use std::os::unix::process::ExitStatusExt;
+        let Some(child) = &mut self.child else {
+            return Ok(None);
+        };
+        let Some(status) = child.try_wait()? else {
+            return Ok(None);
+        };
+        self.child = None;
+        let exit = classify(status.code(), status.signal());
+        let (log, crash_text) = match &self.output {
+            Some(o) => {
+                o.wait_closed(Duration::from_secs(2));
+                (o.text(), o.crash_text(5))
+            }
+            None => Default::default(),
+        };
+        // A process that ran for two minutes before failing starts its
+        // back-off over.
+        if self.started.elapsed() > Duration::from_secs(120) {
+            self.failures = 0;
+        }
+        self.failures += 1;
+        let next = decide(
+            &self.role.name(),
+            &exit,
+            last_error_line(&log).as_deref(),
+            asked,
+            &mut self.crashes,
+            now_ms(),
+            self.failures,
+            budget,
+        );
+        Ok(Some(Ended {
+            exit,
+            next,
+            crash_text,
+        }))
+    }
+
     /// A process to start now.
     pub fn new(role: Role) -> Supervised {
         Supervised {

@@ -17,9 +17,9 @@
 
 use super::dir::LeagueDir;
 use super::open::open_process;
-use super::process::{interrupt, spawn, Role, Supervised};
-use super::store::{now_ms, SeatLease, SeatRow, SeatState, Store};
-use super::supervision::{classify, decide, last_error_line, CrashBudget, Exit, Next};
+use super::process::{interrupt, spawn, Ended, Role, Supervised};
+use super::store::{SeatLease, SeatRow, SeatState, Store};
+use super::supervision::{CrashBudget, Exit, Next};
 use anyhow::{bail, Result};
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -208,72 +208,45 @@ pub fn run_worker(dir: &LeagueDir, opts: &WorkerOptions, stop: &AtomicBool) -> R
         }
         for h in &mut held {
             let p = &mut h.proc;
-            if let Some(child) = &mut p.child {
-                if let Some(status) = child.try_wait()? {
-                    p.child = None;
-                    use std::os::unix::process::ExitStatusExt;
-                    let exit = classify(status.code(), status.signal());
-                    let log = p
-                        .output
-                        .as_ref()
-                        .map(|o| {
-                            o.wait_closed(Duration::from_secs(2));
-                            o.text()
-                        })
-                        .unwrap_or_default();
-                    let crash_text = p
-                        .output
-                        .as_ref()
-                        .map(|o| o.crash_text(5))
-                        .unwrap_or_default();
-                    let message = last_error_line(&log);
-                    if p.started.elapsed() > Duration::from_secs(120) {
-                        p.failures = 0;
+            let asked = stopping || stop.load(Ordering::SeqCst);
+            if let Some(Ended {
+                exit,
+                next,
+                crash_text,
+            }) = p.reap(asked, budget)?
+            {
+                let name = p.role.name();
+                match next {
+                Next::Finished => {
+                    if exit == Exit::Done {
+                        store.finish_seat(&h.lease, SeatState::Done, None)?;
+                        eprintln!("worker {holder}: {name} done");
+                    } else {
+                        store.release_seat(&h.lease)?;
                     }
-                    p.failures += 1;
-                    let asked = stopping || stop.load(Ordering::SeqCst);
-                    let name = p.role.name();
-                    match decide(
-                        &name,
-                        &exit,
-                        message.as_deref(),
-                        asked,
-                        &mut p.crashes,
-                        now_ms(),
-                        p.failures,
-                        budget,
-                    ) {
-                        Next::Finished => {
-                            if exit == Exit::Done {
-                                store.finish_seat(&h.lease, SeatState::Done, None)?;
-                                eprintln!("worker {holder}: {name} done");
-                            } else {
-                                store.release_seat(&h.lease)?;
-                            }
-                            p.finished = true;
-                        }
-                        Next::Restart { after, cause } => {
-                            store
-                                .record_crash(&name, &cause, &crash_text)
-                                .unwrap_or_else(|e| eprintln!("cannot record a crash: {e}"));
-                            eprintln!(
-                                "worker {holder}: {name} crashed ({cause}); restarting it in {} s",
-                                after.as_secs()
-                            );
-                            p.restart_at = Some(Instant::now() + after);
-                        }
-                        Next::StopLeague { why } => {
-                            if exit != Exit::CannotStart {
-                                store.record_crash(&name, &why, &crash_text).ok();
-                            }
-                            store.finish_seat(&h.lease, SeatState::Failed, Some(&why))?;
-                            eprintln!("worker {holder}: {why}");
-                            p.finished = true;
-                            failure.get_or_insert(why);
-                        }
+                    p.finished = true;
+                }
+                Next::Restart { after, cause } => {
+                    store
+                        .record_crash(&name, &cause, &crash_text)
+                        .unwrap_or_else(|e| eprintln!("cannot record a crash: {e}"));
+                    eprintln!(
+                        "worker {holder}: {name} crashed ({cause}); restarting it in {} s",
+                        after.as_secs()
+                    );
+                    p.restart_at = Some(Instant::now() + after);
+                }
+                Next::StopLeague { why } => {
+                    if exit != Exit::CannotStart {
+                        store.record_crash(&name, &why, &crash_text).ok();
                     }
+                    store.finish_seat(&h.lease, SeatState::Failed, Some(&why))?;
+                    eprintln!("worker {holder}: {why}");
+                    p.finished = true;
+                    failure.get_or_insert(why);
                 }
             }
+        }
             if p.child.is_none() && !p.finished && !stopping {
                 if let Some(at) = p.restart_at {
                     if Instant::now() >= at {

@@ -16,6 +16,22 @@ pub struct Adam {
     v: Vec<Tensor>,
 }
 
+/// The first half of every learner's gradient step: clears the gradients
+/// of each optimizer's variables, backpropagates `loss`, then clips each
+/// optimizer's gradients to its own max norm, in the order given. Returns
+/// the norms before clipping, for the caller to check (a non-finite one
+/// refuses the update) before it steps.
+pub fn backward_clipped(loss: &Tensor, optimizers: &mut [(&mut Adam, f64)]) -> Vec<f64> {
+    for (adam, _) in optimizers.iter_mut() {
+        adam.zero_grad();
+    }
+    loss.backward();
+    optimizers
+        .iter_mut()
+        .map(|(adam, max_norm)| adam.clip_grad_norm(*max_norm))
+        .collect()
+}
+
 impl Adam {
     pub fn new(vs: &nn::VarStore, lr: f64, eps: f64) -> Adam {
         let mut params: Vec<(String, Tensor)> = vs.variables().into_iter().collect();

@@ -26,6 +26,7 @@
 //!      the factor held constant, plus a penalty on the logits;
 //!    - targets: theta' <- tau theta + (1 - tau) theta'.
 
+use super::adam::backward_clipped;
 use super::learner::{Learner, NamedTensors};
 use super::offpolicy::{
     check_replay, gumbel_noise, one_hot, td_target, within, Batch, Params, ReplayLearner,
@@ -407,18 +408,17 @@ impl MaacLearner {
         if !(cl.is_finite() && al.is_finite()) {
             return Err(BadUpdate(format!("critic loss {cl}, actor loss {al}")));
         }
-        self.params.critic_adam.zero_grad();
-        critic_loss.backward();
-        let critic_norm = self
-            .params
-            .critic_adam
-            .clip_grad_norm(cfg.critic_max_grad_norm * self.team as f64);
-        self.params.actor_adam.zero_grad();
-        actor_loss.backward();
-        let actor_norm = self
-            .params
-            .actor_adam
-            .clip_grad_norm(cfg.actor_max_grad_norm);
+        let critic_norm = backward_clipped(
+            &critic_loss,
+            &mut [(
+                &mut self.params.critic_adam,
+                cfg.critic_max_grad_norm * self.team as f64,
+            )],
+        )[0];
+        let actor_norm = backward_clipped(
+            &actor_loss,
+            &mut [(&mut self.params.actor_adam, cfg.actor_max_grad_norm)],
+        )[0];
         if !(actor_norm.is_finite() && critic_norm.is_finite()) {
             return Err(BadUpdate(format!(
                 "gradient norm not finite (actor {actor_norm}, critic {critic_norm})"

@@ -19,6 +19,7 @@
 //!      small penalty on the logits (the original's regulariser);
 //!    - targets: theta' <- tau theta + (1 - tau) theta'.
 
+use super::adam::backward_clipped;
 use super::learner::{Learner, NamedTensors};
 use super::mappo::{mates_index, Mappo};
 use super::offpolicy::{
@@ -330,9 +331,10 @@ impl MaddpgLearner {
         if !cl.is_finite() {
             return Err(BadUpdate(format!("critic loss {cl}")));
         }
-        self.params.critic_adam.zero_grad();
-        critic_loss.backward();
-        let critic_norm = self.params.critic_adam.clip_grad_norm(cfg.max_grad_norm);
+        let critic_norm = backward_clipped(
+            &critic_loss,
+            &mut [(&mut self.params.critic_adam, cfg.max_grad_norm)],
+        )[0];
         if !critic_norm.is_finite() {
             return Err(BadUpdate(format!("critic gradient norm {critic_norm}")));
         }
@@ -352,9 +354,10 @@ impl MaddpgLearner {
         if !al.is_finite() {
             return Err(BadUpdate(format!("actor loss {al}")));
         }
-        self.params.actor_adam.zero_grad();
-        actor_loss.backward();
-        let actor_norm = self.params.actor_adam.clip_grad_norm(cfg.max_grad_norm);
+        let actor_norm = backward_clipped(
+            &actor_loss,
+            &mut [(&mut self.params.actor_adam, cfg.max_grad_norm)],
+        )[0];
         if !actor_norm.is_finite() {
             return Err(BadUpdate(format!("actor gradient norm {actor_norm}")));
         }

@@ -5,9 +5,9 @@
 
 use super::learner::Learner;
 use crate::env::Side;
+use crate::fs::{write_file_atomically, Written};
 use crate::nn::checkpoint::{
-    read_checked, read_meta, write_checkpoint, write_file_atomically, write_new_checkpoint,
-    CheckpointMeta, Written,
+    read_checked, read_meta, write_checkpoint, write_new_checkpoint, CheckpointMeta,
 };
 use anyhow::{bail, Context, Result};
 use serde::{Deserialize, Serialize};
@@ -33,10 +33,10 @@ impl RunState {
     }
 
     pub fn write(&self, run_dir: &Path) -> Result<()> {
-        write_file_atomically(
+        Ok(write_file_atomically(
             &run_dir.join("state.json"),
             serde_json::to_string_pretty(self)?.as_bytes(),
-        )
+        )?)
     }
 }
 

@@ -4,7 +4,7 @@
 //! Adam, which every learner uses, are in `rollout.rs` and `adam.rs`).
 //! MAPPO and IPPO differ only in what the critic reads (`mappo.rs`, `ippo.rs`).
 
-use super::adam::Adam;
+use super::adam::{backward_clipped, Adam};
 use super::learner::{file, optimizer_file, restore_optimizers, Learner, NamedTensors};
 use super::rollout::{BadUpdate, Rollout, UpdateStats};
 use super::Algorithm;
@@ -611,11 +611,14 @@ impl PpoLearner {
                         entropy.double_value(&[])
                     )));
                 }
-                self.actor_adam.zero_grad();
-                self.critic_adam.zero_grad();
-                loss.backward();
-                let actor_norm = self.actor_adam.clip_grad_norm(cfg.max_grad_norm);
-                let critic_norm = self.critic_adam.clip_grad_norm(cfg.max_grad_norm);
+                let norms = backward_clipped(
+                    &loss,
+                    &mut [
+                        (&mut self.actor_adam, cfg.max_grad_norm),
+                        (&mut self.critic_adam, cfg.max_grad_norm),
+                    ],
+                );
+                let (actor_norm, critic_norm) = (norms[0], norms[1]);
                 if !(actor_norm.is_finite() && critic_norm.is_finite()) {
                     return Err(BadUpdate(format!(
                         "gradient norm not finite (actor {actor_norm}, critic {critic_norm})"

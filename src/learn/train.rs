@@ -23,9 +23,8 @@ use super::Algorithm;
 use crate::env::vec_env::episode_seed;
 use crate::env::{Action, Side, VecEnv};
 use crate::map::PreparedMap;
-use crate::nn::checkpoint::{
-    checkpoint_name, clean_stale_temporaries, code_version, CheckpointMeta, FORMAT,
-};
+use crate::fs::clean_stale_temporaries;
+use crate::nn::checkpoint::{checkpoint_name, code_version, CheckpointMeta, FORMAT};
 use crate::nn::obs_tensors;
 use crate::nn::prior::{add_prior, target_hint};
 use anyhow::{anyhow, bail, Context, Result};

@@ -580,7 +580,7 @@ pub fn render_episode(
     // Written to a temporary sibling, synced and renamed: a render killed
     // while writing leaves the previous GIF (or none), never half of one.
     remove_dead_temporaries(out);
-    crate::nn::checkpoint::write_file_atomically(out, &bytes)
+    crate::fs::write_file_atomically(out, &bytes)
         .with_context(|| format!("cannot write GIF {}", out.display()))?;
     Ok(EpisodeSummary {
         map: map.grid.name.clone(),

@@ -1,5 +1,6 @@
 //! Environment settings and robot constants (spec §2, §3).
 
+use crate::error::{in_range, ConfigError};
 use serde::{Deserialize, Serialize};
 
 /// Simulation step (s).
@@ -31,7 +32,8 @@ pub struct RobotSpec {
 }
 
 /// When an episode counts as a capture.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
 pub enum CaptureRule {
     /// All 12 probe positions around the target are blocked (the paper's tables).
@@ -41,7 +43,8 @@ pub enum CaptureRule {
 }
 
 /// How the drive command becomes a force.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
 pub enum DriveForce {
     /// mass * accel^2 * u: what the reference really does; the paper's tables use it.
@@ -83,23 +86,28 @@ impl Default for EnvConfig {
 
 impl EnvConfig {
     /// Checks the settings; the error names the field.
-    pub fn validate(&self) -> Result<(), String> {
-        if self.num_captors == 0 || self.num_captors > 32 {
-            return Err(format!(
-                "num_captors = {}: must be between 1 and 32",
-                self.num_captors
-            ));
-        }
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        in_range(
+            "num_captors",
+            self.num_captors,
+            1..=32,
+            "must be between 1 and 32",
+        )?;
         for (name, v) in [
             ("captor_speed", self.captor_speed),
             ("target_speed", self.target_speed),
         ] {
+            // Above zero: a robot that cannot move makes no episode.
             if !(v.is_finite() && v > 0.0 && v <= 10.0) {
-                return Err(format!("{name} = {v}: must be a speed in (0, 10] m/s"));
+                return Err(ConfigError::new(name, v, "must be a speed in (0, 10] m/s"));
             }
         }
         if self.episode_length == 0 {
-            return Err("episode_length = 0: must be at least 1 step".into());
+            return Err(ConfigError::new(
+                "episode_length",
+                0,
+                "must be at least 1 step",
+            ));
         }
         Ok(())
     }

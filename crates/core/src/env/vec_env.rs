@@ -6,6 +6,7 @@
 
 use super::potential::Potential;
 use super::{Action, Controller, EnvConfig, PlacementError, Side, TrapEnv, PATCH_LEN};
+use crate::error::{ConfigError, EnvError};
 use crate::map::PreparedMap;
 use rayon::prelude::*;
 use std::sync::Arc;
@@ -80,9 +81,9 @@ impl VecEnv {
         maps: Arc<Vec<Arc<PreparedMap>>>,
         num_envs: usize,
         base_seed: u64,
-    ) -> Result<VecEnv, String> {
+    ) -> Result<VecEnv, EnvError> {
         if num_envs == 0 {
-            return Err("num_envs must be at least 1".into());
+            return Err(ConfigError::new("num_envs", 0, "must be at least 1").into());
         }
         let slots = (0..num_envs)
             .map(|_| {
@@ -93,7 +94,7 @@ impl VecEnv {
                     returns: vec![0.0; cfg.num_agents()],
                 })
             })
-            .collect::<Result<Vec<_>, String>>()?;
+            .collect::<Result<Vec<_>, EnvError>>()?;
         let n = num_envs * cfg.num_agents();
         Ok(VecEnv {
             slots,
@@ -154,7 +155,7 @@ impl VecEnv {
         world: usize,
         captor_speed: f64,
         target_speed: f64,
-    ) -> Result<(), String> {
+    ) -> Result<(), ConfigError> {
         self.slots[world].env.set_speeds(captor_speed, target_speed)
     }
 

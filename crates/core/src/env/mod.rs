@@ -20,6 +20,7 @@ pub use physics::Robot;
 pub use placement::PlacementError;
 pub use vec_env::VecEnv;
 
+use crate::error::{ConfigError, EnvError};
 use crate::asz::{strict_capture_cells, FastMarching, Source};
 use crate::map::PreparedMap;
 use physics::dist;
@@ -118,10 +119,10 @@ pub struct TrapEnv {
 
 impl TrapEnv {
     /// A world over a set of maps; each episode picks one from its seed.
-    pub fn new(cfg: EnvConfig, maps: Arc<Vec<Arc<PreparedMap>>>) -> Result<TrapEnv, String> {
+    pub fn new(cfg: EnvConfig, maps: Arc<Vec<Arc<PreparedMap>>>) -> Result<TrapEnv, EnvError> {
         cfg.validate()?;
         if maps.is_empty() {
-            return Err("no map to play on".into());
+            return Err(EnvError::NoMaps);
         }
         let n = cfg.num_agents();
         let mut specs = vec![cfg.captor_spec(); cfg.num_captors];
@@ -186,7 +187,7 @@ impl TrapEnv {
 
     /// Changes the robots' top speeds from the next step on (the league's
     /// curriculum sets the target's speed per episode).
-    pub fn set_speeds(&mut self, captor_speed: f64, target_speed: f64) -> Result<(), String> {
+    pub fn set_speeds(&mut self, captor_speed: f64, target_speed: f64) -> Result<(), ConfigError> {
         let cfg = EnvConfig {
             captor_speed,
             target_speed,

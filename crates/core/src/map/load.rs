@@ -122,7 +122,7 @@ pub fn save_png(grid: &Grid, path: &Path) -> Result<(), MapError> {
     let mut bytes = std::io::Cursor::new(Vec::new());
     img.write_to(&mut bytes, image::ImageFormat::Png)
         .map_err(|e| MapError::new(path, format!("cannot encode PNG: {e}")))?;
-    crate::nn::checkpoint::write_file_atomically(path, bytes.get_ref())
+    crate::fs::write_file_atomically(path, bytes.get_ref())
         .map_err(|e| MapError::new(path, format!("cannot write PNG: {e:#}")))
 }
 

@@ -33,7 +33,7 @@ pub fn gibson_dir() -> Option<PathBuf> {
     }
     let candidates = [
         PathBuf::from("../shared/maps/gibson"),
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/maps/gibson"),
+        Path::new(crate::PROJECT_ROOT).join("../shared/maps/gibson"),
     ];
     candidates.into_iter().find(|p| p.is_dir())
 }
@@ -44,7 +44,7 @@ pub fn shipped_dir() -> PathBuf {
     if local.join("manifest.csv").is_file() {
         return local;
     }
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("maps")
+    Path::new(crate::PROJECT_ROOT).join("maps")
 }
 
 /// Where a class list gave a map its class: the file and the line.

@@ -1,0 +1,79 @@
+//! The core's typed errors. A setting out of range is a `ConfigError`
+//! naming the field, the value and the rule, so every config file's
+//! message reads the same way ("env.num_captors = 0: must be between 1 and
+//! 32"); `in_range` is the one range check every config uses for numbers.
+
+use std::fmt::Display;
+use std::ops::RangeInclusive;
+
+/// A setting that cannot be honoured: `field = value: rule`.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("{field} = {value}: {rule}")]
+pub struct ConfigError {
+    /// The field's path in its file (`env.num_captors`).
+    pub field: String,
+    /// The value as given.
+    pub value: String,
+    /// What the value must be.
+    pub rule: String,
+}
+
+impl ConfigError {
+    pub fn new(field: impl Into<String>, value: impl Display, rule: impl Into<String>) -> Self {
+        ConfigError {
+            field: field.into(),
+            value: value.to_string(),
+            rule: rule.into(),
+        }
+    }
+
+    /// The same error seen from the table above: `num_captors` in `env`
+    /// becomes `env.num_captors`.
+    pub fn within(mut self, table: &str) -> Self {
+        self.field = format!("{table}.{}", self.field);
+        self
+    }
+}
+
+/// `value` must lie in `range` (and be finite, for floats: NaN is in no
+/// range); else the error says `field = value: rule`.
+pub fn in_range<T: PartialOrd + Display>(
+    field: &str,
+    value: T,
+    range: RangeInclusive<T>,
+    rule: &str,
+) -> Result<(), ConfigError> {
+    if range.contains(&value) {
+        Ok(())
+    } else {
+        Err(ConfigError::new(field, value, rule))
+    }
+}
+
+/// Why an environment cannot be built or changed.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum EnvError {
+    #[error(transparent)]
+    Config(#[from] ConfigError),
+    #[error("no map to play on")]
+    NoMaps,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_range_error_names_field_value_and_rule_and_nan_is_in_no_range() {
+        assert_eq!(in_range("k", 3usize, 1..=32, "between 1 and 32"), Ok(()));
+        let e = in_range("k", 0usize, 1..=32, "must be between 1 and 32").unwrap_err();
+        assert_eq!(e.to_string(), "k = 0: must be between 1 and 32");
+        assert_eq!(
+            e.within("env").to_string(),
+            "env.k = 0: must be between 1 and 32"
+        );
+        assert!(in_range("v", f64::NAN, 0.0..=10.0, "a speed").is_err());
+        assert!(in_range("v", f64::INFINITY, 0.0..=10.0, "a speed").is_err());
+        assert!(in_range("v", 10.0, 0.0..=10.0, "a speed").is_ok());
+    }
+}
