@@ -302,7 +302,7 @@ fn placement_respects_the_distances_and_fails_cleanly() {
     .unwrap();
     match &e {
         t2e::error::EnvError::Config(c) => {
-            assert_eq!((c.field.as_str(), c.value.as_str()), ("target_speed", "-1"))
+            assert_eq!((c.field.as_str(), c.value.as_deref()), ("target_speed", Some("-1")))
         }
         other => panic!("{other}"),
     }

@@ -231,7 +231,8 @@ fn near_copies_of_a_test_map_are_refused_under_both_protocols() {
         );
         let err = Protocol::HeldOut
             .check_training_maps("mine", &maps)
-            .expect_err(edit);
+            .expect_err(edit)
+            .to_string();
         assert!(
             err.contains(&format!("map 'my-{edit}' is a near-copy of the Gibson test map {name} (medium) at similarity "))
                 && err.contains("maps = \"mine\""),
@@ -240,7 +241,8 @@ fn near_copies_of_a_test_map_are_refused_under_both_protocols() {
         // Paper trains on the 26 maps unmodified, so no edited copy either.
         let err = Protocol::Paper
             .check_training_maps("mine", &maps)
-            .expect_err(edit);
+            .expect_err(edit)
+            .to_string();
         assert!(
             err.contains("not one of the 26 Gibson maps but a near-copy of the Gibson test map Avonia_floor_trav_0_v3"),
             "{edit}: {err}"
@@ -252,7 +254,8 @@ fn near_copies_of_a_test_map_are_refused_under_both_protocols() {
     let maps = catalog::load_prepared(renamed.to_str().unwrap()).unwrap();
     let err = Protocol::HeldOut
         .check_training_maps("r", &maps)
-        .unwrap_err();
+        .unwrap_err()
+        .to_string();
     assert!(
         err.contains("is the Gibson test map Avonia_floor_trav_0_v3 (medium"),
         "{err}"
@@ -270,7 +273,8 @@ fn near_copies_of_a_test_map_are_refused_under_both_protocols() {
     let maps = catalog::load_prepared(mixed.path().to_str().unwrap()).unwrap();
     let err = Protocol::HeldOut
         .check_training_maps("mixed", &maps)
-        .unwrap_err();
+        .unwrap_err()
+        .to_string();
     assert!(err.contains("map 'zz-rot' is a near-copy"), "{err}");
 }
 
@@ -293,7 +297,8 @@ fn shipped_and_generated_maps_train_held_out_and_the_check_is_fast() {
     assert!(took < 1.0, "{took:.3} s");
     let err = Protocol::Paper
         .check_training_maps("generated:20", &generated)
-        .unwrap_err();
+        .unwrap_err()
+        .to_string();
     assert!(
         err.contains("not one of the 26 Gibson maps") && err.contains("and 59 more"),
         "{err}"

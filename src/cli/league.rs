@@ -581,9 +581,14 @@ pub fn learner(args: LearnerArgs) -> Result<()> {
         other => bail!("--side {other}: expected captors or target"),
     };
     let dir = process::dir_from_env(&args.dir)?;
-    let seat = crate::league::players::Seat {
+    use crate::league::players::{Seat, SeatRole};
+    let seat = Seat {
         side,
-        exploiter: args.exploiter,
+        role: if args.exploiter {
+            SeatRole::Exploiter
+        } else {
+            SeatRole::Main
+        },
     };
     let lock_path = dir.seat_dir(seat).with_extension("lock");
     std::fs::create_dir_all(lock_path.parent().unwrap())?;

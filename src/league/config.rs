@@ -243,7 +243,7 @@ impl LeagueConfig {
     /// name and seed (its own initial weights and episodes).
     pub fn seat_train_config(&self, seat: Seat) -> TrainConfig {
         let mut t = self.train_config(seat.side);
-        if seat.exploiter {
+        if seat.is_exploiter() {
             t.name = seat.name();
             t.seed ^= 0xE7_0000;
         }

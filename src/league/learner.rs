@@ -15,7 +15,7 @@ use super::matchmaking::{
     choose_opponent, draw_seed, pick_slot, slot_seed, Candidate, MatchmakingConfig, Opponent,
 };
 use super::opponents::{OpponentNets, WorldOpponent};
-use super::players::{learner_name, Seat};
+use super::players::{learner_name, Seat, SeatRole};
 use super::pool::{add_snapshot, SnapshotOutcome};
 use super::store::{BeatState, Kind, MatchRecord, NewPlayer, Player, Store};
 use super::supervision::{CannotStart, Outcome};
@@ -34,9 +34,8 @@ pub struct LeagueHooks<'a> {
     side: Side,
     learner_id: i64,
     learner_name: String,
-    /// An exploiter plays only the other side's main learner and leaves the
-    /// curriculum to the main captors.
-    exploiter: bool,
+    /// Its seat: what it draws and whether it moves the curriculum.
+    seat: Seat,
     matchmaking: MatchmakingConfig,
     /// The other side's playable members, and this learner's record against each.
     members: Vec<Player>,
@@ -69,7 +68,7 @@ impl<'a> LeagueHooks<'a> {
     ) -> Result<LeagueHooks<'a>> {
         let side = seat.side;
         let mut matchmaking = cfg.matchmaking.clone();
-        if seat.exploiter {
+        if seat.draws_main_line_only() {
             // Always the main learner once it has a snapshot; the pool
             // (heuristics first) until then.
             matchmaking.main_share = 1.0;
@@ -82,7 +81,7 @@ impl<'a> LeagueHooks<'a> {
             side,
             learner_id,
             learner_name: seat.name(),
-            exploiter: seat.exploiter,
+            seat,
             matchmaking,
             members: Vec::new(),
             candidates: Vec::new(),
@@ -100,7 +99,7 @@ impl<'a> LeagueHooks<'a> {
             matches_recorded: 0,
         };
         hooks.refresh()?;
-        if side == Side::Captors && !seat.exploiter {
+        if seat.drives_curriculum() {
             // The window survives restarts: rebuilt from the matches the
             // store holds since the current stage began.
             let since = store
@@ -120,10 +119,7 @@ impl<'a> LeagueHooks<'a> {
     }
 
     fn seat(&self) -> Seat {
-        Seat {
-            side: self.side,
-            exploiter: self.exploiter,
-        }
+        self.seat
     }
 
     /// Re-reads the pool, this learner's record and the curriculum stage.
@@ -297,7 +293,7 @@ impl RolloutHooks for LeagueHooks<'_> {
             };
             self.games += 1;
             self.wins += won as u64;
-            if self.side == Side::Captors && !self.exploiter {
+            if self.seat.drives_curriculum() {
                 if let Some(stage) =
                     self.curriculum
                         .record(&self.cfg.curriculum, w.speed, s.captured)
@@ -350,6 +346,22 @@ pub struct SnapshotRule {
     pub win_rate: f64,
     /// ...or this many env steps since its last snapshot, winning or not.
     pub timeout_env_steps: u64,
+}
+
+impl SnapshotRule {
+    /// A seat's rule: exploiters snapshot on their own win rate and
+    /// timeout (`[exploiters]`), main learners on `[snapshots]`.
+    pub fn of(cfg: &LeagueConfig, seat: Seat) -> SnapshotRule {
+        let (win_rate, timeout_env_steps) = match seat.role {
+            SeatRole::Main => (cfg.snapshots.win_rate, cfg.snapshots.timeout_env_steps),
+            SeatRole::Exploiter => (cfg.exploiters.win_rate, cfg.exploiters.timeout_env_steps),
+        };
+        SnapshotRule {
+            every_env_steps: cfg.snapshots.every_env_steps,
+            win_rate,
+            timeout_env_steps,
+        }
+    }
 }
 
 /// Whether a learner `since` env steps past its last snapshot, having won
@@ -409,7 +421,7 @@ fn cannot_start(e: anyhow::Error) -> anyhow::Error {
 pub fn run_learner(dir: &LeagueDir, seat: Seat, stop: &AtomicBool) -> Result<Outcome> {
     let opened = super::open::open_process(dir).map_err(cannot_start)?;
     let (cfg, store, league_id) = (opened.cfg, opened.store, opened.league_id);
-    if seat.exploiter && !cfg.exploiters.enabled(seat.side) {
+    if seat.is_exploiter() && !cfg.exploiters.enabled(seat.side) {
         return Err(cannot_start(anyhow::anyhow!(
             "{}: this league has no {} (exploiters.{} = false in {})",
             dir.root.display(),
@@ -443,10 +455,9 @@ fn start_learner(
     let learner_id = store.add_player(&NewPlayer {
         name: name.clone(),
         side: seat.side,
-        kind: if seat.exploiter {
-            Kind::Exploiter
-        } else {
-            Kind::Learner
+        kind: match seat.role {
+            SeatRole::Main => Kind::Learner,
+            SeatRole::Exploiter => Kind::Exploiter,
         },
         parent: None,
         env_steps: 0,
@@ -497,7 +508,11 @@ fn resume_point(
     use crate::learn::persist::RunState;
     let run_dir = dir.seat_dir(Seat {
         side: row.side,
-        exploiter: row.kind == Kind::Exploiter,
+        role: if row.kind == Kind::Exploiter {
+            SeatRole::Exploiter
+        } else {
+            SeatRole::Main
+        },
     });
     let state_path = run_dir.join("state.json");
     if state_path.is_file() {
@@ -605,7 +620,7 @@ fn train_learner(
     } = started;
     let run_dir = dir.seat_dir(seat);
     let initial = run_dir.join("initial");
-    if seat.exploiter && !initial.join("meta.json").is_file() {
+    if seat.resets_after_snapshot() && !initial.join("meta.json").is_file() {
         // What every reset returns to (written once, before any training).
         trainer.save_side(side, &initial)?;
     }
@@ -628,7 +643,7 @@ fn train_learner(
         .map(|p| p.env_steps)
         .max()
         .unwrap_or(0);
-    if seat.exploiter && last_snapshot == trainer.env_steps && trainer.env_steps > 0 {
+    if seat.resets_after_snapshot() && last_snapshot == trainer.env_steps && trainer.env_steps > 0 {
         // Killed between its snapshot and its reset: reset now, or it would
         // go on training the weights it just added to the pool.
         trainer.reset_learner(side, &initial)?;
@@ -642,7 +657,7 @@ fn train_learner(
     let mut own_inference = 0.0;
     let mut waited = 0.0;
     while trainer.env_steps < cfg.env_steps_per_learner && !stop.load(Ordering::SeqCst) {
-        if !seat.exploiter {
+        if seat.keeps_pace() {
             waited +=
                 wait_for_other_main(store, seat, trainer.env_steps, cfg.pace_env_steps, stop)?;
             if stop.load(Ordering::SeqCst) {
@@ -657,20 +672,7 @@ fn train_learner(
             hooks.wins - wins_at_snapshot,
             hooks.games - games_at_snapshot,
         );
-        let rule = SnapshotRule {
-            every_env_steps: cfg.snapshots.every_env_steps,
-            win_rate: if seat.exploiter {
-                cfg.exploiters.win_rate
-            } else {
-                cfg.snapshots.win_rate
-            },
-            timeout_env_steps: if seat.exploiter {
-                cfg.exploiters.timeout_env_steps
-            } else {
-                cfg.snapshots.timeout_env_steps
-            },
-        };
-        if should_snapshot(since, w, g, rule) {
+        if should_snapshot(since, w, g, SnapshotRule::of(cfg, seat)) {
             // The learner's own checkpoint first: a restart then resumes at
             // or after this snapshot, so it never takes one under a name
             // the pool already holds.
@@ -698,7 +700,7 @@ fn train_learner(
             last_snapshot = trainer.env_steps;
             wins_at_snapshot = hooks.wins;
             games_at_snapshot = hooks.games;
-            if seat.exploiter {
+            if seat.resets_after_snapshot() {
                 trainer.reset_learner(side, &initial)?;
                 // The reset is the new resume point: a restart must not
                 // bring back the weights that were just snapshotted.

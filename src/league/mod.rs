@@ -39,6 +39,7 @@ pub mod evaluator_config;
 pub mod exploit;
 pub mod learner;
 pub mod manager;
+pub mod manager_lease;
 pub mod matchmaking;
 pub mod members;
 pub mod open;

@@ -14,35 +14,74 @@ pub fn learner_name(side: Side) -> String {
     format!("{}-main", side.name())
 }
 
+/// What a seat's learner is for. Every question the league asks of a seat
+/// (what it draws, whether it drives the curriculum, keeps pace, resets
+/// after a snapshot) is answered by `Seat`'s methods below, once for every
+/// role, so a new role is one variant here and its answers.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SeatRole {
+    /// The side's main learner: plays the whole pool, stays in it.
+    Main,
+    /// The side's main exploiter (AlphaStar): plays only the other side's
+    /// main line and starts over after each snapshot.
+    Exploiter,
+}
+
 /// Which learner a process runs: a side's main learner or its main exploiter.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Seat {
     pub side: Side,
-    pub exploiter: bool,
+    pub role: SeatRole,
 }
 
 impl Seat {
     pub fn main(side: Side) -> Seat {
         Seat {
             side,
-            exploiter: false,
+            role: SeatRole::Main,
         }
     }
 
     pub fn exploiter(side: Side) -> Seat {
         Seat {
             side,
-            exploiter: true,
+            role: SeatRole::Exploiter,
         }
+    }
+
+    pub fn is_exploiter(self) -> bool {
+        self.role == SeatRole::Exploiter
     }
 
     /// Its player name (`captors-main`, `target-exploiter`, ...).
     pub fn name(self) -> String {
-        if self.exploiter {
-            format!("{}-exploiter", self.side.name())
-        } else {
-            learner_name(self.side)
+        match self.role {
+            SeatRole::Main => learner_name(self.side),
+            SeatRole::Exploiter => format!("{}-exploiter", self.side.name()),
         }
+    }
+
+    /// Draws only the other side's main line (and the heuristics until it
+    /// has a snapshot), never the rest of the pool.
+    pub fn draws_main_line_only(self) -> bool {
+        self.role == SeatRole::Exploiter
+    }
+
+    /// Moves the target-speed curriculum: the main captors alone, so one
+    /// learner's results set the stage every learner plays at.
+    pub fn drives_curriculum(self) -> bool {
+        self.side == Side::Captors && self.role == SeatRole::Main
+    }
+
+    /// Waits for the other side's main learner when it runs ahead
+    /// (`pace_env_steps`): the main learners grow together.
+    pub fn keeps_pace(self) -> bool {
+        self.role == SeatRole::Main
+    }
+
+    /// Goes back to its initial weights after each snapshot.
+    pub fn resets_after_snapshot(self) -> bool {
+        self.role == SeatRole::Exploiter
     }
 }
 
@@ -51,5 +90,28 @@ pub fn heuristic_name(side: Side) -> String {
     match side {
         Side::Captors => "expert-captors".into(),
         Side::Target => "rule-based-target".into(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn each_seat_answers_the_leagues_questions_as_its_role_says() {
+        // (seat, name, main line only, curriculum, pace, reset)
+        let table = [
+            (Seat::main(Side::Captors), "captors-main", false, true, true, false),
+            (Seat::main(Side::Target), "target-main", false, false, true, false),
+            (Seat::exploiter(Side::Captors), "captors-exploiter", true, false, false, true),
+            (Seat::exploiter(Side::Target), "target-exploiter", true, false, false, true),
+        ];
+        for (seat, name, main_line, curriculum, pace, reset) in table {
+            assert_eq!(seat.name(), name);
+            assert_eq!(seat.draws_main_line_only(), main_line, "{name}");
+            assert_eq!(seat.drives_curriculum(), curriculum, "{name}");
+            assert_eq!(seat.keeps_pace(), pace, "{name}");
+            assert_eq!(seat.resets_after_snapshot(), reset, "{name}");
+        }
     }
 }

@@ -15,7 +15,7 @@
 
 use super::config::LeagueConfig;
 use super::dir::LeagueDir;
-use super::players::{learner_name, Seat};
+use super::players::{learner_name, Seat, SeatRole};
 use super::store::{Kind, NewPlayer, Player, Store};
 use crate::controllers::ControllerSpec;
 use crate::env::Side;
@@ -49,7 +49,7 @@ pub fn playable(players: &[Player], seat: Seat) -> Playable {
         .iter()
         .filter(|p| p.side == other && p.quarantined.is_none())
         .filter(|p| matches!(p.kind, Kind::Snapshot | Kind::Heuristic))
-        .filter(|p| !seat.exploiter || p.kind == Kind::Heuristic || of_other_main(p))
+        .filter(|p| !seat.draws_main_line_only() || p.kind == Kind::Heuristic || of_other_main(p))
         .cloned()
         .collect();
     let main = members
@@ -62,10 +62,9 @@ pub fn playable(players: &[Player], seat: Seat) -> Playable {
 
 /// The player name of `seat`'s snapshot at `env_steps`.
 pub fn snapshot_name(seat: Seat, env_steps: u64) -> String {
-    let owner = if seat.exploiter {
-        seat.name()
-    } else {
-        seat.side.name().to_string()
+    let owner = match seat.role {
+        SeatRole::Main => seat.side.name().to_string(),
+        SeatRole::Exploiter => seat.name(),
     };
     format!("{owner}-snap-{env_steps:012}")
 }

@@ -265,7 +265,7 @@ pub fn spawn(
             cmd.arg("league-learner")
                 .arg("--side")
                 .arg(seat.side.name());
-            if seat.exploiter {
+            if seat.is_exploiter() {
                 cmd.arg("--exploiter");
             }
         }

@@ -47,7 +47,7 @@ pub fn supervise_workers(
     logs: &Path,
     run_for: Option<Duration>,
     stop: &AtomicBool,
-    guard: &mut super::manager::ManagerGuard,
+    guard: &mut super::manager_lease::ManagerGuard,
 ) -> Result<()> {
     let names: Vec<String> = roles.iter().map(|r| r.name()).collect();
     store.define_seats(&names)?;

@@ -3,27 +3,47 @@
 //! message reads the same way ("env.num_captors = 0: must be between 1 and
 //! 32"); `in_range` is the one range check every config uses for numbers.
 
-use std::fmt::Display;
+use std::fmt::{self, Display};
 use std::ops::RangeInclusive;
 
-/// A setting that cannot be honoured: `field = value: rule`.
-#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
-#[error("{field} = {value}: {rule}")]
+/// A setting that cannot be honoured: `field = value: rule`, or
+/// `field: rule` for a field that is missing.
+#[derive(Clone, Debug, PartialEq, Eq)]
 pub struct ConfigError {
     /// The field's path in its file (`env.num_captors`).
     pub field: String,
-    /// The value as given.
-    pub value: String,
+    /// The value as given; None when the field is missing.
+    pub value: Option<String>,
     /// What the value must be.
     pub rule: String,
 }
+
+impl fmt::Display for ConfigError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match &self.value {
+            Some(v) => write!(f, "{} = {v}: {}", self.field, self.rule),
+            None => write!(f, "{}: {}", self.field, self.rule),
+        }
+    }
+}
+
+impl std::error::Error for ConfigError {}
 
 impl ConfigError {
     pub fn new(field: impl Into<String>, value: impl Display, rule: impl Into<String>) -> Self {
         ConfigError {
             field: field.into(),
-            value: value.to_string(),
+            value: Some(value.to_string()),
             rule: rule.into(),
+        }
+    }
+
+    /// A field that must be there and is not.
+    pub fn missing(field: impl Into<String>, rule: impl Into<String>) -> Self {
+        ConfigError {
+            field: field.into(),
+            value: None,
+            rule: format!("missing; {}", rule.into()),
         }
     }
 
@@ -50,6 +70,31 @@ pub fn in_range<T: PartialOrd + Display>(
     }
 }
 
+/// A map set that does not fit its protocol, or extra maps that are test
+/// maps: the first offending map, and how many more there are.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct MapsRefused {
+    /// The config's `maps` value.
+    pub spec: String,
+    /// Why the first offending map (in the set's order) is refused.
+    pub first: String,
+    /// How many more maps are refused, and what they are.
+    pub more: usize,
+    pub more_what: String,
+}
+
+impl fmt::Display for MapsRefused {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "maps = \"{}\": {}", self.spec, self.first)?;
+        if self.more > 0 {
+            write!(f, " (and {} more {})", self.more, self.more_what)?;
+        }
+        Ok(())
+    }
+}
+
+impl std::error::Error for MapsRefused {}
+
 /// Why an environment cannot be built or changed.
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
 pub enum EnvError {
@@ -75,5 +120,9 @@ mod tests {
         assert!(in_range("v", f64::NAN, 0.0..=10.0, "a speed").is_err());
         assert!(in_range("v", f64::INFINITY, 0.0..=10.0, "a speed").is_err());
         assert!(in_range("v", 10.0, 0.0..=10.0, "a speed").is_ok());
+        assert_eq!(
+            ConfigError::missing("protocol", "name it").to_string(),
+            "protocol: missing; name it"
+        );
     }
 }

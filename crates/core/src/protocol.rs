@@ -6,6 +6,7 @@
 //! it (the Gibson maps are recognised by content, `map::testset`), and
 //! checkpoints, eval tables and summaries carry it.
 
+use crate::error::{ConfigError, MapsRefused};
 use crate::map::PreparedMap;
 use serde::{Deserialize, Serialize};
 use std::fmt;
@@ -52,7 +53,7 @@ impl Protocol {
         self,
         spec: &str,
         maps: &[std::sync::Arc<PreparedMap>],
-    ) -> Result<(), String> {
+    ) -> Result<(), MapsRefused> {
         use crate::map::testset::{
             gibson_class, gibson_name, resembled_test_map, NEAR_COPY_THRESHOLD,
         };
@@ -92,7 +93,10 @@ impl Protocol {
 /// Checks training-only extra maps (`[extra_maps]`): never a Gibson test
 /// map nor a near-copy of one, under either protocol. `spec` is their
 /// `maps` value, for the message.
-pub fn check_extra_maps(spec: &str, maps: &[std::sync::Arc<PreparedMap>]) -> Result<(), String> {
+pub fn check_extra_maps(
+    spec: &str,
+    maps: &[std::sync::Arc<PreparedMap>],
+) -> Result<(), MapsRefused> {
     use crate::map::testset::{gibson_class, gibson_name, resembled_test_map, NEAR_COPY_THRESHOLD};
     use rayon::prelude::*;
     const USE: &str = "extra maps are never test maps, under either protocol (protocol = \"paper\" trains on the 26 Gibson maps through `maps`); use generated:N, shipped or a folder of your own";
@@ -116,14 +120,15 @@ pub fn check_extra_maps(spec: &str, maps: &[std::sync::Arc<PreparedMap>]) -> Res
 
 /// The first of a map set's errors, and how many more there are (`more`
 /// says what they are).
-fn first_error(spec: &str, errors: &[String], more: &str) -> Result<(), String> {
+fn first_error(spec: &str, errors: &[String], more: &str) -> Result<(), MapsRefused> {
     match errors.split_first() {
         None => Ok(()),
-        Some((first, [])) => Err(format!("maps = \"{spec}\": {first}")),
-        Some((first, rest)) => Err(format!(
-            "maps = \"{spec}\": {first} (and {} more {more})",
-            rest.len()
-        )),
+        Some((first, rest)) => Err(MapsRefused {
+            spec: spec.to_string(),
+            first: first.clone(),
+            more: rest.len(),
+            more_what: more.to_string(),
+        }),
     }
 }
 
@@ -135,13 +140,17 @@ impl fmt::Display for Protocol {
 
 /// Refuses a config text (TOML) that does not name its protocol: a default
 /// would let a figure be read under the wrong one. `what` names the file.
-pub fn require_named(text: &str) -> Result<(), String> {
-    let value: toml::Value = toml::from_str(text).map_err(|e| e.to_string())?;
+pub fn require_named(text: &str) -> Result<(), ConfigError> {
+    // Text that does not parse is left to the parse that follows, which
+    // names the line.
+    let Ok(value) = toml::from_str::<toml::Value>(text) else {
+        return Ok(());
+    };
     if value.get("protocol").is_none() {
-        return Err(
-            "protocol: missing; name the evaluation protocol: protocol = \"held-out\" (train on generated maps, test on the unseen Gibson maps) or protocol = \"paper\" (train and test on the 26 Gibson maps, as the paper did)"
-                .into(),
-        );
+        return Err(ConfigError::missing(
+            "protocol",
+            "name the evaluation protocol: protocol = \"held-out\" (train on generated maps, test on the unseen Gibson maps) or protocol = \"paper\" (train and test on the 26 Gibson maps, as the paper did)",
+        ));
     }
     Ok(())
 }
@@ -154,7 +163,8 @@ mod tests {
     fn configs_must_name_it_and_names_round_trip() {
         assert!(require_named("seed = 1\n")
             .unwrap_err()
-            .contains("protocol: missing"));
+            .to_string()
+            .starts_with("protocol: missing; name the evaluation protocol"));
         assert!(require_named("protocol = \"paper\"\nseed = 1\n").is_ok());
         #[derive(Deserialize)]
         struct C {
