@@ -1,7 +1,7 @@
 //! `t2e-league generate-docs` (hidden): the CLI reference
 //! (docs/reference/cli.md) and the man pages (docs/reference/man/), both
 //! generated from the clap definitions, so they cannot drift from the code
-//! (tests/docs/cli_reference.rs checks that the committed files are what
+//! (tests/integration/docs/cli_reference.rs checks that the committed files are what
 //! this writes).
 
 use anyhow::{Context, Result};

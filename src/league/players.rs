@@ -101,10 +101,38 @@ mod tests {
     fn each_seat_answers_the_leagues_questions_as_its_role_says() {
         // (seat, name, main line only, curriculum, pace, reset)
         let table = [
-            (Seat::main(Side::Captors), "captors-main", false, true, true, false),
-            (Seat::main(Side::Target), "target-main", false, false, true, false),
-            (Seat::exploiter(Side::Captors), "captors-exploiter", true, false, false, true),
-            (Seat::exploiter(Side::Target), "target-exploiter", true, false, false, true),
+            (
+                Seat::main(Side::Captors),
+                "captors-main",
+                false,
+                true,
+                true,
+                false,
+            ),
+            (
+                Seat::main(Side::Target),
+                "target-main",
+                false,
+                false,
+                true,
+                false,
+            ),
+            (
+                Seat::exploiter(Side::Captors),
+                "captors-exploiter",
+                true,
+                false,
+                false,
+                true,
+            ),
+            (
+                Seat::exploiter(Side::Target),
+                "target-exploiter",
+                true,
+                false,
+                false,
+                true,
+            ),
         ];
         for (seat, name, main_line, curriculum, pace, reset) in table {
             assert_eq!(seat.name(), name);

@@ -1,7 +1,7 @@
 //! The pool on disk: snapshot folders in `players/` and the store rows that
 //! name them.
 //!
-//! Invariants (each has a test in tests/league_faults.rs):
+//! Invariants (each has a test in tests/integration/league_faults.rs):
 //! - A recorded member never changes: a snapshot folder is written under a
 //!   new name only (`write_new_checkpoint`), never over an existing folder,
 //!   and a name the store already records is never written again.
@@ -370,9 +370,7 @@ fn import_member(
             );
         }
     } else {
-        crate::fs::write_new_dir_atomically(&target, |tmp| {
-            crate::fs::copy_files(&snap.dir, tmp)
-        })?;
+        crate::fs::write_new_dir_atomically(&target, |tmp| crate::fs::copy_files(&snap.dir, tmp))?;
         // The copy, not the source, is what the league plays.
         PolicySnapshot::load(&target, side)?;
     }

@@ -217,36 +217,36 @@ pub fn run_worker(dir: &LeagueDir, opts: &WorkerOptions, stop: &AtomicBool) -> R
             {
                 let name = p.role.name();
                 match next {
-                Next::Finished => {
-                    if exit == Exit::Done {
-                        store.finish_seat(&h.lease, SeatState::Done, None)?;
-                        eprintln!("worker {holder}: {name} done");
-                    } else {
-                        store.release_seat(&h.lease)?;
+                    Next::Finished => {
+                        if exit == Exit::Done {
+                            store.finish_seat(&h.lease, SeatState::Done, None)?;
+                            eprintln!("worker {holder}: {name} done");
+                        } else {
+                            store.release_seat(&h.lease)?;
+                        }
+                        p.finished = true;
                     }
-                    p.finished = true;
-                }
-                Next::Restart { after, cause } => {
-                    store
-                        .record_crash(&name, &cause, &crash_text)
-                        .unwrap_or_else(|e| eprintln!("cannot record a crash: {e}"));
-                    eprintln!(
-                        "worker {holder}: {name} crashed ({cause}); restarting it in {} s",
-                        after.as_secs()
-                    );
-                    p.restart_at = Some(Instant::now() + after);
-                }
-                Next::StopLeague { why } => {
-                    if exit != Exit::CannotStart {
-                        store.record_crash(&name, &why, &crash_text).ok();
+                    Next::Restart { after, cause } => {
+                        store
+                            .record_crash(&name, &cause, &crash_text)
+                            .unwrap_or_else(|e| eprintln!("cannot record a crash: {e}"));
+                        eprintln!(
+                            "worker {holder}: {name} crashed ({cause}); restarting it in {} s",
+                            after.as_secs()
+                        );
+                        p.restart_at = Some(Instant::now() + after);
                     }
-                    store.finish_seat(&h.lease, SeatState::Failed, Some(&why))?;
-                    eprintln!("worker {holder}: {why}");
-                    p.finished = true;
-                    failure.get_or_insert(why);
+                    Next::StopLeague { why } => {
+                        if exit != Exit::CannotStart {
+                            store.record_crash(&name, &why, &crash_text).ok();
+                        }
+                        store.finish_seat(&h.lease, SeatState::Failed, Some(&why))?;
+                        eprintln!("worker {holder}: {why}");
+                        p.finished = true;
+                        failure.get_or_insert(why);
+                    }
                 }
             }
-        }
             if p.child.is_none() && !p.finished && !stopping {
                 if let Some(at) = p.restart_at {
                     if Instant::now() >= at {

@@ -43,7 +43,7 @@ use tch::{nn, Device, Kind, Tensor};
 /// except the learning rate (the original's 1e-2 suits its two-layer MLPs,
 /// not a CNN and GRU; here the upper end of the paper's PPO range) and the
 /// gradient clip (the paper's 10, spec §9: the original's 0.5 held learning
-/// on the chase task of tests/learn.rs to half the return in the same
+/// on the chase task of tests/integration/learn.rs to half the return in the same
 /// steps, 48 vs 106 after 200 iterations at lr 1e-3, at this game's
 /// reward scale). A rate of 3e-3 learns that task faster but did not get
 /// MADDPG to a capture on the 3:1, 1.0 grid cell in 150 k steps (docs/algorithms/maddpg.md).

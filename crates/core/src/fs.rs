@@ -142,7 +142,8 @@ fn rename_no_replace(a: &Path, b: &Path) -> std::io::Result<()> {
 /// snapshot frozen for a best response, exported, or imported into a
 /// league's pool.
 pub fn copy_files(src: &Path, dst: &Path) -> Result<(), FsError> {
-    let entries = std::fs::read_dir(src).map_err(io(|| format!("cannot read {}", src.display())))?;
+    let entries =
+        std::fs::read_dir(src).map_err(io(|| format!("cannot read {}", src.display())))?;
     for e in entries {
         let path = e
             .map_err(io(|| format!("cannot read {}", src.display())))?
@@ -189,7 +190,8 @@ fn write_dir<E: From<FsError>>(
         return Err(FsError::Exists(dir.to_path_buf()).into());
     }
     let parent = dir.parent().unwrap_or(Path::new("."));
-    std::fs::create_dir_all(parent).map_err(io(|| format!("cannot create {}", parent.display())))?;
+    std::fs::create_dir_all(parent)
+        .map_err(io(|| format!("cannot create {}", parent.display())))?;
     let name = file_name(dir)?;
     let tmp = parent.join(format!(".{name}.tmp-{}", std::process::id()));
     if tmp.exists() {
@@ -214,7 +216,8 @@ fn write_dir<E: From<FsError>>(
         return Ok(Written::Created);
     }
     let outcome = if !dir.exists() {
-        std::fs::rename(&tmp, dir).map_err(io(|| format!("cannot move {} into place", dir.display())))?;
+        std::fs::rename(&tmp, dir)
+            .map_err(io(|| format!("cannot move {} into place", dir.display())))?;
         Written::Created
     } else if same_files(&tmp, dir) {
         std::fs::remove_dir_all(&tmp).map_err(io(|| format!("cannot remove {}", tmp.display())))?;
@@ -222,9 +225,12 @@ fn write_dir<E: From<FsError>>(
     } else {
         if exchange(&tmp, dir).is_err() {
             let aside = parent.join(format!(".{name}.old-{}", std::process::id()));
-            std::fs::rename(dir, &aside).map_err(io(|| format!("cannot move {} aside", dir.display())))?;
-            std::fs::rename(&tmp, dir).map_err(io(|| format!("cannot move {} into place", dir.display())))?;
-            std::fs::rename(&aside, &tmp).map_err(io(|| format!("cannot move {} back", aside.display())))?;
+            std::fs::rename(dir, &aside)
+                .map_err(io(|| format!("cannot move {} aside", dir.display())))?;
+            std::fs::rename(&tmp, dir)
+                .map_err(io(|| format!("cannot move {} into place", dir.display())))?;
+            std::fs::rename(&aside, &tmp)
+                .map_err(io(|| format!("cannot move {} back", aside.display())))?;
         }
         // `tmp` now holds the old version.
         std::fs::remove_dir_all(&tmp).map_err(io(|| format!("cannot remove {}", tmp.display())))?;
@@ -236,9 +242,13 @@ fn write_dir<E: From<FsError>>(
 
 /// Syncs a folder's entries, then the folder.
 fn sync_tree(dir: &Path) -> Result<(), FsError> {
-    let entries = std::fs::read_dir(dir).map_err(io(|| format!("cannot read {}", dir.display())))?;
+    let entries =
+        std::fs::read_dir(dir).map_err(io(|| format!("cannot read {}", dir.display())))?;
     for e in entries {
-        sync_path(&e.map_err(io(|| format!("cannot read {}", dir.display())))?.path())?;
+        sync_path(
+            &e.map_err(io(|| format!("cannot read {}", dir.display())))?
+                .path(),
+        )?;
     }
     sync_path(dir)
 }
@@ -248,7 +258,8 @@ pub fn write_file_atomically(path: &Path, bytes: &[u8]) -> Result<(), FsError> {
     use std::io::Write;
     let name = file_name(path)?;
     let tmp = path.with_file_name(format!(".{name}.tmp-{}", std::process::id()));
-    let mut f = std::fs::File::create(&tmp).map_err(io(|| format!("cannot write {}", tmp.display())))?;
+    let mut f =
+        std::fs::File::create(&tmp).map_err(io(|| format!("cannot write {}", tmp.display())))?;
     if let Err(cause) = f.write_all(bytes).and_then(|_| f.sync_all()) {
         // A full disk stays full with the half-written temporary on it.
         drop(f);
@@ -258,7 +269,8 @@ pub fn write_file_atomically(path: &Path, bytes: &[u8]) -> Result<(), FsError> {
             cause,
         });
     }
-    std::fs::rename(&tmp, path).map_err(io(|| format!("cannot move {} into place", path.display())))?;
+    std::fs::rename(&tmp, path)
+        .map_err(io(|| format!("cannot move {} into place", path.display())))?;
     if let Some(parent) = path.parent().filter(|p| !p.as_os_str().is_empty()) {
         sync_path(parent)?;
     }

@@ -62,7 +62,6 @@ pub use export::{best_player, best_validated, export, BestValidated};
 pub use plot::{panel_curves, plot, rating_lines, PanelCurve, RatingLine};
 pub use text::render;
 
-
 #[derive(Clone, Debug, Serialize)]
 pub struct PlayerRow {
     pub id: i64,

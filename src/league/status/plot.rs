@@ -320,4 +320,3 @@ pub fn plot(dir: &LeagueDir, r: &StatusReport, path: &Path) -> Result<()> {
     }
     save_png(&img, path)
 }
-

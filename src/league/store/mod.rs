@@ -10,7 +10,7 @@
 //!   (the manager, the learners, `status`) read and write it at once.
 //! - The schema comes from `league/migrations/{sqlite,postgres}/*.sql`
 //!   (`sqlx::migrate!`): the same migrations, numbered alike, for both
-//!   (tests/store.rs checks the schemas agree); an older database is
+//!   (tests/integration/store.rs checks the schemas agree); an older database is
 //!   migrated, one written by a newer schema is refused.
 //! - Queries are one text for both backends (`$N` parameters, `ON
 //!   CONFLICT`, no database-specific function; times are written by the
@@ -52,7 +52,7 @@ use std::time::{Duration, Instant};
 /// `AnyArguments::convert_to`), so a statement first prepared with a NULL
 /// there (and cached per connection) refuses every later float with
 /// "incorrect binary data format". Optional floats are bound as a value and
-/// a 0/1 flag instead; tests/store.rs binds NULL first to keep it honest.
+/// a 0/1 flag instead; tests/integration/store.rs binds NULL first to keep it honest.
 #[allow(dead_code)]
 const NO_NULL_FLOATS: () = ();
 

@@ -20,8 +20,8 @@ pub use physics::Robot;
 pub use placement::PlacementError;
 pub use vec_env::VecEnv;
 
-use crate::error::{ConfigError, EnvError};
 use crate::asz::{strict_capture_cells, FastMarching, Source};
+use crate::error::{ConfigError, EnvError};
 use crate::map::PreparedMap;
 use physics::dist;
 use rand::{Rng, SeedableRng};

@@ -17,7 +17,7 @@ const WALL_WEIGHT: f64 = 0.6;
 /// rays, d_m the first 0.1 m sample along ray m inside an obstacle (searched
 /// up to D). The sampling, not the exact distance, is what the reference's
 /// robots use: exact distances push them harder off the walls and change
-/// about 5% of their decisions (tests/conformance.rs).
+/// about 5% of their decisions (tests/integration/conformance.rs).
 pub fn wall_force(map: &PreparedMap, pos: [f64; 2], d: f64) -> [f64; 2] {
     let mut f = [0.0, 0.0];
     for u in ray_dirs().iter().take(NUM_RAYS) {
@@ -119,7 +119,7 @@ impl ExpertParams {
 
 /// The expert captor with its constants given. With `ExpertParams::SPEC`
 /// every sum is the spec's to the bit (a lead of 0.0 and a factor of 1.0
-/// change no float), which tests/heuristics.rs pins.
+/// change no float), which tests/integration/heuristics.rs pins.
 pub fn expert_captor_action_with(env: &TrapEnv, i: usize, p: &ExpertParams) -> Action {
     let map = env.map();
     let d = map.long_ray_max();

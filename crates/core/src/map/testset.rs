@@ -134,7 +134,7 @@ pub fn gibson_name(grid: &Grid) -> Option<&'static str> {
 /// Similarity (`map::fingerprint::Match`: the smaller of the free-space
 /// IoU and the agreement of the walls, at 0.1 m, best of the 8 symmetries
 /// of the square, centroids aligned) from which a training map counts as a
-/// copy of a test map. Measured by `tests/protocol.rs` `near_copy_margins`
+/// copy of a test map. Measured by `tests/integration/protocol.rs` `near_copy_margins`
 /// (every Gibson map, each edit): mirrored, flipped, turned 90/180/270
 /// degrees, transposed, padded by 40 px and one pixel changed (in the free
 /// space, or an island far away) all score 1.000; shifted by 3 px at least
@@ -176,7 +176,7 @@ impl fmt::Display for Resemblance {
 
 /// The embedded fingerprints of the 26 Gibson maps (`map::fingerprint`),
 /// generated from `../shared/maps/gibson` by
-/// `cargo test --release --test gibson_maps -- --ignored write_test_map_fingerprints`
+/// `cargo test --release --test integration -- --ignored gibson_maps::write_test_map_fingerprints`
 /// and checked against that folder, where present, by
 /// `the_embedded_fingerprints_are_those_of_the_test_maps`.
 pub const FINGERPRINTS_FILE: &[u8] = include_bytes!("gibson_fingerprints.bin");

@@ -30,8 +30,18 @@ fn the_core_crate_depends_on_no_libtorch_and_no_database() {
         .lines()
         .filter_map(|l| l.split_whitespace().next())
         .collect();
-    assert!(crates.contains(&"t2e-core") && crates.contains(&"rayon"), "{tree}");
-    for banned in ["tch", "torch-sys", "sqlx", "sqlx-core", "libsqlite3-sys", "tokio"] {
+    assert!(
+        crates.contains(&"t2e-core") && crates.contains(&"rayon"),
+        "{tree}"
+    );
+    for banned in [
+        "tch",
+        "torch-sys",
+        "sqlx",
+        "sqlx-core",
+        "libsqlite3-sys",
+        "tokio",
+    ] {
         assert!(
             !crates.contains(&banned),
             "t2e-core reaches {banned}:\n{tree}"

@@ -168,7 +168,7 @@ fn the_embedded_fingerprints_are_those_of_the_test_maps() {
     let file = fingerprint_file(&dir);
     assert!(
         file == t2e::map::testset::FINGERPRINTS_FILE,
-        "crates/core/src/map/gibson_fingerprints.bin is not the fingerprint of {}: regenerate it with cargo test --release --test gibson_maps -- --ignored write_test_map_fingerprints",
+        "crates/core/src/map/gibson_fingerprints.bin is not the fingerprint of {}: regenerate it with cargo test --release --test integration -- --ignored gibson_maps::write_test_map_fingerprints",
         dir.display()
     );
     let probes = t2e::map::testset::test_probes();
@@ -181,8 +181,8 @@ fn the_embedded_fingerprints_are_those_of_the_test_maps() {
 #[ignore]
 fn write_test_map_fingerprints() {
     let dir = gibson_or_skip().expect("the Gibson maps are needed");
-    let out =
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("crates/core/src/map/gibson_fingerprints.bin");
+    let out = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("crates/core/src/map/gibson_fingerprints.bin");
     let bytes = fingerprint_file(&dir);
     std::fs::write(&out, &bytes).unwrap();
     eprintln!("wrote {} ({} bytes)", out.display(), bytes.len());

@@ -1,9 +1,9 @@
 //! The store on both backends, against a real PostgreSQL server started by
-//! `scripts/postgres.sh` (tests/common/postgres.rs): the same contract, the
+//! `scripts/postgres.sh` (tests/integration/common/postgres.rs): the same contract, the
 //! same schema, seats as leases under contention, and clear errors for bad
 //! URLs that never show the password.
 
-mod common;
+use crate::common;
 
 use common::postgres::{fresh_database, server, sql, with_database};
 use std::collections::{BTreeMap, BTreeSet};
@@ -113,7 +113,7 @@ fn both_backends_keep_the_same_contract() {
             store.recent_outcomes(c, 1.0, 0, 2).unwrap(),
             vec![false, true]
         );
-        // An exploit (tests/exploit.rs runs it for real on SQLite): all its
+        // An exploit (tests/integration/exploit.rs runs it for real on SQLite): all its
         // map sets at once, once; a player the store does not know refused.
         let exploit = |maps: &str, wins: u64, player: i64| ExploitRecord {
             exploit_key: "x1".into(),

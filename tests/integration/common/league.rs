@@ -1,5 +1,5 @@
-//! The invariants every league keeps, whatever kills it (tests/league.rs,
-//! tests/workers.rs).
+//! The invariants every league keeps, whatever kills it (tests/integration/league.rs,
+//! tests/integration/workers.rs).
 #![allow(dead_code)]
 
 use std::collections::BTreeSet;
@@ -8,7 +8,7 @@ use t2e::league::dir::LeagueDir;
 use t2e::league::store::{Kind, Store};
 use t2e::learn::persist::RunState;
 
-/// The tiny league of tests/league.rs: two learners (K = 2, tiny networks)
+/// The tiny league of tests/integration/league.rs: two learners (K = 2, tiny networks)
 /// and the evaluator, 9,600 env steps each.
 pub const TINY_LEAGUE: &str = include_str!("tiny_league.toml");
 

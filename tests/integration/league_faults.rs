@@ -1,11 +1,11 @@
 //! The league under faults a user (or a machine) inflicts, beside the random
-//! kill -9 test in tests/league.rs: each test puts the league at the moment a
+//! kill -9 test in tests/integration/league.rs: each test puts the league at the moment a
 //! fault hurts most and checks its invariants (ARCHITECTURE.md, league):
 //! a recorded member is immutable, nothing that verifies is ever deleted,
 //! every process exit has one defined outcome, status never shows a process
 //! that is gone as alive, and nothing is written before every check passed.
 
-mod common;
+use crate::common;
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};

@@ -5,7 +5,7 @@
 //! none lost from what was recorded, no duplicate member, no orphan file,
 //! and learners that continue from their last checkpoints.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 use std::process::{Child, Command, Stdio};

@@ -2,9 +2,9 @@
 //! folders, HOME and host names; one shared pool folder; one server started
 //! by scripts/postgres.sh): kill -9 of a worker and of the manager, 8
 //! workers and a status poller contending, a 30 s server outage, and bad
-//! input. The invariants are tests/league.rs's (`common::league::check`).
+//! input. The invariants are tests/integration/league.rs's (`common::league::check`).
 
-mod common;
+use crate::common;
 
 use common::league::{check, TINY_LEAGUE};
 use common::postgres::{cluster_dir, fresh_database, server, start_cluster, stop_cluster};

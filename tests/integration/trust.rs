@@ -4,7 +4,7 @@
 //! weights loaded without a check, degenerate options giving results, test
 //! maps trained on, paths leaving their folder, unclear errors).
 
-mod common;
+use crate::common;
 
 use common::{maps, room};
 use std::path::{Path, PathBuf};
@@ -13,10 +13,10 @@ use t2e::cli::bench::BenchArgs;
 use t2e::cli::eval::EvalArgs;
 use t2e::env::{CaptureRule, EnvConfig, Side};
 use t2e::eval::Summary;
+use t2e::fs::{clean_stale_temporaries, write_dir_atomically, Written};
 use t2e::learn::ppo::{PpoConfig, PpoLearner};
 use t2e::learn::rollout::Rollout;
 use t2e::learn::train::{SideConfig, TrainConfig, Trainer};
-use t2e::fs::{clean_stale_temporaries, write_dir_atomically, Written};
 use t2e::nn::checkpoint::read_meta;
 use t2e::nn::{NetConfig, PolicySnapshot};
 
@@ -338,10 +338,16 @@ fn checkpoints_are_never_lost_and_never_silently_replaced() {
     let dir = run.path().join("swap");
     std::fs::create_dir(&dir).unwrap();
     std::fs::write(dir.join("a"), "old").unwrap();
-    let w = write_dir_atomically(&dir, |tmp| std::fs::write(tmp.join("a"), "new").map_err(anyhow::Error::from)).unwrap();
+    let w = write_dir_atomically(&dir, |tmp| {
+        std::fs::write(tmp.join("a"), "new").map_err(anyhow::Error::from)
+    })
+    .unwrap();
     assert_eq!(w, Written::Replaced);
     assert_eq!(std::fs::read_to_string(dir.join("a")).unwrap(), "new");
-    let w = write_dir_atomically(&dir, |tmp| std::fs::write(tmp.join("a"), "new").map_err(anyhow::Error::from)).unwrap();
+    let w = write_dir_atomically(&dir, |tmp| {
+        std::fs::write(tmp.join("a"), "new").map_err(anyhow::Error::from)
+    })
+    .unwrap();
     assert_eq!(w, Written::Unchanged);
 
     // What a killed process leaves behind is cleaned up; a folder moved

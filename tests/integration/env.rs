@@ -9,7 +9,7 @@ use t2e::env::*;
 use t2e::heuristics::{Heuristic, RandomActions};
 use t2e::map::PreparedMap;
 
-mod common;
+use crate::common;
 use common::{env_with, maps, robot, room};
 
 /// A 10 m x 10 m room centred at the origin.
@@ -302,7 +302,10 @@ fn placement_respects_the_distances_and_fails_cleanly() {
     .unwrap();
     match &e {
         t2e::error::EnvError::Config(c) => {
-            assert_eq!((c.field.as_str(), c.value.as_deref()), ("target_speed", Some("-1")))
+            assert_eq!(
+                (c.field.as_str(), c.value.as_deref()),
+                ("target_speed", Some("-1"))
+            )
         }
         other => panic!("{other}"),
     }

@@ -6,7 +6,7 @@
 //! relabelled results, lost a previous file or gave clap's error instead of
 //! ours.
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;

@@ -3,7 +3,7 @@
 //! must fit it, and the protocol travels with the checkpoint into every eval
 //! table, so no figure can be read under the wrong one.
 
-mod common;
+use crate::common;
 
 use std::sync::Arc;
 use t2e::controllers::ControllerSpec;

@@ -1,7 +1,7 @@
 //! Learners end to end: a task small enough to learn in seconds, checkpoints
 //! as controllers, sidecar mismatches, and resuming a run.
 
-mod common;
+use crate::common;
 
 use common::{maps, room};
 use std::path::Path;

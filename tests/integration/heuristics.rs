@@ -7,7 +7,7 @@ use t2e::env::*;
 use t2e::heuristics::*;
 use t2e::map::Grid;
 
-mod common;
+use crate::common;
 use common::{robot, room};
 
 /// K captors and a target in `g`, episodes of 500 steps.
