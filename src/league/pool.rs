@@ -396,28 +396,7 @@ fn import_member(
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn player(
-        id: i64,
-        name: &str,
-        side: Side,
-        kind: Kind,
-        parent: Option<i64>,
-        env_steps: u64,
-    ) -> Player {
-        Player {
-            id,
-            name: name.into(),
-            side,
-            kind,
-            parent,
-            created_at_ms: 0,
-            env_steps,
-            curriculum_stage: 0,
-            checkpoint: None,
-            quarantined: None,
-        }
-    }
+    use crate::league::store::test_player as player;
 
     #[test]
     fn a_main_learner_draws_every_playable_member_and_an_exploiter_only_the_main_line() {

@@ -135,28 +135,7 @@ pub fn rank_validated(
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn player(
-        id: i64,
-        name: &str,
-        side: Side,
-        kind: Kind,
-        parent: Option<i64>,
-        steps: u64,
-    ) -> Player {
-        Player {
-            id,
-            name: name.into(),
-            side,
-            kind,
-            parent,
-            created_at_ms: 0,
-            env_steps: steps,
-            curriculum_stage: 0,
-            checkpoint: None,
-            quarantined: None,
-        }
-    }
+    use crate::league::store::test_player as player;
 
     fn result(
         member: i64,

@@ -31,6 +31,8 @@ pub mod url;
 pub use exploits::ExploitRecord;
 pub use held_out::{HeldOutEpisode, HeldOutResult, Panel};
 pub use leases::{ManagerLease, SeatLease};
+#[cfg(test)]
+pub use rows::test_player;
 pub use rows::{
     inside_pool, BeatState, Crash, Heartbeat, Kind, MatchRecord, NewPlayer, PairResult, Player,
     RatingEntry, SeatRow, SeatState, StageChange,

@@ -152,6 +152,31 @@ pub struct Player {
     pub quarantined: Option<String>,
 }
 
+/// A player as the pure rules' tests build them: no checkpoint, stage 0,
+/// created at time 0, playing.
+#[cfg(test)]
+pub fn test_player(
+    id: i64,
+    name: &str,
+    side: Side,
+    kind: Kind,
+    parent: Option<i64>,
+    env_steps: u64,
+) -> Player {
+    Player {
+        id,
+        name: name.into(),
+        side,
+        kind,
+        parent,
+        created_at_ms: 0,
+        env_steps,
+        curriculum_stage: 0,
+        checkpoint: None,
+        quarantined: None,
+    }
+}
+
 /// The `players` row as stored.
 #[derive(Clone, sqlx::FromRow)]
 pub(super) struct PlayerRow {
