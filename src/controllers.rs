@@ -4,12 +4,33 @@
 //! sits above `heuristics` and `nn` because it names controllers of both.
 
 use crate::env::{Controller, EnvConfig, Side};
+use crate::error::ConfigError;
 use crate::heuristics::{AszGreedy, Heuristic, RandomActions, RandomisedExpert, Still};
 use crate::nn::{CheckpointController, PolicySnapshot};
 use std::fmt;
 use std::path::PathBuf;
 use std::str::FromStr;
 use std::sync::{Arc, OnceLock};
+
+/// Why a controller cannot be named, loaded or built for a side.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum ControllerError {
+    #[error("'{0}': the ASZ-greedy coarsening must be a whole number of map cells from 1 to {max} (greedy:2 marches on 0.10 m cells)", max = AszGreedy::MAX_COARSENING)]
+    Coarsening(String),
+    #[error(
+        "'{0}': expert:SEED needs a whole number SEED (expert captors with randomised constants)"
+    )]
+    ExpertSeed(String),
+    #[error("'{0}:' needs a path: {0}:runs/NAME (newest checkpoint) or {0}:runs/NAME/checkpoints/SIDE-STEPS")]
+    MissingPath(&'static str),
+    #[error("unknown controller '{0}' (expected heuristic, greedy, greedy:K, expert:SEED, random, still, ckpt:PATH or sample:PATH)")]
+    Unknown(String),
+    #[error("expert:{0} is a captor team (the expert captors with randomised constants); it cannot play the target")]
+    ExpertAsTarget(u64),
+    /// The checkpoint's loader refused it; its message names the file.
+    #[error("{0}")]
+    Checkpoint(String),
+}
 
 /// A controller as named on the command line.
 #[derive(Clone, Debug, PartialEq)]
@@ -40,7 +61,7 @@ pub struct CheckpointSpec {
     /// Sample each action from the policy (seeded by the episode) instead
     /// of taking the most likely one, the paper's evaluation.
     pub sampled: bool,
-    loaded: Arc<OnceLock<Result<Arc<PolicySnapshot>, String>>>,
+    loaded: Arc<OnceLock<Result<Arc<PolicySnapshot>, ControllerError>>>,
 }
 
 impl PartialEq for CheckpointSpec {
@@ -67,20 +88,20 @@ impl CheckpointSpec {
     }
 
     /// The policy for `side`; the first call reads it from disk.
-    pub fn snapshot(&self, side: Side) -> Result<Arc<PolicySnapshot>, String> {
+    pub fn snapshot(&self, side: Side) -> Result<Arc<PolicySnapshot>, ControllerError> {
         self.loaded
             .get_or_init(|| {
                 PolicySnapshot::load(&self.path, side)
                     .map(Arc::new)
-                    .map_err(|e| format!("{e:#}"))
+                    .map_err(|e| ControllerError::Checkpoint(format!("{e:#}")))
             })
             .clone()
     }
 }
 
 impl FromStr for ControllerSpec {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
+    type Err = ControllerError;
+    fn from_str(s: &str) -> Result<Self, ControllerError> {
         match s.trim() {
             "heuristic" | "rule" | "expert" => Ok(ControllerSpec::Heuristic),
             "greedy" | "asz-greedy" => Ok(ControllerSpec::Greedy { coarsening: 1 }),
@@ -90,16 +111,13 @@ impl FromStr for ControllerSpec {
                     Ok(k) if (1..=AszGreedy::MAX_COARSENING).contains(&k) => {
                         Ok(ControllerSpec::Greedy { coarsening: k })
                     }
-                    _ => Err(format!(
-                        "'{other}': the ASZ-greedy coarsening must be a whole number of map cells from 1 to {} (greedy:2 marches on 0.10 m cells)",
-                        AszGreedy::MAX_COARSENING
-                    )),
+                    _ => Err(ControllerError::Coarsening(other.to_string())),
                 }
             }
             other if other.starts_with("expert:") => {
                 match other["expert:".len()..].parse::<u64>() {
                     Ok(seed) => Ok(ControllerSpec::RandomisedExpert { seed }),
-                    Err(_) => Err(format!("'{other}': expert:SEED needs a whole number SEED (expert captors with randomised constants)")),
+                    Err(_) => Err(ControllerError::ExpertSeed(other.to_string())),
                 }
             }
             "random" => Ok(ControllerSpec::Random),
@@ -107,18 +125,18 @@ impl FromStr for ControllerSpec {
             other if other.starts_with("ckpt:") => {
                 let path = &other["ckpt:".len()..];
                 if path.is_empty() {
-                    return Err("'ckpt:' needs a path: ckpt:runs/NAME (newest checkpoint) or ckpt:runs/NAME/checkpoints/SIDE-STEPS".into());
+                    return Err(ControllerError::MissingPath("ckpt"));
                 }
                 Ok(ControllerSpec::Checkpoint(CheckpointSpec::new(path)))
             }
             other if other.starts_with("sample:") => {
                 let path = &other["sample:".len()..];
                 if path.is_empty() {
-                    return Err("'sample:' needs a path: sample:runs/NAME (newest checkpoint) or sample:runs/NAME/checkpoints/SIDE-STEPS".into());
+                    return Err(ControllerError::MissingPath("sample"));
                 }
                 Ok(ControllerSpec::Checkpoint(CheckpointSpec::sampled(path)))
             }
-            other => Err(format!("unknown controller '{other}' (expected heuristic, greedy, greedy:K, expert:SEED, random, still, ckpt:PATH or sample:PATH)")),
+            other => Err(ControllerError::Unknown(other.to_string())),
         }
     }
 }
@@ -140,23 +158,19 @@ impl fmt::Display for ControllerSpec {
 
 impl ControllerSpec {
     /// A fresh controller for `side`; the error says why the pair does not fit.
-    pub fn build(&self, side: Side) -> Result<Box<dyn Controller>, String> {
+    pub fn build(&self, side: Side) -> Result<Box<dyn Controller>, ControllerError> {
         Ok(match self {
             ControllerSpec::Heuristic => Box::new(Heuristic),
             ControllerSpec::Greedy { coarsening } => Box::new(AszGreedy::new(*coarsening)),
             ControllerSpec::RandomisedExpert { seed } => match side {
                 Side::Captors => Box::new(RandomisedExpert::new(*seed)),
-                Side::Target => {
-                    return Err(format!(
-                        "expert:{seed} is a captor team (the expert captors with randomised constants); it cannot play the target"
-                    ))
-                }
+                Side::Target => return Err(ControllerError::ExpertAsTarget(*seed)),
             },
             ControllerSpec::Random => Box::new(RandomActions::new()),
             ControllerSpec::Still => Box::new(Still),
             ControllerSpec::Checkpoint(c) => {
-                let ckpt =
-                    CheckpointController::new(c.snapshot(side)?).map_err(|e| format!("{e:#}"))?;
+                let ckpt = CheckpointController::new(c.snapshot(side)?)
+                    .map_err(|e| ControllerError::Checkpoint(format!("{e:#}")))?;
                 Box::new(if c.sampled { ckpt.sampling() } else { ckpt })
             }
         })
@@ -164,13 +178,13 @@ impl ControllerSpec {
 
     /// Checks that this controller can play `side` in environments set up as
     /// `cfg` (a checkpoint's K and side), building one to be sure.
-    pub fn check(&self, side: Side, cfg: &EnvConfig) -> Result<(), String> {
+    pub fn check(&self, side: Side, cfg: &EnvConfig) -> Result<(), ControllerError> {
         self.build(side)?;
         if let ControllerSpec::Checkpoint(c) = self {
             let snap = c.snapshot(side)?;
             snap.meta
                 .check_fits(side, cfg)
-                .map_err(|e| format!("{}: {e}", snap.dir.display()))?;
+                .map_err(|e| ControllerError::Checkpoint(format!("{}: {e}", snap.dir.display())))?;
         }
         Ok(())
     }
@@ -188,21 +202,22 @@ impl ControllerSpec {
         names: &[String],
         side: Side,
         refuse: impl Fn(&ControllerSpec) -> Option<String>,
-    ) -> Result<Vec<ControllerSpec>, String> {
+    ) -> Result<Vec<ControllerSpec>, ConfigError> {
         let mut out: Vec<ControllerSpec> = Vec::new();
         for name in names {
-            let spec: ControllerSpec = name
-                .parse()
-                .map_err(|e| format!("{field} = \"{name}\": {e}"))?;
+            let refused = |why: String| ConfigError::new(field, format!("\"{name}\""), why);
+            let spec: ControllerSpec = name.parse().map_err(|e| refused(format!("{e}")))?;
             if let Some(why) = refuse(&spec) {
-                return Err(format!("{field} = \"{name}\": {why}"));
+                return Err(refused(why));
             }
             if !spec.is_checkpoint() {
-                spec.build(side)
-                    .map_err(|e| format!("{field} = \"{name}\": {e}"))?;
+                spec.build(side).map_err(|e| refused(e.to_string()))?;
             }
             if out.contains(&spec) {
-                return Err(format!("{field}: \"{name}\" is named twice"));
+                return Err(ConfigError::about(
+                    field,
+                    format!("\"{name}\" is named twice"),
+                ));
             }
             out.push(spec);
         }

@@ -39,4 +39,4 @@ pub mod render;
 
 // The floor below, in its own crate (no libtorch, no database), under the
 // names the rest of the code and its users know.
-pub use t2e_core::{asz, env, error, fs, heuristics, map, protocol, util, PROJECT_ROOT};
+pub use t2e_core::{algorithm, asz, env, error, fs, heuristics, map, protocol, util, PROJECT_ROOT};

@@ -9,7 +9,7 @@
 //! co-evolved with. Pooling here is over the episodes actually played, so a
 //! pooled cell is one binomial sample with its own Wilson interval.
 
-use super::paper_table::{differences, paper_cells, same_play, Sourced, CLASSES};
+use super::paper_table::{differences, paper_cells, same_play, Sourced, TableError, CLASSES};
 use super::{ratio_label, wilson_interval, Summary};
 use crate::env::CaptureRule;
 use std::collections::BTreeMap;
@@ -97,7 +97,7 @@ type Sections<'a> = BTreeMap<(usize, u64), Vec<Pair<'a>>>;
 /// that cannot be pooled (other episode lengths or capture rules, other
 /// captors behind one name). Unlike Tables II and III, the episode counts
 /// of a pair's classes may differ: pooling weighs each episode once.
-fn pairs(summaries: &[Sourced]) -> Result<(Sections<'_>, usize), String> {
+fn pairs(summaries: &[Sourced]) -> Result<(Sections<'_>, usize), TableError> {
     let mut sections: Sections = BTreeMap::new();
     let mut left_out = 0;
     for sourced in summaries {
@@ -135,29 +135,36 @@ fn pairs(summaries: &[Sourced]) -> Result<(Sections<'_>, usize), String> {
         );
         if pairs[i].protocol != s.protocol {
             let (other_source, _) = pairs[i].cells.iter().flatten().next().expect("a cell");
-            return Err(format!(
-                "one table row ({what}) would pool results of players trained under the {} protocol ({other_source}) and the {} protocol ({source}): other weights behind one name; give one of them",
-                pairs[i].protocol, s.protocol
-            ));
+            return Err(TableError::NotOneSetting {
+                row: what,
+                conflict: format!(
+                    "pool results of players trained under the {} protocol ({other_source}) and the {} protocol ({source}): other weights behind one name; give one of them",
+                    pairs[i].protocol, s.protocol
+                ),
+            });
         }
         if let Some((other_source, other)) = pairs[i].cells[class] {
             if other == s {
                 continue;
             }
-            return Err(format!(
-                "two results for one table cell ({what}, {}): {other_source} and {source}, which differ in {}; give only the eval folder whose result belongs in the table",
-                CLASSES[class],
-                differences(other, s)
-            ));
+            return Err(TableError::TwoResults {
+                cell: format!("{what}, {}", CLASSES[class]),
+                first: other_source.to_string(),
+                second: source.to_string(),
+                differences: differences(other, s),
+            });
         }
         for (other_source, other) in pairs[i].cells.iter().flatten() {
             if !same_play(other, s) {
-                return Err(format!(
-                    "one table row ({what}) would pool {} from {other_source} and {} from {source}, which differ in {}: pooled classes must be one setting; evaluate them alike",
-                    other.maps,
-                    s.maps,
-                    differences(other, s)
-                ));
+                return Err(TableError::NotOneSetting {
+                    row: what,
+                    conflict: format!(
+                        "pool {} from {other_source} and {} from {source}, which differ in {}: pooled classes must be one setting; evaluate them alike",
+                        other.maps,
+                        s.maps,
+                        differences(other, s)
+                    ),
+                });
             }
         }
         pairs[i].cells[class] = Some(sourced);
@@ -184,13 +191,10 @@ fn pooled_of(p: &Pair) -> Option<Pooled> {
 /// every learner that appears. Refuses summaries that do not lay out
 /// (`pairs`); summaries on maps other than the three Gibson classes are
 /// counted and left out.
-pub fn markdown(summaries: &[Sourced]) -> Result<String, String> {
+pub fn markdown(summaries: &[Sourced]) -> Result<String, TableError> {
     let (sections, left_out) = pairs(summaries)?;
     if sections.is_empty() {
-        return Err(format!(
-            "none of the {} summaries is on the Gibson classes (--maps small,medium,large): Table V pools those",
-            summaries.len()
-        ));
+        return Err(TableError::NoGibsonClass(summaries.len()));
     }
     let mut out = String::new();
     for ((k, ratio), pairs) in &sections {
@@ -422,7 +426,7 @@ mod tests {
         let mut other = base.clone();
         other.0 = "elsewhere/summary.json".into();
         other.1.sr = 40.0;
-        let err = markdown(&[base.clone(), other]).unwrap_err();
+        let err = markdown(&[base.clone(), other]).unwrap_err().to_string();
         assert!(
             err.contains("two results for one table cell")
                 && err.contains("ckpt:a-heuristic-small/summary.json and elsewhere/summary.json"),
@@ -430,7 +434,7 @@ mod tests {
         );
         let mut longer = summary("ckpt:a", "heuristic", "large", 10, 100);
         longer.1.episode_length = 300;
-        let err = markdown(&[base.clone(), longer]).unwrap_err();
+        let err = markdown(&[base.clone(), longer]).unwrap_err().to_string();
         assert!(
             err.contains("would pool small from") && err.contains("episode_length 500 vs 300"),
             "{err}"
@@ -438,7 +442,7 @@ mod tests {
         // Other episode counts per class pool fine: each episode once.
         let mut paper = summary("ckpt:a", "heuristic", "medium", 10, 100);
         paper.1.protocol = "paper".into();
-        let err = markdown(&[base.clone(), paper]).unwrap_err();
+        let err = markdown(&[base.clone(), paper]).unwrap_err().to_string();
         assert!(
             err.contains("the held-out protocol") && err.contains("the paper protocol"),
             "{err}"
@@ -447,7 +451,9 @@ mod tests {
         assert!(markdown(&[base, fewer])
             .unwrap()
             .contains("| 100 / - / 50 x 500 steps |"));
-        let err = markdown(&[summary("ckpt:a", "heuristic", "shipped", 1, 10)]).unwrap_err();
+        let err = markdown(&[summary("ckpt:a", "heuristic", "shipped", 1, 10)])
+            .unwrap_err()
+            .to_string();
         assert!(err.contains("none of the 1 summaries"), "{err}");
     }
 }

@@ -3,9 +3,11 @@
 //! Path Len and the size of the Absolutely Safe Zone over time (SoA).
 
 use crate::asz::{cells_to_m2, FastMarching};
+use crate::controllers::ControllerError;
 use crate::controllers::ControllerSpec;
 use crate::env::vec_env::episode_seed;
 use crate::env::{Action, CaptureRule, EnvConfig, Side, TrapEnv};
+use crate::error::{in_interval, ConfigError};
 use crate::map::PreparedMap;
 
 pub mod cross_table;
@@ -50,25 +52,34 @@ impl Default for EvalSetting {
 
 impl EvalSetting {
     /// Checks the numbers a user gave; the error names the option.
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        // Options, not a file's fields: `--episodes 0: ...`.
+        let option = |name: &str, value: &dyn std::fmt::Display, rule: &str| ConfigError {
+            field: format!("{name} {value}"),
+            value: None,
+            rule: rule.into(),
+        };
         if self.episodes == 0 {
-            return Err(
-                "--episodes 0: needs at least one episode (an SR of 0 episodes is no result)"
-                    .into(),
-            );
-        }
-        if self.episodes > 10_000_000 {
-            return Err(format!("--episodes {}: at most 10,000,000", self.episodes));
-        }
-        if !(self.speed_ratio.is_finite() && self.speed_ratio > 0.0 && self.speed_ratio <= 10.0) {
-            return Err(format!(
-                "--speed-ratio {}: must be a number in (0, 10]",
-                self.speed_ratio
+            return Err(option(
+                "--episodes",
+                &0,
+                "needs at least one episode (an SR of 0 episodes is no result)",
             ));
         }
-        self.env_config()
-            .validate()
-            .map_err(|e| format!("evaluation setting: {e}"))
+        if self.episodes > 10_000_000 {
+            return Err(option("--episodes", &self.episodes, "at most 10,000,000"));
+        }
+        if in_interval("speed_ratio", self.speed_ratio, 0.0, 10.0, false).is_err() {
+            return Err(option(
+                "--speed-ratio",
+                &self.speed_ratio,
+                "must be a number in (0, 10]",
+            ));
+        }
+        self.env_config().validate().map_err(|e| ConfigError {
+            field: format!("evaluation setting: {}", e.field),
+            ..e
+        })
     }
 
     pub fn env_config(&self) -> EnvConfig {
@@ -121,9 +132,9 @@ impl SettingIdentity {
         setting: &EvalSetting,
         maps_label: &str,
         maps: &[Arc<PreparedMap>],
-    ) -> Result<SettingIdentity, String> {
+    ) -> Result<SettingIdentity, ControllerError> {
         type Hashes = (Option<String>, Option<String>);
-        let hashes = |spec: &ControllerSpec, side: Side| -> Result<Hashes, String> {
+        let hashes = |spec: &ControllerSpec, side: Side| -> Result<Hashes, ControllerError> {
             match spec {
                 ControllerSpec::Checkpoint(c) => {
                     let snap = c.snapshot(side)?;
@@ -403,7 +414,7 @@ pub fn captors_learner(spec: &ControllerSpec) -> String {
     match spec {
         ControllerSpec::Checkpoint(c) => c
             .snapshot(Side::Captors)
-            .map(|s| s.meta.algorithm.to_uppercase())
+            .map(|s| s.meta.algorithm.name().to_uppercase())
             .unwrap_or_else(|_| "unknown".into()),
         ControllerSpec::Heuristic => "expert heuristic".into(),
         ControllerSpec::Greedy { coarsening: 1 } => "ASZ-greedy".into(),

@@ -9,6 +9,32 @@ use crate::env::CaptureRule;
 use std::collections::BTreeMap;
 use std::fmt::Write;
 
+/// Why eval results cannot be laid out as a table: two results for one
+/// cell, or a row that would join results of different settings.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum TableError {
+    #[error("two results for one table cell ({cell}): {first} and {second}, which differ in {differences}; give only the eval folder whose result belongs in the table")]
+    TwoResults {
+        cell: String,
+        first: String,
+        second: String,
+        differences: String,
+    },
+    /// A row would join results that are not one setting; `conflict` says
+    /// which and how to fix it.
+    #[error("one table row ({row}) would {conflict}")]
+    NotOneSetting { row: String, conflict: String },
+    #[error("none of the {0} summaries is on the Gibson classes (--maps small,medium,large): Table V pools those")]
+    NoGibsonClass(usize),
+    /// The embedded copy of the paper's tables does not parse.
+    #[error("paper tables line {line}: {what}: {text}")]
+    PaperCsv {
+        line: usize,
+        what: String,
+        text: String,
+    },
+}
+
 /// Every cell of the paper's Tables II, III and V (a copy of
 /// ../shared/paper/tables.csv; a test keeps them equal): per table, K,
 /// speed ratio, learner, target and map class, the paper's Time (steps),
@@ -36,18 +62,22 @@ pub fn paper_cells() -> &'static [PaperCell] {
     CELLS.get_or_init(|| parse_paper_tables(PAPER_TABLES).expect("the embedded paper tables parse"))
 }
 
-fn parse_paper_tables(text: &str) -> Result<Vec<PaperCell>, String> {
+fn parse_paper_tables(text: &str) -> Result<Vec<PaperCell>, TableError> {
     let mut out = Vec::new();
     for (n, line) in text.lines().enumerate().skip(1) {
         if line.trim().is_empty() {
             continue;
         }
         let f: Vec<&str> = line.split(',').collect();
-        let bad = |what: &str| format!("paper tables line {}: {what}: {line}", n + 1);
+        let bad = |what: &str| TableError::PaperCsv {
+            line: n + 1,
+            what: what.to_string(),
+            text: line.to_string(),
+        };
         if f.len() != 9 {
             return Err(bad("expected 9 fields"));
         }
-        let num = |x: &str| -> Result<f64, String> {
+        let num = |x: &str| -> Result<f64, TableError> {
             x.parse::<f64>()
                 .ok()
                 .filter(|v| v.is_finite())
@@ -188,7 +218,9 @@ pub(super) fn same_play(a: &Summary, b: &Summary) -> bool {
 /// the run trains). The same summary given twice (the same folder named twice) is
 /// one result and is shown once. Rows may differ from each other in episode
 /// count and length: the last column says it for each row.
-fn rows(summaries: &[Sourced]) -> Result<(BTreeMap<usize, Vec<Row<'_>>>, usize), String> {
+type RowsByK<'a> = BTreeMap<usize, Vec<Row<'a>>>;
+
+fn rows(summaries: &[Sourced]) -> Result<(RowsByK<'_>, usize), TableError> {
     let mut by_k: BTreeMap<usize, Vec<Row>> = BTreeMap::new();
     let mut left_out = 0;
     for sourced in summaries {
@@ -229,23 +261,30 @@ fn rows(summaries: &[Sourced]) -> Result<(BTreeMap<usize, Vec<Row<'_>>>, usize),
             if other == s {
                 continue;
             }
-            return Err(format!(
-                "two results for one table cell ({what}): {other_source} and {source}, which differ in {}; give only the eval folder whose result belongs in the table",
-                differences(other, s)
-            ));
+            return Err(TableError::TwoResults {
+                cell: what,
+                first: other_source.to_string(),
+                second: source.to_string(),
+                differences: differences(other, s),
+            });
         }
         for (other_source, other) in rows[i].cells.iter().flatten() {
             if other.episodes != s.episodes || !same_play(other, s) {
-                return Err(format!(
-                    "one table row ({}:1 at v_p:v_e 1.0:{}, captors {} ({})) would join {} from {other_source} and {} from {source}, which differ in {}: a row is one setting over the three classes; evaluate the classes alike",
-                    s.num_captors,
-                    ratio_label(s.speed_ratio),
-                    s.captors,
-                    s.protocol,
-                    other.maps,
-                    s.maps,
-                    differences(other, s)
-                ));
+                return Err(TableError::NotOneSetting {
+                    row: format!(
+                        "{}:1 at v_p:v_e 1.0:{}, captors {} ({})",
+                        s.num_captors,
+                        ratio_label(s.speed_ratio),
+                        s.captors,
+                        s.protocol
+                    ),
+                    conflict: format!(
+                        "join {} from {other_source} and {} from {source}, which differ in {}: a row is one setting over the three classes; evaluate the classes alike",
+                        other.maps,
+                        s.maps,
+                        differences(other, s)
+                    ),
+                });
             }
         }
         rows[i].cells[class] = Some(sourced);
@@ -282,7 +321,7 @@ fn triple(cells: &[Option<&Sourced>; 3], f: impl Fn(&Summary) -> String) -> Vec<
 
 /// Markdown: one table per K, and a line per left-out summary count.
 /// Refuses summaries that do not lay out as the paper's tables (`rows`).
-pub fn markdown(summaries: &[Sourced]) -> Result<String, String> {
+pub fn markdown(summaries: &[Sourced]) -> Result<String, TableError> {
     let (by_k, left_out) = rows(summaries)?;
     let mut out = String::new();
     for (k, rows) in &by_k {
@@ -331,7 +370,7 @@ fn latex_escape(s: &str) -> String {
 }
 
 /// LaTeX (booktabs): one tabular per K, SR with its interval, paper SR beside.
-pub fn latex(summaries: &[Sourced]) -> Result<String, String> {
+pub fn latex(summaries: &[Sourced]) -> Result<String, TableError> {
     let (by_k, _) = rows(summaries)?;
     let mut out = String::from("% t2e-league table: captors against the rule-based target; requires \\usepackage{booktabs}\n");
     for (k, rows) in &by_k {
@@ -457,6 +496,7 @@ mod tests {
         assert!(
             parse_paper_tables("h\nII,3,1.0:1.0,MAPPO,rule-based,small,x,1,1\n")
                 .unwrap_err()
+                .to_string()
                 .contains("line 2")
         );
         let shared =
@@ -484,7 +524,9 @@ mod tests {
             sr: 80.0,
             ..base.clone()
         };
-        let err = markdown(&sourced(vec![base.clone(), other])).unwrap_err();
+        let err = markdown(&sourced(vec![base.clone(), other]))
+            .unwrap_err()
+            .to_string();
         assert!(
             err.contains("two results for one table cell (3:1 at v_p:v_e 1.0:1.0, captors ckpt:runs/MAPPO (held-out), small)")
                 && err.contains("eval0/summary.json and eval1/summary.json")
@@ -495,7 +537,9 @@ mod tests {
             sr: 80.0,
             ..base.clone()
         };
-        let err = latex(&sourced(vec![base.clone(), same_options])).unwrap_err();
+        let err = latex(&sourced(vec![base.clone(), same_options]))
+            .unwrap_err()
+            .to_string();
         assert!(err.contains("SR 85.8 vs 80.0"), "{err}");
         // Cells of one row from settings of other lengths or counts: refused.
         for other in [
@@ -515,7 +559,9 @@ mod tests {
                 ..base.clone()
             },
         ] {
-            let err = markdown(&sourced(vec![base.clone(), other])).unwrap_err();
+            let err = markdown(&sourced(vec![base.clone(), other]))
+                .unwrap_err()
+                .to_string();
             assert!(
                 err.contains("one table row")
                     && err.contains(
@@ -530,8 +576,9 @@ mod tests {
             captors_sha256: Some(sha.repeat(64)),
             ..base.clone()
         };
-        let err =
-            markdown(&sourced(vec![weights("small", "a"), weights("large", "b")])).unwrap_err();
+        let err = markdown(&sourced(vec![weights("small", "a"), weights("large", "b")]))
+            .unwrap_err()
+            .to_string();
         assert!(
             err.contains("captor weights (actor sha256) aaaaaaaaaaaa vs bbbbbbbbbbbb"),
             "{err}"

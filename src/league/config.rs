@@ -8,11 +8,14 @@ use super::evaluator_config::EvaluatorConfig;
 use super::matchmaking::MatchmakingConfig;
 use super::members::MembersConfig;
 use super::players::Seat;
+use crate::controllers::ControllerSpec;
 use crate::env::{EnvConfig, Side};
+use crate::error::{in_interval, in_range, ConfigError, ConfigFileError};
 use crate::learn::maac::MaacConfig;
 use crate::learn::maddpg::MaddpgConfig;
 use crate::learn::ppo::PpoConfig;
 use crate::learn::shaping::ShapingConfig;
+use crate::learn::train::Play;
 use crate::learn::train::{SideConfig, TrainConfig};
 use crate::learn::Algorithm;
 use crate::nn::NetConfig;
@@ -223,8 +226,8 @@ impl LeagueConfig {
         Self::parse(&text).map_err(|e| anyhow!("{}: {e}", path.display()))
     }
 
-    pub fn parse(text: &str) -> Result<LeagueConfig, String> {
-        let cfg: LeagueConfig = toml::from_str(text).map_err(|e| e.to_string())?;
+    pub fn parse(text: &str) -> Result<LeagueConfig, ConfigFileError> {
+        let cfg: LeagueConfig = crate::util::from_toml(text)?;
         cfg.validate()?;
         Ok(cfg)
     }
@@ -253,7 +256,7 @@ impl LeagueConfig {
     pub fn train_config(&self, side: Side) -> TrainConfig {
         let learner = self.learner(side);
         let learn = SideConfig {
-            play: learner.algorithm.name().into(),
+            play: Play::Learn(learner.algorithm),
             ppo: learner.ppo.clone(),
             maddpg: learner.maddpg.clone(),
             maac: learner.maac.clone(),
@@ -261,7 +264,7 @@ impl LeagueConfig {
             shaping: learner.shaping.clone(),
         };
         let other = SideConfig {
-            play: "still".into(),
+            play: Play::Script(ControllerSpec::Still),
             ..SideConfig::default()
         };
         let (captors, target) = match side {
@@ -299,7 +302,7 @@ impl LeagueConfig {
     /// training map (`maps`) and no validation team is a league member
     /// (`[members]`). The test side (Gibson maps, `greedy:K`) is refused by
     /// `EvaluatorConfig::validate`; the maps' content by the evaluator.
-    fn check_validation_apart(&self) -> Result<(), String> {
+    fn check_validation_apart(&self) -> Result<(), ConfigError> {
         if let Some(spec) = &self.evaluator.validation_maps {
             let shared = spec == &self.maps
                 || match (
@@ -312,9 +315,10 @@ impl LeagueConfig {
                     _ => false,
                 };
             if shared {
-                return Err(format!(
-                    "evaluator.validation_maps = \"{spec}\": shares maps with the training maps (maps = \"{}\"); validation plays maps the league never trained on (generated:N@S with seeds past the training maps', e.g. generated:8@1001)",
-                    self.maps
+                return Err(ConfigError::new(
+                    "evaluator.validation_maps",
+                    format!("\"{spec}\""),
+                    format!("shares maps with the training maps (maps = \"{}\"); validation plays maps the league never trained on (generated:N@S with seeds past the training maps', e.g. generated:8@1001)", self.maps),
                 ));
             }
         }
@@ -322,98 +326,116 @@ impl LeagueConfig {
             let validation = self
                 .evaluator
                 .validation(member_side)
-                .map_err(|e| format!("evaluator.{e}"))?;
+                .map_err(|e| e.within("evaluator"))?;
             let members = self
                 .members
                 .of(member_side.other())
-                .map_err(|e| format!("members.{e}"))?;
+                .map_err(|e| e.within("members"))?;
             if let Some((name, _)) = validation
                 .iter()
                 .find(|(_, v)| members.iter().any(|(_, m)| m == v))
             {
-                return Err(format!(
-                    "evaluator.{} = \"{name}\": also a member of the league ([members]), which the league trains against; validation plays teams the league never meets",
+                return Err(ConfigError::new(
                     match member_side {
-                        Side::Target => "validation_captors",
-                        Side::Captors => "validation_targets",
-                    }
+                        Side::Target => "evaluator.validation_captors",
+                        Side::Captors => "evaluator.validation_targets",
+                    },
+                    format!("\"{name}\""),
+                    "also a member of the league ([members]), which the league trains against; validation plays teams the league never meets",
                 ));
             }
         }
         Ok(())
     }
 
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), ConfigError> {
         self.matchmaking
             .validate()
-            .map_err(|e| format!("matchmaking.{e}"))?;
+            .map_err(|e| e.within("matchmaking"))?;
         self.curriculum
             .validate()
-            .map_err(|e| format!("curriculum.{e}"))?;
+            .map_err(|e| e.within("curriculum"))?;
         self.evaluator
             .validate()
-            .map_err(|e| format!("evaluator.{e}"))?;
+            .map_err(|e| e.within("evaluator"))?;
         let held_out = [Side::Target, Side::Captors]
             .into_iter()
             .map(|member_side| {
                 let specs = self.evaluator.held_out(member_side)?;
                 Ok((member_side.other(), specs))
             })
-            .collect::<Result<Vec<_>, String>>()
-            .map_err(|e| format!("evaluator.{e}"))?;
+            .collect::<Result<Vec<_>, ConfigError>>()
+            .map_err(|e| e.within("evaluator"))?;
         self.members
             .validate(&held_out)
-            .map_err(|e| format!("members.{e}"))?;
+            .map_err(|e| e.within("members"))?;
         self.check_validation_apart()?;
         if self.matchmaking.members_share > 0.0 && self.members.is_empty() {
-            return Err(format!(
-                "matchmaking.members_share = {}: the league has no extra members to give it to (add [members])",
-                self.matchmaking.members_share
+            return Err(ConfigError::new(
+                "matchmaking.members_share",
+                self.matchmaking.members_share,
+                "the league has no extra members to give it to (add [members])",
             ));
         }
-        if !(self.snapshots.win_rate.is_finite() && (0.0..=1.0).contains(&self.snapshots.win_rate))
-        {
-            return Err(format!(
-                "snapshots.win_rate = {}: must be in [0, 1]",
-                self.snapshots.win_rate
-            ));
-        }
-        if !(self.exploiters.win_rate.is_finite()
-            && (0.0..=1.0).contains(&self.exploiters.win_rate))
-        {
-            return Err(format!(
-                "exploiters.win_rate = {}: must be in [0, 1]",
-                self.exploiters.win_rate
-            ));
-        }
-        if self.exploiters.timeout_env_steps == 0 {
-            return Err("exploiters.timeout_env_steps = 0: must be at least 1".into());
-        }
-        if self.snapshots.every_env_steps == 0 || self.snapshots.timeout_env_steps == 0 {
-            return Err(
-                "snapshots.every_env_steps and snapshots.timeout_env_steps must be at least 1"
-                    .into(),
-            );
-        }
+        in_interval(
+            "snapshots.win_rate",
+            self.snapshots.win_rate,
+            0.0,
+            1.0,
+            true,
+        )?;
+        in_interval(
+            "exploiters.win_rate",
+            self.exploiters.win_rate,
+            0.0,
+            1.0,
+            true,
+        )?;
+        let at_least_one = 1..=u64::MAX;
+        in_range(
+            "exploiters.timeout_env_steps",
+            self.exploiters.timeout_env_steps,
+            at_least_one.clone(),
+            "must be at least 1",
+        )?;
+        in_range(
+            "snapshots.every_env_steps",
+            self.snapshots.every_env_steps,
+            at_least_one.clone(),
+            "must be at least 1",
+        )?;
+        in_range(
+            "snapshots.timeout_env_steps",
+            self.snapshots.timeout_env_steps,
+            at_least_one,
+            "must be at least 1",
+        )?;
         // The worlds and the rollout first: the budget check below divides
         // by them, and must not blame the budget for an impossible rollout.
         crate::learn::train::check_rollout(self.num_envs, self.rollout_steps)?;
         let per_iteration = (self.num_envs * self.rollout_steps) as u64;
         if self.env_steps_per_learner < per_iteration.max(1) {
-            return Err(format!(
-                "env_steps_per_learner = {}: less than one iteration ({} worlds x {} steps)",
-                self.env_steps_per_learner, self.num_envs, self.rollout_steps
+            return Err(ConfigError::new(
+                "env_steps_per_learner",
+                self.env_steps_per_learner,
+                format!(
+                    "less than one iteration ({} worlds x {} steps)",
+                    self.num_envs, self.rollout_steps
+                ),
             ));
         }
-        if self.opponent_cache == 0 {
-            return Err("opponent_cache = 0: must hold at least one network".into());
-        }
-        if self.threads_per_learner > 256 {
-            return Err(format!(
-                "threads_per_learner = {}: at most 256",
-                self.threads_per_learner
-            ));
-        }
+        in_range(
+            "opponent_cache",
+            self.opponent_cache,
+            1..=usize::MAX,
+            "must hold at least one network",
+        )?;
+        in_range(
+            "threads_per_learner",
+            self.threads_per_learner,
+            0..=256,
+            "at most 256",
+        )?;
         for side in [Side::Captors, Side::Target] {
             self.train_config(side).validate()?;
         }
@@ -428,25 +450,41 @@ mod tests {
     #[test]
     fn configs_validate_and_typos_name_the_field() {
         LeagueConfig::default().validate().unwrap();
-        let err = LeagueConfig::parse("[matchmaking]\nweighting = \"hard\"\npp = 2\n").unwrap_err();
+        let err = LeagueConfig::parse("[matchmaking]\nweighting = \"hard\"\npp = 2\n")
+            .unwrap_err()
+            .to_string();
         assert!(err.contains("pp"), "{err}");
-        let err = LeagueConfig::parse("[curriculum]\nstages = [1.2, 1.0]\n").unwrap_err();
+        let err = LeagueConfig::parse("[curriculum]\nstages = [1.2, 1.0]\n")
+            .unwrap_err()
+            .to_string();
         assert!(err.starts_with("curriculum.stages[1]"), "{err}");
-        let err = LeagueConfig::parse("[target.ppo]\nentropy_coef = nan\n").unwrap_err();
+        let err = LeagueConfig::parse("[target.ppo]\nentropy_coef = nan\n")
+            .unwrap_err()
+            .to_string();
         assert!(err.contains("target.ppo.entropy_coef"), "{err}");
-        let err = LeagueConfig::parse("[target]\nalgorithm = \"mapo\"\n").unwrap_err();
+        let err = LeagueConfig::parse("[target]\nalgorithm = \"mapo\"\n")
+            .unwrap_err()
+            .to_string();
         assert!(
             err.contains("algorithm = \"mapo\"") && err.contains("`mappo`"),
             "{err}"
         );
-        let err = LeagueConfig::parse("env_steps_per_learner = 0\n").unwrap_err();
+        let err = LeagueConfig::parse("env_steps_per_learner = 0\n")
+            .unwrap_err()
+            .to_string();
         assert!(err.starts_with("env_steps_per_learner = 0"), "{err}");
         // An impossible rollout is named as such, not blamed on the budget.
-        let err = LeagueConfig::parse("num_envs = 100000\n").unwrap_err();
+        let err = LeagueConfig::parse("num_envs = 100000\n")
+            .unwrap_err()
+            .to_string();
         assert!(err.starts_with("num_envs = 100000"), "{err}");
-        let err = LeagueConfig::parse("rollout_steps = 0\n").unwrap_err();
+        let err = LeagueConfig::parse("rollout_steps = 0\n")
+            .unwrap_err()
+            .to_string();
         assert!(err.starts_with("rollout_steps = 0"), "{err}");
-        let err = LeagueConfig::parse("[evaluator]\nepisodes = 0\n").unwrap_err();
+        let err = LeagueConfig::parse("[evaluator]\nepisodes = 0\n")
+            .unwrap_err()
+            .to_string();
         assert!(err.starts_with("evaluator.episodes = 0"), "{err}");
         LeagueConfig::parse("[evaluator]\nenabled = false\nepisodes = 0\n").unwrap();
         // Held-out opponents: controllers of the right side, never a member.
@@ -481,7 +519,9 @@ mod tests {
             ("held_out_captors = [\"random\", \"random\"]", "named twice"),
             ("held_out_captors = [\"ckpt:\"]", "needs a path"),
         ] {
-            let err = LeagueConfig::parse(&format!("[evaluator]\n{text}\n")).unwrap_err();
+            let err = LeagueConfig::parse(&format!("[evaluator]\n{text}\n"))
+                .unwrap_err()
+                .to_string();
             assert!(err.contains(says), "{text}: {err}");
         }
         // Left out of the stored config while empty: leagues stored before
@@ -490,19 +530,26 @@ mod tests {
         assert!(!stored.contains("held_out"), "{stored}");
         assert!(!stored.contains("members"), "{stored}");
         // Extra members: named by their field, never also held out.
-        let err = LeagueConfig::parse("[members]\ncaptors = [\"greedy:99\"]\n").unwrap_err();
+        let err = LeagueConfig::parse("[members]\ncaptors = [\"greedy:99\"]\n")
+            .unwrap_err()
+            .to_string();
         assert!(err.starts_with("members.captors = \"greedy:99\""), "{err}");
         let err = LeagueConfig::parse(
             "[members]\ncaptors = [\"greedy:2\"]\n[evaluator]\nheld_out_captors = [\"greedy:2\"]\n",
         )
-        .unwrap_err();
+        .unwrap_err()
+        .to_string();
         assert!(
-            err.starts_with("members.captors = \"greedy:2\" is also a held-out"),
+            err.starts_with("members.captors = \"greedy:2\": also a held-out"),
             "{err}"
         );
-        let err = LeagueConfig::parse("[members]\ncaptor = [\"greedy:4\"]\n").unwrap_err();
+        let err = LeagueConfig::parse("[members]\ncaptor = [\"greedy:4\"]\n")
+            .unwrap_err()
+            .to_string();
         assert!(err.contains("captor"), "{err}");
-        let err = LeagueConfig::parse("[matchmaking]\nmembers_share = 0.2\n").unwrap_err();
+        let err = LeagueConfig::parse("[matchmaking]\nmembers_share = 0.2\n")
+            .unwrap_err()
+            .to_string();
         assert!(err.starts_with("matchmaking.members_share = 0.2"), "{err}");
         let cfg = LeagueConfig::parse("[members]\ncaptors = [\"greedy:4\"]\n").unwrap();
         assert!(toml::to_string(&cfg)
@@ -561,14 +608,14 @@ mod tests {
             ("validation_maps = \"generated:4@1001\"\nvalidation_targets = [\"expert:3\"]", "captor team"),
         ] {
             let err = LeagueConfig::parse(&format!("maps = \"generated:20\"\n[evaluator]\n{text}\n"))
-                .unwrap_err();
+                .unwrap_err().to_string();
             assert!(err.contains(says), "{text}:\n{err}");
         }
         // A validation team that the config also makes a member.
         let err = LeagueConfig::parse(
             "maps = \"generated:20\"\n[members]\ncaptors = [\"expert:5\"]\n[evaluator]\nvalidation_maps = \"generated:4@1001\"\nvalidation_captors = [\"expert:5\"]\n",
         )
-        .unwrap_err();
+        .unwrap_err().to_string();
         assert!(
             err.starts_with(
                 "evaluator.validation_captors = \"expert:5\": also a member of the league"

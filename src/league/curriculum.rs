@@ -5,6 +5,7 @@
 //! earlier stages so nothing is forgotten.
 
 use crate::env::Side;
+use crate::error::{in_interval, in_range, ConfigError};
 use serde::{Deserialize, Serialize};
 use std::collections::VecDeque;
 
@@ -50,39 +51,42 @@ impl CurriculumConfig {
         }
     }
 
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), ConfigError> {
         if self.stages.is_empty() {
-            return Err("stages = []: needs at least one speed ratio".into());
-        }
-        for (i, &s) in self.stages.iter().enumerate() {
-            if !(s.is_finite() && s > 0.0 && s <= 10.0) {
-                return Err(format!(
-                    "stages[{i}] = {s}: must be a speed ratio in (0, 10]"
-                ));
-            }
-            if i > 0 && s <= self.stages[i - 1] {
-                return Err(format!("stages[{i}] = {s}: stages must increase"));
-            }
-        }
-        if !(self.promote_at.is_finite() && self.promote_at > 0.0 && self.promote_at <= 1.0) {
-            return Err(format!(
-                "promote_at = {}: must be in (0, 1]",
-                self.promote_at
+            return Err(ConfigError::new(
+                "stages",
+                "[]",
+                "needs at least one speed ratio",
             ));
         }
-        if self.window == 0 {
-            return Err("window = 0: must be at least 1 match".into());
+        for (i, &s) in self.stages.iter().enumerate() {
+            let field = format!("stages[{i}]");
+            in_interval(&field, s, 0.0, 10.0, false)
+                .map_err(|_| ConfigError::new(&field, s, "must be a speed ratio in (0, 10]"))?;
+            if i > 0 && s <= self.stages[i - 1] {
+                return Err(ConfigError::new(field, s, "stages must increase"));
+            }
         }
+        in_interval("promote_at", self.promote_at, 0.0, 1.0, false)?;
+        in_range(
+            "window",
+            self.window,
+            1..=usize::MAX,
+            "must be at least 1 match",
+        )?;
         if !(self.replay_share.is_finite() && (0.0..1.0).contains(&self.replay_share)) {
-            return Err(format!(
-                "replay_share = {}: must be in [0, 1)",
-                self.replay_share
+            return Err(ConfigError::new(
+                "replay_share",
+                self.replay_share,
+                "must be in [0, 1)",
             ));
         }
         if let Some(share) = self.captors_replay_share {
             if !(share.is_finite() && (0.0..1.0).contains(&share)) {
-                return Err(format!(
-                    "captors_replay_share = {share}: must be in [0, 1) (the main captors must play the current stage for the league to move on)"
+                return Err(ConfigError::new(
+                    "captors_replay_share",
+                    share,
+                    "must be in [0, 1) (the main captors must play the current stage for the league to move on)",
                 ));
             }
         }
@@ -211,23 +215,35 @@ mod tests {
             stages: vec![1.0, 1.0],
             ..Default::default()
         };
-        assert!(bad.validate().unwrap_err().starts_with("stages[1]"));
+        assert!(bad
+            .validate()
+            .unwrap_err()
+            .to_string()
+            .starts_with("stages[1]"));
         let bad = CurriculumConfig {
             promote_at: f64::NAN,
             ..Default::default()
         };
-        assert!(bad.validate().unwrap_err().starts_with("promote_at"));
+        assert!(bad
+            .validate()
+            .unwrap_err()
+            .to_string()
+            .starts_with("promote_at"));
         let bad = CurriculumConfig {
             replay_share: 1.0,
             ..Default::default()
         };
-        assert!(bad.validate().unwrap_err().starts_with("replay_share"));
+        assert!(bad
+            .validate()
+            .unwrap_err()
+            .to_string()
+            .starts_with("replay_share"));
         for share in [1.0, -0.1, f64::INFINITY] {
             let bad = CurriculumConfig {
                 captors_replay_share: Some(share),
                 ..Default::default()
             };
-            let err = bad.validate().unwrap_err();
+            let err = bad.validate().unwrap_err().to_string();
             assert!(err.starts_with("captors_replay_share"), "{err}");
         }
     }

@@ -5,6 +5,7 @@
 
 use crate::controllers::ControllerSpec;
 use crate::env::Side;
+use crate::error::{in_interval, in_range, ConfigError};
 use serde::{Deserialize, Serialize};
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -64,19 +65,16 @@ impl Default for EvaluatorConfig {
 }
 
 impl EvaluatorConfig {
-    pub fn validate(&self) -> Result<(), String> {
-        if !(self.cpu_share.is_finite() && self.cpu_share > 0.0 && self.cpu_share <= 1.0) {
-            return Err(format!("cpu_share = {}: must be in (0, 1]", self.cpu_share));
-        }
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        in_interval("cpu_share", self.cpu_share, 0.0, 1.0, false)?;
         if self.enabled && self.episodes == 0 {
-            return Err(
-                "episodes = 0: every snapshot must play at least one panel episode (or set enabled = false)"
-                    .into(),
-            );
+            return Err(ConfigError::new(
+                "episodes",
+                0,
+                "every snapshot must play at least one panel episode (or set enabled = false)",
+            ));
         }
-        if self.episodes > 100_000 {
-            return Err(format!("episodes = {}: at most 100000", self.episodes));
-        }
+        in_range("episodes", self.episodes, 0..=100_000, "at most 100000")?;
         for side in [Side::Captors, Side::Target] {
             self.held_out(side)?;
             let validation = self.validation(side)?;
@@ -85,24 +83,25 @@ impl EvaluatorConfig {
                 .iter()
                 .find(|(_, v)| held_out.iter().any(|(_, h)| h == v))
             {
-                return Err(format!(
-                    "{} = \"{name}\": also a held-out opponent; validation shares no team with another panel",
-                    Self::validation_field(side)
+                return Err(ConfigError::new(
+                    Self::validation_field(side),
+                    format!("\"{name}\""),
+                    "also a held-out opponent; validation shares no team with another panel",
                 ));
             }
         }
         let teams = !(self.validation_captors.is_empty() && self.validation_targets.is_empty());
         match &self.validation_maps {
             None if teams => {
-                return Err("validation_captors / validation_targets need validation_maps: validation plays on maps that are neither trained on nor tested on (e.g. \"generated:8@1001\")".into())
+                return Err(ConfigError::about("validation_captors / validation_targets", "need validation_maps: validation plays on maps that are neither trained on nor tested on (e.g. \"generated:8@1001\")"))
             }
             Some(spec) if !teams => {
-                return Err(format!("validation_maps = \"{spec}\": no validation team to play there (set validation_captors or validation_targets)"))
+                return Err(ConfigError::new("validation_maps", format!("\"{spec}\""), "no validation team to play there (set validation_captors or validation_targets)"))
             }
             Some(spec) => {
                 let source = spec.split(':').next().unwrap_or_default();
                 if matches!(source, "gibson" | "small" | "medium" | "large") {
-                    return Err(format!("validation_maps = \"{spec}\": the Gibson maps are the test maps under either protocol; validation never plays on a test map (use generated:N@S or a folder of your own)"));
+                    return Err(ConfigError::new("validation_maps", format!("\"{spec}\""), "the Gibson maps are the test maps under either protocol; validation never plays on a test map (use generated:N@S or a folder of your own)"));
                 }
             }
             None => {}
@@ -118,7 +117,10 @@ impl EvaluatorConfig {
     }
 
     /// The validation opponents of `member_side`'s snapshots, parsed.
-    pub fn validation(&self, member_side: Side) -> Result<Vec<(String, ControllerSpec)>, String> {
+    pub fn validation(
+        &self,
+        member_side: Side,
+    ) -> Result<Vec<(String, ControllerSpec)>, ConfigError> {
         let names = match member_side {
             Side::Target => &self.validation_captors,
             Side::Captors => &self.validation_targets,
@@ -152,7 +154,10 @@ impl EvaluatorConfig {
     }
 
     /// The held-out opponents that play `member_side`'s snapshots, parsed.
-    pub fn held_out(&self, member_side: Side) -> Result<Vec<(String, ControllerSpec)>, String> {
+    pub fn held_out(
+        &self,
+        member_side: Side,
+    ) -> Result<Vec<(String, ControllerSpec)>, ConfigError> {
         let (field, names) = match member_side {
             Side::Target => ("held_out_captors", &self.held_out_captors),
             Side::Captors => ("held_out_targets", &self.held_out_targets),

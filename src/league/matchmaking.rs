@@ -6,6 +6,7 @@
 //! caller supplies the head-to-head record and a seed.
 
 use crate::env::vec_env::episode_seed;
+use crate::error::{in_interval, in_range, ConfigError};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
@@ -74,32 +75,28 @@ fn is_zero(x: &f64) -> bool {
 }
 
 impl MatchmakingConfig {
-    pub fn validate(&self) -> Result<(), String> {
-        if !(self.p.is_finite() && self.p > 0.0 && self.p <= 16.0) {
-            return Err(format!("p = {}: must be in (0, 16]", self.p));
-        }
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        in_interval("p", self.p, 0.0, 16.0, false)?;
         for (name, v) in [
             ("main_share", self.main_share),
             ("members_share", self.members_share),
             ("floor", self.floor),
         ] {
-            if !(v.is_finite() && (0.0..=1.0).contains(&v)) {
-                return Err(format!("{name} = {v}: must be in [0, 1]"));
-            }
+            in_interval(name, v, 0.0, 1.0, true)?;
         }
         if self.main_share + self.members_share > 1.0 {
-            return Err(format!(
-                "members_share = {}: with main_share = {} the shares exceed 1",
-                self.members_share, self.main_share
+            return Err(ConfigError::new(
+                "members_share",
+                self.members_share,
+                format!("with main_share = {} the shares exceed 1", self.main_share),
             ));
         }
-        if self.slots > 64 {
-            return Err(format!(
-                "slots = {}: must be in 0..=64 (0 = no slots)",
-                self.slots
-            ));
-        }
-        Ok(())
+        in_range(
+            "slots",
+            self.slots,
+            0..=64,
+            "must be in 0..=64 (0 = no slots)",
+        )
     }
 }
 
@@ -365,7 +362,7 @@ mod tests {
             members_share: 0.7,
             ..MatchmakingConfig::default()
         };
-        assert!(bad.validate().unwrap_err().contains("exceed 1"));
+        assert!(bad.validate().unwrap_err().to_string().contains("exceed 1"));
     }
 
     #[test]

@@ -10,6 +10,7 @@
 use super::players::heuristic_name;
 use crate::controllers::ControllerSpec;
 use crate::env::Side;
+use crate::error::ConfigError;
 use serde::{Deserialize, Serialize};
 
 /// Extra permanent members, per side, as controller names: heuristics
@@ -37,7 +38,7 @@ impl MembersConfig {
 
     /// Every permanent member of `side`: (player name, controller), the
     /// default heuristic first. Errors name the field.
-    pub fn of(&self, side: Side) -> Result<Vec<(String, ControllerSpec)>, String> {
+    pub fn of(&self, side: Side) -> Result<Vec<(String, ControllerSpec)>, ConfigError> {
         let (field, names) = match side {
             Side::Captors => ("captors", &self.captors),
             Side::Target => ("target", &self.target),
@@ -58,8 +59,10 @@ impl MembersConfig {
         for spec in extras {
             let name = member_name(&spec, side);
             if out.iter().any(|(n, _)| *n == name) {
-                return Err(format!(
-                    "{field} = \"{spec}\": its player name {name} is another member's (two checkpoints of one name: give one another folder)"
+                return Err(ConfigError::new(
+                    field,
+                    format!("\"{spec}\""),
+                    format!("its player name {name} is another member's (two checkpoints of one name: give one another folder)"),
                 ));
             }
             out.push((name, spec));
@@ -89,7 +92,7 @@ impl MembersConfig {
     pub fn validate(
         &self,
         held_out: &[(Side, Vec<(String, ControllerSpec)>)],
-    ) -> Result<(), String> {
+    ) -> Result<(), ConfigError> {
         for side in [Side::Captors, Side::Target] {
             for (_, spec) in self.of(side)?.iter().skip(1) {
                 let clash = held_out
@@ -98,12 +101,13 @@ impl MembersConfig {
                     .flat_map(|(_, specs)| specs)
                     .any(|(_, h)| h == spec);
                 if clash {
-                    return Err(format!(
-                        "{} = \"{spec}\" is also a held-out opponent of the evaluator: a held-out opponent is one the league never trains against",
+                    return Err(ConfigError::new(
                         match side {
                             Side::Captors => "captors",
                             Side::Target => "target",
-                        }
+                        },
+                        format!("\"{spec}\""),
+                        "also a held-out opponent of the evaluator: a held-out opponent is one the league never trains against",
                     ));
                 }
             }
@@ -234,7 +238,7 @@ mod tests {
             ),
             (members(&["nonsense"], &[]), "unknown controller"),
         ] {
-            let err = m.validate(&[]).unwrap_err();
+            let err = m.validate(&[]).unwrap_err().to_string();
             assert!(err.contains(field), "{err}");
         }
     }
@@ -249,9 +253,9 @@ mod tests {
                 ControllerSpec::Greedy { coarsening: 2 },
             )],
         )];
-        let err = m.validate(&held_out).unwrap_err();
+        let err = m.validate(&held_out).unwrap_err().to_string();
         assert!(
-            err.contains("captors = \"greedy:2\" is also a held-out opponent"),
+            err.contains("captors = \"greedy:2\": also a held-out opponent"),
             "{err}"
         );
         // A different planner's resolution is a different controller.

@@ -304,8 +304,7 @@ pub fn spawn_logged(mut cmd: Command, log_path: &Path) -> Result<(Child, Output)
                 .create(true)
                 .append(true)
                 .open(&log_path)
-        })
-        .map_err(|e| format!("cannot open its log {}: {e}", log_path.display()));
+        });
     let (reader, writer) = std::io::pipe().context("cannot make a pipe for a child's output")?;
     cmd.stdin(Stdio::null())
         .stdout(writer.try_clone()?)
@@ -324,14 +323,17 @@ pub fn spawn_logged(mut cmd: Command, log_path: &Path) -> Result<(Child, Output)
 /// Appends each line of a child's output to its log and keeps the last ones.
 fn copy_output(
     reader: std::io::PipeReader,
-    log: std::result::Result<File, String>,
+    log: std::io::Result<File>,
     log_path: PathBuf,
     state: Output,
 ) {
     use std::io::{BufRead, Write};
     let (mut log, first_error) = match log {
         Ok(f) => (Some(f), None),
-        Err(e) => (None, Some(e)),
+        Err(e) => (
+            None,
+            Some(format!("cannot open its log {}: {e}", log_path.display())),
+        ),
     };
     if let Ok(mut s) = state.0.lock() {
         s.log_error = first_error;

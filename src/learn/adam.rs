@@ -2,6 +2,15 @@
 
 use tch::{nn, Device, Kind, Tensor};
 
+/// A saved optimizer state that does not fit the network it is loaded into.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum OptimizerStateError {
+    #[error("no optimizer moment '{0}'")]
+    Missing(String),
+    #[error("optimizer moment '{0}' has the wrong shape")]
+    Shape(String),
+}
+
 /// Adam over the variables of one var store, by name, with its moments kept
 /// as tensors so a checkpoint can carry them and a resumed run continues
 /// exactly where it stopped.
@@ -120,16 +129,20 @@ impl Adam {
         out
     }
 
-    pub fn load_state(&mut self, tensors: &[(String, Tensor)], steps: u64) -> Result<(), String> {
+    pub fn load_state(
+        &mut self,
+        tensors: &[(String, Tensor)],
+        steps: u64,
+    ) -> Result<(), OptimizerStateError> {
         for (((name, p), m), v) in self.params.iter().zip(&mut self.m).zip(&mut self.v) {
             for (prefix, dst) in [("m", &mut *m), ("v", &mut *v)] {
                 let key = format!("{prefix}.{name}");
                 let src = tensors
                     .iter()
                     .find(|(n, _)| *n == key)
-                    .ok_or_else(|| format!("no optimizer moment '{key}'"))?;
+                    .ok_or_else(|| OptimizerStateError::Missing(key.clone()))?;
                 if src.1.size() != p.size() {
-                    return Err(format!("optimizer moment '{key}' has the wrong shape"));
+                    return Err(OptimizerStateError::Shape(key));
                 }
                 tch::no_grad(|| dst.copy_(&src.1));
             }

@@ -11,11 +11,14 @@ use super::shaping::ShapingConfig;
 use super::Algorithm;
 use crate::controllers::ControllerSpec;
 use crate::env::{EnvConfig, Side};
+use crate::error::{in_range, ConfigError};
 use crate::nn::NetConfig;
 use crate::protocol::Protocol;
 use anyhow::{anyhow, Context, Result};
-use serde::{Deserialize, Serialize};
+use serde::{Deserialize, Deserializer, Serialize, Serializer};
+use std::fmt;
 use std::path::Path;
+use std::str::FromStr;
 use tch::Device;
 
 /// A training run, as written in `configs/*.toml`.
@@ -63,7 +66,7 @@ pub struct TrainConfig {
 pub struct SideConfig {
     /// "mappo", "ippo", "maddpg" or "maac" to learn; otherwise a controller
     /// that does not learn: heuristic, greedy, random, still or ckpt:PATH.
-    pub play: String,
+    pub play: Play,
     /// MAPPO's and IPPO's settings.
     pub ppo: PpoConfig,
     /// MADDPG's settings (left out of the stored config, and so of the
@@ -87,7 +90,7 @@ fn is_default<T: Default + PartialEq>(x: &T) -> bool {
 impl Default for SideConfig {
     fn default() -> Self {
         SideConfig {
-            play: "heuristic".into(),
+            play: Play::Script(ControllerSpec::Heuristic),
             ppo: PpoConfig::default(),
             maddpg: MaddpgConfig::default(),
             maac: MaacConfig::default(),
@@ -113,7 +116,7 @@ impl Default for TrainConfig {
             map_sampling: MapSampling::Uniform,
             env: EnvConfig::default(),
             captors: SideConfig {
-                play: "mappo".into(),
+                play: Play::Learn(Algorithm::Mappo),
                 ..SideConfig::default()
             },
             target: SideConfig::default(),
@@ -121,26 +124,80 @@ impl Default for TrainConfig {
     }
 }
 
-/// What plays a side, once the config is read.
-#[derive(Clone, Debug)]
-pub enum Role {
+/// Who plays a side: a learner, or a controller that does not learn. Read
+/// and written as the one string of `play = "..."`, so stored configs and
+/// their hashes read as before (aliases such as `rule` read as the name
+/// they stand for).
+#[derive(Clone, Debug, PartialEq)]
+pub enum Play {
     Learn(Algorithm),
     Script(ControllerSpec),
 }
 
-impl SideConfig {
-    pub fn role(&self) -> Result<Role, String> {
-        let play = self.play.trim();
+impl Play {
+    /// The algorithm that learns this side, if one does.
+    pub fn algorithm(&self) -> Option<Algorithm> {
+        match self {
+            Play::Learn(algorithm) => Some(*algorithm),
+            Play::Script(_) => None,
+        }
+    }
+}
+
+impl FromStr for Play {
+    type Err = ConfigError;
+    fn from_str(text: &str) -> Result<Play, ConfigError> {
+        let play = text.trim();
         if let Some(algorithm) = Algorithm::parse(play) {
-            return Ok(Role::Learn(algorithm));
+            return Ok(Play::Learn(algorithm));
         }
         play.parse::<ControllerSpec>()
-            .map(Role::Script)
+            .map(Play::Script)
             .map_err(|e| {
-                format!("play = \"{play}\": {e}; or mappo / ippo / maddpg / maac to learn")
+                ConfigError::new(
+                    "play",
+                    format!("\"{play}\""),
+                    format!("{e}; or mappo / ippo / maddpg / maac to learn"),
+                )
             })
     }
+}
 
+impl fmt::Display for Play {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Play::Learn(algorithm) => f.write_str(algorithm.name()),
+            Play::Script(spec) => spec.fmt(f),
+        }
+    }
+}
+
+impl From<Algorithm> for Play {
+    fn from(algorithm: Algorithm) -> Play {
+        Play::Learn(algorithm)
+    }
+}
+
+impl From<ControllerSpec> for Play {
+    fn from(spec: ControllerSpec) -> Play {
+        Play::Script(spec)
+    }
+}
+
+impl Serialize for Play {
+    fn serialize<S: Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        serializer.collect_str(self)
+    }
+}
+
+impl<'de> Deserialize<'de> for Play {
+    fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Play, D::Error> {
+        let text = String::deserialize(deserializer)?;
+        text.parse().map_err(serde::de::Error::custom)
+    }
+}
+
+impl SideConfig {
     /// The recurrent chunk length `algorithm` trains on.
     pub fn chunk_len(&self, algorithm: Algorithm) -> usize {
         match algorithm {
@@ -160,44 +217,38 @@ impl SideConfig {
     }
 
     /// Checks the settings of `algorithm`; the error names the field.
-    fn validate_learner(&self, algorithm: Algorithm) -> Result<(), String> {
-        self.net.validate().map_err(|e| format!("net.{e}"))?;
-        self.shaping
-            .validate()
-            .map_err(|e| format!("shaping.{e}"))?;
+    fn validate_learner(&self, algorithm: Algorithm) -> Result<(), ConfigError> {
+        self.net.validate().map_err(|e| e.within("net"))?;
+        self.shaping.validate().map_err(|e| e.within("shaping"))?;
         match algorithm {
-            Algorithm::Mappo | Algorithm::Ippo => {
-                self.ppo.validate().map_err(|e| format!("ppo.{e}"))
-            }
-            Algorithm::Maddpg => self.maddpg.validate().map_err(|e| format!("maddpg.{e}")),
-            Algorithm::Maac => self
-                .maac
-                .validate(&self.net)
-                .map_err(|e| format!("maac.{e}")),
+            Algorithm::Mappo | Algorithm::Ippo => self.ppo.validate().map_err(|e| e.within("ppo")),
+            Algorithm::Maddpg => self.maddpg.validate().map_err(|e| e.within("maddpg")),
+            Algorithm::Maac => self.maac.validate(&self.net).map_err(|e| e.within("maac")),
         }
     }
 }
 
 /// Worlds and steps per world of one rollout: each in range, and the
 /// rollout small enough to hold (checked before anything divides by them).
-pub fn check_rollout(num_envs: usize, rollout_steps: usize) -> Result<(), String> {
-    if !(1..=4096).contains(&num_envs) {
-        return Err(format!(
-            "num_envs = {num_envs}: must be in 1..=4096 (the paper uses 16 to 32)"
-        ));
-    }
-    if !(1..=100_000).contains(&rollout_steps) {
-        return Err(format!(
-            "rollout_steps = {rollout_steps}: must be in 1..=100000"
-        ));
-    }
-    if num_envs * rollout_steps > 4_000_000 {
-        return Err(format!(
-            "num_envs x rollout_steps = {}: a rollout of more than 4,000,000 steps does not fit in memory",
-            num_envs * rollout_steps
-        ));
-    }
-    Ok(())
+pub fn check_rollout(num_envs: usize, rollout_steps: usize) -> Result<(), ConfigError> {
+    in_range(
+        "num_envs",
+        num_envs,
+        1..=4096,
+        "must be in 1..=4096 (the paper uses 16 to 32)",
+    )?;
+    in_range(
+        "rollout_steps",
+        rollout_steps,
+        1..=100_000,
+        "must be in 1..=100000",
+    )?;
+    in_range(
+        "num_envs x rollout_steps",
+        num_envs * rollout_steps,
+        1..=4_000_000,
+        "a rollout of more than 4,000,000 steps does not fit in memory",
+    )
 }
 
 impl TrainConfig {
@@ -222,55 +273,63 @@ impl TrainConfig {
                 .map_err(|e| anyhow!("{}: {e}", path.display()))?;
         }
         let cfg: TrainConfig =
-            toml::from_str(&text).map_err(|e| anyhow!("{}: {e}", path.display()))?;
+            crate::util::from_toml(&text).map_err(|e| anyhow!("{}: {e}", path.display()))?;
         cfg.validate()
             .map_err(|e| anyhow!("{}: {e}", path.display()))?;
         Ok(cfg)
     }
 
     /// Checks every setting; the error names the field.
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), ConfigError> {
         let mut env = self.env.clone();
         env.observations = true;
-        env.validate().map_err(|e| format!("env.{e}"))?;
+        env.validate().map_err(|e| e.within("env"))?;
         validate_name(&self.name)?;
         check_rollout(self.num_envs, self.rollout_steps)?;
         self.extra_maps
             .validate()
-            .map_err(|e| format!("extra_maps.{e}"))?;
+            .map_err(|e| e.within("extra_maps"))?;
         let per_iteration = (self.num_envs * self.rollout_steps) as u64;
         if self.total_env_steps < per_iteration {
-            return Err(format!(
-                "total_env_steps = {}: less than one iteration ({} worlds x {} steps = {per_iteration}); nothing would be trained",
-                self.total_env_steps, self.num_envs, self.rollout_steps
+            return Err(ConfigError::new(
+                "total_env_steps",
+                self.total_env_steps,
+                format!(
+                    "less than one iteration ({} worlds x {} steps = {per_iteration}); nothing would be trained",
+                    self.num_envs, self.rollout_steps
+                ),
             ));
         }
-        if self.checkpoint_every == 0 {
-            return Err("checkpoint_every = 0: must be at least 1 iteration".into());
-        }
+        in_range(
+            "checkpoint_every",
+            self.checkpoint_every,
+            1..=u64::MAX,
+            "must be at least 1 iteration",
+        )?;
         let mut learners = 0;
         for (name, side_cfg, side) in [
             ("captors", &self.captors, Side::Captors),
             ("target", &self.target, Side::Target),
         ] {
-            match side_cfg.role().map_err(|e| format!("{name}.{e}"))? {
-                Role::Learn(algorithm) => {
+            match &side_cfg.play {
+                Play::Learn(algorithm) => {
+                    let algorithm = *algorithm;
                     learners += 1;
                     side_cfg
                         .validate_learner(algorithm)
-                        .map_err(|e| format!("{name}.{e}"))?;
+                        .map_err(|e| e.within(name))?;
                     crate::nn::prior::check(
                         side_cfg.net.heuristic_prior,
                         side,
                         !algorithm.off_policy(),
                     )
-                    .map_err(|e| format!("{name}.net.{e}"))?;
+                    .map_err(|e| e.within("net").within(name))?;
                     crate::nn::prior::check_kl(
                         side_cfg.ppo.heuristic_kl,
                         side,
                         !algorithm.off_policy(),
                     )
-                    .map_err(|e| format!("{name}.ppo.{e}"))?;
+                    .map_err(|e| e.within("ppo").within(name))?;
                     let chunk_len = side_cfg.chunk_len(algorithm);
                     let field = if algorithm.off_policy() {
                         algorithm.name()
@@ -278,28 +337,35 @@ impl TrainConfig {
                         "ppo"
                     };
                     if !self.rollout_steps.is_multiple_of(chunk_len) {
-                        return Err(format!(
-                            "rollout_steps = {} is not a multiple of {name}.{field}.chunk_len = {chunk_len}",
-                            self.rollout_steps
+                        return Err(ConfigError::new(
+                            "rollout_steps",
+                            self.rollout_steps,
+                            format!("not a multiple of {name}.{field}.chunk_len = {chunk_len}"),
                         ));
                     }
                     // A replayed sequence holds the state of at most one
                     // truncation to bootstrap from.
                     if algorithm.off_policy() && self.env.episode_length as usize <= chunk_len {
-                        return Err(format!(
-                            "env.episode_length = {}: must exceed {name}.{field}.chunk_len = {chunk_len} for {}",
+                        return Err(ConfigError::new(
+                            "env.episode_length",
                             self.env.episode_length,
-                            algorithm.name()
+                            format!(
+                                "must exceed {name}.{field}.chunk_len = {chunk_len} for {}",
+                                algorithm.name()
+                            ),
                         ));
                     }
                 }
-                Role::Script(spec) => spec
-                    .check(side, &env)
-                    .map_err(|e| format!("{name}.play: {e}"))?,
+                Play::Script(spec) => spec.check(side, &env).map_err(|e| {
+                    ConfigError::new(format!("{name}.play"), format!("\"{spec}\""), e.to_string())
+                })?,
             }
         }
         if learners == 0 {
-            return Err("neither captors.play nor target.play is a learner (mappo, ippo, maddpg or maac): nothing to train".into());
+            return Err(ConfigError::about(
+                "captors.play, target.play",
+                "neither is a learner (mappo, ippo, maddpg or maac): nothing to train",
+            ));
         }
         Ok(())
     }
@@ -348,7 +414,7 @@ pub enum DeviceChoice {
 
 /// A run name becomes the folder `runs/NAME`: it must stay one plain
 /// component inside `runs/`.
-fn validate_name(name: &str) -> Result<(), String> {
+fn validate_name(name: &str) -> Result<(), ConfigError> {
     let plain = !name.is_empty()
         && name.len() <= 100
         && !name.starts_with('.')
@@ -358,8 +424,10 @@ fn validate_name(name: &str) -> Result<(), String> {
     if plain {
         Ok(())
     } else {
-        Err(format!(
-            "name = {name:?}: must be 1 to 100 letters, digits, '-', '_', '+' or '.', not starting with '.' (it names the folder runs/NAME)"
+        Err(ConfigError::new(
+            "name",
+            format!("{name:?}"),
+            "must be 1 to 100 letters, digits, '-', '_', '+' or '.', not starting with '.' (it names the folder runs/NAME)",
         ))
     }
 }
@@ -379,16 +447,32 @@ mod tests {
             rollout_steps: 15,
             ..TrainConfig::default()
         };
-        assert!(cfg.validate().unwrap_err().contains("chunk_len"));
+        assert!(cfg
+            .validate()
+            .unwrap_err()
+            .to_string()
+            .contains("chunk_len"));
         let mut cfg = TrainConfig::default();
-        cfg.captors.play = "heuristic".into();
-        assert!(cfg.validate().unwrap_err().contains("nothing to train"));
+        cfg.captors.play = Play::Script(ControllerSpec::Heuristic);
+        assert!(cfg
+            .validate()
+            .unwrap_err()
+            .to_string()
+            .contains("nothing to train"));
         let mut cfg = TrainConfig::default();
-        cfg.target.play = "greedy:9".into();
-        assert!(cfg.validate().unwrap_err().starts_with("target.play"));
+        cfg.target.play = "expert:3".parse().unwrap();
+        assert_eq!(cfg.validate().unwrap_err().field, "target.play");
         let mut cfg = TrainConfig::default();
         cfg.captors.ppo.gamma = 1.5;
-        assert!(cfg.validate().unwrap_err().starts_with("captors.ppo.gamma"));
+        assert_eq!(cfg.validate().unwrap_err().field, "captors.ppo.gamma");
+        // A misspelt `play` is refused as the file is read, by its path.
+        let err = crate::util::from_toml::<TrainConfig>("[target]\nplay = \"mapo\"\n")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.starts_with("target.play") && err.contains("\"mapo\""),
+            "{err}"
+        );
         assert_eq!(TrainConfig::default().hash(), TrainConfig::default().hash());
         let other = TrainConfig {
             seed: 1,

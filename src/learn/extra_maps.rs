@@ -8,6 +8,7 @@
 //! run that uses them says so in its config (and hash); every figure it
 //! makes must say "paper protocol + extra maps".
 
+use crate::error::ConfigError;
 use crate::map::PreparedMap;
 use serde::{Deserialize, Serialize};
 use std::sync::Arc;
@@ -39,17 +40,19 @@ impl ExtraMapsConfig {
     }
 
     /// The error names the field (relative to `extra_maps.`).
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), ConfigError> {
         if !(self.share.is_finite() && self.share > 0.0 && self.share < 1.0) {
-            return Err(format!(
-                "share = {}: must be in (0, 1), the share of episodes on the extra maps",
-                self.share
+            return Err(ConfigError::new(
+                "share",
+                self.share,
+                "must be in (0, 1), the share of episodes on the extra maps",
             ));
         }
         if self.is_off() && *self != ExtraMapsConfig::default() {
-            return Err(format!(
-                "share = {} but maps is empty: name the extra maps (e.g. maps = \"generated:100\") or drop [extra_maps]",
-                self.share
+            return Err(ConfigError::new(
+                "share",
+                self.share,
+                "but maps is empty: name the extra maps (e.g. maps = \"generated:100\") or drop [extra_maps]",
             ));
         }
         Ok(())
@@ -140,7 +143,10 @@ mod tests {
                 share,
             };
             assert!(
-                cfg.validate().unwrap_err().starts_with("share = "),
+                cfg.validate()
+                    .unwrap_err()
+                    .to_string()
+                    .starts_with("share = "),
                 "{share}"
             );
         }
@@ -148,7 +154,11 @@ mod tests {
             maps: String::new(),
             share: 0.3,
         };
-        assert!(cfg.validate().unwrap_err().contains("maps is empty"));
+        assert!(cfg
+            .validate()
+            .unwrap_err()
+            .to_string()
+            .contains("maps is empty"));
         assert!(ExtraMapsConfig::default().validate().is_ok());
     }
 }

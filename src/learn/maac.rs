@@ -29,12 +29,13 @@
 use super::adam::backward_clipped;
 use super::learner::{Learner, NamedTensors};
 use super::offpolicy::{
-    check_replay, gumbel_noise, one_hot, td_target, within, Batch, Params, ReplayLearner,
-    ReplaySchedule, SequenceReplay,
+    check_replay, gumbel_noise, one_hot, td_target, Batch, Params, ReplayLearner, ReplaySchedule,
+    SequenceReplay,
 };
 use super::rollout::{BadUpdate, Rollout, UpdateStats};
 use super::Algorithm;
 use crate::env::Action;
+use crate::error::{in_interval, in_range, ConfigError};
 use crate::nn::{Actor, NetConfig, Trunk};
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
@@ -111,24 +112,24 @@ impl Default for MaacConfig {
 }
 
 impl MaacConfig {
-    pub fn validate(&self, net: &NetConfig) -> Result<(), String> {
-        within("actor_lr", self.actor_lr, 0.0, 0.1, false)?;
-        within("critic_lr", self.critic_lr, 0.0, 0.1, false)?;
-        within("adam_eps", self.adam_eps, 0.0, 1.0, false)?;
-        within("gamma", self.gamma, 0.0, 1.0, true)?;
-        within("tau", self.tau, 0.0, 1.0, false)?;
-        within("entropy_coef", self.entropy_coef, 0.0, 10.0, true)?;
-        within("attention_reg", self.attention_reg, 0.0, 10.0, true)?;
-        within("logit_reg", self.logit_reg, 0.0, 10.0, true)?;
-        within("replay_ratio", self.replay_ratio, 0.0, 1000.0, false)?;
-        within(
+    pub fn validate(&self, net: &NetConfig) -> Result<(), ConfigError> {
+        in_interval("actor_lr", self.actor_lr, 0.0, 0.1, false)?;
+        in_interval("critic_lr", self.critic_lr, 0.0, 0.1, false)?;
+        in_interval("adam_eps", self.adam_eps, 0.0, 1.0, false)?;
+        in_interval("gamma", self.gamma, 0.0, 1.0, true)?;
+        in_interval("tau", self.tau, 0.0, 1.0, false)?;
+        in_interval("entropy_coef", self.entropy_coef, 0.0, 10.0, true)?;
+        in_interval("attention_reg", self.attention_reg, 0.0, 10.0, true)?;
+        in_interval("logit_reg", self.logit_reg, 0.0, 10.0, true)?;
+        in_interval("replay_ratio", self.replay_ratio, 0.0, 1000.0, false)?;
+        in_interval(
             "critic_max_grad_norm",
             self.critic_max_grad_norm,
             0.0,
             1e6,
             false,
         )?;
-        within(
+        in_interval(
             "actor_max_grad_norm",
             self.actor_max_grad_norm,
             0.0,
@@ -136,9 +137,10 @@ impl MaacConfig {
             false,
         )?;
         if self.attention_heads < 1 || net.hidden % self.attention_heads != 0 {
-            return Err(format!(
-                "attention_heads = {}: must be at least 1 and divide net.hidden = {}",
-                self.attention_heads, net.hidden
+            return Err(ConfigError::new(
+                "attention_heads",
+                self.attention_heads,
+                format!("must be at least 1 and divide net.hidden = {}", net.hidden),
             ));
         }
         check_replay(
@@ -147,9 +149,12 @@ impl MaacConfig {
             self.buffer_steps,
             self.learning_starts,
         )?;
-        if self.max_bad_updates == 0 {
-            return Err("max_bad_updates = 0: must be at least 1".into());
-        }
+        in_range(
+            "max_bad_updates",
+            self.max_bad_updates,
+            1..=u32::MAX,
+            "must be at least 1",
+        )?;
         Ok(())
     }
 }

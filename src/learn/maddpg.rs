@@ -23,13 +23,14 @@ use super::adam::backward_clipped;
 use super::learner::{Learner, NamedTensors};
 use super::mappo::{mates_index, Mappo};
 use super::offpolicy::{
-    check_replay, gumbel_noise, gumbel_softmax_st, one_hot, td_target, within, Batch, Params,
+    check_replay, gumbel_noise, gumbel_softmax_st, one_hot, td_target, Batch, Params,
     ReplayLearner, ReplaySchedule, SequenceReplay,
 };
 use super::ppo::CriticView;
 use super::rollout::{BadUpdate, Rollout, UpdateStats};
 use super::Algorithm;
 use crate::env::Action;
+use crate::error::{in_interval, in_range, ConfigError};
 use crate::nn::{Actor, NetConfig, Trunk};
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
@@ -120,31 +121,34 @@ impl Default for MaddpgConfig {
 }
 
 impl MaddpgConfig {
-    pub fn validate(&self) -> Result<(), String> {
-        within("actor_lr", self.actor_lr, 0.0, 0.1, false)?;
-        within("critic_lr", self.critic_lr, 0.0, 0.1, false)?;
-        within("adam_eps", self.adam_eps, 0.0, 1.0, false)?;
-        within("gamma", self.gamma, 0.0, 1.0, true)?;
-        within("tau", self.tau, 0.0, 1.0, false)?;
-        within("replay_ratio", self.replay_ratio, 0.0, 1000.0, false)?;
-        within(
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        in_interval("actor_lr", self.actor_lr, 0.0, 0.1, false)?;
+        in_interval("critic_lr", self.critic_lr, 0.0, 0.1, false)?;
+        in_interval("adam_eps", self.adam_eps, 0.0, 1.0, false)?;
+        in_interval("gamma", self.gamma, 0.0, 1.0, true)?;
+        in_interval("tau", self.tau, 0.0, 1.0, false)?;
+        in_interval("replay_ratio", self.replay_ratio, 0.0, 1000.0, false)?;
+        in_interval(
             "gumbel_temperature",
             self.gumbel_temperature,
             0.0,
             100.0,
             false,
         )?;
-        within("logit_reg", self.logit_reg, 0.0, 10.0, true)?;
-        within("max_grad_norm", self.max_grad_norm, 0.0, 1e6, false)?;
+        in_interval("logit_reg", self.logit_reg, 0.0, 10.0, true)?;
+        in_interval("max_grad_norm", self.max_grad_norm, 0.0, 1e6, false)?;
         check_replay(
             self.chunk_len,
             self.batch_size,
             self.buffer_steps,
             self.learning_starts,
         )?;
-        if self.max_bad_updates == 0 {
-            return Err("max_bad_updates = 0: must be at least 1".into());
-        }
+        in_range(
+            "max_bad_updates",
+            self.max_bad_updates,
+            1..=u32::MAX,
+            "must be at least 1",
+        )?;
         Ok(())
     }
 }

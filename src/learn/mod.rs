@@ -20,50 +20,13 @@ pub mod rollout;
 pub mod shaping;
 pub mod train;
 
-use serde::{Deserialize, Serialize};
+pub use crate::algorithm::Algorithm;
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Algorithm {
-    Mappo,
-    Ippo,
-    Maddpg,
-    Maac,
-}
-
-impl Algorithm {
-    pub fn name(self) -> &'static str {
-        match self {
-            Algorithm::Mappo => "mappo",
-            Algorithm::Ippo => "ippo",
-            Algorithm::Maddpg => "maddpg",
-            Algorithm::Maac => "maac",
-        }
-    }
-
-    pub const ALL: [Algorithm; 4] = [
-        Algorithm::Mappo,
-        Algorithm::Ippo,
-        Algorithm::Maddpg,
-        Algorithm::Maac,
-    ];
-
-    /// The algorithm a config or sidecar names, if any.
-    pub fn parse(name: &str) -> Option<Algorithm> {
-        Algorithm::ALL.into_iter().find(|a| a.name() == name)
-    }
-
-    /// Whether it learns from a replay of past experience.
-    pub fn off_policy(self) -> bool {
-        matches!(self, Algorithm::Maddpg | Algorithm::Maac)
-    }
-
-    /// What PPO's critic reads: the whole team's observations (MAPPO) or
-    /// the robot's own (IPPO, and anything else asked).
-    pub fn critic_view(self) -> Box<dyn ppo::CriticView> {
-        match self {
-            Algorithm::Mappo => Box::new(mappo::Mappo),
-            _ => Box::new(ippo::Ippo),
-        }
+/// What PPO's critic reads: the whole team's observations (MAPPO) or the
+/// robot's own (IPPO, and anything else asked).
+pub fn critic_view(algorithm: Algorithm) -> Box<dyn ppo::CriticView> {
+    match algorithm {
+        Algorithm::Mappo => Box::new(mappo::Mappo),
+        _ => Box::new(ippo::Ippo),
     }
 }

@@ -16,6 +16,7 @@
 use super::adam::Adam;
 use super::learner::{file, optimizer_file, restore_optimizers, NamedTensors};
 use super::rollout::{BadUpdate, Rollout, UpdateStats};
+use crate::error::{in_range, ConfigError};
 use crate::nn::checkpoint::{load_into, named_cpu_tensors};
 use crate::nn::obs_tensors;
 use rand::Rng;
@@ -655,37 +656,26 @@ pub fn check_replay(
     batch_size: usize,
     buffer_steps: usize,
     learning_starts: usize,
-) -> Result<(), String> {
-    if !(1..=1000).contains(&chunk_len) {
-        return Err(format!("chunk_len = {chunk_len}: must be in 1..=1000"));
-    }
-    if !(1..=100_000).contains(&batch_size) {
-        return Err(format!(
-            "batch_size = {batch_size}: must be in 1..=100000 sequences"
-        ));
-    }
-    if buffer_steps < chunk_len * batch_size || buffer_steps > 100_000_000 {
-        return Err(format!(
-            "buffer_steps = {buffer_steps}: must hold at least one batch ({batch_size} sequences of {chunk_len} steps) and at most 100,000,000 steps"
-        ));
-    }
-    if learning_starts > buffer_steps {
-        return Err(format!(
-            "learning_starts = {learning_starts}: more than the buffer holds (buffer_steps = {buffer_steps})"
-        ));
-    }
-    Ok(())
-}
-
-/// A number within (lo, hi] (or [lo, hi] with `closed`), NaN-proof.
-pub fn within(name: &str, v: f64, lo: f64, hi: f64, closed: bool) -> Result<(), String> {
-    let above = if closed { v >= lo } else { v > lo };
-    if above && v <= hi && v.is_finite() {
-        Ok(())
-    } else {
-        let bracket = if closed { "[" } else { "(" };
-        Err(format!("{name} = {v}: must be in {bracket}{lo}, {hi}]"))
-    }
+) -> Result<(), ConfigError> {
+    in_range("chunk_len", chunk_len, 1..=1000, "must be in 1..=1000")?;
+    in_range(
+        "batch_size",
+        batch_size,
+        1..=100_000,
+        "must be in 1..=100000 sequences",
+    )?;
+    in_range(
+        "buffer_steps",
+        buffer_steps,
+        chunk_len * batch_size..=100_000_000,
+        &format!("must hold at least one batch ({batch_size} sequences of {chunk_len} steps) and at most 100,000,000 steps"),
+    )?;
+    in_range(
+        "learning_starts",
+        learning_starts,
+        0..=buffer_steps,
+        &format!("more than the buffer holds (buffer_steps = {buffer_steps})"),
+    )
 }
 
 #[cfg(test)]

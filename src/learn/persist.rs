@@ -67,7 +67,7 @@ pub fn save_new_learner(
 /// algorithm is refused before anything is loaded.
 pub fn load_learner(dir: &Path, learner: &mut dyn Learner) -> Result<CheckpointMeta> {
     let meta = read_meta(dir)?;
-    let algorithm = learner.algorithm().name();
+    let algorithm = learner.algorithm();
     if meta.algorithm != algorithm {
         bail!(
             "{}: a {} checkpoint, but this learner is {algorithm}",

@@ -8,6 +8,7 @@ use super::adam::{backward_clipped, Adam};
 use super::learner::{file, optimizer_file, restore_optimizers, Learner, NamedTensors};
 use super::rollout::{BadUpdate, Rollout, UpdateStats};
 use super::Algorithm;
+use crate::error::{in_interval, in_range, ConfigError};
 use crate::nn::checkpoint::{load_into, named_cpu_tensors};
 use crate::nn::prior::add_prior;
 use crate::nn::{Actor, Critic, NetConfig};
@@ -105,16 +106,10 @@ impl Default for PpoConfig {
 }
 
 impl PpoConfig {
-    pub fn validate(&self) -> Result<(), String> {
-        // Written so that NaN fails every check: a comparison with NaN is false.
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        // (lo, hi] where the last argument is true, else [lo, hi].
         let within = |name: &str, v: f64, lo: f64, hi: f64, open_lo: bool| {
-            let above = if open_lo { v > lo } else { v >= lo };
-            if above && v <= hi && v.is_finite() {
-                Ok(())
-            } else {
-                let bracket = if open_lo { "(" } else { "[" };
-                Err(format!("{name} = {v}: must be in {bracket}{lo}, {hi}]"))
-            }
+            in_interval(name, v, lo, hi, !open_lo)
         };
         within("gamma", self.gamma, 0.0, 1.0, false)?;
         within("gae_lambda", self.gae_lambda, 0.0, 1.0, false)?;
@@ -131,13 +126,14 @@ impl PpoConfig {
             ("minibatches", self.minibatches),
             ("chunk_len", self.chunk_len),
         ] {
-            if !(1..=10_000).contains(&v) {
-                return Err(format!("{name} = {v}: must be in 1..=10000"));
-            }
+            in_range(name, v, 1..=10_000, "must be in 1..=10000")?;
         }
-        if self.max_bad_updates == 0 {
-            return Err("max_bad_updates = 0: must be at least 1".into());
-        }
+        in_range(
+            "max_bad_updates",
+            self.max_bad_updates,
+            1..=u32::MAX,
+            "must be at least 1",
+        )?;
         Ok(())
     }
 }
@@ -303,7 +299,7 @@ impl PpoLearner {
         team: usize,
         device: Device,
     ) -> PpoLearner {
-        let view = algorithm.critic_view();
+        let view = super::critic_view(algorithm);
         let actor_vs = nn::VarStore::new(device);
         let actor = Actor::new(&actor_vs.root(), &net, vector_len);
         let critic_vs = nn::VarStore::new(device);

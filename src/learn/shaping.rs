@@ -6,6 +6,7 @@
 //! stay the spec's; a run that shapes says so in its config (and hash).
 
 use crate::env::potential::Potential;
+use crate::error::{in_interval, ConfigError};
 use serde::{Deserialize, Serialize};
 
 /// `[captors.shaping]` / `[target.shaping]` of a training config.
@@ -30,11 +31,8 @@ impl Default for ShapingConfig {
 }
 
 impl ShapingConfig {
-    pub fn validate(&self) -> Result<(), String> {
-        if !(self.weight.is_finite() && (0.0..=1000.0).contains(&self.weight)) {
-            return Err(format!("weight = {}: must be in [0, 1000]", self.weight));
-        }
-        Ok(())
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        in_interval("weight", self.weight, 0.0, 1000.0, true)
     }
 
     pub fn is_off(&self) -> bool {
@@ -98,7 +96,10 @@ mod tests {
                 potential: Some(Potential::Trap),
                 weight: w,
             };
-            assert!(c.validate().unwrap_err().contains("weight"), "{w}");
+            assert!(
+                c.validate().unwrap_err().to_string().contains("weight"),
+                "{w}"
+            );
         }
         assert!(ShapingConfig::default().is_off());
     }

@@ -10,7 +10,7 @@
 //! a `--resume` continues from.
 
 use super::acting::{gather_side, gather_worlds, sample};
-pub use super::config::{check_rollout, DeviceChoice, Role, SideConfig, TrainConfig};
+pub use super::config::{check_rollout, DeviceChoice, Play, SideConfig, TrainConfig};
 use super::learner::Learner;
 use super::maac::MaacLearner;
 use super::maddpg::MaddpgLearner;
@@ -267,11 +267,11 @@ impl Trainer {
         .map_err(anyhow::Error::msg)?;
         let mut learners = Vec::new();
         for (side, side_cfg) in [(Side::Captors, &cfg.captors), (Side::Target, &cfg.target)] {
-            match side_cfg.role().map_err(anyhow::Error::msg)? {
-                Role::Script(spec) => {
+            match &side_cfg.play {
+                Play::Script(spec) => {
                     venv.script(side, || spec.build(side).expect("checked by validate"));
                 }
-                Role::Learn(algorithm) => {
+                &Play::Learn(algorithm) => {
                     let team = side.agents(k).len();
                     let rows = team * cfg.num_envs;
                     // Each side's initial weights from its own seed, drawn
@@ -713,7 +713,7 @@ impl Trainer {
         CheckpointMeta {
             format: FORMAT,
             side: ls.side,
-            algorithm: ls.learner.algorithm().name().into(),
+            algorithm: ls.learner.algorithm(),
             net: ls.learner.net().clone(),
             num_captors: self.cfg.env.num_captors,
             critic_agents: ls.learner.critic_agents(),

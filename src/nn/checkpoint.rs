@@ -18,6 +18,7 @@
 //!   refuses non-finite weights: a flipped byte or a NaN never plays.
 
 use super::{obs_tensors, pool_patch, Actor, NetConfig};
+use crate::algorithm::Algorithm;
 use crate::env::{Action, Controller, EnvConfig, Side, TrapEnv, PATCH_LEN};
 use crate::fs::{write_dir_atomically, write_new_dir_atomically, Written};
 use crate::util::sha256_file;
@@ -35,7 +36,6 @@ use tch::{nn, Device, Kind, Tensor};
 pub const FORMAT: u32 = 2;
 
 /// The learners whose checkpoints this build can load.
-pub const KNOWN_ALGORITHMS: [&str; 4] = ["mappo", "ippo", "maddpg", "maac"];
 
 /// The sidecar of a checkpoint.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -44,7 +44,7 @@ pub struct CheckpointMeta {
     pub format: u32,
     pub side: Side,
     /// "mappo" or "ippo".
-    pub algorithm: String,
+    pub algorithm: Algorithm,
     pub net: NetConfig,
     /// K, which fixes the observation vector's length (5 + 5 K).
     pub num_captors: usize,
@@ -94,24 +94,35 @@ impl CheckpointMeta {
     }
 
     /// Whether this policy can play `side` in environments configured as `cfg`.
-    pub fn check_fits(&self, side: Side, cfg: &EnvConfig) -> Result<(), String> {
+    pub fn check_fits(&self, side: Side, cfg: &EnvConfig) -> Result<(), DoesNotFit> {
         if self.side != side {
-            return Err(format!(
-                "it holds a {} policy, asked to play the {}",
-                self.side.name(),
-                side.name()
-            ));
+            return Err(DoesNotFit::Side {
+                holds: self.side,
+                asked: side,
+            });
         }
         if self.num_captors != cfg.num_captors {
-            return Err(format!(
-                "it was trained with K = {} captors and its observations have {} numbers; this setting has K = {}",
-                self.num_captors,
-                self.vector_len(),
-                cfg.num_captors
-            ));
+            return Err(DoesNotFit::Captors {
+                trained: self.num_captors,
+                vector_len: self.vector_len(),
+                asked: cfg.num_captors,
+            });
         }
         Ok(())
     }
+}
+
+/// Why a checkpoint cannot play where it was asked to.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum DoesNotFit {
+    #[error("it holds a {} policy, asked to play the {}", holds.name(), asked.name())]
+    Side { holds: Side, asked: Side },
+    #[error("it was trained with K = {trained} captors and its observations have {vector_len} numbers; this setting has K = {asked}")]
+    Captors {
+        trained: usize,
+        vector_len: usize,
+        asked: usize,
+    },
 }
 
 pub fn code_version() -> String {
@@ -293,16 +304,24 @@ pub fn read_meta_hashed(dir: &Path) -> Result<(CheckpointMeta, String)> {
             );
         }
     }
+    // The algorithm first, by name: an unknown one is refused as such,
+    // not as a sidecar that does not parse.
+    #[derive(Deserialize)]
+    struct Named {
+        algorithm: String,
+    }
+    if let Ok(Named { algorithm }) = serde_json::from_str::<Named>(&text) {
+        if Algorithm::parse(&algorithm).is_none() {
+            let known: Vec<&str> = Algorithm::ALL.iter().map(|a| a.name()).collect();
+            bail!(
+                "{}: algorithm \"{algorithm}\" is not one this build can load ({})",
+                path.display(),
+                known.join(", ")
+            );
+        }
+    }
     let meta: CheckpointMeta = serde_json::from_str(&text)
         .with_context(|| format!("{}: not a checkpoint sidecar", path.display()))?;
-    if !KNOWN_ALGORITHMS.contains(&meta.algorithm.as_str()) {
-        bail!(
-            "{}: algorithm \"{}\" is not one this build can load ({})",
-            path.display(),
-            meta.algorithm,
-            KNOWN_ALGORITHMS.join(", ")
-        );
-    }
     if !(meta.speed_ratio.is_finite() && meta.speed_ratio > 0.0) {
         bail!(
             "{}: speed_ratio = {}: not a speed ratio",

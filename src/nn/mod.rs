@@ -16,6 +16,7 @@ pub use checkpoint::{CheckpointController, CheckpointMeta, PolicySnapshot};
 pub(crate) use egocentric::EgocentricVector;
 
 use crate::env::{Action, PATCH};
+use crate::error::{in_range, ConfigError};
 use serde::{Deserialize, Serialize};
 use tch::nn::{self, RNN};
 use tch::{Device, Kind, Tensor};
@@ -178,20 +179,20 @@ impl ScaledVector {
 }
 
 impl NetConfig {
-    pub fn validate(&self) -> Result<(), String> {
-        if !(8..=4096).contains(&self.hidden) {
-            return Err(format!("hidden = {}: must be in 8..=4096", self.hidden));
-        }
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        in_range("hidden", self.hidden, 8..=4096, "must be in 8..=4096")?;
         if self.conv_channels.iter().any(|&c| !(1..=512).contains(&c)) {
-            return Err(format!(
-                "conv_channels = {:?}: each must be in 1..=512",
-                self.conv_channels
+            return Err(ConfigError::new(
+                "conv_channels",
+                format!("{:?}", self.conv_channels),
+                "each must be in 1..=512",
             ));
         }
         if ![1, 2, 3, 4, 6].contains(&self.patch_pool) {
-            return Err(format!(
-                "patch_pool = {}: must divide 48 and leave at least 8 pixels (1, 2, 3, 4 or 6)",
-                self.patch_pool
+            return Err(ConfigError::new(
+                "patch_pool",
+                self.patch_pool,
+                "must divide 48 and leave at least 8 pixels (1, 2, 3, 4 or 6)",
             ));
         }
         Ok(())

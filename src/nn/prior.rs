@@ -21,6 +21,7 @@
 //! side and learner check.
 
 use crate::env::{Action, Side, TrapEnv};
+use crate::error::ConfigError;
 use tch::{Kind, Tensor};
 
 /// The largest prior weight accepted: beyond it the policy is the rule-based
@@ -47,10 +48,12 @@ pub fn add_prior(logits: Tensor, hints: &Tensor, weight: f64) -> Tensor {
 
 /// Checks a side's prior: only the target has a rule-based action to lean
 /// on, and only the PPO learners (MAPPO, IPPO) read it.
-pub fn check(weight: f64, side: Side, ppo: bool) -> Result<(), String> {
+pub fn check(weight: f64, side: Side, ppo: bool) -> Result<(), ConfigError> {
     if !(weight.is_finite() && (0.0..=MAX_WEIGHT).contains(&weight)) {
-        return Err(format!(
-            "heuristic_prior = {weight}: must be in [0, {MAX_WEIGHT}] (0: off)"
+        return Err(ConfigError::new(
+            "heuristic_prior",
+            weight,
+            format!("must be in [0, {MAX_WEIGHT}] (0: off)"),
         ));
     }
     target_and_ppo_only(
@@ -66,7 +69,7 @@ pub fn check(weight: f64, side: Side, ppo: bool) -> Result<(), String> {
 /// Checks a side's `ppo.heuristic_kl` (the penalty for leaving the
 /// rule-based target's action): the target's alone, as the prior. Its
 /// range is `PpoConfig::validate`'s.
-pub fn check_kl(weight: f64, side: Side, ppo: bool) -> Result<(), String> {
+pub fn check_kl(weight: f64, side: Side, ppo: bool) -> Result<(), ConfigError> {
     target_and_ppo_only(
         "heuristic_kl",
         weight,
@@ -86,15 +89,19 @@ fn target_and_ppo_only(
     ppo: bool,
     what: &str,
     section: &str,
-) -> Result<(), String> {
+) -> Result<(), ConfigError> {
     if weight > 0.0 && side == Side::Captors {
-        return Err(format!(
-            "{field} = {weight}: only the target has one ({what}); set it under {section}"
+        return Err(ConfigError::new(
+            field,
+            weight,
+            format!("only the target has one ({what}); set it under {section}"),
         ));
     }
     if weight > 0.0 && !ppo {
-        return Err(format!(
-            "{field} = {weight}: only MAPPO and IPPO read it; drop it or play mappo / ippo"
+        return Err(ConfigError::new(
+            field,
+            weight,
+            "only MAPPO and IPPO read it; drop it or play mappo / ippo",
         ));
     }
     Ok(())
@@ -131,14 +138,17 @@ mod tests {
         assert!(check(2.0, Side::Target, true).is_ok());
         assert!(check(2.0, Side::Captors, true)
             .unwrap_err()
+            .to_string()
             .contains("only the target"));
         assert!(check(2.0, Side::Target, false)
             .unwrap_err()
+            .to_string()
             .contains("MAPPO and IPPO"));
         for w in [-1.0, 21.0, f64::NAN, f64::INFINITY] {
             assert!(
                 check(w, Side::Target, true)
                     .unwrap_err()
+                    .to_string()
                     .starts_with("heuristic_prior"),
                 "{w}"
             );
@@ -151,9 +161,11 @@ mod tests {
         assert!(check_kl(0.5, Side::Target, true).is_ok());
         assert!(check_kl(0.5, Side::Captors, true)
             .unwrap_err()
+            .to_string()
             .contains("only the target"));
         assert!(check_kl(0.5, Side::Target, false)
             .unwrap_err()
+            .to_string()
             .contains("MAPPO and IPPO"));
     }
 }

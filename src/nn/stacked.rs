@@ -125,15 +125,24 @@ pub struct StackedActors {
     tensors: Vec<Tensor>,
 }
 
+/// Why actors cannot run as one stacked network.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum StackError {
+    #[error("no actors to stack")]
+    Empty,
+    #[error("cannot stack networks of different shapes ({0})")]
+    Shapes(String),
+}
+
 impl StackedActors {
     /// Stacks actors of one shape (checked).
-    pub fn new(actors: &[&PreparedActor]) -> Result<StackedActors, String> {
-        let first = actors.first().ok_or("no actors to stack")?;
+    pub fn new(actors: &[&PreparedActor]) -> Result<StackedActors, StackError> {
+        let first = actors.first().ok_or(StackError::Empty)?;
         if let Some(odd) = actors.iter().find(|a| !a.same_shape(first)) {
-            return Err(format!(
-                "cannot stack networks of different shapes ({:?}, {} inputs vs {:?}, {} inputs)",
+            return Err(StackError::Shapes(format!(
+                "{:?}, {} inputs vs {:?}, {} inputs",
                 first.net, first.vector_len, odd.net, odd.vector_len
-            ));
+            )));
         }
         let tensors: Vec<Tensor> = (0..first.tensors.len())
             .map(|i| {

@@ -223,6 +223,7 @@ fn controllers_are_named_and_checked_per_side() {
         assert!(
             bad.parse::<ControllerSpec>()
                 .unwrap_err()
+                .to_string()
                 .contains("coarsening"),
             "{bad}"
         );
@@ -231,12 +232,14 @@ fn controllers_are_named_and_checked_per_side() {
     assert!("magic"
         .parse::<ControllerSpec>()
         .unwrap_err()
+        .to_string()
         .contains("unknown controller"));
     for empty in ["ckpt:", "sample:"] {
         assert!(
             empty
                 .parse::<ControllerSpec>()
                 .unwrap_err()
+                .to_string()
                 .contains("needs a path"),
             "{empty}"
         );
@@ -249,7 +252,7 @@ fn controllers_are_named_and_checked_per_side() {
         (greedy.to_string(), sampled.to_string()),
         ("ckpt:runs/x".into(), "sample:runs/x".into())
     );
-    let missing = sampled.build(Side::Captors).err().unwrap();
+    let missing = sampled.build(Side::Captors).err().unwrap().to_string();
     assert!(missing.contains("runs/x"), "{missing}");
 }
 
@@ -335,10 +338,11 @@ fn randomised_experts_draw_their_constants_per_episode_and_replay_with_the_seed(
     let spec: ControllerSpec = "expert:7".parse().unwrap();
     assert_eq!(spec.to_string(), "expert:7");
     assert!(spec.build(Side::Captors).is_ok());
-    let err = spec.build(Side::Target).err().unwrap();
+    let err = spec.build(Side::Target).err().unwrap().to_string();
     assert!(err.contains("captor team"), "{err}");
     assert!("expert:x"
         .parse::<ControllerSpec>()
         .unwrap_err()
+        .to_string()
         .contains("expert:SEED"));
 }

@@ -34,7 +34,7 @@ fn chase_config(seed: u64) -> TrainConfig {
             ..EnvConfig::default()
         },
         captors: SideConfig {
-            play: "mappo".into(),
+            play: "mappo".parse().unwrap(),
             net: NetConfig {
                 hidden: 32,
                 conv_channels: [4, 8],
@@ -49,7 +49,7 @@ fn chase_config(seed: u64) -> TrainConfig {
             ..SideConfig::default()
         },
         target: SideConfig {
-            play: "still".into(),
+            play: "still".parse().unwrap(),
             ..SideConfig::default()
         },
     }
@@ -161,7 +161,7 @@ fn checkpoints_play_as_controllers_and_resume_exactly() {
         (meta.side, meta.num_captors, meta.iteration, meta.env_steps),
         (Side::Captors, 1, 2, 1280)
     );
-    assert_eq!(meta.algorithm, "mappo");
+    assert_eq!(meta.algorithm.name(), "mappo");
     assert_eq!(meta.config_hash, cfg.hash());
 
     // Resuming restores weights, optimiser and counters.
@@ -233,7 +233,10 @@ fn checkpoints_play_as_controllers_and_resume_exactly() {
     assert!(loaded.iter().zip(&saved).all(|((_, a), (_, b))| a.equal(b)));
 
     // It refuses to play the target, or with another K.
-    let err = spec.check(Side::Target, &EnvConfig::default()).unwrap_err();
+    let err = spec
+        .check(Side::Target, &EnvConfig::default())
+        .unwrap_err()
+        .to_string();
     assert!(
         err.contains("captors policy") || err.contains("holds no target"),
         "{err}"
@@ -242,7 +245,7 @@ fn checkpoints_play_as_controllers_and_resume_exactly() {
         num_captors: 3,
         ..EnvConfig::default()
     };
-    let err = spec.check(Side::Captors, &cfg3).unwrap_err();
+    let err = spec.check(Side::Captors, &cfg3).unwrap_err().to_string();
     assert!(err.contains("K = 1") && err.contains("K = 3"), "{err}");
     let _ = TrapEnv::new(cfg3, chase_maps()).unwrap();
 }
@@ -313,7 +316,7 @@ fn both_sides_learn_together_and_a_frozen_checkpoint_can_be_the_opponent() {
     let dir = tempfile::tempdir().unwrap();
     let mut cfg = chase_config(4);
     cfg.target = SideConfig {
-        play: "ippo".into(),
+        play: "ippo".parse().unwrap(),
         ..cfg.captors.clone()
     };
     let mut trainer = Trainer::new(cfg.clone(), chase_maps()).unwrap();
@@ -328,7 +331,7 @@ fn both_sides_learn_together_and_a_frozen_checkpoint_can_be_the_opponent() {
     assert_eq!(names, ["captors-000000000640", "target-000000000640"]);
     let target_meta = read_meta(&written[1]).unwrap();
     assert_eq!(
-        (target_meta.side, target_meta.algorithm.as_str()),
+        (target_meta.side, target_meta.algorithm.name()),
         (Side::Target, "ippo")
     );
     assert_eq!(target_meta.critic_agents, 1);
@@ -337,12 +340,12 @@ fn both_sides_learn_together_and_a_frozen_checkpoint_can_be_the_opponent() {
 
     // The target's checkpoint, frozen, as the opponent of learning captors.
     let mut against_frozen = chase_config(5);
-    against_frozen.target.play = format!("ckpt:{}", dir.path().display());
+    against_frozen.target.play = format!("ckpt:{}", dir.path().display()).parse().unwrap();
     let mut t = Trainer::new(against_frozen.clone(), chase_maps()).unwrap();
     let m = t.iterate().unwrap();
     assert!(m.captor_policy_loss.is_some() && m.target_policy_loss.is_none());
     // A captor checkpoint cannot play the target.
-    against_frozen.target.play = format!("ckpt:{}", written[0].display());
+    against_frozen.target.play = format!("ckpt:{}", written[0].display()).parse().unwrap();
     let err = Trainer::new(against_frozen, chase_maps())
         .err()
         .unwrap()
@@ -357,7 +360,7 @@ fn both_sides_learn_together_and_a_frozen_checkpoint_can_be_the_opponent() {
 /// rollout on, several gradient steps per rollout.
 fn off_policy_chase(play: &str, seed: u64) -> TrainConfig {
     let mut cfg = chase_config(seed);
-    cfg.captors.play = play.into();
+    cfg.captors.play = play.parse().unwrap();
     cfg.captors.maddpg = t2e::learn::maddpg::MaddpgConfig {
         learning_starts: 640,
         replay_ratio: 8.0,
@@ -433,7 +436,7 @@ fn off_policy_checkpoints_keep_their_target_networks_resume_and_play() {
         let written = trainer.save(&run).unwrap();
         let ckpt = &written[0];
         let meta = read_meta(ckpt).unwrap();
-        assert_eq!((meta.algorithm.as_str(), meta.num_captors), (play, 2));
+        assert_eq!((meta.algorithm.name(), meta.num_captors), (play, 2));
         let files =
             |dir: &Path, name: &str| t2e::nn::checkpoint::read_tensors(&dir.join(name)).unwrap();
         // Soft updates keep the targets behind the online networks, and the
@@ -521,9 +524,9 @@ fn a_target_leaning_on_the_rule_based_one_plays_it_and_learns_from_its_own_logit
     let dir = tempfile::tempdir().unwrap();
     let room_maps = || maps(room(60, 260, 60, 260));
     let mut cfg = chase_config(6);
-    cfg.captors.play = "heuristic".into();
+    cfg.captors.play = "heuristic".parse().unwrap();
     cfg.target = SideConfig {
-        play: "ippo".into(),
+        play: "ippo".parse().unwrap(),
         net: NetConfig {
             heuristic_prior: 20.0,
             ..cfg.captors.net.clone()
@@ -583,7 +586,7 @@ fn a_target_leaning_on_the_rule_based_one_plays_it_and_learns_from_its_own_logit
     // The captors have no rule-based action to lean on.
     let mut bad = chase_config(6);
     bad.captors.net.heuristic_prior = 2.0;
-    let err = bad.validate().unwrap_err();
+    let err = bad.validate().unwrap_err().to_string();
     assert!(err.starts_with("captors.net.heuristic_prior"), "{err}");
 }
 
@@ -601,9 +604,9 @@ fn a_kl_towards_the_rule_based_target_pulls_the_learned_target_to_its_actions() 
     let room_maps = || maps(room(60, 260, 60, 260));
     let trained = |kl: f64| {
         let mut cfg = chase_config(8);
-        cfg.captors.play = "heuristic".into();
+        cfg.captors.play = "heuristic".parse().unwrap();
         cfg.target = SideConfig {
-            play: "ippo".into(),
+            play: "ippo".parse().unwrap(),
             net: cfg.captors.net.clone(),
             ppo: t2e::learn::ppo::PpoConfig {
                 lr: 2e-3,
@@ -661,9 +664,9 @@ fn a_kl_towards_the_rule_based_target_pulls_the_learned_target_to_its_actions() 
 
     let mut bad = chase_config(8);
     bad.captors.ppo.heuristic_kl = 1.0;
-    let err = bad.validate().unwrap_err();
+    let err = bad.validate().unwrap_err().to_string();
     assert!(err.starts_with("captors.ppo.heuristic_kl"), "{err}");
     bad.captors.ppo.heuristic_kl = f64::NAN;
-    let err = bad.validate().unwrap_err();
+    let err = bad.validate().unwrap_err().to_string();
     assert!(err.starts_with("captors.ppo.heuristic_kl"), "{err}");
 }

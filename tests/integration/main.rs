@@ -16,6 +16,7 @@ mod league_faults;
 mod learn;
 mod protocol;
 mod store;
+mod stored_runs;
 mod tch_smoke;
 mod trust;
 mod workers;

@@ -159,7 +159,11 @@ fn degenerate_options_are_refused() {
         total_env_steps: 0,
         ..TrainConfig::default()
     };
-    assert!(cfg.validate().unwrap_err().contains("total_env_steps = 0"));
+    assert!(cfg
+        .validate()
+        .unwrap_err()
+        .to_string()
+        .contains("total_env_steps = 0"));
 }
 
 #[test]
@@ -295,7 +299,7 @@ fn tiny_config() -> TrainConfig {
             ..EnvConfig::default()
         },
         captors: SideConfig {
-            play: "mappo".into(),
+            play: "mappo".parse().unwrap(),
             net: NetConfig {
                 hidden: 16,
                 conv_channels: [2, 4],
@@ -306,7 +310,7 @@ fn tiny_config() -> TrainConfig {
             ..SideConfig::default()
         },
         target: SideConfig {
-            play: "still".into(),
+            play: "still".parse().unwrap(),
             ..SideConfig::default()
         },
     }
@@ -609,7 +613,11 @@ fn inputs_that_once_misbehaved_give_clear_errors() {
         name: "../elsewhere".into(),
         ..TrainConfig::default()
     };
-    assert!(cfg.validate().unwrap_err().starts_with("name = "));
+    assert!(cfg
+        .validate()
+        .unwrap_err()
+        .to_string()
+        .starts_with("name = "));
 
     // render writes GIF data, so the file must be a .gif.
     use clap::Parser;
@@ -632,7 +640,10 @@ fn defects_an_adversarial_pass_found_are_fixed() {
             ..tiny_config()
         };
         assert!(
-            cfg.validate().unwrap_err().starts_with("num_envs"),
+            cfg.validate()
+                .unwrap_err()
+                .to_string()
+                .starts_with("num_envs"),
             "{envs}"
         );
     }
@@ -641,7 +652,11 @@ fn defects_an_adversarial_pass_found_are_fixed() {
         rollout_steps: 100_000,
         ..tiny_config()
     };
-    assert!(cfg.validate().unwrap_err().contains("does not fit"));
+    assert!(cfg
+        .validate()
+        .unwrap_err()
+        .to_string()
+        .contains("does not fit"));
 
     // A 1x1 map says it is smaller than a cell.
     let dir = tempfile::tempdir().unwrap();

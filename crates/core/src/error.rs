@@ -47,6 +47,16 @@ impl ConfigError {
         }
     }
 
+    /// A rule about a field that no single value breaks (two settings
+    /// that do not fit together, a side with nothing to do).
+    pub fn about(field: impl Into<String>, rule: impl Into<String>) -> Self {
+        ConfigError {
+            field: field.into(),
+            value: None,
+            rule: rule.into(),
+        }
+    }
+
     /// The same error seen from the table above: `num_captors` in `env`
     /// becomes `env.num_captors`.
     pub fn within(mut self, table: &str) -> Self {
@@ -67,6 +77,28 @@ pub fn in_range<T: PartialOrd + Display>(
         Ok(())
     } else {
         Err(ConfigError::new(field, value, rule))
+    }
+}
+
+/// A real number within (lo, hi], or [lo, hi] when `closed`; NaN and the
+/// infinities are in no interval. The rule reads `must be in (0, 1]`.
+pub fn in_interval(
+    field: &str,
+    value: f64,
+    lo: f64,
+    hi: f64,
+    closed: bool,
+) -> Result<(), ConfigError> {
+    let above = if closed { value >= lo } else { value > lo };
+    if above && value <= hi && value.is_finite() {
+        Ok(())
+    } else {
+        let bracket = if closed { "[" } else { "(" };
+        Err(ConfigError::new(
+            field,
+            value,
+            format!("must be in {bracket}{lo}, {hi}]"),
+        ))
     }
 }
 
@@ -95,6 +127,16 @@ impl fmt::Display for MapsRefused {
 
 impl std::error::Error for MapsRefused {}
 
+/// A config file's text that cannot be read as its schema, or whose values
+/// cannot be honoured.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum ConfigFileError {
+    #[error(transparent)]
+    Toml(#[from] crate::util::TomlError),
+    #[error(transparent)]
+    Invalid(#[from] ConfigError),
+}
+
 /// Why an environment cannot be built or changed.
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
 pub enum EnvError {
@@ -120,6 +162,15 @@ mod tests {
         assert!(in_range("v", f64::NAN, 0.0..=10.0, "a speed").is_err());
         assert!(in_range("v", f64::INFINITY, 0.0..=10.0, "a speed").is_err());
         assert!(in_range("v", 10.0, 0.0..=10.0, "a speed").is_ok());
+        assert_eq!(
+            in_interval("clip", 0.0, 0.0, 1.0, false)
+                .unwrap_err()
+                .to_string(),
+            "clip = 0: must be in (0, 1]"
+        );
+        assert!(in_interval("gamma", 0.0, 0.0, 1.0, true).is_ok());
+        assert!(in_interval("gamma", f64::NAN, 0.0, 1.0, true).is_err());
+        assert!(in_interval("gamma", 1.5, 0.0, 1.0, true).is_err());
         assert_eq!(
             ConfigError::missing("protocol", "name it").to_string(),
             "protocol: missing; name it"

@@ -47,6 +47,14 @@ pub enum Written {
     Unchanged,
 }
 
+/// The folder that holds `path`: `.` for a bare name such as `out`, whose
+/// `parent()` is the empty path (which cannot be opened or synced).
+fn parent_dir(path: &Path) -> &Path {
+    path.parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."))
+}
+
 fn sync_path(path: &Path) -> Result<(), FsError> {
     std::fs::File::open(path)
         .and_then(|f| f.sync_all())
@@ -189,7 +197,7 @@ fn write_dir<E: From<FsError>>(
     if !replace && dir.exists() {
         return Err(FsError::Exists(dir.to_path_buf()).into());
     }
-    let parent = dir.parent().unwrap_or(Path::new("."));
+    let parent = parent_dir(dir);
     std::fs::create_dir_all(parent)
         .map_err(io(|| format!("cannot create {}", parent.display())))?;
     let name = file_name(dir)?;
@@ -325,4 +333,16 @@ pub fn clean_stale_temporaries(dir: &Path) -> Result<Vec<PathBuf>, FsError> {
         }
     }
     Ok(touched)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_bare_name_lives_in_the_working_folder() {
+        assert_eq!(parent_dir(Path::new("out")), Path::new("."));
+        assert_eq!(parent_dir(Path::new("runs/out")), Path::new("runs"));
+        assert_eq!(parent_dir(Path::new("/out")), Path::new("/"));
+    }
 }

@@ -3,6 +3,7 @@
 //! evaluation protocols, and the file-system code every writer shares.
 //! The learners and the league build on it (the `t2e` crate re-exports
 //! these modules under the same names).
+pub mod algorithm;
 pub mod asz;
 pub mod env;
 pub mod error;

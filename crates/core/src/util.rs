@@ -56,10 +56,42 @@ pub fn safe_component(text: &str, max: usize) -> String {
     out
 }
 
+/// A TOML text that does not fit its schema, at `path` (`target.play`; `.`
+/// for the whole document).
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("{}{message}", if path == "." { String::new() } else { format!("{path}: ") })]
+pub struct TomlError {
+    pub path: String,
+    pub message: String,
+}
+
+/// Reads a TOML document into `T`; the error names the field it stopped
+/// at, which toml's own message leaves to a line number.
+pub fn from_toml<T: serde::de::DeserializeOwned>(text: &str) -> Result<T, TomlError> {
+    serde_path_to_error::deserialize(toml::Deserializer::new(text)).map_err(|e| TomlError {
+        path: e.path().to_string(),
+        message: e.into_inner().to_string(),
+    })
+}
+
+/// A duration option that cannot be read: `--for 0: must be more than 0`.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("{option} {text}: {why}")]
+pub struct DurationError {
+    pub option: String,
+    pub text: String,
+    pub why: String,
+}
+
 /// Parses a wall-clock duration given to `option` (`--for`,
 /// `--eval-every`): `90` or `90s`, `10m`, `2h`; more than 0, at most 30
 /// days, and finite, so 0, negatives and garbage are refused by name.
-pub fn parse_duration(option: &str, text: &str) -> Result<Duration, String> {
+pub fn parse_duration(option: &str, text: &str) -> Result<Duration, DurationError> {
+    let refuse = |why: String| DurationError {
+        option: option.to_string(),
+        text: text.to_string(),
+        why,
+    };
     let t = text.trim();
     let (num, unit) = match t.char_indices().find(|(_, c)| c.is_ascii_alphabetic()) {
         Some((i, _)) => (&t[..i], &t[i..]),
@@ -67,21 +99,15 @@ pub fn parse_duration(option: &str, text: &str) -> Result<Duration, String> {
     };
     let n: f64 = num
         .parse()
-        .map_err(|_| format!("{option} {text}: expected a duration such as 90s, 10m or 2h"))?;
+        .map_err(|_| refuse("expected a duration such as 90s, 10m or 2h".into()))?;
     let secs = match unit {
         "s" => n,
         "m" | "min" => n * 60.0,
         "h" => n * 3600.0,
-        _ => {
-            return Err(format!(
-                "{option} {text}: unknown unit '{unit}' (s, m or h)"
-            ))
-        }
+        _ => return Err(refuse(format!("unknown unit '{unit}' (s, m or h)"))),
     };
     if !(secs.is_finite() && secs > 0.0 && secs <= 30.0 * 86400.0) {
-        return Err(format!(
-            "{option} {text}: must be more than 0 and at most 30 days"
-        ));
+        return Err(refuse("must be more than 0 and at most 30 days".into()));
     }
     Ok(Duration::from_secs_f64(secs))
 }
@@ -178,7 +204,7 @@ mod tests {
         );
         for bad in ["", "0", "-5m", "10x", "nanm", "1e9h", "0s"] {
             let e = parse_duration("--eval-every", bad).unwrap_err();
-            assert!(e.starts_with("--eval-every"), "{bad}: {e}");
+            assert!(e.to_string().starts_with("--eval-every"), "{bad}: {e}");
         }
     }
 }

@@ -30,9 +30,23 @@ impl Kind {
     }
 }
 
+/// A stored value this program cannot read back: a column holding a name
+/// it does not know, or a row that breaks the store's rules.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum RowError {
+    #[error("unknown {what} {value:?}")]
+    Unknown { what: &'static str, value: String },
+    #[error("player {player} names the checkpoint {path:?}, outside the league's pool folder; refusing it")]
+    CheckpointOutsidePool { player: String, path: String },
+}
+
+fn unknown(what: &'static str, value: String) -> RowError {
+    RowError::Unknown { what, value }
+}
+
 impl TryFrom<String> for Kind {
-    type Error = String;
-    fn try_from(s: String) -> Result<Kind, String> {
+    type Error = RowError;
+    fn try_from(s: String) -> Result<Kind, RowError> {
         [
             Kind::Learner,
             Kind::Snapshot,
@@ -41,7 +55,7 @@ impl TryFrom<String> for Kind {
         ]
         .into_iter()
         .find(|k| k.name() == s)
-        .ok_or_else(|| format!("unknown player kind {s:?}"))
+        .ok_or_else(|| unknown("player kind", s))
     }
 }
 
@@ -57,12 +71,12 @@ pub(super) fn side_name(side: Side) -> &'static str {
 pub(super) struct StoredSide(pub Side);
 
 impl TryFrom<String> for StoredSide {
-    type Error = String;
-    fn try_from(s: String) -> Result<StoredSide, String> {
+    type Error = RowError;
+    fn try_from(s: String) -> Result<StoredSide, RowError> {
         match s.as_str() {
             "captors" => Ok(StoredSide(Side::Captors)),
             "target" => Ok(StoredSide(Side::Target)),
-            _ => Err(format!("unknown side {s:?}")),
+            _ => Err(unknown("side", s)),
         }
     }
 }
@@ -101,8 +115,8 @@ impl BeatState {
 }
 
 impl TryFrom<String> for BeatState {
-    type Error = String;
-    fn try_from(s: String) -> Result<BeatState, String> {
+    type Error = RowError;
+    fn try_from(s: String) -> Result<BeatState, RowError> {
         [
             BeatState::Waiting,
             BeatState::Training,
@@ -112,7 +126,7 @@ impl TryFrom<String> for BeatState {
         ]
         .into_iter()
         .find(|k| k.name() == s)
-        .ok_or_else(|| format!("unknown heartbeat state {s:?}"))
+        .ok_or_else(|| unknown("heartbeat state", s))
     }
 }
 
@@ -224,20 +238,20 @@ impl PlayerRow {
                 env_steps: self.env_steps,
                 curriculum_stage: self.curriculum_stage,
                 checkpoint: None,
-                quarantined: Some(why),
+                quarantined: Some(why.to_string()),
             },
         }
     }
 }
 
 impl TryFrom<PlayerRow> for Player {
-    type Error = String;
-    fn try_from(r: PlayerRow) -> Result<Player, String> {
+    type Error = RowError;
+    fn try_from(r: PlayerRow) -> Result<Player, RowError> {
         if let Some(path) = r.checkpoint_path.as_deref().filter(|p| !inside_pool(p)) {
-            return Err(format!(
-                "player {} names the checkpoint {path:?}, outside the league's pool folder; refusing it",
-                r.name
-            ));
+            return Err(RowError::CheckpointOutsidePool {
+                player: r.name,
+                path: path.to_string(),
+            });
         }
         Ok(Player {
             id: r.id,
@@ -348,12 +362,12 @@ impl SeatState {
 }
 
 impl TryFrom<String> for SeatState {
-    type Error = String;
-    fn try_from(s: String) -> Result<SeatState, String> {
+    type Error = RowError;
+    fn try_from(s: String) -> Result<SeatState, RowError> {
         [SeatState::Open, SeatState::Done, SeatState::Failed]
             .into_iter()
             .find(|k| k.name() == s)
-            .ok_or_else(|| format!("unknown seat state {s:?}"))
+            .ok_or_else(|| unknown("seat state", s))
     }
 }
 

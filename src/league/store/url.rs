@@ -25,6 +25,34 @@ pub enum StoreUrl {
     Postgres(String),
 }
 
+/// A `--store` value that names no store this program can open: the
+/// value as shown (its password masked; empty where it says nothing) and
+/// why.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct StoreUrlError {
+    pub shown: String,
+    pub why: String,
+}
+
+impl std::fmt::Display for StoreUrlError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        if self.shown.is_empty() {
+            write!(f, "--store: {}", self.why)
+        } else {
+            write!(f, "--store {}: {}", self.shown, self.why)
+        }
+    }
+}
+
+impl std::error::Error for StoreUrlError {}
+
+fn refused(shown: &str, why: impl Into<String>) -> StoreUrlError {
+    StoreUrlError {
+        shown: shown.to_string(),
+        why: why.into(),
+    }
+}
+
 impl StoreUrl {
     /// The embedded default: `league.db` in the league directory.
     pub fn in_dir(league_dir: &Path) -> StoreUrl {
@@ -34,12 +62,13 @@ impl StoreUrl {
     /// Reads `--store`: `postgres://` or `postgresql://` selects PostgreSQL;
     /// `sqlite:` or a plain path selects SQLite. A URL of another scheme is
     /// refused rather than taken for a file name.
-    pub fn parse(text: &str) -> Result<StoreUrl, String> {
+    pub fn parse(text: &str) -> Result<StoreUrl, StoreUrlError> {
         let text = text.trim();
         if text.is_empty() {
-            return Err(
-                "--store: empty; give postgres://USER@HOST:PORT/DB or a SQLite file".into(),
-            );
+            return Err(refused(
+                "",
+                "empty; give postgres://USER@HOST:PORT/DB or a SQLite file",
+            ));
         }
         let lower = text.to_ascii_lowercase();
         if lower.starts_with("postgres://") || lower.starts_with("postgresql://") {
@@ -51,15 +80,17 @@ impl StoreUrl {
             .or_else(|| text.strip_prefix("sqlite:"))
         {
             if rest.is_empty() || rest.contains('?') {
-                return Err(format!(
-                    "--store {text}: give the SQLite file's path after sqlite: (options are the store's own)"
+                return Err(refused(
+                    text,
+                    "give the SQLite file's path after sqlite: (options are the store's own)",
                 ));
             }
             return Ok(StoreUrl::Sqlite(PathBuf::from(rest)));
         }
         if let Some((scheme, _)) = text.split_once("://") {
-            return Err(format!(
-                "--store: unknown scheme {scheme}:// (postgres:// for PostgreSQL, sqlite: or a path for SQLite)"
+            return Err(refused(
+                "",
+                format!("unknown scheme {scheme}:// (postgres:// for PostgreSQL, sqlite: or a path for SQLite)"),
             ));
         }
         Ok(StoreUrl::Sqlite(PathBuf::from(text)))
@@ -84,7 +115,7 @@ impl StoreUrl {
 
 /// A PostgreSQL URL names one database, and nothing after it: a stray path
 /// (`/db/extra`) would otherwise be read as a database called `db/extra`.
-fn check_postgres(url: &str) -> Result<(), String> {
+fn check_postgres(url: &str) -> Result<(), StoreUrlError> {
     let shown = mask(url);
     let after_scheme = url.split_once("://").map(|x| x.1).unwrap_or("");
     let without_query = after_scheme.split('?').next().unwrap_or("");
@@ -94,16 +125,17 @@ fn check_postgres(url: &str) -> Result<(), String> {
     };
     let host = authority.rsplit('@').next().unwrap_or("");
     if host.is_empty() && !url.contains("host=") {
-        return Err(format!("--store {shown}: names no host"));
+        return Err(refused(&shown, "names no host"));
     }
     if path.contains('/') {
-        return Err(format!(
-            "--store {shown}: a stray path after the database name ({path}); the URL names one database: postgres://USER@HOST:PORT/DB"
+        return Err(refused(
+            &shown,
+            format!("a stray path after the database name ({path}); the URL names one database: postgres://USER@HOST:PORT/DB"),
         ));
     }
     if let Some(port) = host.rsplit_once(':').map(|x| x.1) {
         if !port.is_empty() && port.parse::<u16>().is_err() {
-            return Err(format!("--store {shown}: port {port} is not a port number"));
+            return Err(refused(&shown, format!("port {port} is not a port number")));
         }
     }
     Ok(())
@@ -200,16 +232,21 @@ mod tests {
 
     #[test]
     fn malformed_urls_are_refused_with_the_reason() {
-        let e = StoreUrl::parse("postgres://u:pw@h:5432/db/extra").unwrap_err();
+        let e = StoreUrl::parse("postgres://u:pw@h:5432/db/extra")
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("stray path") && !e.contains("pw@"), "{e}");
         assert!(StoreUrl::parse("mysql://h/db")
             .unwrap_err()
+            .to_string()
             .contains("unknown scheme"));
         assert!(StoreUrl::parse("postgres://u@h:port/db")
             .unwrap_err()
+            .to_string()
             .contains("not a port"));
         assert!(StoreUrl::parse("postgres:///db")
             .unwrap_err()
+            .to_string()
             .contains("no host"));
         assert!(StoreUrl::parse("").is_err());
     }

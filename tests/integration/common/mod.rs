@@ -88,7 +88,7 @@ pub fn tiny_train_config(
             ..EnvConfig::default()
         },
         captors: SideConfig {
-            play: "mappo".into(),
+            play: "mappo".parse().unwrap(),
             net: t2e::nn::NetConfig {
                 hidden: 8,
                 conv_channels: [2, 2],
@@ -98,7 +98,7 @@ pub fn tiny_train_config(
             ..SideConfig::default()
         },
         target: SideConfig {
-            play: "heuristic".into(),
+            play: "heuristic".parse().unwrap(),
             ..SideConfig::default()
         },
         ..TrainConfig::default()

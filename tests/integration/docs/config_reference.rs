@@ -84,6 +84,8 @@ impl<'de, 'a> de::Deserializer<'de> for FieldWalker<'a> {
         visitor.visit_unit()
     }
 
+    // Strings are visited as "still": every string field takes it, and a
+    // typed one (`play`, parsed as it is read) needs a name it knows.
     leaves! {
         deserialize_bool => visit_bool(false);
         deserialize_i8 => visit_i64(0);
@@ -97,8 +99,8 @@ impl<'de, 'a> de::Deserializer<'de> for FieldWalker<'a> {
         deserialize_f32 => visit_f64(0.0);
         deserialize_f64 => visit_f64(0.0);
         deserialize_char => visit_char('x');
-        deserialize_str => visit_str("");
-        deserialize_string => visit_str("");
+        deserialize_str => visit_str("still");
+        deserialize_string => visit_str("still");
         deserialize_bytes => visit_bytes(&[]);
         deserialize_byte_buf => visit_bytes(&[]);
         deserialize_unit => visit_unit();

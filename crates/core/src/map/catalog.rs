@@ -95,9 +95,12 @@ fn read_class_list(path: &Path, out: &mut BTreeMap<String, Listed>) -> Result<()
             )
         })?;
         let line = rec.position().map_or(i as u64 + 2, |p| p.line());
-        let class: SizeClass = rec[split_col].parse().map_err(|e: String| {
-            anyhow::anyhow!("{}: line {line}, field 'split': {e}", path.display())
-        })?;
+        let class: SizeClass =
+            rec[split_col]
+                .parse()
+                .map_err(|e: super::grid::UnknownSizeClass| {
+                    anyhow::anyhow!("{}: line {line}, field 'split': {e}", path.display())
+                })?;
         let map = rec[map_col].trim().to_string();
         if map.is_empty() {
             bail!("{}: line {line}, field 'map': empty", path.display());

@@ -537,45 +537,63 @@ pub fn encode(maps: &[(Fingerprint, Option<super::SizeClass>)]) -> Vec<u8> {
     out
 }
 
+/// Why the embedded fingerprint bytes cannot be read.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum FingerprintError {
+    #[error("fingerprints end at byte {at}, reading {what}")]
+    Truncated { at: usize, what: &'static str },
+    #[error("not a fingerprint file (bad magic)")]
+    BadMagic,
+    #[error("a name is not UTF-8")]
+    NameNotUtf8,
+    #[error("{name}: class byte {byte}")]
+    BadClass { name: String, byte: u8 },
+    #[error("{left} bytes left over after {count} fingerprints")]
+    LeftOver { left: usize, count: u32 },
+}
+
 struct Cursor<'a> {
     bytes: &'a [u8],
     at: usize,
 }
 
 impl<'a> Cursor<'a> {
-    fn take(&mut self, n: usize, what: &str) -> Result<&'a [u8], String> {
+    fn take(&mut self, n: usize, what: &'static str) -> Result<&'a [u8], FingerprintError> {
         let s = self
             .bytes
             .get(self.at..self.at + n)
-            .ok_or_else(|| format!("fingerprints end at byte {}, reading {what}", self.at))?;
+            .ok_or(FingerprintError::Truncated { at: self.at, what })?;
         self.at += n;
         Ok(s)
     }
 
-    fn array<const N: usize>(&mut self, what: &str) -> Result<[u8; N], String> {
+    fn array<const N: usize>(&mut self, what: &'static str) -> Result<[u8; N], FingerprintError> {
         Ok(self.take(N, what)?.try_into().unwrap())
     }
 }
 
 /// Reads what `encode` wrote; the error says where it stops making sense.
-pub fn decode(bytes: &[u8]) -> Result<Vec<(Fingerprint, Option<super::SizeClass>)>, String> {
+pub fn decode(
+    bytes: &[u8],
+) -> Result<Vec<(Fingerprint, Option<super::SizeClass>)>, FingerprintError> {
     let mut cur = Cursor { bytes, at: 0 };
     if cur.take(8, "the magic")? != MAGIC {
-        return Err("not a fingerprint file (bad magic)".into());
+        return Err(FingerprintError::BadMagic);
     }
     let count = u32::from_le_bytes(cur.array("the count")?);
     let mut out = Vec::new();
     for _ in 0..count {
         let len = u16::from_le_bytes(cur.array("a name length")?) as usize;
         let name = String::from_utf8(cur.take(len, "a name")?.to_vec())
-            .map_err(|_| "a name is not UTF-8".to_string())?;
+            .map_err(|_| FingerprintError::NameNotUtf8)?;
         let class = match cur.take(1, "a class")?[0] {
             255 => None,
-            c => Some(
-                *super::SizeClass::ALL
-                    .get(c as usize)
-                    .ok_or_else(|| format!("{name}: class byte {c}"))?,
-            ),
+            c => Some(*super::SizeClass::ALL.get(c as usize).ok_or(
+                FingerprintError::BadClass {
+                    name: name.clone(),
+                    byte: c,
+                },
+            )?),
         };
         let free_cells = u32::from_le_bytes(cur.array("free cells")?);
         let r = f64::from_le_bytes(cur.array("a centroid")?);
@@ -598,10 +616,10 @@ pub fn decode(bytes: &[u8]) -> Result<Vec<(Fingerprint, Option<super::SizeClass>
         ));
     }
     if cur.at != bytes.len() {
-        return Err(format!(
-            "{} bytes left over after {count} fingerprints",
-            bytes.len() - cur.at
-        ));
+        return Err(FingerprintError::LeftOver {
+            left: bytes.len() - cur.at,
+            count,
+        });
     }
     Ok(out)
 }
@@ -681,7 +699,15 @@ mod tests {
         assert_eq!(back[1].1, None);
         assert!(decode(&bytes[..bytes.len() - 1])
             .unwrap_err()
+            .to_string()
             .contains("bits"));
-        assert!(decode(b"nope").unwrap_err().contains("magic"));
+        assert_eq!(
+            decode(b"nope"),
+            Err(FingerprintError::Truncated {
+                at: 0,
+                what: "the magic"
+            })
+        );
+        assert_eq!(decode(b"not-magic-bytes"), Err(FingerprintError::BadMagic));
     }
 }

@@ -62,16 +62,19 @@ impl fmt::Display for SizeClass {
     }
 }
 
+/// A size class's name that is none of small, medium or large.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("unknown size class '{0}' (expected small, medium or large)")]
+pub struct UnknownSizeClass(pub String);
+
 impl std::str::FromStr for SizeClass {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
+    type Err = UnknownSizeClass;
+    fn from_str(s: &str) -> Result<Self, UnknownSizeClass> {
         match s.trim().to_ascii_lowercase().as_str() {
             "small" => Ok(SizeClass::Small),
             "medium" => Ok(SizeClass::Medium),
             "large" => Ok(SizeClass::Large),
-            other => Err(format!(
-                "unknown size class '{other}' (expected small, medium or large)"
-            )),
+            other => Err(UnknownSizeClass(other.to_string())),
         }
     }
 }

@@ -58,22 +58,33 @@ pub fn load_png(path: &Path) -> Result<Grid, MapError> {
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_else(|| "map".into());
     let gray = img.to_luma8();
-    grid_from_pixels(&name, &gray).map_err(|reason| MapError::new(path, reason))
+    grid_from_pixels(&name, &gray).map_err(|reason| MapError::new(path, reason.to_string()))
+}
+
+/// Why an image cannot be a map.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum PixelsRefused {
+    #[error("not square: {w}x{h} pixels")]
+    NotSquare { w: u32, h: u32 },
+    #[error("empty image")]
+    Empty,
+    #[error("{w}x{h} pixels: smaller than one 0.05 m cell ({PIXELS_PER_CELL} pixels at 0.01 m per pixel)")]
+    SmallerThanACell { w: u32, h: u32 },
+    #[error("no free cell: every sampled pixel is an obstacle (free pixels must be exactly 255)")]
+    NoFreeCell,
 }
 
 /// Point-samples a traversability image into the 0.05 m working grid.
-pub fn grid_from_pixels(name: &str, img: &GrayImage) -> Result<Grid, String> {
+pub fn grid_from_pixels(name: &str, img: &GrayImage) -> Result<Grid, PixelsRefused> {
     let (w, h) = img.dimensions();
     if w != h {
-        return Err(format!("not square: {w}x{h} pixels"));
+        return Err(PixelsRefused::NotSquare { w, h });
     }
     if w == 0 {
-        return Err("empty image".into());
+        return Err(PixelsRefused::Empty);
     }
     if w <= PIXELS_PER_CELL / 2 {
-        return Err(format!(
-            "{w}x{h} pixels: smaller than one 0.05 m cell ({PIXELS_PER_CELL} pixels at 0.01 m per pixel)"
-        ));
+        return Err(PixelsRefused::SmallerThanACell { w, h });
     }
     let side_px = w.max(MIN_SIDE_PX);
     let side = side_px.div_ceil(PIXELS_PER_CELL) as usize;
@@ -94,10 +105,7 @@ pub fn grid_from_pixels(name: &str, img: &GrayImage) -> Result<Grid, String> {
     }
     let grid = Grid::new(name, side, free);
     if grid.free_cells() == 0 {
-        return Err(
-            "no free cell: every sampled pixel is an obstacle (free pixels must be exactly 255)"
-                .into(),
-        );
+        return Err(PixelsRefused::NoFreeCell);
     }
     Ok(grid)
 }
