@@ -1,6 +1,8 @@
 fn main() {
     if let Err(e) = t2e::cli::main() {
-        eprintln!("error: {e:#}");
+        // Through the log, so `--log-format json` gets the cause as JSON
+        // too; the text format writes `error: ...` as before.
+        tracing::error!("{e:#}");
         std::process::exit(1);
     }
 }

@@ -245,12 +245,12 @@ pub fn run(args: BenchArgs) -> Result<()> {
         .num_threads(threads)
         .build_global();
     tch::set_num_threads(threads as i32);
-    eprintln!("bench: {threads} threads ({why})");
+    tracing::info!("bench: {threads} threads ({why})");
     if let Some(load) = crate::util::load_average() {
         // Timings on a shared machine measure the other processes too.
         if load >= 0.5 {
-            eprintln!(
-                "warning: the machine is busy (load {load:.1} on {} cores): these timings will read low; compare ratios measured side by side",
+            tracing::warn!(
+                "the machine is busy (load {load:.1} on {} cores): these timings will read low; compare ratios measured side by side",
                 crate::util::cores()
             );
         }

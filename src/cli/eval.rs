@@ -325,7 +325,7 @@ pub fn run(args: EvalArgs) -> Result<()> {
             args.out.join("soa.png"),
         )?;
     }
-    eprintln!("wrote {}", args.out.display());
+    tracing::info!("wrote {}", args.out.display());
     Ok(())
 }
 

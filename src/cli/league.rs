@@ -297,7 +297,7 @@ pub fn find_league_dir(dir: Option<&Path>) -> Result<PathBuf> {
     match leagues.len() {
         1 => {
             let d = leagues.remove(0);
-            eprintln!(
+            tracing::info!(
                 "league folder: {} (the only one under {LEAGUES}/; --dir picks another)",
                 d.display()
             );
@@ -508,7 +508,7 @@ pub fn exploit(args: ExploitArgs) -> Result<()> {
     };
     ctrlc::set_handler(|| {
         if exploit::EVALUATING.load(Ordering::SeqCst) {
-            eprintln!("stopped during the evaluation, nothing recorded; the same command evaluates the trained best response again");
+            tracing::info!("stopped during the evaluation, nothing recorded; the same command evaluates the trained best response again");
             // _exit, not exit: the evaluation's threads are still running,
             // and libtorch's static destructors under them abort the process.
             // SAFETY: ends the process; nothing is left to flush or save.
@@ -530,7 +530,7 @@ pub fn exploit(args: ExploitArgs) -> Result<()> {
             Ok(())
         }
         ExploitOutcome::Stopped { env_steps, folder } => {
-            eprintln!(
+            tracing::info!(
                 "stopped at {env_steps} env steps, nothing recorded; the same command resumes it from {}",
                 folder.display()
             );
@@ -567,7 +567,7 @@ fn exit_with(result: Result<Outcome>) -> Result<()> {
         Ok(Outcome::Done) => Ok(()),
         Ok(Outcome::Stopped) => std::process::exit(EXIT_STOPPED),
         Err(e) if e.downcast_ref::<CannotStart>().is_some() => {
-            eprintln!("error: {e:#}");
+            tracing::error!("{e:#}");
             std::process::exit(EXIT_CANNOT_START)
         }
         Err(e) => Err(e),

@@ -8,6 +8,7 @@ mod bench_store;
 pub mod docs;
 pub mod eval;
 pub mod league;
+pub mod logging;
 pub mod maps;
 pub mod periodic_eval;
 pub mod render;
@@ -35,6 +36,12 @@ pub fn read_csv<T: serde::de::DeserializeOwned>(path: &std::path::Path) -> anyho
     about = "Multi-robot target trapping (T2E): environment, heuristics, evaluation and league training"
 )]
 pub struct Cli {
+    /// How log lines are written to stderr: `text` (messages as they read)
+    /// or `json` (one object a line: timestamp, level, target, message, for
+    /// a cluster's log collector). A league's processes inherit it. Levels
+    /// follow `RUST_LOG` (default `info`).
+    #[arg(long, global = true, value_enum, env = logging::ENV, default_value_t = logging::LogFormat::Text)]
+    pub log_format: logging::LogFormat,
     #[command(subcommand)]
     pub command: Command,
 }
@@ -96,16 +103,8 @@ pub fn keep_freed_memory() {
 
 pub fn main() -> anyhow::Result<()> {
     keep_freed_memory();
-    tracing_subscriber::fmt()
-        .with_env_filter(
-            // sqlx warns of every statement that waited on another process's
-            // write; the league's processes share one store by design.
-            tracing_subscriber::EnvFilter::try_from_default_env()
-                .unwrap_or_else(|_| "warn,sqlx=error".into()),
-        )
-        .with_writer(std::io::stderr)
-        .init();
     let cli = Cli::parse();
+    logging::init(cli.log_format);
     match cli.command {
         Command::Maps(a) => maps::run(a),
         Command::Eval(a) => eval::run(a),

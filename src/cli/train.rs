@@ -140,7 +140,7 @@ pub fn run(args: TrainArgs) -> Result<()> {
     let mut trainer = if args.resume {
         let t = Trainer::resume(cfg.clone(), maps, &run_dir)?;
         keep_metrics_up_to(&run_dir.join("metrics.csv"), t.iteration)?;
-        eprintln!(
+        tracing::info!(
             "resuming {} at iteration {}, {} env steps",
             run_dir.display(),
             t.iteration,
@@ -162,10 +162,10 @@ pub fn run(args: TrainArgs) -> Result<()> {
     }
     ctrlc::set_handler(|| {
         if STOP.swap(true, Ordering::SeqCst) {
-            eprintln!("\nsecond Ctrl-C: quitting without a final checkpoint");
+            tracing::info!("\nsecond Ctrl-C: quitting without a final checkpoint");
             std::process::exit(130);
         }
-        eprintln!("\nCtrl-C: finishing this iteration and writing a checkpoint (Ctrl-C again to quit now)");
+        tracing::info!("\nCtrl-C: finishing this iteration and writing a checkpoint (Ctrl-C again to quit now)");
     })
     .context("cannot install the Ctrl-C handler")?;
 
@@ -189,7 +189,7 @@ pub fn run(args: TrainArgs) -> Result<()> {
             " drawn class-balanced (a training option: each size class a third of the episodes)"
         }
     };
-    eprintln!(
+    tracing::info!(
         "training {} on maps {:?}{sampling}{extra}, {} worlds, device {:?}, {threads} threads ({why}), run folder {}",
         learners.join(" + "),
         cfg.maps,
@@ -234,7 +234,7 @@ pub fn run(args: TrainArgs) -> Result<()> {
             let written = trainer.save(&run_dir)?;
             write_curves(&run_dir)?;
             if args.quiet && trainer.iteration % cfg.checkpoint_every == 0 {
-                eprintln!("iteration {}: {}", trainer.iteration, status_line(&recent));
+                tracing::info!("iteration {}: {}", trainer.iteration, status_line(&recent));
             }
             if let (true, Some(p)) = (eval_due, periodic.as_mut()) {
                 let sides: Vec<_> = trainer
@@ -262,7 +262,7 @@ pub fn run(args: TrainArgs) -> Result<()> {
             .zip(written.iter().cloned())
             .collect();
         launch_or_warn(p, &sides, trainer.env_steps, trainer.wall_s);
-        eprintln!("waiting for the periodic evaluations to finish");
+        tracing::info!("waiting for the periodic evaluations to finish");
         p.collect(true)?;
     }
     let why = if STOP.load(Ordering::SeqCst) {

@@ -309,6 +309,6 @@ pub fn run_evaluator(dir: &LeagueDir, stop: &AtomicBool) -> Result<Outcome> {
         Outcome::Stopped => BeatState::Stopped,
     };
     store.heartbeat(EVALUATOR, state, total, None)?;
-    eprintln!("evaluator: {state}, {total} panel episodes played in this league");
+    tracing::info!("evaluator: {state}, {total} panel episodes played in this league");
     Ok(outcome)
 }

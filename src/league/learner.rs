@@ -235,7 +235,7 @@ impl<'a> LeagueHooks<'a> {
                 Err(err) => {
                     // A member whose files are gone or corrupt leaves the pool; the league goes on.
                     tracing::warn!("quarantining {}: {err:#}", member.name);
-                    eprintln!("quarantining {}: {err:#}", member.name);
+                    tracing::warn!("quarantining {}: {err:#}", member.name);
                     self.store.quarantine(member.id, &format!("{err:#}"))?;
                     self.refresh()?;
                     self.slots_window = None;
@@ -308,7 +308,7 @@ impl RolloutHooks for LeagueHooks<'_> {
                             self.cfg.curriculum.window
                         ),
                     )?;
-                    eprintln!("curriculum: stage {stage}, speed ratio {speed}");
+                    tracing::info!("curriculum: stage {stage}, speed ratio {speed}");
                 }
             }
             let next = self.draw(venv, s.env)?;
@@ -397,7 +397,7 @@ fn wait_for_other_main(
             break;
         }
         if !announced {
-            eprintln!(
+            tracing::info!(
                 "{}: {} env steps ahead of {other} by more than {lead}: waiting for it",
                 seat.name(),
                 mine
@@ -480,7 +480,7 @@ fn start_learner(
         }
         ResumePoint::State => {
             let t = Trainer::resume(tcfg, maps, &run_dir)?;
-            eprintln!("{name}: resuming at {} env steps", t.env_steps);
+            tracing::info!("{name}: resuming at {} env steps", t.env_steps);
             t
         }
     };
@@ -573,7 +573,7 @@ fn resume_point(
                     checkpoints: vec![(row.side, name.clone())],
                 }
                 .write(&run_dir)?;
-                eprintln!(
+                tracing::warn!(
                     "{}: {} was missing; rebuilt from {}, its newest checkpoint that verifies ({} env steps)",
                     row.name,
                     state_path.display(),
@@ -629,9 +629,9 @@ fn train_learner(
     for (rel, adopted) in super::pool::adopt_unrecorded(dir, store, league_id, Some(&name))? {
         match adopted {
             Ok(()) => {
-                eprintln!("{name}: adopted {rel}, a snapshot whose row it did not live to add")
+                tracing::warn!("{name}: adopted {rel}, a snapshot whose row it did not live to add")
             }
-            Err(e) => eprintln!("{name}: left {rel} out of the pool ({e:#})"),
+            Err(e) => tracing::warn!("{name}: left {rel} out of the pool ({e:#})"),
         }
     }
     let mut hooks = LeagueHooks::new(store, dir, cfg, seat, learner_id)?;
@@ -648,7 +648,9 @@ fn train_learner(
         // go on training the weights it just added to the pool.
         trainer.reset_learner(side, &initial)?;
         save_learner(&trainer, store, dir, seat, learner_id)?;
-        eprintln!("{name}: back to its initial weights (its last snapshot is its resume point)");
+        tracing::info!(
+            "{name}: back to its initial weights (its last snapshot is its resume point)"
+        );
     }
     hooks.assign_all(trainer.venv_mut())?;
     let (mut wins_at_snapshot, mut games_at_snapshot) = (0u64, 0u64);
@@ -687,12 +689,12 @@ fn train_learner(
                 hooks.curriculum.stage,
             )? {
                 SnapshotOutcome::Added(snap) => {
-                    eprintln!("{name}: snapshot {snap} joins the pool")
+                    tracing::info!("{name}: snapshot {snap} joins the pool")
                 }
-                SnapshotOutcome::AlreadyInPool(snap) => eprintln!(
+                SnapshotOutcome::AlreadyInPool(snap) => tracing::info!(
                     "{name}: {snap} is already in the pool (recorded before a restart); it stays as recorded"
                 ),
-                SnapshotOutcome::Blocked(snap) => eprintln!(
+                SnapshotOutcome::Blocked(snap) => tracing::warn!(
                     "{name}: cannot add the snapshot {snap}: {} exists and is not a recorded member (put there by hand?); left alone, this snapshot is skipped",
                     dir.players_dir().join(&snap).display()
                 ),
@@ -705,7 +707,7 @@ fn train_learner(
                 // The reset is the new resume point: a restart must not
                 // bring back the weights that were just snapshotted.
                 save_learner(&trainer, store, dir, seat, learner_id)?;
-                eprintln!("{name}: back to its initial weights");
+                tracing::info!("{name}: back to its initial weights");
             }
         } else if trainer.iteration % cfg.checkpoint_every == 0 {
             save_learner(&trainer, store, dir, seat, learner_id)?;
@@ -740,14 +742,14 @@ fn train_learner(
         trainer.env_steps,
         (trained > 0).then_some(rate),
     )?;
-    eprintln!(
+    tracing::info!(
         "{name}: {state} at {} env steps, {} matches recorded; this run {:.1} s training ({waited:.1} s waiting for the other side), {rate:.0} env steps/s",
         trainer.env_steps, hooks.matches_recorded, secs
     );
     let team = side.agents(cfg.num_captors).len() as f64;
     let own_rows = trained as f64 * team;
     if own_rows > 0.0 && hooks.nets.rows > 0 {
-        eprintln!(
+        tracing::info!(
             "{name}: inference per robot row: own networks (actor + critic, sampling) {:.2} us, opponent networks (actor, batched per opponent) {:.2} us over {} rows",
             1e6 * own_inference / own_rows,
             1e6 * hooks.nets.seconds / hooks.nets.rows as f64,

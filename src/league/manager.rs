@@ -137,7 +137,7 @@ pub fn run_with(
                     &dir.config_path(),
                     toml::to_string_pretty(&cfg)?.as_bytes(),
                 )?;
-                eprintln!(
+                tracing::warn!(
                     "{}: was missing; restored from the league's store",
                     dir.config_path().display()
                 );
@@ -148,7 +148,7 @@ pub fn run_with(
             if write_identity {
                 dir.write_identity(&identity)?;
             }
-            eprintln!("resuming the league {} in {}", cfg.name, dir.root.display());
+            tracing::info!("resuming the league {} in {}", cfg.name, dir.root.display());
             (cfg, Some(identity.league_id))
         }
     };
@@ -202,28 +202,28 @@ fn run_league(
                 name: cfg.name.clone(),
             })?;
             write_file_atomically(&dir.config_path(), toml::to_string_pretty(&cfg)?.as_bytes())?;
-            eprintln!("starting the league {} in {}", cfg.name, dir.root.display());
+            tracing::info!("starting the league {} in {}", cfg.name, dir.root.display());
             id
         }
     };
     ensure_members(dir, store, &cfg)?;
     let found = reconcile(dir, store, &league_id)?;
     for r in &found.removed_temporaries {
-        eprintln!("removed {r}: a temporary its writer left when it was killed");
+        tracing::info!("removed {r}: a temporary its writer left when it was killed");
     }
     for a in &found.adopted {
-        eprintln!("adopted {a}: a complete snapshot whose row its writer did not live to add");
+        tracing::info!("adopted {a}: a complete snapshot whose row its writer did not live to add");
     }
     for (u, why) in &found.unrecorded {
-        eprintln!(
+        tracing::warn!(
             "left {u} in place, out of the pool: no row names it and it cannot be adopted ({why})"
         );
     }
     for q in &found.quarantined {
-        eprintln!("quarantined {q}: its checkpoint files are missing or corrupt");
+        tracing::warn!("quarantined {q}: its checkpoint files are missing or corrupt");
     }
     for r in &found.reinstated {
-        eprintln!("reinstated {r}: its files are back and verify against its recorded hash");
+        tracing::info!("reinstated {r}: its files are back and verify against its recorded hash");
     }
     let mut seats = vec![Seat::main(Side::Captors), Seat::main(Side::Target)];
     for side in [Side::Captors, Side::Target] {
@@ -367,7 +367,7 @@ fn run_league(
         b.finish();
     }
     let players = store.players()?.len();
-    eprintln!(
+    tracing::info!(
         "league {}: {} matches, {players} players; `t2e-league status --dir {}` shows the table",
         cfg.name,
         store.match_count()?,

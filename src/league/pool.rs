@@ -386,7 +386,7 @@ fn import_member(
             crate::util::sha256_file(&target.join("meta.json"))?,
         )),
     })?;
-    eprintln!(
+    tracing::info!(
         "{name}: {} joins the pool as a permanent member",
         snap.dir.display()
     );

@@ -30,7 +30,7 @@ pub fn spawn_worker(dir: &LeagueDir, logs: &Path, index: usize) -> Result<Child>
         StoreUrl::Sqlite(path) => cmd.env("T2E_STORE", path),
     };
     // Through a pipe: a worker whose log sits on a full disk would die in
-    // its first eprintln!.
+    // its first line of output.
     super::process::spawn_logged(cmd, &logs.join(format!("worker-{index}.log")))
         .map(|(child, _)| child)
         .context("cannot start a worker")
@@ -53,9 +53,9 @@ pub fn supervise_workers(
     store.define_seats(&names)?;
     let reopened = store.reopen_failed_seats()?;
     for s in reopened {
-        eprintln!("seat {s} had failed; open again for this run");
+        tracing::warn!("seat {s} had failed; open again for this run");
     }
-    eprintln!(
+    tracing::info!(
         "league {}: {} seats in {} for workers; {local} local workers (logs in {}); more join with `t2e-league worker --store URL --pool {}`",
         cfg.name,
         names.len(),
@@ -79,7 +79,7 @@ pub fn supervise_workers(
                 || deadline.is_some_and(|d| Instant::now() >= d))
         {
             stopping = true;
-            eprintln!("stopping: each worker's seats finish their iteration and checkpoint");
+            tracing::info!("stopping: each worker's seats finish their iteration and checkpoint");
             workers.iter().flatten().for_each(super::process::interrupt);
         }
         let mut all_done = false;
@@ -100,7 +100,7 @@ pub fn supervise_workers(
                 .collect();
             if !missing.is_empty() && !stopping {
                 store.define_seats(&missing)?;
-                eprintln!(
+                tracing::warn!(
                     "seat {} was missing from {} (its row deleted?); defined it again, open for a worker",
                     missing.join(", "),
                     store.url()
@@ -135,7 +135,7 @@ pub fn supervise_workers(
                 .collect::<Vec<_>>()
                 .join(", ");
             if line != last_line {
-                eprintln!("seats: {line}");
+                tracing::info!("seats: {line}");
                 last_line = line;
             }
         }
@@ -144,7 +144,7 @@ pub fn supervise_workers(
                 if let Some(status) = c.try_wait()? {
                     *slot = None;
                     if !stopping && !all_done && !status.success() {
-                        eprintln!(
+                        tracing::warn!(
                             "worker {i} exited ({status}); starting another (log: {})",
                             logs.join(format!("worker-{i}.log")).display()
                         );
@@ -160,7 +160,7 @@ pub fn supervise_workers(
         }
         std::thread::sleep(Duration::from_millis(200));
     }
-    eprintln!(
+    tracing::info!(
         "league {}: {} matches, {} players; `t2e-league status --store URL` shows the table",
         cfg.name,
         store.match_count()?,

@@ -162,13 +162,28 @@ pub fn decide(
 
 /// The error line a process printed last (`error: ...`, or a panic), from
 /// the text of its log written since it started.
+/// The message of an error line as either log format writes it: `error:
+/// ...` (text) or an object whose level is ERROR (`--log-format json`).
+fn logged_error(line: &str) -> Option<String> {
+    if let Some(rest) = line.strip_prefix("error:") {
+        return Some(rest.trim().to_string());
+    }
+    if !line.starts_with('{') {
+        return None;
+    }
+    let v: serde_json::Value = serde_json::from_str(line).ok()?;
+    (v["level"] == "ERROR")
+        .then(|| v["fields"]["message"].as_str().map(str::to_string))
+        .flatten()
+}
+
 pub fn last_error_line(log: &str) -> Option<String> {
     let lines: Vec<&str> = log.lines().map(str::trim).collect();
     let at = lines
         .iter()
-        .rposition(|l| l.starts_with("error:") || l.contains("panicked at"))?;
+        .rposition(|l| logged_error(l).is_some() || l.contains("panicked at"))?;
     let l = lines[at];
-    let mut line = l.strip_prefix("error:").unwrap_or(l).trim().to_string();
+    let mut line = logged_error(l).unwrap_or_else(|| l.to_string());
     // A panic prints where on its own line and what on the next one.
     if l.contains("panicked at") && l.ends_with(':') {
         if let Some(what) = lines.get(at + 1).filter(|w| !w.is_empty()) {
@@ -290,5 +305,18 @@ mod tests {
             "the panic's message: {line}"
         );
         assert_eq!(last_error_line("all fine\n"), None);
+        // `--log-format json`: the object whose level is ERROR.
+        let json = concat!(
+            r#"{"timestamp":"t","level":"INFO","fields":{"message":"captors-main: resuming"},"target":"t2e"}"#,
+            "\n",
+            r#"{"timestamp":"t","level":"ERROR","fields":{"message":"checkpoints/x: meta.json missing"},"target":"t2e_league"}"#,
+            "\n",
+            r#"{"timestamp":"t","level":"WARN","fields":{"message":"slow"},"target":"t2e"}"#,
+            "\n",
+        );
+        assert_eq!(
+            last_error_line(json).as_deref(),
+            Some("checkpoints/x: meta.json missing")
+        );
     }
 }

@@ -145,7 +145,7 @@ pub fn run_worker(dir: &LeagueDir, opts: &WorkerOptions, stop: &AtomicBool) -> R
     let mut failure: Option<String> = None;
     let mut last_renewed = Instant::now();
     let mut last_claim = Instant::now() - Duration::from_secs(60);
-    eprintln!(
+    tracing::info!(
         "worker {holder}: league {} ({}), pool {}, up to {} seats",
         opened.cfg.name,
         store.url(),
@@ -173,7 +173,7 @@ pub fn run_worker(dir: &LeagueDir, opts: &WorkerOptions, stop: &AtomicBool) -> R
                 match store.renew_lease(&h.lease, lease_ms) {
                     Ok(true) => {}
                     Ok(false) => {
-                        eprintln!(
+                        tracing::warn!(
                             "worker {holder}: lost the lease of {} ({}); ending its process",
                             h.lease.seat,
                             why_lost(&store, &h.lease)
@@ -186,7 +186,7 @@ pub fn run_worker(dir: &LeagueDir, opts: &WorkerOptions, stop: &AtomicBool) -> R
                     }
                     Err(e) => {
                         all_ok = false;
-                        eprintln!("worker {holder}: cannot renew {}: {e}", h.lease.seat);
+                        tracing::warn!("worker {holder}: cannot renew {}: {e}", h.lease.seat);
                     }
                 }
             }
@@ -195,7 +195,7 @@ pub fn run_worker(dir: &LeagueDir, opts: &WorkerOptions, stop: &AtomicBool) -> R
             } else if last_renewed.elapsed() >= opts.lease * 9 / 10 {
                 for h in &mut held {
                     if let Some(mut c) = h.proc.child.take() {
-                        eprintln!(
+                        tracing::warn!(
                             "worker {holder}: the store was out of reach for the lease's length; ending {} before another worker may take it",
                             h.lease.seat
                         );
@@ -220,7 +220,7 @@ pub fn run_worker(dir: &LeagueDir, opts: &WorkerOptions, stop: &AtomicBool) -> R
                     Next::Finished => {
                         if exit == Exit::Done {
                             store.finish_seat(&h.lease, SeatState::Done, None)?;
-                            eprintln!("worker {holder}: {name} done");
+                            tracing::info!("worker {holder}: {name} done");
                         } else {
                             store.release_seat(&h.lease)?;
                         }
@@ -229,8 +229,8 @@ pub fn run_worker(dir: &LeagueDir, opts: &WorkerOptions, stop: &AtomicBool) -> R
                     Next::Restart { after, cause } => {
                         store
                             .record_crash(&name, &cause, &crash_text)
-                            .unwrap_or_else(|e| eprintln!("cannot record a crash: {e}"));
-                        eprintln!(
+                            .unwrap_or_else(|e| tracing::error!("cannot record a crash: {e}"));
+                        tracing::warn!(
                             "worker {holder}: {name} crashed ({cause}); restarting it in {} s",
                             after.as_secs()
                         );
@@ -241,7 +241,7 @@ pub fn run_worker(dir: &LeagueDir, opts: &WorkerOptions, stop: &AtomicBool) -> R
                             store.record_crash(&name, &why, &crash_text).ok();
                         }
                         store.finish_seat(&h.lease, SeatState::Failed, Some(&why))?;
-                        eprintln!("worker {holder}: {why}");
+                        tracing::info!("worker {holder}: {why}");
                         p.finished = true;
                         failure.get_or_insert(why);
                     }
@@ -272,7 +272,7 @@ pub fn run_worker(dir: &LeagueDir, opts: &WorkerOptions, stop: &AtomicBool) -> R
                 continue;
             }
             if held.is_empty() && seats.iter().all(|s| s.state == SeatState::Done) {
-                eprintln!("worker {holder}: every seat of the league is done");
+                tracing::info!("worker {holder}: every seat of the league is done");
                 return Ok(());
             }
             if let Some(lease) = store.claim_seat(&holder, &opts.host, lease_ms)? {
@@ -284,9 +284,10 @@ pub fn run_worker(dir: &LeagueDir, opts: &WorkerOptions, stop: &AtomicBool) -> R
                         lease.seat
                     );
                 };
-                eprintln!(
+                tracing::info!(
                     "worker {holder}: took {} (taken {} times so far)",
-                    lease.seat, lease.claims
+                    lease.seat,
+                    lease.claims
                 );
                 held.push(Held {
                     lease,

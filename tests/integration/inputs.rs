@@ -806,3 +806,65 @@ fn a_file_as_pool_and_seats_out_of_range_are_named() {
     );
     assert!(!Path::new(db).exists(), "no store created");
 }
+
+#[test]
+fn log_lines_are_plain_text_or_one_json_object_each() {
+    let tmp = tempfile::tempdir().unwrap();
+    let root = tmp.path();
+    // Text: the message as it reads, an error marked as one.
+    let (ok, _, err) = t2e_in(root, &["train", "--config", "missing.toml"]);
+    assert!(!ok);
+    assert!(
+        err.starts_with("error: missing.toml: cannot read") && err.lines().count() == 1,
+        "{err}"
+    );
+    // JSON, by flag or inherited through T2E_LOG_FORMAT as a league's
+    // processes inherit it: every line one object with a level and a message.
+    let eval = [
+        "eval",
+        "--maps",
+        "shipped",
+        "--episodes",
+        "2",
+        "--episode-length",
+        "20",
+        "--quiet",
+        "--out",
+        "out",
+    ];
+    let by_flag: Vec<&str> = ["--log-format", "json"].into_iter().chain(eval).collect();
+    let (ok, _, err) = t2e_in(root, &by_flag);
+    assert!(ok, "{err}");
+    let inherited = Command::new(BIN)
+        .args(["train", "--config", "missing.toml"])
+        .env("T2E_LOG_FORMAT", "json")
+        .current_dir(root)
+        .output()
+        .unwrap();
+    assert!(!inherited.status.success());
+    let inherited = String::from_utf8_lossy(&inherited.stderr).into_owned();
+    let mut levels = Vec::new();
+    for line in err.lines().chain(inherited.lines()) {
+        let v: serde_json::Value =
+            serde_json::from_str(line).unwrap_or_else(|e| panic!("not JSON ({e}): {line}"));
+        levels.push((
+            v["level"].as_str().unwrap().to_string(),
+            v["fields"]["message"].as_str().unwrap().to_string(),
+        ));
+    }
+    assert!(
+        levels.contains(&("INFO".into(), "wrote out".into())),
+        "{levels:?}"
+    );
+    assert!(
+        levels
+            .iter()
+            .any(|(l, m)| l == "ERROR" && m.starts_with("missing.toml: cannot read")),
+        "{levels:?}"
+    );
+    let (ok, _, err) = t2e_in(root, &["--log-format", "xml", "status"]);
+    assert!(
+        !ok && err.contains("'xml'") && err.contains("text, json"),
+        "{err}"
+    );
+}

@@ -38,7 +38,7 @@ pub fn export(dir: &LeagueDir, player: &str, out: &Path) -> Result<()> {
     // Loading verifies every weight file against meta.json and refuses NaN.
     crate::nn::PolicySnapshot::load(&src, p.side)?;
     if let Some(why) = &p.quarantined {
-        eprintln!(
+        tracing::info!(
             "note: {} is quarantined ({why}); its files verify against the hashes recorded with it, so they are exported",
             p.name
         );

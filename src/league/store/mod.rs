@@ -503,13 +503,13 @@ impl Store {
             match self.rt.block_on(op()) {
                 Ok(v) => {
                     if said {
-                        eprintln!("{}: reachable again", self.url);
+                        tracing::info!("{}: reachable again", self.url);
                     }
                     return Ok(v);
                 }
                 Err(e) if transient(&e) && started.elapsed() < retry_budget() => {
                     if !said {
-                        eprintln!(
+                        tracing::warn!(
                             "{}: {e}; retrying with back-off for up to {} s",
                             self.url,
                             retry_budget().as_secs()
