@@ -27,19 +27,17 @@
 //!    - targets: theta' <- tau theta + (1 - tau) theta'.
 
 use super::adam::backward_clipped;
-use super::learner::{Learner, NamedTensors};
 use super::offpolicy::{
-    check_replay, gumbel_noise, one_hot, td_target, Batch, Params, ReplayLearner, ReplaySchedule,
-    SequenceReplay,
+    check_replay, gumbel_noise, one_hot, td_target, Batch, OffPolicy, OffPolicyParts, Params,
+    ReplayLearner, ReplaySchedule, SequenceReplay,
 };
-use super::rollout::{BadUpdate, Rollout, UpdateStats};
+use super::rollout::{BadUpdate, UpdateStats};
 use super::Algorithm;
 use crate::env::Action;
 use crate::error::{in_interval, in_range, ConfigError};
 use crate::nn::{Actor, NetConfig, Trunk};
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
-use std::path::Path;
 use tch::{nn, Device, Kind, Tensor};
 
 /// Every MAAC hyperparameter. The paper gives none beyond the shared ones
@@ -476,58 +474,22 @@ impl ReplayLearner for MaacLearner {
     }
 }
 
-impl Learner for MaacLearner {
-    fn algorithm(&self) -> Algorithm {
-        Algorithm::Maac
+impl OffPolicy for MaacLearner {
+    const ALGORITHM: Algorithm = Algorithm::Maac;
+    fn parts(&self) -> OffPolicyParts<'_> {
+        OffPolicyParts {
+            net: &self.net,
+            actor: &self.actor,
+            team: self.team,
+            // The attention critic reads each robot's own row.
+            critic_agents: 1,
+            chunk_len: self.cfg.chunk_len,
+            max_bad_updates: self.cfg.max_bad_updates,
+            params: &self.params,
+        }
     }
-    fn net(&self) -> &NetConfig {
-        &self.net
-    }
-    fn actor(&self) -> &Actor {
-        &self.actor
-    }
-    fn team(&self) -> usize {
-        self.team
-    }
-    fn critic_agents(&self) -> usize {
-        1
-    }
-    fn chunk_len(&self) -> usize {
-        self.cfg.chunk_len
-    }
-    fn needs_values(&self) -> bool {
-        false
-    }
-    fn critic_step(
-        &self,
-        patches: &Tensor,
-        vectors: &Tensor,
-        h: &Tensor,
-    ) -> (Option<Tensor>, Tensor) {
-        (None, self.critic.step(patches, vectors, h))
-    }
-    fn update(&mut self, ro: &Rollout, rng: &mut ChaCha8Rng) -> Result<UpdateStats, BadUpdate> {
-        self.update_phase(ro, rng)
-    }
-    fn max_bad_updates(&self) -> u32 {
-        self.cfg.max_bad_updates
-    }
-    fn checkpoint_files(&self) -> Vec<(&'static str, NamedTensors)> {
-        self.params.checkpoint_files()
-    }
-    fn learner_state(&self) -> serde_json::Value {
-        self.params.state()
-    }
-    /// As MADDPG's: everything but the replay, which refills.
-    fn restore(
-        &mut self,
-        files: &[(&'static str, NamedTensors)],
-        state: serde_json::Value,
-        dir: &Path,
-    ) -> anyhow::Result<()> {
-        self.params.restore(files, state, dir)?;
-        self.replay.clear();
-        Ok(())
+    fn critic_h(&self, patches: &Tensor, vectors: &Tensor, h: &Tensor) -> Tensor {
+        self.critic.step(patches, vectors, h)
     }
 }
 

@@ -20,21 +20,19 @@
 //!    - targets: theta' <- tau theta + (1 - tau) theta'.
 
 use super::adam::backward_clipped;
-use super::learner::{Learner, NamedTensors};
 use super::mappo::{mates_index, Mappo};
 use super::offpolicy::{
-    check_replay, gumbel_noise, gumbel_softmax_st, one_hot, td_target, Batch, Params,
-    ReplayLearner, ReplaySchedule, SequenceReplay,
+    check_replay, gumbel_noise, gumbel_softmax_st, one_hot, td_target, Batch, OffPolicy,
+    OffPolicyParts, Params, ReplayLearner, ReplaySchedule, SequenceReplay,
 };
 use super::ppo::CriticView;
-use super::rollout::{BadUpdate, Rollout, UpdateStats};
+use super::rollout::{BadUpdate, UpdateStats};
 use super::Algorithm;
 use crate::env::Action;
 use crate::error::{in_interval, in_range, ConfigError};
 use crate::nn::{Actor, NetConfig, Trunk};
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
-use std::path::Path;
 use tch::{nn, Device, Kind, Tensor};
 
 /// Every MADDPG hyperparameter. The paper gives none for its off-policy
@@ -412,67 +410,28 @@ impl ReplayLearner for MaddpgLearner {
     }
 }
 
-impl Learner for MaddpgLearner {
-    fn algorithm(&self) -> Algorithm {
-        Algorithm::Maddpg
+impl OffPolicy for MaddpgLearner {
+    const ALGORITHM: Algorithm = Algorithm::Maddpg;
+    fn parts(&self) -> OffPolicyParts<'_> {
+        OffPolicyParts {
+            net: &self.net,
+            actor: &self.actor,
+            team: self.team,
+            // The Q critic reads the whole team.
+            critic_agents: self.team,
+            chunk_len: self.cfg.chunk_len,
+            max_bad_updates: self.cfg.max_bad_updates,
+            params: &self.params,
+        }
     }
-    fn net(&self) -> &NetConfig {
-        &self.net
+    fn critic_h(&self, patches: &Tensor, vectors: &Tensor, h: &Tensor) -> Tensor {
+        self.critic.step(patches, vectors, h)
     }
-    fn actor(&self) -> &Actor {
-        &self.actor
-    }
-    fn team(&self) -> usize {
-        self.team
-    }
-    fn critic_agents(&self) -> usize {
-        self.team
-    }
-    fn chunk_len(&self) -> usize {
-        self.cfg.chunk_len
-    }
-    fn needs_values(&self) -> bool {
-        false
-    }
-    fn critic_step(
-        &self,
-        patches: &Tensor,
-        vectors: &Tensor,
-        h: &Tensor,
-    ) -> (Option<Tensor>, Tensor) {
-        (None, self.critic.step(patches, vectors, h))
-    }
-    fn exploration(&self) -> f64 {
+    /// Epsilon-greedy, annealed over the world-steps collected.
+    fn explore(&self) -> f64 {
         let c = &self.cfg;
         let done = (self.params.collected_steps as f64 / c.epsilon_anneal_steps as f64).min(1.0);
         c.epsilon_start + (c.epsilon_finish - c.epsilon_start) * done
-    }
-    fn update(&mut self, ro: &Rollout, rng: &mut ChaCha8Rng) -> Result<UpdateStats, BadUpdate> {
-        self.update_phase(ro, rng)
-    }
-    fn max_bad_updates(&self) -> u32 {
-        self.cfg.max_bad_updates
-    }
-    fn checkpoint_files(&self) -> Vec<(&'static str, NamedTensors)> {
-        self.params.checkpoint_files()
-    }
-    fn learner_state(&self) -> serde_json::Value {
-        self.params.state()
-    }
-    /// Weights, target networks, Adam moments and clocks come back exactly;
-    /// the replay starts empty and refills for `learning_starts` steps
-    /// before learning resumes. Saving it would write `buffer_steps`
-    /// world-steps (0.4 GB by default) at every checkpoint, and the data the
-    /// current policy collects again is what the critic needs most.
-    fn restore(
-        &mut self,
-        files: &[(&'static str, NamedTensors)],
-        state: serde_json::Value,
-        dir: &Path,
-    ) -> anyhow::Result<()> {
-        self.params.restore(files, state, dir)?;
-        self.replay.clear();
-        Ok(())
     }
 }
 

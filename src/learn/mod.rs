@@ -19,6 +19,7 @@ pub mod ppo;
 pub mod rollout;
 pub mod shaping;
 pub mod train;
+pub mod undo;
 
 pub use crate::algorithm::Algorithm;
 

@@ -14,11 +14,13 @@
 //! next episode's first one.
 
 use super::adam::Adam;
-use super::learner::{file, optimizer_file, restore_optimizers, NamedTensors};
+use super::learner::{file, optimizer_file, restore_optimizers, Learner, NamedTensors};
 use super::rollout::{BadUpdate, Rollout, UpdateStats};
+use super::undo::UndoPoint;
+use super::Algorithm;
 use crate::error::{in_range, ConfigError};
 use crate::nn::checkpoint::{load_into, named_cpu_tensors};
-use crate::nn::obs_tensors;
+use crate::nn::{obs_tensors, Actor, NetConfig};
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
@@ -423,8 +425,7 @@ pub struct ParamsState {
 /// A copy of `Params` taken before an update phase, so a non-finite loss
 /// undoes the whole phase, not only its last step.
 pub struct Undo {
-    weights: Vec<NamedTensors>,
-    adams: Vec<(NamedTensors, u64)>,
+    point: UndoPoint,
     gradient_steps: u64,
 }
 
@@ -489,40 +490,20 @@ impl Params {
 
     pub fn undo_point(&self) -> Undo {
         Undo {
-            weights: self
-                .stores()
-                .iter()
-                .map(|vs| {
-                    vs.variables()
-                        .into_iter()
-                        .map(|(n, t)| (n, t.detach().copy()))
-                        .collect()
-                })
-                .collect(),
-            adams: [&self.actor_adam, &self.critic_adam]
-                .iter()
-                .map(|a| (a.state_tensors(), a.steps))
-                .collect(),
+            point: UndoPoint::take(&self.stores(), &[&self.actor_adam, &self.critic_adam]),
             gradient_steps: self.gradient_steps,
         }
     }
 
     pub fn undo(&mut self, undo: Undo) {
-        for (vs, saved) in self.stores().iter().zip(undo.weights) {
-            let vars = vs.variables();
-            tch::no_grad(|| {
-                for (name, t) in saved {
-                    let mut v = vars[&name].shallow_clone();
-                    v.copy_(&t);
-                }
-            });
-        }
-        for (adam, (state, steps)) in [&mut self.actor_adam, &mut self.critic_adam]
-            .into_iter()
-            .zip(undo.adams)
-        {
-            adam.load_state(&state, steps).expect("own moments fit");
-        }
+        let stores = [
+            &self.actor,
+            &self.critic,
+            &self.target_actor,
+            &self.target_critic,
+        ];
+        undo.point
+            .restore(&stores, &mut [&mut self.actor_adam, &mut self.critic_adam]);
         self.gradient_steps = undo.gradient_steps;
     }
 
@@ -676,6 +657,97 @@ pub fn check_replay(
         0..=buffer_steps,
         &format!("more than the buffer holds (buffer_steps = {buffer_steps})"),
     )
+}
+
+/// What an off-policy learner's `Learner` side reads of it: its networks'
+/// shape and actor, its team and how many robots its critic reads, its
+/// chunk length, its patience and its `Params`.
+pub struct OffPolicyParts<'a> {
+    pub net: &'a NetConfig,
+    pub actor: &'a Actor,
+    pub team: usize,
+    pub critic_agents: usize,
+    pub chunk_len: usize,
+    pub max_bad_updates: u32,
+    pub params: &'a Params,
+}
+
+/// An off-policy learner: its algorithm, its parts, its critic's step while
+/// acting and its exploration, beside the replay and gradient step of
+/// `ReplayLearner`. Every one is a `Learner` through the one impl below,
+/// so the plumbing MADDPG and MAAC share is written once.
+pub trait OffPolicy: ReplayLearner {
+    const ALGORITHM: Algorithm;
+    fn parts(&self) -> OffPolicyParts<'_>;
+    /// The critic's next recurrent state (an off-policy critic values
+    /// nothing while acting).
+    fn critic_h(&self, patches: &Tensor, vectors: &Tensor, h: &Tensor) -> Tensor;
+    /// Share of actions drawn uniformly while training.
+    fn explore(&self) -> f64 {
+        0.0
+    }
+}
+
+impl<T: OffPolicy> Learner for T {
+    fn algorithm(&self) -> Algorithm {
+        T::ALGORITHM
+    }
+    fn net(&self) -> &NetConfig {
+        self.parts().net
+    }
+    fn actor(&self) -> &Actor {
+        self.parts().actor
+    }
+    fn team(&self) -> usize {
+        self.parts().team
+    }
+    fn critic_agents(&self) -> usize {
+        self.parts().critic_agents
+    }
+    fn chunk_len(&self) -> usize {
+        self.parts().chunk_len
+    }
+    fn needs_values(&self) -> bool {
+        false
+    }
+    fn critic_step(
+        &self,
+        patches: &Tensor,
+        vectors: &Tensor,
+        h: &Tensor,
+    ) -> (Option<Tensor>, Tensor) {
+        (None, self.critic_h(patches, vectors, h))
+    }
+    fn exploration(&self) -> f64 {
+        self.explore()
+    }
+    fn update(&mut self, ro: &Rollout, rng: &mut ChaCha8Rng) -> Result<UpdateStats, BadUpdate> {
+        self.update_phase(ro, rng)
+    }
+    fn max_bad_updates(&self) -> u32 {
+        self.parts().max_bad_updates
+    }
+    fn checkpoint_files(&self) -> Vec<(&'static str, NamedTensors)> {
+        self.parts().params.checkpoint_files()
+    }
+    fn learner_state(&self) -> serde_json::Value {
+        self.parts().params.state()
+    }
+    /// Weights, target networks, Adam moments and clocks come back exactly;
+    /// the replay starts empty and refills for `learning_starts` steps
+    /// before learning resumes. Saving it would write `buffer_steps`
+    /// world-steps (0.4 GB by default) at every checkpoint, and the data the
+    /// current policy collects again is what the critic needs most.
+    fn restore(
+        &mut self,
+        files: &[(&'static str, NamedTensors)],
+        state: serde_json::Value,
+        dir: &Path,
+    ) -> anyhow::Result<()> {
+        self.params().restore(files, state, dir)?;
+        self.replay().clear();
+        Ok(())
+    }
 }
 
 #[cfg(test)]

@@ -7,6 +7,7 @@
 use super::adam::{backward_clipped, Adam};
 use super::learner::{file, optimizer_file, restore_optimizers, Learner, NamedTensors};
 use super::rollout::{BadUpdate, Rollout, UpdateStats};
+use super::undo::UndoPoint;
 use super::Algorithm;
 use crate::error::{in_interval, in_range, ConfigError};
 use crate::nn::checkpoint::{load_into, named_cpu_tensors};
@@ -330,39 +331,20 @@ impl PpoLearner {
 
     /// Copies of everything an update changes, to undo a bad one.
     fn snapshot(&self) -> LearnerSnapshot {
-        let copy = |vs: &nn::VarStore| -> Vec<Tensor> {
-            let mut v: Vec<(String, Tensor)> = vs.variables().into_iter().collect();
-            v.sort_by(|a, b| a.0.cmp(&b.0));
-            v.into_iter().map(|(_, t)| t.detach().copy()).collect()
-        };
         LearnerSnapshot {
-            actor: copy(&self.actor_vs),
-            critic: copy(&self.critic_vs),
-            actor_adam: self.actor_adam.state_tensors(),
-            critic_adam: self.critic_adam.state_tensors(),
-            adam_steps: (self.actor_adam.steps, self.critic_adam.steps),
+            point: UndoPoint::take(
+                &[&self.actor_vs, &self.critic_vs],
+                &[&self.actor_adam, &self.critic_adam],
+            ),
             value_norm: self.value_norm.clone(),
         }
     }
 
     fn restore(&mut self, snap: LearnerSnapshot) {
-        let paste = |vs: &nn::VarStore, saved: &[Tensor]| {
-            let mut v: Vec<(String, Tensor)> = vs.variables().into_iter().collect();
-            v.sort_by(|a, b| a.0.cmp(&b.0));
-            tch::no_grad(|| {
-                for ((_, mut var), t) in v.into_iter().zip(saved) {
-                    var.copy_(t);
-                }
-            });
-        };
-        paste(&self.actor_vs, &snap.actor);
-        paste(&self.critic_vs, &snap.critic);
-        self.actor_adam
-            .load_state(&snap.actor_adam, snap.adam_steps.0)
-            .expect("own moments fit");
-        self.critic_adam
-            .load_state(&snap.critic_adam, snap.adam_steps.1)
-            .expect("own moments fit");
+        snap.point.restore(
+            &[&self.actor_vs, &self.critic_vs],
+            &mut [&mut self.actor_adam, &mut self.critic_adam],
+        );
         self.value_norm = snap.value_norm;
     }
 
@@ -753,11 +735,7 @@ impl Learner for PpoLearner {
 
 /// Everything an update changes, copied before it.
 struct LearnerSnapshot {
-    actor: Vec<Tensor>,
-    critic: Vec<Tensor>,
-    actor_adam: Vec<(String, Tensor)>,
-    critic_adam: Vec<(String, Tensor)>,
-    adam_steps: (u64, u64),
+    point: UndoPoint,
     value_norm: ValueNorm,
 }
 
