@@ -31,10 +31,10 @@ use super::offpolicy::{
     check_replay, gumbel_noise, one_hot, td_target, Batch, OffPolicy, OffPolicyParts, Params,
     ReplayLearner, ReplaySchedule, SequenceReplay,
 };
-use super::rollout::{BadUpdate, UpdateStats};
+use super::rollout::{check_max_bad_updates, BadUpdate, UpdateStats};
 use super::Algorithm;
 use crate::env::Action;
-use crate::error::{in_interval, in_range, ConfigError};
+use crate::error::{in_interval, ConfigError};
 use crate::nn::{Actor, NetConfig, Trunk};
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
@@ -147,12 +147,7 @@ impl MaacConfig {
             self.buffer_steps,
             self.learning_starts,
         )?;
-        in_range(
-            "max_bad_updates",
-            self.max_bad_updates,
-            1..=u32::MAX,
-            "must be at least 1",
-        )?;
+        check_max_bad_updates(self.max_bad_updates)?;
         Ok(())
     }
 }

@@ -26,10 +26,10 @@ use super::offpolicy::{
     OffPolicyParts, Params, ReplayLearner, ReplaySchedule, SequenceReplay,
 };
 use super::ppo::CriticView;
-use super::rollout::{BadUpdate, UpdateStats};
+use super::rollout::{check_max_bad_updates, BadUpdate, UpdateStats};
 use super::Algorithm;
 use crate::env::Action;
-use crate::error::{in_interval, in_range, ConfigError};
+use crate::error::{in_interval, ConfigError};
 use crate::nn::{Actor, NetConfig, Trunk};
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
@@ -141,12 +141,7 @@ impl MaddpgConfig {
             self.buffer_steps,
             self.learning_starts,
         )?;
-        in_range(
-            "max_bad_updates",
-            self.max_bad_updates,
-            1..=u32::MAX,
-            "must be at least 1",
-        )?;
+        check_max_bad_updates(self.max_bad_updates)?;
         Ok(())
     }
 }

@@ -6,7 +6,7 @@
 
 use super::adam::{backward_clipped, Adam};
 use super::learner::{file, optimizer_file, restore_optimizers, Learner, NamedTensors};
-use super::rollout::{BadUpdate, Rollout, UpdateStats};
+use super::rollout::{check_max_bad_updates, BadUpdate, Rollout, UpdateStats};
 use super::undo::UndoPoint;
 use super::Algorithm;
 use crate::error::{in_interval, in_range, ConfigError};
@@ -129,12 +129,7 @@ impl PpoConfig {
         ] {
             in_range(name, v, 1..=10_000, "must be in 1..=10000")?;
         }
-        in_range(
-            "max_bad_updates",
-            self.max_bad_updates,
-            1..=u32::MAX,
-            "must be at least 1",
-        )?;
+        check_max_bad_updates(self.max_bad_updates)?;
         Ok(())
     }
 }

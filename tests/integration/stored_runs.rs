@@ -503,6 +503,24 @@ fn settings(eval_dir: &Path) -> Vec<(String, PathBuf)> {
 /// Runs `eval ARGS --out OUT` in a folder holding copies of `fixtures`, and
 /// compares what it writes with the stored `fixture()/OUT`: the same maps
 /// and weights, then the same summaries, number for number.
+/// The setting the league's exports were evaluated in when stored.
+const EXPORTS_SETTING: &[&str] = &[
+    "--k",
+    "2",
+    "--speed-ratio",
+    "1.0",
+    "--maps",
+    "shipped:small,shipped:large",
+    "--episodes",
+    "10",
+    "--episode-length",
+    "150",
+    "--seed",
+    "5",
+    "--soa-every",
+    "10",
+];
+
 fn evaluates_as_stored(out: &str, fixtures: &[&str], args: &[&str]) {
     let tmp = tempfile::tempdir().unwrap();
     for f in fixtures {
@@ -551,25 +569,10 @@ fn a_stored_league_export_evaluates_to_the_stored_numbers() {
         "eval-export-target",
         &["export-target"],
         &[
-            "--captors",
-            "heuristic",
-            "--target",
-            "ckpt:export-target",
-            "--k",
-            "2",
-            "--speed-ratio",
-            "1.0",
-            "--maps",
-            "shipped:small,shipped:large",
-            "--episodes",
-            "10",
-            "--episode-length",
-            "150",
-            "--seed",
-            "5",
-            "--soa-every",
-            "10",
-        ],
+            &["--captors", "heuristic", "--target", "ckpt:export-target"],
+            EXPORTS_SETTING,
+        ]
+        .concat(),
     );
 }
 
@@ -579,25 +582,15 @@ fn two_stored_league_exports_evaluate_to_the_stored_numbers() {
         "eval-exports",
         &["export-captors", "export-target"],
         &[
-            "--captors",
-            "ckpt:export-captors",
-            "--target",
-            "ckpt:export-target",
-            "--k",
-            "2",
-            "--speed-ratio",
-            "1.0",
-            "--maps",
-            "shipped:small,shipped:large",
-            "--episodes",
-            "10",
-            "--episode-length",
-            "150",
-            "--seed",
-            "5",
-            "--soa-every",
-            "10",
-        ],
+            &[
+                "--captors",
+                "ckpt:export-captors",
+                "--target",
+                "ckpt:export-target",
+            ],
+            EXPORTS_SETTING,
+        ]
+        .concat(),
     );
 }
 
