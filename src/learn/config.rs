@@ -172,12 +172,6 @@ impl fmt::Display for Play {
     }
 }
 
-impl From<Algorithm> for Play {
-    fn from(algorithm: Algorithm) -> Play {
-        Play::Learn(algorithm)
-    }
-}
-
 impl From<ControllerSpec> for Play {
     fn from(spec: ControllerSpec) -> Play {
         Play::Script(spec)

@@ -108,20 +108,16 @@ impl Default for PpoConfig {
 
 impl PpoConfig {
     pub fn validate(&self) -> Result<(), ConfigError> {
-        // (lo, hi] where the last argument is true, else [lo, hi].
-        let within = |name: &str, v: f64, lo: f64, hi: f64, open_lo: bool| {
-            in_interval(name, v, lo, hi, !open_lo)
-        };
-        within("gamma", self.gamma, 0.0, 1.0, false)?;
-        within("gae_lambda", self.gae_lambda, 0.0, 1.0, false)?;
-        within("clip", self.clip, 0.0, 1.0, true)?;
-        within("lr", self.lr, 0.0, 0.1, true)?;
-        within("adam_eps", self.adam_eps, 0.0, 1.0, true)?;
-        within("entropy_coef", self.entropy_coef, 0.0, 10.0, false)?;
-        within("value_coef", self.value_coef, 0.0, 100.0, false)?;
-        within("huber_delta", self.huber_delta, 0.0, 1e6, true)?;
-        within("max_grad_norm", self.max_grad_norm, 0.0, 1e6, true)?;
-        within("heuristic_kl", self.heuristic_kl, 0.0, 100.0, false)?;
+        in_interval("gamma", self.gamma, 0.0, 1.0, true)?;
+        in_interval("gae_lambda", self.gae_lambda, 0.0, 1.0, true)?;
+        in_interval("clip", self.clip, 0.0, 1.0, false)?;
+        in_interval("lr", self.lr, 0.0, 0.1, false)?;
+        in_interval("adam_eps", self.adam_eps, 0.0, 1.0, false)?;
+        in_interval("entropy_coef", self.entropy_coef, 0.0, 10.0, true)?;
+        in_interval("value_coef", self.value_coef, 0.0, 100.0, true)?;
+        in_interval("huber_delta", self.huber_delta, 0.0, 1e6, false)?;
+        in_interval("max_grad_norm", self.max_grad_norm, 0.0, 1e6, false)?;
+        in_interval("heuristic_kl", self.heuristic_kl, 0.0, 100.0, true)?;
         for (name, v) in [
             ("epochs", self.epochs),
             ("minibatches", self.minibatches),

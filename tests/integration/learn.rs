@@ -16,43 +16,22 @@ use t2e::nn::{NetConfig, PolicySnapshot};
 /// One captor against a target that stands still, in a 3 m x 3 m room: all
 /// the captor must learn is to turn towards the target and drive to it.
 fn chase_config(seed: u64) -> TrainConfig {
-    TrainConfig {
-        name: "chase".into(),
-        seed,
-        total_env_steps: u64::MAX,
-        num_envs: 16,
-        rollout_steps: 40,
-        checkpoint_every: 1000,
-        device: t2e::learn::config::DeviceChoice::Cpu,
-        protocol: t2e::protocol::Protocol::HeldOut,
-        maps: "unused".into(),
-        extra_maps: Default::default(),
-        map_sampling: Default::default(),
-        env: EnvConfig {
-            num_captors: 1,
-            episode_length: 40,
-            ..EnvConfig::default()
-        },
-        captors: SideConfig {
-            play: "mappo".parse().unwrap(),
-            net: NetConfig {
-                hidden: 32,
-                conv_channels: [4, 8],
-                patch_pool: 4,
-                ..Default::default()
-            },
-            ppo: t2e::learn::ppo::PpoConfig {
-                lr: 2e-3,
-                epochs: 4,
-                ..Default::default()
-            },
-            ..SideConfig::default()
-        },
-        target: SideConfig {
-            play: "still".parse().unwrap(),
-            ..SideConfig::default()
-        },
-    }
+    let mut cfg = common::one_captor_against_still("chase", seed);
+    cfg.num_envs = 16;
+    cfg.rollout_steps = 40;
+    cfg.env.episode_length = 40;
+    cfg.captors.net = NetConfig {
+        hidden: 32,
+        conv_channels: [4, 8],
+        patch_pool: 4,
+        ..Default::default()
+    };
+    cfg.captors.ppo = t2e::learn::ppo::PpoConfig {
+        lr: 2e-3,
+        epochs: 4,
+        ..Default::default()
+    };
+    cfg
 }
 
 fn chase_maps() -> Arc<Vec<Arc<t2e::map::PreparedMap>>> {

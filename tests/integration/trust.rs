@@ -11,12 +11,12 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use t2e::cli::bench::BenchArgs;
 use t2e::cli::eval::EvalArgs;
-use t2e::env::{CaptureRule, EnvConfig, Side};
+use t2e::env::{CaptureRule, Side};
 use t2e::eval::Summary;
 use t2e::fs::{clean_stale_temporaries, write_dir_atomically, Written};
 use t2e::learn::ppo::{PpoConfig, PpoLearner};
 use t2e::learn::rollout::Rollout;
-use t2e::learn::train::{SideConfig, TrainConfig, Trainer};
+use t2e::learn::train::{TrainConfig, Trainer};
 use t2e::nn::checkpoint::read_meta;
 use t2e::nn::{NetConfig, PolicySnapshot};
 
@@ -281,39 +281,17 @@ fn a_non_finite_update_is_undone() {
 }
 
 fn tiny_config() -> TrainConfig {
-    TrainConfig {
-        name: "trust".into(),
-        seed: 3,
-        total_env_steps: u64::MAX,
-        num_envs: 4,
-        rollout_steps: 20,
-        checkpoint_every: 1000,
-        device: t2e::learn::config::DeviceChoice::Cpu,
-        protocol: t2e::protocol::Protocol::HeldOut,
-        maps: "unused".into(),
-        extra_maps: Default::default(),
-        map_sampling: Default::default(),
-        env: EnvConfig {
-            num_captors: 1,
-            episode_length: 30,
-            ..EnvConfig::default()
-        },
-        captors: SideConfig {
-            play: "mappo".parse().unwrap(),
-            net: NetConfig {
-                hidden: 16,
-                conv_channels: [2, 4],
-                patch_pool: 4,
-                ..Default::default()
-            },
-            ppo: PpoConfig::default(),
-            ..SideConfig::default()
-        },
-        target: SideConfig {
-            play: "still".parse().unwrap(),
-            ..SideConfig::default()
-        },
-    }
+    let mut cfg = common::one_captor_against_still("trust", 3);
+    cfg.num_envs = 4;
+    cfg.rollout_steps = 20;
+    cfg.env.episode_length = 30;
+    cfg.captors.net = NetConfig {
+        hidden: 16,
+        conv_channels: [2, 4],
+        patch_pool: 4,
+        ..Default::default()
+    };
+    cfg
 }
 
 fn tiny_maps() -> Arc<Vec<Arc<t2e::map::PreparedMap>>> {

@@ -63,6 +63,35 @@ pub fn children_of(parent: u32, needle: &str) -> Vec<i64> {
     pids
 }
 
+/// One MAPPO captor against a target that stands still, on maps the test
+/// hands the trainer (`maps` is not read), budget unbounded: the base the
+/// learning tests set their worlds, episode length and networks on.
+pub fn one_captor_against_still(name: &str, seed: u64) -> t2e::learn::train::TrainConfig {
+    use t2e::learn::train::{SideConfig, TrainConfig};
+    TrainConfig {
+        name: name.into(),
+        seed,
+        total_env_steps: u64::MAX,
+        checkpoint_every: 1000,
+        device: t2e::learn::config::DeviceChoice::Cpu,
+        protocol: t2e::protocol::Protocol::HeldOut,
+        maps: "unused".into(),
+        env: EnvConfig {
+            num_captors: 1,
+            ..EnvConfig::default()
+        },
+        captors: SideConfig {
+            play: "mappo".parse().unwrap(),
+            ..SideConfig::default()
+        },
+        target: SideConfig {
+            play: "still".parse().unwrap(),
+            ..SideConfig::default()
+        },
+        ..TrainConfig::default()
+    }
+}
+
 /// A training config small enough to run an iteration in a test: MAPPO
 /// captors (K = 2, tiny networks) against the rule-based target, 2 worlds x
 /// 10 steps.
