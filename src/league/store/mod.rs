@@ -264,12 +264,29 @@ impl Store {
     pub fn open_read_only(url: &StoreUrl) -> Result<Store, StoreError> {
         let store = Store::inspect(url)?;
         let pool = &store.pool;
-        let applied: Vec<i64> = store.run(move || async move {
-            let rows = sqlx::query("SELECT version FROM _sqlx_migrations WHERE success = TRUE")
-                .fetch_all(pool)
-                .await?;
-            rows.iter().map(|r| r.try_get::<i64, _>(0)).collect()
-        })?;
+        let read_applied = || -> Result<Vec<i64>, StoreError> {
+            store.run(move || async move {
+                let rows = sqlx::query("SELECT version FROM _sqlx_migrations WHERE success = TRUE")
+                    .fetch_all(pool)
+                    .await?;
+                rows.iter().map(|r| r.try_get::<i64, _>(0)).collect()
+            })
+        };
+        let all_applied = |applied: &[i64]| {
+            store
+                .migrator()
+                .iter()
+                .all(|m| applied.contains(&m.version))
+        };
+        let mut applied = read_applied()?;
+        // A store a league is creating this moment holds its first
+        // migrations and not yet the rest: wait for the migrator before
+        // calling the schema older (a `status` poll as the league starts).
+        let deadline = Instant::now() + Duration::from_secs(10);
+        while !all_applied(&applied) && Instant::now() < deadline {
+            std::thread::sleep(Duration::from_millis(250));
+            applied = read_applied()?;
+        }
         for m in store.migrator().iter() {
             if !applied.contains(&m.version) {
                 return Err(StoreError::Invalid(format!(
