@@ -1,10 +1,10 @@
 //! Embeds the libtorch library folder as an rpath so `t2e-league`, the tests
 //! and the benches run without LD_LIBRARY_PATH, and keeps libtorch's CUDA
 //! library linked into the binary so `tch` sees a GPU where there is one.
+//! (The code version that checkpoints record is embedded by
+//! crates/learners/build.rs, beside the checkpoint code.)
 fn main() {
     println!("cargo:rerun-if-env-changed=DEP_TCH_LIBTORCH_LIB");
-    println!("cargo:rerun-if-changed=.git/HEAD");
-    println!("cargo:rerun-if-changed=.git/refs/heads");
     if let Ok(lib) = std::env::var("DEP_TCH_LIBTORCH_LIB") {
         println!("cargo:rustc-link-arg=-Wl,-rpath,{lib}");
         // Also rpath-link so the linker resolves libtorch's own dependencies.
@@ -16,13 +16,4 @@ fn main() {
             println!("cargo:rustc-link-arg-bins=-Wl,--no-as-needed,-ltorch_cuda,--as-needed");
         }
     }
-    // The code version checkpoints record.
-    let commit = std::process::Command::new("git")
-        .args(["rev-parse", "--short=12", "HEAD"])
-        .output()
-        .ok()
-        .filter(|o| o.status.success())
-        .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
-        .unwrap_or_else(|| "unknown".into());
-    println!("cargo:rustc-env=T2E_GIT_COMMIT={commit}");
 }

@@ -30,13 +30,10 @@
 //! assert_eq!(env.reset(42).unwrap(), first);
 //! ```
 pub mod cli;
-pub mod controllers;
-pub mod eval;
 pub mod league;
-pub mod learn;
-pub mod nn;
-pub mod render;
 
-// The floor below, in its own crate (no libtorch, no database), under the
-// names the rest of the code and its users know.
+// The floors below, each in its own crate, under the names the rest of the
+// code and its users know: the core (no libtorch, no database) and the
+// learners (libtorch, no database).
 pub use t2e_core::{algorithm, asz, env, error, fs, heuristics, map, protocol, util, PROJECT_ROOT};
+pub use t2e_learners::{controllers, eval, learn, nn, render};

@@ -99,7 +99,7 @@ pub fn run(args: TrainArgs) -> Result<()> {
         .out
         .clone()
         .unwrap_or_else(|| PathBuf::from("runs").join(&cfg.name));
-    if !args.resume && run_dir.join("state.json").exists() {
+    if !args.resume && crate::learn::persist::RunDir::new(&run_dir).has_state() {
         bail!(
             "{} already holds a run: add --resume to continue it, or pick another --out or name",
             run_dir.display()

@@ -136,16 +136,13 @@ impl LeagueDir {
             seats.sort_by_key(|e| e.file_name());
             for e in seats {
                 let path = e.path();
-                let checkpoints = visible(&path.join("checkpoints"));
-                if path.join("state.json").exists() || checkpoints > 0 {
+                let run = crate::learn::persist::RunDir::new(&path);
+                let checkpoints = run.checkpoint_names(None).map_or(0, |n| n.len());
+                if run.has_state() || checkpoints > 0 {
                     found.push(format!(
                         "learners/{}/ ({checkpoints} checkpoints{})",
                         e.file_name().to_string_lossy(),
-                        if path.join("state.json").exists() {
-                            ", state.json"
-                        } else {
-                            ""
-                        }
+                        if run.has_state() { ", state.json" } else { "" }
                     ));
                 }
             }

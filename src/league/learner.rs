@@ -505,18 +505,18 @@ fn resume_point(
     row: &super::store::Player,
     tcfg: &crate::learn::train::TrainConfig,
 ) -> Result<ResumePoint> {
-    use crate::learn::persist::RunState;
-    let run_dir = dir.seat_dir(Seat {
+    use crate::learn::persist::{RunDir, RunState};
+    let run = RunDir::new(dir.seat_dir(Seat {
         side: row.side,
         role: if row.kind == Kind::Exploiter {
             SeatRole::Exploiter
         } else {
             SeatRole::Main
         },
-    });
-    let state_path = run_dir.join("state.json");
-    if state_path.is_file() {
-        let state = RunState::read(&run_dir)?;
+    }));
+    let state_path = run.state_path();
+    if run.has_state() {
+        let state = run.read_state()?;
         if state.env_steps < row.env_steps {
             bail!(
                 "{}: at {} env steps, but the store ({}) recorded {} at {} env steps; it would train again over steps it already played. Put the newer state.json back",
@@ -533,19 +533,11 @@ fn resume_point(
     // between its checkpoint and its state): resume from the newest of the
     // learner's checkpoints that verifies, is not behind the store's
     // record, and was written under this config.
-    let checkpoints_dir = run_dir.join("checkpoints");
-    let mut names: Vec<String> = std::fs::read_dir(&checkpoints_dir)
-        .map(|it| {
-            it.flatten()
-                .map(|e| e.file_name().to_string_lossy().into_owned())
-                .filter(|n| n.starts_with(&format!("{}-", row.side.name())))
-                .collect()
-        })
-        .unwrap_or_default();
-    names.sort();
+    let checkpoints_dir = run.checkpoints_dir();
+    let names = run.checkpoint_names(Some(row.side)).unwrap_or_default();
     let mut rejected = Vec::new();
     for name in names.iter().rev() {
-        let ckpt = checkpoints_dir.join(name);
+        let ckpt = run.checkpoint(name);
         let usable = (|| -> Result<crate::nn::checkpoint::CheckpointMeta> {
             let meta = crate::nn::checkpoint::read_meta(&ckpt)?;
             for file in meta.files.keys() {
@@ -565,14 +557,13 @@ fn resume_point(
         })();
         match usable {
             Ok(meta) => {
-                RunState {
+                run.write_state(&RunState {
                     iteration: meta.iteration,
                     env_steps: meta.env_steps,
                     wall_s: 0.0,
                     config_hash: meta.config_hash.clone(),
                     checkpoints: vec![(row.side, name.clone())],
-                }
-                .write(&run_dir)?;
+                })?;
                 tracing::warn!(
                     "{}: {} was missing; rebuilt from {}, its newest checkpoint that verifies ({} env steps)",
                     row.name,

@@ -232,9 +232,7 @@ fn run_league(
         }
     }
     for seat in &seats {
-        for sub in ["", "checkpoints"] {
-            crate::fs::clean_stale_temporaries(&dir.seat_dir(*seat).join(sub))?;
-        }
+        crate::learn::persist::RunDir::new(dir.seat_dir(*seat)).clean_stale_temporaries()?;
     }
 
     let mut roles: Vec<Role> = seats.iter().map(|s| Role::Learner(*s)).collect();

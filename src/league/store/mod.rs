@@ -1,5 +1,6 @@
 //! The league's store: players, matches, ratings, curriculum, heartbeats,
-//! crashes, seats, the config, exploits and held-out panel episodes, through sqlx. Two backends behind one
+//! crashes, seats, the config, exploits and held-out panel episodes, through sqlx,
+//! one module per table (or pair of tables), each adding its methods to `Store`. Two backends behind one
 //! API (`url`): a SQLite file (`league.db` in the league directory, the
 //! embedded default) or a PostgreSQL database that workers on many hosts
 //! share. sqlx is async; its runtime lives here, inside `Store`, so the
@@ -18,13 +19,19 @@
 //!   (taking a seat: `FOR UPDATE SKIP LOCKED` on PostgreSQL).
 //! - A match is recorded once: its key names the episode (learner, world,
 //!   episode), and recording it again is a no-op. The rating update of a
-//!   match is written in the same transaction as the match. So every
+//!   match is written in the same transaction (`Tx`) as the match. So every
 //!   write can be retried when the connection fails (`Store::run`).
 //! - A PostgreSQL URL's password is never printed (`StoreUrl`'s Display).
 
+mod curriculum;
 mod exploits;
+mod health;
 mod held_out;
 mod leases;
+mod matches;
+mod meta;
+mod players;
+mod ratings;
 mod rows;
 pub mod url;
 
@@ -39,12 +46,9 @@ pub use rows::{
 };
 pub use url::{Backend, StoreUrl};
 
-use super::ratings::{self, Rating};
-use rows::{side_name, PlayerRow};
 use sqlx::any::AnyPoolOptions;
 use sqlx::AnyPool;
 use sqlx::{Executor, Row};
-use std::collections::HashMap;
 use std::future::Future;
 use std::path::Path;
 use std::time::{Duration, Instant};
@@ -60,6 +64,30 @@ const NO_NULL_FLOATS: () = ();
 
 static SQLITE_MIGRATIONS: sqlx::migrate::Migrator = sqlx::migrate!("league/migrations/sqlite");
 static POSTGRES_MIGRATIONS: sqlx::migrate::Migrator = sqlx::migrate!("league/migrations/postgres");
+
+/// One transaction: the writes that must land together (a match and both
+/// players' rating updates; an exploit and its result) take it, each from
+/// its own table's module, and it commits or rolls back whole.
+pub(crate) struct Tx<'c>(sqlx::Transaction<'c, sqlx::Any>);
+
+impl<'c> Tx<'c> {
+    pub(crate) async fn begin(pool: &'c AnyPool) -> Result<Tx<'c>, sqlx::Error> {
+        pool.begin().await.map(Tx)
+    }
+
+    /// The connection the transaction's statements run on.
+    pub(crate) fn conn(&mut self) -> &mut sqlx::AnyConnection {
+        &mut self.0
+    }
+
+    pub(crate) async fn commit(self) -> Result<(), sqlx::Error> {
+        self.0.commit().await
+    }
+
+    pub(crate) async fn rollback(self) -> Result<(), sqlx::Error> {
+        self.0.rollback().await
+    }
+}
 
 #[derive(Debug, thiserror::Error)]
 pub enum StoreError {
@@ -546,532 +574,11 @@ impl Store {
         }
     }
 
-    /// Stores the league's config the first time; returns the one stored
-    /// (the first), so a resumed league can tell whether it changed.
-    pub fn config_once(&self, toml: &str) -> Result<String, StoreError> {
-        let pool = &self.pool;
-        self.run(move || async move {
-            sqlx::query(
-                "INSERT INTO league_config (id, config_toml, created_at_ms) VALUES (1, $1, $2) ON CONFLICT (id) DO NOTHING",
-            )
-            .bind(toml)
-            .bind(now_ms())
-            .execute(pool)
-            .await?;
-            sqlx::query("SELECT config_toml FROM league_config WHERE id = 1")
-                .fetch_one(pool)
-                .await?
-                .try_get::<String, _>(0)
-        })
-    }
-
-    /// The config the league was started with, if the store holds one (an
-    /// empty store does not).
-    pub fn stored_config(&self) -> Result<Option<String>, StoreError> {
-        let pool = &self.pool;
-        self.run(move || async move {
-            sqlx::query("SELECT config_toml FROM league_config WHERE id = 1")
-                .fetch_optional(pool)
-                .await?
-                .map(|r| r.try_get::<String, _>(0))
-                .transpose()
-        })
-    }
-
-    /// The league's identity, if one was written (a store from before
-    /// identities has no such column until it is migrated).
-    pub fn league_id(&self) -> Result<Option<String>, StoreError> {
-        let pool = &self.pool;
-        let row = self.run(move || async move {
-            sqlx::query("SELECT * FROM league_config WHERE id = 1")
-                .fetch_optional(pool)
-                .await
-        })?;
-        Ok(row.and_then(|r| r.try_get::<Option<String>, _>("league_id").ok().flatten()))
-    }
-
-    /// Takes a member back into play: its files verify again.
-    pub fn reinstate(&self, id: i64) -> Result<(), StoreError> {
-        let pool = &self.pool;
-        self.run(move || async move {
-            sqlx::query("UPDATE players SET quarantined = NULL WHERE id = $1")
-                .bind(id)
-                .execute(pool)
-                .await
-                .map(|_| ())
-        })
-    }
-
-    /// Writes the league's identity once (the config row must exist);
-    /// returns the identity stored, which is `id` unless one was there.
-    pub fn set_league_id_once(&self, id: &str) -> Result<String, StoreError> {
-        let pool = &self.pool;
-        self.run(move || async move {
-            sqlx::query(
-                "UPDATE league_config SET league_id = $1 WHERE id = 1 AND league_id IS NULL",
-            )
-            .bind(id)
-            .execute(pool)
-            .await
-            .map(|_| ())
-        })?;
-        self.league_id()?.ok_or_else(|| {
-            StoreError::Invalid(format!(
-                "{}: holds no league config to attach an identity to",
-                self.url
-            ))
-        })
-    }
-
-    /// Matches a recorder (a learner's name, or "evaluator") wrote.
-    pub fn matches_recorded_by(&self, recorder: &str) -> Result<u64, StoreError> {
-        let pool = &self.pool;
-        self.run(move || async move {
-            sqlx::query("SELECT COUNT(*) FROM matches WHERE recorded_by = $1")
-                .bind(recorder)
-                .fetch_one(pool)
-                .await?
-                .try_get::<i64, _>(0)
-        })
-        .map(|n| n as u64)
-    }
-
-    /// Adds a player; a player of the same name already there is returned
-    /// as it is (adding is idempotent, so a killed writer cannot duplicate).
-    /// A recorded member never changes: adding a name that is recorded with
-    /// other checkpoint files is an error, not a silent no-op.
-    pub fn add_player(&self, p: &NewPlayer) -> Result<i64, StoreError> {
-        if let Some((rel, _)) = p
-            .checkpoint
-            .as_ref()
-            .filter(|(rel, _)| !rows::inside_pool(rel))
-        {
-            return Err(StoreError::Invalid(format!(
-                "{}: player {} would name the checkpoint {rel:?}, outside the league's pool folder",
-                self.url, p.name
-            )));
-        }
-        let (path, sha) = match &p.checkpoint {
-            Some((a, b)) => (Some(a.as_str()), Some(b.as_str())),
-            None => (None, None),
-        };
-        let pool = &self.pool;
-        let (id, stored_path, stored_sha) = self.run(move || async move {
-            sqlx::query(
-                "INSERT INTO players (name, side, kind, parent, created_at_ms, env_steps, curriculum_stage, checkpoint_path, checkpoint_sha256) \
-                 VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9) ON CONFLICT (name) DO NOTHING",
-            )
-            .bind(&p.name)
-            .bind(side_name(p.side))
-            .bind(p.kind.name())
-            .bind(p.parent)
-            .bind(now_ms())
-            .bind(p.env_steps as i64)
-            .bind(p.curriculum_stage as i64)
-            .bind(path)
-            .bind(sha)
-            .execute(pool)
-            .await?;
-            let row = sqlx::query(
-                "SELECT id, checkpoint_path, checkpoint_sha256 FROM players WHERE name = $1",
-            )
-            .bind(&p.name)
-            .fetch_one(pool)
-            .await?;
-            Ok((
-                row.try_get::<i64, _>("id")?,
-                row.try_get::<Option<String>, _>("checkpoint_path")?,
-                row.try_get::<Option<String>, _>("checkpoint_sha256")?,
-            ))
-        })?;
-        if p.checkpoint.is_some()
-            && (stored_path.as_deref() != path || stored_sha.as_deref() != sha)
-        {
-            return Err(StoreError::Invalid(format!(
-                "{}: player {} is already recorded with other checkpoint files ({} sha256 {}); a recorded member never changes",
-                self.url,
-                p.name,
-                stored_path.as_deref().unwrap_or("none"),
-                stored_sha.as_deref().unwrap_or("none"),
-            )));
-        }
-        Ok(id)
-    }
-
-    /// Points a learner's row at its newest checkpoint.
-    pub fn update_learner(
-        &self,
-        id: i64,
-        env_steps: u64,
-        checkpoint: (&str, &str),
-    ) -> Result<(), StoreError> {
-        let pool = &self.pool;
-        self.run(move || async move {
-            sqlx::query(
-                "UPDATE players SET env_steps = $1, checkpoint_path = $2, checkpoint_sha256 = $3 WHERE id = $4",
-            )
-            .bind(env_steps as i64)
-            .bind(checkpoint.0)
-            .bind(checkpoint.1)
-            .bind(id)
-            .execute(pool)
-            .await
-            .map(|_| ())
-        })
-    }
-
-    /// Takes a member out of play, saying why.
-    pub fn quarantine(&self, id: i64, why: &str) -> Result<(), StoreError> {
-        let pool = &self.pool;
-        self.run(move || async move {
-            sqlx::query("UPDATE players SET quarantined = $1 WHERE id = $2")
-                .bind(why)
-                .bind(id)
-                .execute(pool)
-                .await
-                .map(|_| ())
-        })
-    }
-
-    /// Every `players` row as stored, by id.
-    fn player_rows(&self) -> Result<Vec<PlayerRow>, StoreError> {
-        let pool = &self.pool;
-        self.run(move || async move {
-            sqlx::query_as(
-                "SELECT id, name, side, kind, parent, created_at_ms, env_steps, curriculum_stage, checkpoint_path, checkpoint_sha256, quarantined \
-                 FROM players ORDER BY id",
-            )
-            .fetch_all(pool)
-            .await
-        })
-    }
-
-    pub fn players(&self) -> Result<Vec<Player>, StoreError> {
-        let rows = self.player_rows()?;
-        rows.into_iter()
-            .map(|r| {
-                Player::try_from(r).map_err(|e| StoreError::Invalid(format!("{}: {e}", self.url)))
-            })
-            .collect()
-    }
-
-    /// Every player, by id, for a report: a row naming a checkpoint outside
-    /// the pool is listed without it and flagged in `quarantined`, where
-    /// `players` refuses the whole read.
-    pub fn players_flagged(&self) -> Result<Vec<Player>, StoreError> {
-        let rows = self.player_rows()?;
-        Ok(rows.into_iter().map(PlayerRow::flagged).collect())
-    }
-
-    /// Records a match and updates both players' live ratings, in one
-    /// transaction. Returns false (and changes nothing) when a match with
-    /// the same key is already recorded.
-    pub fn record_match(&self, m: &MatchRecord) -> Result<bool, StoreError> {
-        if !m.speed_ratio.is_finite() || m.final_asz_m2.is_some_and(|a| !a.is_finite()) {
-            return Err(StoreError::Invalid(format!(
-                "match {}: non-finite speed ratio or |ASZ|",
-                m.key
-            )));
-        }
-        let pool = &self.pool;
-        self.run(move || async move {
-            let mut tx = pool.begin().await?;
-            let inserted = sqlx::query(
-                "INSERT INTO matches (match_key, captor_player, target_player, map, num_captors, speed_ratio, seed, captured, steps, final_asz_m2, recorded_by, recorded_at_ms) \
-                 VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, CASE WHEN $13 = 1 THEN $10 ELSE NULL END, $11, $12) ON CONFLICT (match_key) DO NOTHING",
-            )
-            .bind(&m.key)
-            .bind(m.captor_player)
-            .bind(m.target_player)
-            .bind(&m.map)
-            .bind(m.num_captors as i64)
-            .bind(m.speed_ratio)
-            .bind(m.seed as i64)
-            .bind(m.captured as i64)
-            .bind(m.steps as i64)
-            .bind(m.final_asz_m2.unwrap_or(0.0))
-            .bind(&m.recorded_by)
-            .bind(now_ms())
-            .bind(m.final_asz_m2.is_some() as i64)
-            .execute(&mut *tx)
-            .await?
-            .rows_affected()
-                == 1;
-            if !inserted {
-                tx.rollback().await?;
-                return Ok(false);
-            }
-            let match_id: i64 = sqlx::query("SELECT id FROM matches WHERE match_key = $1")
-                .bind(&m.key)
-                .fetch_one(&mut *tx)
-                .await?
-                .try_get("id")?;
-            let mut current = [Rating::default(); 2];
-            for (slot, player) in current.iter_mut().zip([m.captor_player, m.target_player]) {
-                if let Some(row) = sqlx::query(
-                    "SELECT mu, sigma FROM ratings WHERE player = $1 ORDER BY id DESC LIMIT 1",
-                )
-                .bind(player)
-                .fetch_optional(&mut *tx)
-                .await?
-                {
-                    *slot = Rating {
-                        mu: row.try_get("mu")?,
-                        sigma: row.try_get("sigma")?,
-                    };
-                }
-            }
-            let (c, t) = ratings::update(current[0], current[1], m.captured);
-            for (player, r) in [(m.captor_player, c), (m.target_player, t)] {
-                sqlx::query(
-                    "INSERT INTO ratings (player, match_id, mu, sigma, at_ms) VALUES ($1, $2, $3, $4, $5)",
-                )
-                .bind(player)
-                .bind(match_id)
-                .bind(r.mu)
-                .bind(r.sigma)
-                .bind(now_ms())
-                .execute(&mut *tx)
-                .await?;
-            }
-            tx.commit().await?;
-            Ok(true)
-        })
-    }
-
-    pub fn has_match(&self, key: &str) -> Result<bool, StoreError> {
-        let pool = &self.pool;
-        self.run(move || async move {
-            sqlx::query("SELECT COUNT(*) FROM matches WHERE match_key = $1")
-                .bind(key)
-                .fetch_one(pool)
-                .await?
-                .try_get::<i64, _>(0)
-        })
-        .map(|n| n > 0)
-    }
-
-    pub fn match_count(&self) -> Result<u64, StoreError> {
-        let pool = &self.pool;
-        self.run(move || async move {
-            sqlx::query("SELECT COUNT(*) FROM matches")
-                .fetch_one(pool)
-                .await?
-                .try_get::<i64, _>(0)
-        })
-        .map(|n| n as u64)
-    }
-
-    /// The payoff table: captor wins and games per captor-target pair.
-    pub fn payoff(&self) -> Result<Vec<PairResult>, StoreError> {
-        let pool = &self.pool;
-        self.run(move || async move {
-            sqlx::query_as(
-                "SELECT captor_player AS captor, target_player AS target, CAST(SUM(captured) AS BIGINT) AS captor_wins, COUNT(*) AS games FROM matches \
-                 GROUP BY captor_player, target_player ORDER BY captor_player, target_player",
-            )
-            .fetch_all(pool)
-            .await
-        })
-    }
-
-    /// The payoff of the matches one recorder wrote ("evaluator": the
-    /// panel's episodes, which the matchmaker's choices do not bias).
-    pub fn payoff_recorded_by(&self, recorder: &str) -> Result<Vec<PairResult>, StoreError> {
-        let pool = &self.pool;
-        self.run(move || async move {
-            sqlx::query_as(
-                "SELECT captor_player AS captor, target_player AS target, CAST(SUM(captured) AS BIGINT) AS captor_wins, COUNT(*) AS games FROM matches \
-                 WHERE recorded_by = $1 GROUP BY captor_player, target_player ORDER BY captor_player, target_player",
-            )
-            .bind(recorder)
-            .fetch_all(pool)
-            .await
-        })
-    }
-
-    /// Each player's latest live rating (players without matches are absent).
-    pub fn ratings(&self) -> Result<HashMap<i64, Rating>, StoreError> {
-        let pool = &self.pool;
-        let rows = self.run(move || async move {
-            sqlx::query(
-                "SELECT r.player, r.mu, r.sigma FROM ratings r \
-                 WHERE r.id = (SELECT MAX(q.id) FROM ratings q WHERE q.player = r.player)",
-            )
-            .fetch_all(pool)
-            .await
-        })?;
-        rows.iter()
-            .map(|r| {
-                Ok((
-                    r.try_get::<i64, _>("player")?,
-                    Rating {
-                        mu: r.try_get("mu")?,
-                        sigma: r.try_get("sigma")?,
-                    },
-                ))
-            })
-            .collect::<Result<_, sqlx::Error>>()
-            .map_err(|e| self.db(e))
-    }
-
     fn db(&self, source: sqlx::Error) -> StoreError {
         StoreError::Database {
             store: self.url.to_string(),
             source,
         }
-    }
-
-    /// A player's live ratings, oldest first.
-    pub fn rating_history(&self, player: i64) -> Result<Vec<RatingEntry>, StoreError> {
-        let pool = &self.pool;
-        self.run(move || async move {
-            sqlx::query_as(
-                "SELECT match_id, mu, sigma, at_ms FROM ratings WHERE player = $1 ORDER BY id",
-            )
-            .bind(player)
-            .fetch_all(pool)
-            .await
-        })
-    }
-
-    /// Appends a curriculum stage change.
-    pub fn push_curriculum(
-        &self,
-        stage: usize,
-        speed_ratio: f64,
-        reason: &str,
-    ) -> Result<(), StoreError> {
-        let pool = &self.pool;
-        self.run(move || async move {
-            sqlx::query(
-                "INSERT INTO curriculum (stage, speed_ratio, reason, at_ms) VALUES ($1, $2, $3, $4)",
-            )
-            .bind(stage as i64)
-            .bind(speed_ratio)
-            .bind(reason)
-            .bind(now_ms())
-            .execute(pool)
-            .await
-            .map(|_| ())
-        })
-    }
-
-    /// Outcomes (captured or not), oldest first, of the last `limit`
-    /// matches `captor_player` played at `speed_ratio` since `since_ms`: the
-    /// curriculum's window, rebuilt when a learner restarts.
-    pub fn recent_outcomes(
-        &self,
-        captor_player: i64,
-        speed_ratio: f64,
-        since_ms: i64,
-        limit: usize,
-    ) -> Result<Vec<bool>, StoreError> {
-        let pool = &self.pool;
-        let rows = self.run(move || async move {
-            sqlx::query(
-                "SELECT captured FROM matches WHERE captor_player = $1 AND ABS(speed_ratio - $2) < 1e-9 \
-                 AND recorded_at_ms >= $3 ORDER BY id DESC LIMIT $4",
-            )
-            .bind(captor_player)
-            .bind(speed_ratio)
-            .bind(since_ms)
-            .bind(limit as i64)
-            .fetch_all(pool)
-            .await
-        })?;
-        rows.iter()
-            .rev()
-            .map(|r| r.try_get::<i64, _>(0).map(|c| c != 0))
-            .collect::<Result<_, _>>()
-            .map_err(|e| self.db(e))
-    }
-
-    /// Curriculum stage changes, oldest first.
-    pub fn curriculum_history(&self) -> Result<Vec<StageChange>, StoreError> {
-        let pool = &self.pool;
-        self.run(move || async move {
-            sqlx::query_as("SELECT stage, speed_ratio, reason, at_ms FROM curriculum ORDER BY id")
-                .fetch_all(pool)
-                .await
-        })
-    }
-
-    /// A learner's latest state and throughput; `steps_per_s` None keeps
-    /// the rate last reported (a run that trained no step measured none).
-    pub fn heartbeat(
-        &self,
-        learner: &str,
-        state: BeatState,
-        env_steps: u64,
-        steps_per_s: Option<f64>,
-    ) -> Result<(), StoreError> {
-        let rate = steps_per_s.map(|r| if r.is_finite() { r } else { 0.0 });
-        let host = host_name();
-        let host = host.as_str();
-        let pool = &self.pool;
-        // No Option<f64> bind (see NO_NULL_FLOATS): a flag says whether the
-        // rate is new.
-        self.run(move || async move {
-            sqlx::query(
-                "INSERT INTO heartbeats (learner, pid, host, state, env_steps, steps_per_s, at_ms) VALUES ($1, $2, $3, $4, $5, $6, $7) \
-                 ON CONFLICT (learner) DO UPDATE SET pid = excluded.pid, host = excluded.host, state = excluded.state, env_steps = excluded.env_steps, \
-                 steps_per_s = CASE WHEN $8 = 1 THEN excluded.steps_per_s ELSE heartbeats.steps_per_s END, at_ms = excluded.at_ms",
-            )
-            .bind(learner)
-            .bind(std::process::id() as i64)
-            .bind(host)
-            .bind(state.name())
-            .bind(env_steps as i64)
-            .bind(rate.unwrap_or(0.0))
-            .bind(now_ms())
-            .bind(rate.is_some() as i64)
-            .execute(pool)
-            .await
-            .map(|_| ())
-        })
-    }
-
-    pub fn heartbeats(&self) -> Result<Vec<Heartbeat>, StoreError> {
-        let pool = &self.pool;
-        self.run(move || async move {
-            sqlx::query_as(
-                "SELECT learner, pid, host, state, env_steps, steps_per_s, at_ms FROM heartbeats ORDER BY learner",
-            )
-            .fetch_all(pool)
-            .await
-        })
-    }
-
-    pub fn record_crash(
-        &self,
-        learner: &str,
-        exit_status: &str,
-        message: &str,
-    ) -> Result<(), StoreError> {
-        let pool = &self.pool;
-        self.run(move || async move {
-            sqlx::query(
-                "INSERT INTO crashes (learner, exit_status, message, at_ms) VALUES ($1, $2, $3, $4)",
-            )
-            .bind(learner)
-            .bind(exit_status)
-            .bind(message)
-            .bind(now_ms())
-            .execute(pool)
-            .await
-            .map(|_| ())
-        })
-    }
-
-    /// Crashes, oldest first.
-    pub fn crashes(&self) -> Result<Vec<Crash>, StoreError> {
-        let pool = &self.pool;
-        self.run(move || async move {
-            sqlx::query_as("SELECT learner, exit_status, message, at_ms FROM crashes ORDER BY id")
-                .fetch_all(pool)
-                .await
-        })
     }
 }
 

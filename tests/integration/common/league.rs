@@ -6,7 +6,7 @@ use std::collections::BTreeSet;
 use t2e::env::Side;
 use t2e::league::dir::LeagueDir;
 use t2e::league::store::{Kind, Store};
-use t2e::learn::persist::RunState;
+use t2e::learn::persist::RunDir;
 
 /// The tiny league of tests/integration/league.rs: two learners (K = 2, tiny networks)
 /// and the evaluator, 9,600 env steps each.
@@ -80,7 +80,8 @@ pub fn check(dir: &LeagueDir) -> (u64, Vec<u64>) {
     let resume: Vec<u64> = [Side::Captors, Side::Target]
         .iter()
         .map(|&side| {
-            RunState::read(&dir.learner_dir(side))
+            RunDir::new(dir.learner_dir(side))
+                .read_state()
                 .map(|s| s.env_steps)
                 .unwrap_or(0)
         })

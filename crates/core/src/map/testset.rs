@@ -176,7 +176,7 @@ impl fmt::Display for Resemblance {
 
 /// The embedded fingerprints of the 26 Gibson maps (`map::fingerprint`),
 /// generated from `../shared/maps/gibson` by
-/// `cargo test --release --test integration -- --ignored gibson_maps::write_test_map_fingerprints`
+/// `./scripts/test.sh --test integration -- --ignored gibson_maps::write_test_map_fingerprints`
 /// and checked against that folder, where present, by
 /// `the_embedded_fingerprints_are_those_of_the_test_maps`.
 pub const FINGERPRINTS_FILE: &[u8] = include_bytes!("gibson_fingerprints.bin");

@@ -10,6 +10,7 @@
 pub mod checkpoint;
 mod egocentric;
 pub mod prior;
+pub mod run_dir;
 pub mod stacked;
 
 pub use checkpoint::{CheckpointController, CheckpointMeta, PolicySnapshot};

@@ -15,14 +15,13 @@ use super::learner::Learner;
 use super::maac::MaacLearner;
 use super::maddpg::MaddpgLearner;
 use super::offpolicy::sequence_bytes;
-use super::persist::{self, RunState};
+use super::persist::{self, RunDir, RunState};
 use super::ppo::PpoLearner;
 use super::rollout::{Rollout, UpdateStats};
 use super::shaping::shaping_term;
 use super::Algorithm;
 use crate::env::vec_env::episode_seed;
 use crate::env::{Action, Side, VecEnv};
-use crate::fs::clean_stale_temporaries;
 use crate::map::PreparedMap;
 use crate::nn::checkpoint::{checkpoint_name, code_version, CheckpointMeta, FORMAT};
 use crate::nn::obs_tensors;
@@ -346,8 +345,9 @@ impl Trainer {
         maps: Arc<Vec<Arc<PreparedMap>>>,
         run_dir: &Path,
     ) -> Result<Trainer> {
-        let state_path = run_dir.join("state.json");
-        let state = RunState::read(run_dir)?;
+        let run = RunDir::new(run_dir);
+        let state_path = run.state_path();
+        let state = run.read_state()?;
         if state.config_hash != cfg.hash() {
             bail!(
                 "{}: the run was started with a different configuration (hash {} vs {}); start a new run instead",
@@ -356,28 +356,21 @@ impl Trainer {
                 cfg.hash()
             );
         }
-        for dir in [run_dir.to_path_buf(), run_dir.join("checkpoints")] {
-            for p in clean_stale_temporaries(&dir)? {
-                tracing::info!("removed {} (left by a killed run)", p.display());
-            }
+        for p in run.clean_stale_temporaries()? {
+            tracing::info!("removed {} (left by a killed run)", p.display());
         }
         let mut t = Trainer::starting_at(cfg, maps, state.iteration)?;
         t.env_steps = state.env_steps;
         t.wall_s = state.wall_s;
         for ls in &mut t.learners {
-            let name = state
-                .checkpoints
-                .iter()
-                .find(|(s, _)| *s == ls.side)
-                .map(|(_, n)| n.clone())
-                .with_context(|| {
-                    format!(
-                        "{}: names no {} checkpoint",
-                        state_path.display(),
-                        ls.side.name()
-                    )
-                })?;
-            let dir = run_dir.join("checkpoints").join(&name);
+            let name = state.checkpoint_of(ls.side).with_context(|| {
+                format!(
+                    "{}: names no {} checkpoint",
+                    state_path.display(),
+                    ls.side.name()
+                )
+            })?;
+            let dir = run.checkpoint(name);
             if !dir.is_dir() {
                 bail!(
                     "{}: names the checkpoint {}, which is missing",
@@ -731,23 +724,23 @@ impl Trainer {
 
     /// Writes a checkpoint of every learning side, then `state.json`.
     pub fn save(&self, run_dir: &Path) -> Result<Vec<PathBuf>> {
+        let run = RunDir::new(run_dir);
         let mut written = Vec::new();
         let mut names = Vec::new();
         for ls in &self.learners {
             let name = checkpoint_name(ls.side, self.env_steps);
-            let dir = run_dir.join("checkpoints").join(&name);
+            let dir = run.checkpoint(&name);
             persist::save_learner(&dir, ls.learner.as_ref(), self.meta(ls))?;
             written.push(dir);
             names.push((ls.side, name));
         }
-        RunState {
+        run.write_state(&RunState {
             iteration: self.iteration,
             env_steps: self.env_steps,
             wall_s: self.wall_s,
             config_hash: self.config_hash.clone(),
             checkpoints: names,
-        }
-        .write(run_dir)?;
+        })?;
         Ok(written)
     }
 

@@ -499,13 +499,12 @@ mod tests {
                 .to_string()
                 .contains("line 2")
         );
-        let shared =
-            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/paper/tables.csv");
+        let shared = std::path::Path::new(crate::PROJECT_ROOT).join("../shared/paper/tables.csv");
         if let Ok(text) = std::fs::read_to_string(&shared) {
             assert_eq!(
                 text,
                 PAPER_TABLES,
-                "src/eval/paper_tables.csv differs from {}",
+                "crates/learners/src/eval/paper_tables.csv differs from {}",
                 shared.display()
             );
         }

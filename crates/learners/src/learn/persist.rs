@@ -1,44 +1,17 @@
 //! Persistence of training: a learning side's checkpoint folder (weights,
 //! Adam moments, return statistics; see `nn::checkpoint` for the layout and
-//! its integrity checks) and a run's `state.json`. Kept apart from the
-//! training loop so the league's learners write and read the same folders.
+//! its integrity checks). The run folder around the checkpoints, and its
+//! `state.json`, belong to `nn::run_dir`. Kept apart from the training loop
+//! so the league's learners write and read the same folders.
 
 use super::learner::Learner;
-use crate::env::Side;
-use crate::fs::{write_file_atomically, Written};
+use crate::fs::Written;
 use crate::nn::checkpoint::{
     read_checked, read_meta, write_checkpoint, write_new_checkpoint, CheckpointMeta,
 };
+pub use crate::nn::run_dir::{RunDir, RunState};
 use anyhow::{bail, Context, Result};
-use serde::{Deserialize, Serialize};
 use std::path::Path;
-
-/// `state.json`: where a run stands, written after every checkpoint.
-#[derive(Clone, Debug, Serialize, Deserialize)]
-pub struct RunState {
-    pub iteration: u64,
-    pub env_steps: u64,
-    pub wall_s: f64,
-    pub config_hash: String,
-    /// Checkpoint folder names (under `checkpoints/`) per learning side.
-    pub checkpoints: Vec<(Side, String)>,
-}
-
-impl RunState {
-    pub fn read(run_dir: &Path) -> Result<RunState> {
-        let path = run_dir.join("state.json");
-        let text = std::fs::read_to_string(&path)
-            .with_context(|| format!("{}: cannot read (nothing to resume)", path.display()))?;
-        serde_json::from_str(&text).with_context(|| format!("{}: not a run state", path.display()))
-    }
-
-    pub fn write(&self, run_dir: &Path) -> Result<()> {
-        Ok(write_file_atomically(
-            &run_dir.join("state.json"),
-            serde_json::to_string_pretty(self)?.as_bytes(),
-        )?)
-    }
-}
 
 /// Writes `learner` as the checkpoint folder `dir` with sidecar `meta`
 /// (its `learner_state` filled in here).

@@ -342,58 +342,7 @@ pub fn read_meta_hashed(dir: &Path) -> Result<(CheckpointMeta, String)> {
     Ok((meta, sha256))
 }
 
-/// The newest checkpoint of `side` in a run folder or a `checkpoints` folder.
-pub fn latest_checkpoint(run_or_checkpoints: &Path, side: Side) -> Option<PathBuf> {
-    let dir = if run_or_checkpoints.join("checkpoints").is_dir() {
-        run_or_checkpoints.join("checkpoints")
-    } else {
-        run_or_checkpoints.to_path_buf()
-    };
-    let prefix = format!("{}-", side.name());
-    let mut found: Vec<PathBuf> = std::fs::read_dir(&dir)
-        .ok()?
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| {
-            p.file_name()
-                .and_then(|n| n.to_str())
-                .is_some_and(|n| n.starts_with(&prefix))
-                && p.join("meta.json").is_file()
-        })
-        .collect();
-    found.sort();
-    found.pop()
-}
-
-/// The checkpoint of `side` that a run folder's `state.json` names, if the
-/// folder has a `state.json` naming one; an error if that checkpoint is gone
-/// (never an older one in its place: that would play the wrong weights).
-fn checkpoint_named_by_state(run: &Path, side: Side) -> Result<Option<PathBuf>> {
-    let state = run.join("state.json");
-    if !state.is_file() {
-        return Ok(None);
-    }
-    #[derive(Deserialize)]
-    struct Named {
-        checkpoints: Vec<(Side, String)>,
-    }
-    let text = std::fs::read_to_string(&state)
-        .with_context(|| format!("{}: cannot read", state.display()))?;
-    let named: Named = serde_json::from_str(&text)
-        .with_context(|| format!("{}: not a run state", state.display()))?;
-    let Some((_, name)) = named.checkpoints.iter().find(|(s, _)| *s == side) else {
-        return Ok(None);
-    };
-    let dir = run.join("checkpoints").join(name);
-    if !dir.join("meta.json").is_file() {
-        bail!(
-            "{}: names the {} checkpoint {}, which is missing or incomplete; refusing to fall back to an older one",
-            state.display(),
-            side.name(),
-            dir.display()
-        );
-    }
-    Ok(Some(dir))
-}
+pub use super::run_dir::latest_checkpoint;
 
 /// Resolves what a user wrote after `ckpt:`: a checkpoint folder, a file in
 /// one, or a run folder (its newest checkpoint of `side`).
@@ -411,7 +360,7 @@ pub fn resolve_checkpoint(path: &Path, side: Side) -> Result<PathBuf> {
     if path.join("meta.json").is_file() {
         return Ok(path.to_path_buf());
     }
-    if let Some(named) = checkpoint_named_by_state(path, side)? {
+    if let Some(named) = super::run_dir::RunDir::new(path).named_checkpoint(side)? {
         return Ok(named);
     }
     let looks_like_a_checkpoint = path

@@ -1,0 +1,280 @@
+//! A training run's folder, and the one place that knows its layout:
+//!
+//! ```text
+//! RUN/
+//!   state.json                  where the run stands (`RunState`)
+//!   checkpoints/SIDE-ENVSTEPS/  one checkpoint folder per save (nn::checkpoint)
+//! ```
+//!
+//! `train`, the league's learners and `exploit`'s best responses all keep
+//! their runs this way, so every question about a run folder (is there a
+//! run, which checkpoints does it hold, which one does it resume from) is
+//! answered here. Checkpoint names sort by age (the env steps are
+//! zero-padded); a folder whose name starts with a dot is a write in
+//! progress and never counts.
+
+use crate::env::Side;
+use crate::fs::{clean_stale_temporaries, write_file_atomically, FsError};
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// What went wrong with a run folder; each message names the file.
+#[derive(Debug, thiserror::Error)]
+pub enum RunDirError {
+    #[error("{}: cannot read (nothing to resume): {cause}", .path.display())]
+    Unreadable {
+        path: PathBuf,
+        cause: std::io::Error,
+    },
+    #[error("{}: not a run state: {cause}", .path.display())]
+    NotAState {
+        path: PathBuf,
+        cause: serde_json::Error,
+    },
+    #[error("{}: names the {side} checkpoint {}, which is missing or incomplete; refusing to fall back to an older one", .state.display(), .checkpoint.display())]
+    NamedCheckpointGone {
+        state: PathBuf,
+        side: &'static str,
+        checkpoint: PathBuf,
+    },
+    #[error("cannot read {}: {cause}", .dir.display())]
+    Unlistable { dir: PathBuf, cause: std::io::Error },
+    #[error(transparent)]
+    Write(#[from] FsError),
+}
+
+/// `state.json`: where a run stands, written after every checkpoint.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct RunState {
+    pub iteration: u64,
+    pub env_steps: u64,
+    pub wall_s: f64,
+    pub config_hash: String,
+    /// Checkpoint folder names (under `checkpoints/`) per learning side.
+    pub checkpoints: Vec<(Side, String)>,
+}
+
+impl RunState {
+    /// The checkpoint folder name this state names for `side`.
+    pub fn checkpoint_of(&self, side: Side) -> Option<&str> {
+        self.checkpoints
+            .iter()
+            .find(|(s, _)| *s == side)
+            .map(|(_, n)| n.as_str())
+    }
+}
+
+/// A run folder (it need not exist yet).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct RunDir {
+    root: PathBuf,
+}
+
+impl RunDir {
+    pub fn new(root: impl Into<PathBuf>) -> RunDir {
+        RunDir { root: root.into() }
+    }
+
+    pub fn root(&self) -> &Path {
+        &self.root
+    }
+
+    pub fn state_path(&self) -> PathBuf {
+        self.root.join("state.json")
+    }
+
+    /// Whether a run was saved here (its `state.json` exists).
+    pub fn has_state(&self) -> bool {
+        self.state_path().is_file()
+    }
+
+    pub fn read_state(&self) -> Result<RunState, RunDirError> {
+        let path = self.state_path();
+        let text = match std::fs::read_to_string(&path) {
+            Ok(text) => text,
+            Err(cause) => return Err(RunDirError::Unreadable { path, cause }),
+        };
+        serde_json::from_str(&text).map_err(|cause| RunDirError::NotAState { path, cause })
+    }
+
+    pub fn write_state(&self, state: &RunState) -> Result<(), RunDirError> {
+        let text = serde_json::to_string_pretty(state).expect("a run state serialises");
+        write_file_atomically(&self.state_path(), text.as_bytes())?;
+        Ok(())
+    }
+
+    /// Removes what killed writes left behind (dot temporaries) in the run
+    /// folder and in its checkpoints; returns what it removed.
+    pub fn clean_stale_temporaries(&self) -> Result<Vec<PathBuf>, FsError> {
+        let mut removed = clean_stale_temporaries(&self.root)?;
+        removed.extend(clean_stale_temporaries(&self.checkpoints_dir())?);
+        Ok(removed)
+    }
+
+    pub fn checkpoints_dir(&self) -> PathBuf {
+        self.root.join("checkpoints")
+    }
+
+    /// The folder of the checkpoint called `name`.
+    pub fn checkpoint(&self, name: &str) -> PathBuf {
+        self.checkpoints_dir().join(name)
+    }
+
+    /// The checkpoint folders' names, oldest first, of `side` alone when
+    /// given; writes in progress (dot folders) left out. Complete or not:
+    /// a caller that resumes checks each. A missing `checkpoints/` holds
+    /// none.
+    pub fn checkpoint_names(&self, side: Option<Side>) -> Result<Vec<String>, RunDirError> {
+        names_in(&self.checkpoints_dir(), side)
+    }
+
+    /// The newest complete checkpoint (with its `meta.json`) of `side`.
+    pub fn latest_checkpoint(&self, side: Side) -> Option<PathBuf> {
+        latest_in(&self.checkpoints_dir(), side)
+    }
+
+    /// The checkpoint of `side` that `state.json` names, if there is a
+    /// `state.json` naming one; an error if that checkpoint is gone (never
+    /// an older one in its place: that would play the wrong weights).
+    pub fn named_checkpoint(&self, side: Side) -> Result<Option<PathBuf>, RunDirError> {
+        if !self.has_state() {
+            return Ok(None);
+        }
+        let state = self.read_state()?;
+        let Some(name) = state.checkpoint_of(side) else {
+            return Ok(None);
+        };
+        let dir = self.checkpoint(name);
+        if !dir.join("meta.json").is_file() {
+            return Err(RunDirError::NamedCheckpointGone {
+                state: self.state_path(),
+                side: side.name(),
+                checkpoint: dir,
+            });
+        }
+        Ok(Some(dir))
+    }
+}
+
+/// Checkpoint folder names in `dir` (see `RunDir::checkpoint_names`).
+fn names_in(dir: &Path, side: Option<Side>) -> Result<Vec<String>, RunDirError> {
+    let prefix = side.map(|s| format!("{}-", s.name()));
+    let mut names: Vec<String> = match std::fs::read_dir(dir) {
+        Ok(it) => it
+            .flatten()
+            .map(|e| e.file_name().to_string_lossy().into_owned())
+            .filter(|n| !n.starts_with('.'))
+            .filter(|n| prefix.as_ref().is_none_or(|p| n.starts_with(p)))
+            .collect(),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Vec::new(),
+        Err(cause) => {
+            return Err(RunDirError::Unlistable {
+                dir: dir.to_path_buf(),
+                cause,
+            })
+        }
+    };
+    names.sort();
+    Ok(names)
+}
+
+/// The newest complete checkpoint of `side` in a `checkpoints` folder.
+fn latest_in(dir: &Path, side: Side) -> Option<PathBuf> {
+    names_in(dir, Some(side))
+        .ok()?
+        .into_iter()
+        .rev()
+        .map(|n| dir.join(n))
+        .find(|p| p.join("meta.json").is_file())
+}
+
+/// The newest complete checkpoint of `side` in a run folder, or in a
+/// `checkpoints` folder given directly.
+pub fn latest_checkpoint(run_or_checkpoints: &Path, side: Side) -> Option<PathBuf> {
+    let run = RunDir::new(run_or_checkpoints);
+    if run.checkpoints_dir().is_dir() {
+        run.latest_checkpoint(side)
+    } else {
+        latest_in(run_or_checkpoints, side)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn state(checkpoints: Vec<(Side, String)>) -> RunState {
+        RunState {
+            iteration: 3,
+            env_steps: 9600,
+            wall_s: 1.5,
+            config_hash: "abc".into(),
+            checkpoints,
+        }
+    }
+
+    #[test]
+    fn checkpoints_are_listed_oldest_first_without_writes_in_progress() {
+        let run = tempfile::tempdir().unwrap();
+        let run = RunDir::new(run.path());
+        assert!(run.checkpoint_names(None).unwrap().is_empty());
+        for name in [
+            "target-000000006400",
+            "captors-000000012800",
+            "captors-000000003200",
+            ".captors-000000016000.tmp-1",
+        ] {
+            std::fs::create_dir_all(run.checkpoint(name)).unwrap();
+        }
+        assert_eq!(
+            run.checkpoint_names(Some(Side::Captors)).unwrap(),
+            ["captors-000000003200", "captors-000000012800"]
+        );
+        assert_eq!(run.checkpoint_names(None).unwrap().len(), 3);
+        // Only complete ones (with meta.json) are the latest.
+        assert_eq!(run.latest_checkpoint(Side::Captors), None);
+        std::fs::write(
+            run.checkpoint("captors-000000003200").join("meta.json"),
+            "{}",
+        )
+        .unwrap();
+        assert_eq!(
+            run.latest_checkpoint(Side::Captors),
+            Some(run.checkpoint("captors-000000003200"))
+        );
+        assert_eq!(
+            latest_checkpoint(&run.checkpoints_dir(), Side::Captors),
+            Some(run.checkpoint("captors-000000003200"))
+        );
+        assert_eq!(latest_checkpoint(run.root(), Side::Target), None);
+    }
+
+    #[test]
+    fn the_state_names_its_checkpoint_and_a_missing_one_is_an_error_not_an_older_one() {
+        let dir = tempfile::tempdir().unwrap();
+        let run = RunDir::new(dir.path());
+        assert!(!run.has_state());
+        assert_eq!(run.named_checkpoint(Side::Captors).unwrap(), None);
+        let name = "captors-000000009600".to_string();
+        run.write_state(&state(vec![(Side::Captors, name.clone())]))
+            .unwrap();
+        let read = run.read_state().unwrap();
+        assert_eq!((read.iteration, read.env_steps), (3, 9600));
+        assert_eq!(read.checkpoint_of(Side::Captors), Some(name.as_str()));
+        assert_eq!(run.named_checkpoint(Side::Target).unwrap(), None);
+        std::fs::create_dir_all(run.checkpoint("captors-000000003200")).unwrap();
+        std::fs::write(
+            run.checkpoint("captors-000000003200").join("meta.json"),
+            "{}",
+        )
+        .unwrap();
+        let err = run.named_checkpoint(Side::Captors).unwrap_err().to_string();
+        assert!(err.contains("refusing to fall back"), "{err}");
+        std::fs::create_dir_all(run.checkpoint(&name)).unwrap();
+        std::fs::write(run.checkpoint(&name).join("meta.json"), "{}").unwrap();
+        assert_eq!(
+            run.named_checkpoint(Side::Captors).unwrap(),
+            Some(run.checkpoint(&name))
+        );
+    }
+}
