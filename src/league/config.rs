@@ -11,14 +11,10 @@ use super::players::Seat;
 use crate::controllers::ControllerSpec;
 use crate::env::{EnvConfig, Side};
 use crate::error::{in_interval, in_range, ConfigError, ConfigFileError};
-use crate::learn::maac::MaacConfig;
-use crate::learn::maddpg::MaddpgConfig;
 use crate::learn::ppo::PpoConfig;
-use crate::learn::shaping::ShapingConfig;
 use crate::learn::train::Play;
-use crate::learn::train::{SideConfig, TrainConfig};
+use crate::learn::train::{SideConfig, SideDefaults, TrainConfig};
 use crate::learn::Algorithm;
-use crate::nn::NetConfig;
 use crate::protocol::Protocol;
 use anyhow::{anyhow, Context, Result};
 use serde::{Deserialize, Serialize};
@@ -73,41 +69,22 @@ pub struct LeagueConfig {
     pub members: MembersConfig,
 }
 
-/// One main learner.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct LearnerConfig {
-    /// "mappo", "ippo", "maddpg" or "maac".
-    pub algorithm: Algorithm,
-    pub ppo: PpoConfig,
-    /// MADDPG's settings (stored only where they differ from the defaults).
-    #[serde(skip_serializing_if = "is_default")]
-    pub maddpg: MaddpgConfig,
-    /// MAAC's settings (as MADDPG's).
-    #[serde(skip_serializing_if = "is_default")]
-    pub maac: MaacConfig,
-    pub net: NetConfig,
-    /// Training-only potential-based shaping (stored only when on).
-    #[serde(skip_serializing_if = "is_default")]
-    pub shaping: ShapingConfig,
-}
+/// One main learner: the learner-settings struct a training run's sides
+/// use, under the league's defaults (MAPPO; PPO in 4 minibatches).
+pub type LearnerConfig = SideConfig<LeagueDefaults>;
 
-fn is_default<T: Default + PartialEq>(x: &T) -> bool {
-    *x == T::default()
-}
+/// What a league's learner gets where its config leaves a field out.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct LeagueDefaults;
 
-impl Default for LearnerConfig {
-    fn default() -> Self {
-        LearnerConfig {
-            algorithm: Algorithm::Mappo,
-            ppo: PpoConfig {
-                minibatches: 4,
-                ..PpoConfig::default()
-            },
-            maddpg: MaddpgConfig::default(),
-            maac: MaacConfig::default(),
-            net: NetConfig::default(),
-            shaping: ShapingConfig::default(),
+impl SideDefaults for LeagueDefaults {
+    fn play() -> Play {
+        Play::Learn(Algorithm::Mappo)
+    }
+    fn ppo() -> PpoConfig {
+        PpoConfig {
+            minibatches: 4,
+            ..PpoConfig::default()
         }
     }
 }
@@ -255,14 +232,7 @@ impl LeagueConfig {
 
     pub fn train_config(&self, side: Side) -> TrainConfig {
         let learner = self.learner(side);
-        let learn = SideConfig {
-            play: Play::Learn(learner.algorithm),
-            ppo: learner.ppo.clone(),
-            maddpg: learner.maddpg.clone(),
-            maac: learner.maac.clone(),
-            net: learner.net.clone(),
-            shaping: learner.shaping.clone(),
-        };
+        let learn = learner.clone().with_defaults();
         let other = SideConfig {
             play: Play::Script(ControllerSpec::Still),
             ..SideConfig::default()
@@ -437,6 +407,14 @@ impl LeagueConfig {
             "at most 256",
         )?;
         for side in [Side::Captors, Side::Target] {
+            let play = &self.learner(side).play;
+            if play.algorithm().is_none() {
+                return Err(ConfigError::new(
+                    format!("{}.play", side.name()),
+                    format!("\"{play}\""),
+                    "a league's learner learns: mappo, ippo, maddpg or maac",
+                ));
+            }
             self.train_config(side).validate()?;
         }
         Ok(())
@@ -446,6 +424,38 @@ impl LeagueConfig {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_league_learner_is_a_training_side_with_the_leagues_defaults() {
+        // Left out: MAPPO, PPO in 4 minibatches (a training side: the
+        // rule-based robot, 1 minibatch), from one struct.
+        let league = LeagueConfig::parse("[captors.net]\nhidden = 32\n").unwrap();
+        assert_eq!(league.captors.play, Play::Learn(Algorithm::Mappo));
+        assert_eq!(league.captors.ppo.minibatches, 4);
+        assert_eq!(league.captors.net.hidden, 32);
+        let side: SideConfig = crate::util::from_toml("[net]\nhidden = 32\n").unwrap();
+        assert_eq!(side.play, Play::Script(ControllerSpec::Heuristic));
+        assert_eq!(side.ppo.minibatches, 1);
+        // The league's learner reaches its training run unchanged.
+        let train = league.train_config(Side::Captors);
+        assert_eq!(train.captors.play, league.captors.play);
+        assert_eq!(
+            (train.captors.ppo.minibatches, train.captors.net.hidden),
+            (4, 32)
+        );
+        // `algorithm`, the name league configs used, reads as `play`; it is
+        // written as `play`.
+        let old = LeagueConfig::parse("[target]\nalgorithm = \"ippo\"\n").unwrap();
+        assert_eq!(old.target.play, Play::Learn(Algorithm::Ippo));
+        let text = toml::to_string_pretty(&old).unwrap();
+        assert!(text.contains("play = \"ippo\""), "{text}");
+        assert_eq!(LeagueConfig::parse(&text).unwrap(), old);
+        // A league's learners learn.
+        let err = LeagueConfig::parse("[target]\nplay = \"heuristic\"\n")
+            .unwrap_err()
+            .to_string();
+        assert!(err.starts_with("target.play = \"heuristic\""), "{err}");
+    }
 
     #[test]
     fn configs_validate_and_typos_name_the_field() {
@@ -466,7 +476,7 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(
-            err.contains("algorithm = \"mapo\"") && err.contains("`mappo`"),
+            err.starts_with("target.algorithm") && err.contains("mappo / ippo / maddpg / maac"),
             "{err}"
         );
         let err = LeagueConfig::parse("env_steps_per_learner = 0\n")

@@ -56,10 +56,13 @@ pub fn export(dir: &LeagueDir, player: &str, out: &Path) -> Result<()> {
     crate::fs::write_dir_atomically(out, |tmp| {
         let mut manifest = String::new();
         crate::fs::copy_files(&src, tmp)?;
-        std::fs::write(
-            tmp.join("league-config.toml"),
-            toml::to_string_pretty(&cfg).context("cannot write the league's config")?,
-        )?;
+        // The config as the store holds it, byte for byte: what the league
+        // ran with, in the words it was written in.
+        let config_text = match store.stored_config()? {
+            Some(text) => text,
+            None => toml::to_string_pretty(&cfg).context("cannot write the league's config")?,
+        };
+        std::fs::write(tmp.join("league-config.toml"), config_text)?;
         let mut csv = String::from("match_id,mu,sigma,at_ms\n");
         for r in store.rating_history(p.id)? {
             let _ = writeln!(

@@ -201,6 +201,25 @@ struct Fields<'a> {
     next: usize,
 }
 
+/// Other names a field also reads as (`#[serde(alias)]`), each with the
+/// field's own name: serde lists them among a struct's fields, but they
+/// are the same field, documented once under its own name.
+const ALIASES: &[(&str, &str)] = &[("algorithm", "play")];
+
+impl Fields<'_> {
+    fn skip_aliases(&mut self) {
+        while let Some(name) = self.fields.get(self.next) {
+            let alias_here = ALIASES
+                .iter()
+                .any(|(alias, of)| alias == name && self.fields.contains(of));
+            if !alias_here {
+                break;
+            }
+            self.next += 1;
+        }
+    }
+}
+
 impl<'de, 'a> MapAccess<'de> for Fields<'a> {
     type Error = Error;
 
@@ -208,6 +227,7 @@ impl<'de, 'a> MapAccess<'de> for Fields<'a> {
         &mut self,
         seed: K,
     ) -> Result<Option<K::Value>, Error> {
+        self.skip_aliases();
         match self.fields.get(self.next) {
             None => Ok(None),
             Some(&name) => seed

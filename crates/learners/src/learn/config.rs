@@ -17,6 +17,7 @@ use crate::protocol::Protocol;
 use anyhow::{anyhow, Context, Result};
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
 use std::fmt;
+use std::marker::PhantomData;
 use std::path::Path;
 use std::str::FromStr;
 use tch::Device;
@@ -60,12 +61,23 @@ pub struct TrainConfig {
     pub target: SideConfig,
 }
 
-/// Who plays one side, and how it learns if it does.
+/// Who plays one side, and how it learns if it does: the one learner-settings
+/// struct of a training run's sides (`SideConfig`) and of a league's
+/// learners (`league::config::LearnerConfig`). The two differ only in the
+/// defaults a config that leaves a field out gets (`D`); the TOML is the
+/// same, and `D` is not part of it (nor of the config hash).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct SideConfig {
+#[serde(
+    deny_unknown_fields,
+    default,
+    bound(serialize = "", deserialize = "D: SideDefaults")
+)]
+pub struct SideConfig<D: SideDefaults = TrainDefaults> {
     /// "mappo", "ippo", "maddpg" or "maac" to learn; otherwise a controller
     /// that does not learn: heuristic, greedy, random, still or ckpt:PATH.
+    /// A league's configs have always called it `algorithm`, which reads
+    /// as the same field.
+    #[serde(alias = "algorithm")]
     pub play: Play,
     /// MAPPO's and IPPO's settings.
     pub ppo: PpoConfig,
@@ -81,21 +93,44 @@ pub struct SideConfig {
     /// the stored config, and so of the config hash, while off).
     #[serde(skip_serializing_if = "is_default")]
     pub shaping: ShapingConfig,
+    #[serde(skip)]
+    pub defaults: PhantomData<D>,
+}
+
+/// The values a side's settings take where a config leaves them out.
+pub trait SideDefaults: Clone + std::fmt::Debug + PartialEq {
+    fn play() -> Play;
+    fn ppo() -> PpoConfig;
+}
+
+/// A training run's defaults: the rule-based robot plays, and PPO has the
+/// paper's settings.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct TrainDefaults;
+
+impl SideDefaults for TrainDefaults {
+    fn play() -> Play {
+        Play::Script(ControllerSpec::Heuristic)
+    }
+    fn ppo() -> PpoConfig {
+        PpoConfig::default()
+    }
 }
 
 fn is_default<T: Default + PartialEq>(x: &T) -> bool {
     *x == T::default()
 }
 
-impl Default for SideConfig {
+impl<D: SideDefaults> Default for SideConfig<D> {
     fn default() -> Self {
         SideConfig {
-            play: Play::Script(ControllerSpec::Heuristic),
-            ppo: PpoConfig::default(),
+            play: D::play(),
+            ppo: D::ppo(),
             maddpg: MaddpgConfig::default(),
             maac: MaacConfig::default(),
             net: NetConfig::default(),
             shaping: ShapingConfig::default(),
+            defaults: PhantomData,
         }
     }
 }
@@ -191,7 +226,21 @@ impl<'de> Deserialize<'de> for Play {
     }
 }
 
-impl SideConfig {
+impl<D: SideDefaults> SideConfig<D> {
+    /// The same settings under other defaults (a league learner's settings
+    /// as a training run's side).
+    pub fn with_defaults<E: SideDefaults>(self) -> SideConfig<E> {
+        SideConfig {
+            play: self.play,
+            ppo: self.ppo,
+            maddpg: self.maddpg,
+            maac: self.maac,
+            net: self.net,
+            shaping: self.shaping,
+            defaults: PhantomData,
+        }
+    }
+
     /// The recurrent chunk length `algorithm` trains on.
     pub fn chunk_len(&self, algorithm: Algorithm) -> usize {
         match algorithm {

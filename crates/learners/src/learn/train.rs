@@ -10,7 +10,9 @@
 //! a `--resume` continues from.
 
 use super::acting::{gather_side, gather_worlds, sample};
-pub use super::config::{check_rollout, DeviceChoice, Play, SideConfig, TrainConfig};
+pub use super::config::{
+    check_rollout, DeviceChoice, Play, SideConfig, SideDefaults, TrainConfig, TrainDefaults,
+};
 use super::learner::Learner;
 use super::maac::MaacLearner;
 use super::maddpg::MaddpgLearner;
