@@ -7,7 +7,8 @@
 use super::learner::Learner;
 use crate::fs::Written;
 use crate::nn::checkpoint::{
-    read_checked, read_meta, write_checkpoint, write_new_checkpoint, CheckpointMeta,
+    read_checked, read_meta, write_checkpoint, write_new_checkpoint, CheckpointError,
+    CheckpointMeta,
 };
 pub use crate::nn::run_dir::{RunDir, RunState};
 use anyhow::{bail, Context, Result};
@@ -19,7 +20,7 @@ pub fn save_learner(
     dir: &Path,
     learner: &dyn Learner,
     mut meta: CheckpointMeta,
-) -> Result<Written> {
+) -> Result<Written, CheckpointError> {
     meta.learner_state = Some(learner.learner_state());
     write_checkpoint(dir, meta, &learner.checkpoint_files())
 }
@@ -29,7 +30,7 @@ pub fn save_new_learner(
     dir: &Path,
     learner: &dyn Learner,
     mut meta: CheckpointMeta,
-) -> Result<Written> {
+) -> Result<Written, CheckpointError> {
     meta.learner_state = Some(learner.learner_state());
     write_new_checkpoint(dir, meta, &learner.checkpoint_files())
 }

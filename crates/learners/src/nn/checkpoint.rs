@@ -17,12 +17,12 @@
 //! - Loading verifies each weight file against its hash in `meta.json` and
 //!   refuses non-finite weights: a flipped byte or a NaN never plays.
 
+use super::run_dir::RunDirError;
 use super::{obs_tensors, pool_patch, Actor, NetConfig};
 use crate::algorithm::Algorithm;
 use crate::env::{Action, Controller, EnvConfig, Side, TrapEnv, PATCH_LEN};
-use crate::fs::{write_dir_atomically, write_new_dir_atomically, Written};
+use crate::fs::{write_dir_atomically, write_new_dir_atomically, FsError, Written};
 use crate::util::sha256_file;
-use anyhow::{bail, Context, Result};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
@@ -112,6 +112,74 @@ impl CheckpointMeta {
     }
 }
 
+/// Why a checkpoint folder cannot be read or written; each message names
+/// the file (a cause follows it in the message, as in `crate::fs`).
+#[derive(Debug, thiserror::Error)]
+pub enum CheckpointError {
+    #[error("{}: missing", .0.display())]
+    Missing(PathBuf),
+    #[error("{}: missing: {} is not a checkpoint folder (a checkpoint holds meta.json beside its .safetensors files)", .meta.display(), .dir.display())]
+    NoMeta { meta: PathBuf, dir: PathBuf },
+    #[error("{}: cannot read: {cause}", .path.display())]
+    Unreadable {
+        path: PathBuf,
+        cause: std::io::Error,
+    },
+    #[error("{}: not a readable safetensors file: {cause}", .path.display())]
+    NotSafetensors { path: PathBuf, cause: tch::TchError },
+    #[error("cannot write {}: {cause}", .path.display())]
+    CannotWrite { path: PathBuf, cause: tch::TchError },
+    #[error("{}: has no tensor '{name}' that the network needs: the weights do not match the architecture in meta.json", .file.display())]
+    MissingTensor { file: PathBuf, name: String },
+    #[error("{}: tensor '{name}' has shape {got:?}, the network described by meta.json needs {want:?}", .file.display())]
+    WrongShape {
+        file: PathBuf,
+        name: String,
+        got: Vec<i64>,
+        want: Vec<i64>,
+    },
+    #[error("{}: meta.json records no hash for {file}", .dir.display())]
+    NoHash { dir: PathBuf, file: String },
+    #[error("{}: sha256 {got} differs from the {want} recorded in meta.json: the file is corrupt or was changed after it was written", .path.display())]
+    HashMismatch {
+        path: PathBuf,
+        got: String,
+        want: String,
+    },
+    #[error("{}: tensor '{name}' holds NaN or infinite values", .file.display())]
+    NonFinite { file: PathBuf, name: String },
+    #[error("refusing to write a checkpoint with non-finite weights: {0}")]
+    WouldWriteNonFinite(Box<CheckpointError>),
+    #[error("{}: checkpoint format {format}; this build reads format {FORMAT} (format 2 added the weight files' hashes)", .path.display())]
+    Format { path: PathBuf, format: u32 },
+    #[error("{}: algorithm \"{algorithm}\" is not one this build can load ({known})", .path.display())]
+    UnknownAlgorithm {
+        path: PathBuf,
+        algorithm: String,
+        known: String,
+    },
+    #[error("{}: not a checkpoint sidecar: {cause}", .path.display())]
+    NotASidecar {
+        path: PathBuf,
+        cause: serde_json::Error,
+    },
+    /// A sidecar value out of its range (`field = value: rule`).
+    #[error("{}: {what}", .path.display())]
+    Invalid { path: PathBuf, what: String },
+    #[error("{}: not inside a checkpoint folder (no meta.json beside it)", .0.display())]
+    NotInCheckpointFolder(PathBuf),
+    #[error("{}: has no meta.json: not a complete checkpoint folder", .0.display())]
+    Incomplete(PathBuf),
+    #[error("{}: no meta.json, and no {side} checkpoint inside (folders named {side}-<steps> with a meta.json)", .path.display())]
+    NoCheckpointInside { path: PathBuf, side: &'static str },
+    #[error("{}: no such checkpoint", .0.display())]
+    NoSuchCheckpoint(PathBuf),
+    #[error(transparent)]
+    RunDir(#[from] RunDirError),
+    #[error(transparent)]
+    Fs(#[from] FsError),
+}
+
 /// Why a checkpoint cannot play where it was asked to.
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
 pub enum DoesNotFit {
@@ -150,74 +218,90 @@ pub fn named_cpu_tensors(vs: &nn::VarStore) -> Vec<(String, Tensor)> {
     v
 }
 
-pub fn save_tensors(path: &Path, tensors: &[(String, Tensor)]) -> Result<()> {
-    Tensor::write_safetensors(tensors, path)
-        .with_context(|| format!("cannot write {}", path.display()))
+pub fn save_tensors(path: &Path, tensors: &[(String, Tensor)]) -> Result<(), CheckpointError> {
+    Tensor::write_safetensors(tensors, path).map_err(|cause| CheckpointError::CannotWrite {
+        path: path.to_path_buf(),
+        cause,
+    })
 }
 
 /// Copies weights read from `file` into `vs`; every variable of the network
 /// must be there with its shape, or the error says which is not.
-pub fn load_into(vs: &mut nn::VarStore, weights: &[(String, Tensor)], file: &Path) -> Result<()> {
+pub fn load_into(
+    vs: &mut nn::VarStore,
+    weights: &[(String, Tensor)],
+    file: &Path,
+) -> Result<(), CheckpointError> {
     let mut vars: Vec<(String, Tensor)> = vs.variables().into_iter().collect();
     vars.sort_by(|a, b| a.0.cmp(&b.0));
     for (name, var) in &mut vars {
         let Some((_, w)) = weights.iter().find(|(n, _)| n == name) else {
-            bail!(
-                "{}: has no tensor '{name}' that the network needs: the weights do not match the architecture in meta.json",
-                file.display()
-            );
+            return Err(CheckpointError::MissingTensor {
+                file: file.to_path_buf(),
+                name: name.clone(),
+            });
         };
         if w.size() != var.size() {
-            bail!(
-                "{}: tensor '{name}' has shape {:?}, the network described by meta.json needs {:?}",
-                file.display(),
-                w.size(),
-                var.size()
-            );
+            return Err(CheckpointError::WrongShape {
+                file: file.to_path_buf(),
+                name: name.clone(),
+                got: w.size(),
+                want: var.size(),
+            });
         }
         tch::no_grad(|| var.copy_(&w.to_kind(var.kind())));
     }
     Ok(())
 }
 
-pub fn read_tensors(path: &Path) -> Result<Vec<(String, Tensor)>> {
+pub fn read_tensors(path: &Path) -> Result<Vec<(String, Tensor)>, CheckpointError> {
     if !path.is_file() {
-        bail!("{}: missing", path.display());
+        return Err(CheckpointError::Missing(path.to_path_buf()));
     }
-    let mut t = Tensor::read_safetensors(path)
-        .with_context(|| format!("{}: not a readable safetensors file", path.display()))?;
+    let mut t =
+        Tensor::read_safetensors(path).map_err(|cause| CheckpointError::NotSafetensors {
+            path: path.to_path_buf(),
+            cause,
+        })?;
     t.sort_by(|a, b| a.0.cmp(&b.0));
     Ok(t)
 }
 
 /// Checks a checkpoint file against the SHA-256 its `meta.json` recorded.
-pub fn verify_file(dir: &Path, meta: &CheckpointMeta, file: &str) -> Result<()> {
+pub fn verify_file(dir: &Path, meta: &CheckpointMeta, file: &str) -> Result<(), CheckpointError> {
     let path = dir.join(file);
     let Some(want) = meta.files.get(file) else {
-        bail!("{}: meta.json records no hash for {file}", dir.display());
+        return Err(CheckpointError::NoHash {
+            dir: dir.to_path_buf(),
+            file: file.to_string(),
+        });
     };
     if !path.is_file() {
-        bail!("{}: missing", path.display());
+        return Err(CheckpointError::Missing(path));
     }
-    let got = sha256_file(&path).with_context(|| format!("{}: cannot read", path.display()))?;
+    let got = match sha256_file(&path) {
+        Ok(got) => got,
+        Err(cause) => return Err(CheckpointError::Unreadable { path, cause }),
+    };
     if &got != want {
-        bail!(
-            "{}: sha256 {got} differs from the {want} recorded in meta.json: the file is corrupt or was changed after it was written",
-            path.display()
-        );
+        return Err(CheckpointError::HashMismatch {
+            path,
+            got,
+            want: want.clone(),
+        });
     }
     Ok(())
 }
 
 /// Errors unless every value of every tensor is finite.
-pub fn check_finite(tensors: &[(String, Tensor)], file: &Path) -> Result<()> {
+pub fn check_finite(tensors: &[(String, Tensor)], file: &Path) -> Result<(), CheckpointError> {
     for (name, t) in tensors {
         let all_finite = tch::no_grad(|| t.isfinite().all().int64_value(&[]) == 1);
         if !all_finite {
-            bail!(
-                "{}: tensor '{name}' holds NaN or infinite values",
-                file.display()
-            );
+            return Err(CheckpointError::NonFinite {
+                file: file.to_path_buf(),
+                name: name.clone(),
+            });
         }
     }
     Ok(())
@@ -228,7 +312,7 @@ pub fn read_checked(
     dir: &Path,
     meta: &CheckpointMeta,
     file: &str,
-) -> Result<Vec<(String, Tensor)>> {
+) -> Result<Vec<(String, Tensor)>, CheckpointError> {
     verify_file(dir, meta, file)?;
     let path = dir.join(file);
     let tensors = read_tensors(&path)?;
@@ -242,7 +326,7 @@ pub fn write_checkpoint(
     dir: &Path,
     meta: CheckpointMeta,
     files: &[(&str, Vec<(String, Tensor)>)],
-) -> Result<Written> {
+) -> Result<Written, CheckpointError> {
     write_dir_atomically(dir, |tmp| fill_checkpoint(tmp, dir, meta, files))
 }
 
@@ -251,7 +335,7 @@ pub fn write_new_checkpoint(
     dir: &Path,
     meta: CheckpointMeta,
     files: &[(&str, Vec<(String, Tensor)>)],
-) -> Result<Written> {
+) -> Result<Written, CheckpointError> {
     write_new_dir_atomically(dir, |tmp| fill_checkpoint(tmp, dir, meta, files))
 }
 
@@ -260,37 +344,49 @@ fn fill_checkpoint(
     dir: &Path,
     mut meta: CheckpointMeta,
     files: &[(&str, Vec<(String, Tensor)>)],
-) -> Result<()> {
+) -> Result<(), CheckpointError> {
     meta.files.clear();
     for (file, tensors) in files {
         check_finite(tensors, &dir.join(file))
-            .context("refusing to write a checkpoint with non-finite weights")?;
+            .map_err(|e| CheckpointError::WouldWriteNonFinite(Box::new(e)))?;
         let path = tmp.join(file);
         save_tensors(&path, tensors)?;
-        meta.files.insert(file.to_string(), sha256_file(&path)?);
+        let sha = match sha256_file(&path) {
+            Ok(sha) => sha,
+            Err(cause) => return Err(CheckpointError::Unreadable { path, cause }),
+        };
+        meta.files.insert(file.to_string(), sha);
     }
-    std::fs::write(tmp.join("meta.json"), serde_json::to_string_pretty(&meta)?)?;
+    let text = serde_json::to_string_pretty(&meta).expect("a checkpoint's sidecar serialises");
+    let path = tmp.join("meta.json");
+    std::fs::write(&path, text).map_err(|cause| {
+        CheckpointError::Fs(FsError::Io {
+            what: format!("cannot write {}", path.display()),
+            cause,
+        })
+    })?;
     Ok(())
 }
 
-pub fn read_meta(dir: &Path) -> Result<CheckpointMeta> {
+pub fn read_meta(dir: &Path) -> Result<CheckpointMeta, CheckpointError> {
     Ok(read_meta_hashed(dir)?.0)
 }
 
 /// `read_meta`, and the SHA-256 of the exact bytes it parsed: what an eval
 /// setting's identity records, so an edited sidecar (its protocol, say) is
 /// another setting.
-pub fn read_meta_hashed(dir: &Path) -> Result<(CheckpointMeta, String)> {
+pub fn read_meta_hashed(dir: &Path) -> Result<(CheckpointMeta, String), CheckpointError> {
     let path = dir.join("meta.json");
     if !path.is_file() {
-        bail!(
-            "{}: missing: {} is not a checkpoint folder (a checkpoint holds meta.json beside its .safetensors files)",
-            path.display(),
-            dir.display()
-        );
+        return Err(CheckpointError::NoMeta {
+            meta: path,
+            dir: dir.to_path_buf(),
+        });
     }
-    let text = std::fs::read_to_string(&path)
-        .with_context(|| format!("{}: cannot read", path.display()))?;
+    let text = match std::fs::read_to_string(&path) {
+        Ok(text) => text,
+        Err(cause) => return Err(CheckpointError::Unreadable { path, cause }),
+    };
     let sha256 = crate::util::sha256_hex(text.as_bytes());
     #[derive(Deserialize)]
     struct Format {
@@ -298,10 +394,7 @@ pub fn read_meta_hashed(dir: &Path) -> Result<(CheckpointMeta, String)> {
     }
     if let Ok(Format { format }) = serde_json::from_str::<Format>(&text) {
         if format != FORMAT {
-            bail!(
-                "{}: checkpoint format {format}; this build reads format {FORMAT} (format 2 added the weight files' hashes)",
-                path.display()
-            );
+            return Err(CheckpointError::Format { path, format });
         }
     }
     // The algorithm first, by name: an unknown one is refused as such,
@@ -313,32 +406,36 @@ pub fn read_meta_hashed(dir: &Path) -> Result<(CheckpointMeta, String)> {
     if let Ok(Named { algorithm }) = serde_json::from_str::<Named>(&text) {
         if Algorithm::parse(&algorithm).is_none() {
             let known: Vec<&str> = Algorithm::ALL.iter().map(|a| a.name()).collect();
-            bail!(
-                "{}: algorithm \"{algorithm}\" is not one this build can load ({})",
-                path.display(),
-                known.join(", ")
-            );
+            return Err(CheckpointError::UnknownAlgorithm {
+                path,
+                algorithm,
+                known: known.join(", "),
+            });
         }
     }
-    let meta: CheckpointMeta = serde_json::from_str(&text)
-        .with_context(|| format!("{}: not a checkpoint sidecar", path.display()))?;
+    let meta: CheckpointMeta = match serde_json::from_str(&text) {
+        Ok(meta) => meta,
+        Err(cause) => return Err(CheckpointError::NotASidecar { path, cause }),
+    };
+    let invalid = |what: String| CheckpointError::Invalid {
+        path: path.clone(),
+        what,
+    };
     if !(meta.speed_ratio.is_finite() && meta.speed_ratio > 0.0) {
-        bail!(
-            "{}: speed_ratio = {}: not a speed ratio",
-            path.display(),
+        return Err(invalid(format!(
+            "speed_ratio = {}: not a speed ratio",
             meta.speed_ratio
-        );
+        )));
     }
     if meta.num_captors == 0 || meta.num_captors > 32 {
-        bail!(
-            "{}: num_captors = {}: must be between 1 and 32",
-            path.display(),
+        return Err(invalid(format!(
+            "num_captors = {}: must be between 1 and 32",
             meta.num_captors
-        );
+        )));
     }
     meta.net
         .validate()
-        .map_err(|e| anyhow::anyhow!("{}: net.{e}", path.display()))?;
+        .map_err(|e| invalid(format!("net.{e}")))?;
     Ok((meta, sha256))
 }
 
@@ -346,16 +443,13 @@ pub use super::run_dir::latest_checkpoint;
 
 /// Resolves what a user wrote after `ckpt:`: a checkpoint folder, a file in
 /// one, or a run folder (its newest checkpoint of `side`).
-pub fn resolve_checkpoint(path: &Path, side: Side) -> Result<PathBuf> {
+pub fn resolve_checkpoint(path: &Path, side: Side) -> Result<PathBuf, CheckpointError> {
     if path.is_file() {
         let dir = path.parent().unwrap_or(Path::new("."));
         if dir.join("meta.json").is_file() {
             return Ok(dir.to_path_buf());
         }
-        bail!(
-            "{}: not inside a checkpoint folder (no meta.json beside it)",
-            path.display()
-        );
+        return Err(CheckpointError::NotInCheckpointFolder(path.to_path_buf()));
     }
     if path.join("meta.json").is_file() {
         return Ok(path.to_path_buf());
@@ -368,22 +462,15 @@ pub fn resolve_checkpoint(path: &Path, side: Side) -> Result<PathBuf> {
         .and_then(|n| n.to_str())
         .is_some_and(|n| n.starts_with(&format!("{}-", side.name())));
     if path.is_dir() && looks_like_a_checkpoint {
-        bail!(
-            "{}: has no meta.json: not a complete checkpoint folder",
-            path.display()
-        );
+        return Err(CheckpointError::Incomplete(path.to_path_buf()));
     }
     if path.is_dir() {
-        return latest_checkpoint(path, side).with_context(|| {
-            format!(
-                "{}: no meta.json, and no {} checkpoint inside (folders named {}-<steps> with a meta.json)",
-                path.display(),
-                side.name(),
-                side.name()
-            )
+        return latest_checkpoint(path, side).ok_or_else(|| CheckpointError::NoCheckpointInside {
+            path: path.to_path_buf(),
+            side: side.name(),
         });
     }
-    bail!("{}: no such checkpoint", path.display())
+    Err(CheckpointError::NoSuchCheckpoint(path.to_path_buf()))
 }
 
 /// A policy read from disk once and kept as plain tensors on the CPU; every
@@ -399,7 +486,7 @@ pub struct PolicySnapshot {
 }
 
 impl PolicySnapshot {
-    pub fn load(path: &Path, side: Side) -> Result<PolicySnapshot> {
+    pub fn load(path: &Path, side: Side) -> Result<PolicySnapshot, CheckpointError> {
         let dir = resolve_checkpoint(path, side)?;
         let (meta, meta_sha256) = read_meta_hashed(&dir)?;
         let tensors = read_checked(&dir, &meta, "actor.safetensors")?;
@@ -424,7 +511,7 @@ impl PolicySnapshot {
     }
 
     /// A fresh network with these weights.
-    pub fn build_actor(&self, device: Device) -> Result<(nn::VarStore, Actor)> {
+    pub fn build_actor(&self, device: Device) -> Result<(nn::VarStore, Actor), CheckpointError> {
         let mut vs = nn::VarStore::new(device);
         let actor = Actor::new(&vs.root(), &self.meta.net, self.meta.vector_len());
         let tensors: Vec<(String, Tensor)> = self
@@ -454,7 +541,7 @@ pub struct CheckpointController {
 }
 
 impl CheckpointController {
-    pub fn new(snapshot: Arc<PolicySnapshot>) -> Result<CheckpointController> {
+    pub fn new(snapshot: Arc<PolicySnapshot>) -> Result<CheckpointController, CheckpointError> {
         let (vs, actor) = snapshot.build_actor(Device::Cpu)?;
         Ok(CheckpointController {
             snapshot,
