@@ -1,16 +1,18 @@
 //! ARCHITECTURE.md's floors as the build sees them: the core crate reaches
 //! neither libtorch nor a database, by any path through its dependencies,
-//! so it builds and tests where neither is installed.
+//! so it builds and tests where neither is installed; the learners' crate
+//! reaches no database and not the league.
 
-#[test]
-fn the_core_crate_depends_on_no_libtorch_and_no_database() {
+/// Every package `package` reaches through its normal and build
+/// dependencies, itself included.
+fn reached_by(package: &str) -> Vec<String> {
     let out = std::process::Command::new(env!("CARGO"))
         .current_dir(env!("CARGO_MANIFEST_DIR"))
         .args([
             "tree",
             "--offline",
             "-p",
-            "t2e-core",
+            package,
             "--edges",
             "normal,build",
             "--prefix",
@@ -25,13 +27,19 @@ fn the_core_crate_depends_on_no_libtorch_and_no_database() {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    let tree = String::from_utf8_lossy(&out.stdout);
-    let crates: Vec<&str> = tree
+    String::from_utf8_lossy(&out.stdout)
         .lines()
         .filter_map(|l| l.split_whitespace().next())
-        .collect();
+        .map(str::to_string)
+        .collect()
+}
+
+#[test]
+fn the_core_crate_depends_on_no_libtorch_and_no_database() {
+    let crates = reached_by("t2e-core");
+    let tree = crates.join("\n");
     assert!(
-        crates.contains(&"t2e-core") && crates.contains(&"rayon"),
+        crates.iter().any(|c| c == "t2e-core") && crates.iter().any(|c| c == "rayon"),
         "{tree}"
     );
     for banned in [
@@ -43,8 +51,33 @@ fn the_core_crate_depends_on_no_libtorch_and_no_database() {
         "tokio",
     ] {
         assert!(
-            !crates.contains(&banned),
+            !crates.iter().any(|c| c == banned),
             "t2e-core reaches {banned}:\n{tree}"
+        );
+    }
+}
+
+#[test]
+fn the_learners_crate_depends_on_no_database_and_not_on_the_league() {
+    let crates = reached_by("t2e-learners");
+    let tree = crates.join("\n");
+    assert!(
+        ["t2e-learners", "t2e-core", "tch"]
+            .iter()
+            .all(|want| crates.iter().any(|c| c == want)),
+        "{tree}"
+    );
+    for banned in [
+        "t2e-league",
+        "sqlx",
+        "sqlx-core",
+        "libsqlite3-sys",
+        "tokio",
+        "skillratings",
+    ] {
+        assert!(
+            !crates.iter().any(|c| c == banned),
+            "t2e-learners reaches {banned}:\n{tree}"
         );
     }
 }
