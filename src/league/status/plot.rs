@@ -156,8 +156,8 @@ pub fn panel_curves(players: &[PlayerRow], panel: &[PanelRow]) -> Vec<PanelCurve
 /// played), then the payoff matrix as a heat map (captor win rate, rows
 /// captors, columns targets).
 pub fn plot(dir: &LeagueDir, r: &StatusReport, path: &Path) -> Result<()> {
+    use crate::render::heat_map::{heat_map, HeatMap};
     use crate::render::plot::{line_plot, palette, save_png, Series};
-    use crate::render::text::{draw_rect, draw_text, draw_text_centered, fill_rect};
     use image::{Rgb, RgbImage};
     let (cfg, store) = open(dir)?;
     let mut history = Vec::new();
@@ -228,82 +228,34 @@ pub fn plot(dir: &LeagueDir, r: &StatusReport, path: &Path) -> Result<()> {
         .iter()
         .filter(|p| p.side == Side::Target)
         .collect();
-    let cell = 38i64;
-    // Row labels whole, with the id the columns use: an exploiter's
-    // snapshots share their first 27 characters ("captors-exploiter-snap-0000").
-    let row_label = |c: &PlayerRow| format!("#{} {}", c.id, c.name);
-    let longest = captors
-        .iter()
-        .map(|c| row_label(c).chars().count())
-        .max()
-        .unwrap_or(0) as i64;
-    let (left, top) = ((16 + 8 * longest).max(230), 70i64);
-    let height = (top + cell * captors.len() as i64 + 40).max(200) as u32;
-    let width = 900u32.max((left + cell * targets.len() as i64 + 20) as u32);
-    let mut heat = RgbImage::from_pixel(width, height, Rgb([255, 255, 255]));
-    draw_text_centered(
-        &mut heat,
-        width as i32 / 2,
-        8,
-        "payoff: captor win rate (rows captors, columns targets; blank = no games)",
-        Rgb([0, 0, 0]),
-        1,
-    );
-    for (j, t) in targets.iter().enumerate() {
-        let x = left + cell * j as i64;
-        draw_text_centered(
-            &mut heat,
-            (x + cell / 2) as i32,
-            (top - 30) as i32,
-            &format!("#{}", t.id),
-            Rgb([0, 0, 0]),
-            1,
-        );
-    }
-    for (i, c) in captors.iter().enumerate() {
-        let y = top + cell * i as i64;
-        let name = row_label(c);
-        draw_text(
-            &mut heat,
-            8,
-            (y + cell / 2 - 4) as i32,
-            &name,
-            Rgb([0, 0, 0]),
-            1,
-        );
-        for (j, t) in targets.iter().enumerate() {
-            let x = left + cell * j as i64;
-            if let Some(p) = r
-                .payoff
-                .iter()
-                .find(|p| p.captor == c.id && p.target == t.id)
-            {
-                let w = p.captor_wins as f64 / p.games.max(1) as f64;
-                // Blue (targets win) to red (captors win).
-                let color = Rgb([(255.0 * w) as u8, 60, (255.0 * (1.0 - w)) as u8]);
-                fill_rect(&mut heat, x, y, cell, cell, color);
-                draw_text_centered(
-                    &mut heat,
-                    (x + cell / 2) as i32,
-                    (y + cell / 2 - 4) as i32,
-                    &format!("{:.0}", 100.0 * w),
-                    Rgb([255, 255, 255]),
-                    1,
-                );
-            }
-            draw_rect(&mut heat, x, y, cell, cell, Rgb([200, 200, 200]));
-        }
-    }
-    let legend: Vec<String> = targets
-        .iter()
-        .map(|t| format!("#{} {}", t.id, t.name))
-        .collect();
-    for (k, line) in legend.iter().enumerate() {
-        let (x, y) = (left + cell * targets.len() as i64 + 20, top + 12 * k as i64);
-        if x + 200 < width as i64 {
-            draw_text(&mut heat, x as i32, y as i32, line, Rgb([60, 60, 60]), 1);
-        }
-    }
+    let heat = heat_map(&HeatMap {
+        title: "payoff: captor win rate (rows captors, columns targets; blank = no games)".into(),
+        // Row labels whole, with the id the columns use: an exploiter's
+        // snapshots share their first 27 characters ("captors-exploiter-snap-0000").
+        row_labels: captors
+            .iter()
+            .map(|c| format!("#{} {}", c.id, c.name))
+            .collect(),
+        column_labels: targets.iter().map(|t| format!("#{}", t.id)).collect(),
+        cells: captors
+            .iter()
+            .map(|c| {
+                targets
+                    .iter()
+                    .map(|t| {
+                        r.payoff
+                            .iter()
+                            .find(|p| p.captor == c.id && p.target == t.id)
+                            .map(|p| p.captor_wins as f64 / p.games.max(1) as f64)
+                    })
+                    .collect()
+            })
+            .collect(),
+        notes: targets
+            .iter()
+            .map(|t| format!("#{} {}", t.id, t.name))
+            .collect(),
+    });
     let parts: Vec<&RgbImage> = [Some(&ratings), panel.as_ref(), Some(&heat)]
         .into_iter()
         .flatten()

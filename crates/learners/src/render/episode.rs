@@ -10,8 +10,9 @@
 //! palette (no dithering noise) and LZW compresses them well; cropping to the
 //! map's free area keeps frames small.
 
+use super::font::{draw_text, text_size};
 use super::map_image::{FREE_COLOR, OBSTACLE_COLOR};
-use super::text::{draw_circle, draw_line, draw_text, fill_disc, fill_rect, mix, text_size};
+use super::raster::{draw_circle, draw_line, fill_disc, fill_rect, mix};
 use crate::asz::{cells_to_m2, FastMarching};
 use crate::env::config::{PROBE_DIST, RADIUS};
 use crate::env::{Action, Controller, Side, TrapEnv};
@@ -172,7 +173,7 @@ impl FrameLayout {
             c0 -= extra / 2;
             c1 += extra - extra / 2;
         }
-        let header_h = 3 * 4 * text_scale + 2 * 8 * text_scale;
+        let header_h = 3 * 4 * text_scale + 2 * line_height(text_scale);
         let (rows, cols) = (r1 - r0, c1 - c0);
         FrameLayout {
             scale,
@@ -406,7 +407,7 @@ impl Painter<'_> {
         // Header.
         let ts = l.text_scale;
         let pad = 4 * ts as i32;
-        let line_h = 8 * ts as i32;
+        let line_h = line_height(ts) as i32;
         draw_text(
             &mut img,
             pad,
@@ -449,6 +450,11 @@ fn head_line(step: u32, episode_length: u32, asz_cells: usize) -> String {
 }
 
 /// Width in pixels the header needs.
+/// The height of a header line: the font's ascent plus descent.
+fn line_height(text_scale: u32) -> u32 {
+    text_size("Ag", text_scale).1
+}
+
 fn header_width(episode_length: u32, footer: &str, text_scale: u32) -> u32 {
     let pad = 4 * text_scale;
     // Widest first line: the longest step count, a 3-digit area, and the capture flag.
@@ -752,6 +758,7 @@ mod tests {
             layout.to_pixel(first_pos),
             r_px + 0.8,
         );
+
         assert!(near0 as f64 > 0.6 * std::f64::consts::PI * r_px * r_px);
         assert_eq!(far0, 0);
         // The captors are drawn in their colours near their positions.

@@ -2,7 +2,8 @@
 //! where robots may be placed lightly tinted, a 1 m grid and a scale bar.
 //! Episode renderers start from this picture and draw robots on top.
 
-use super::text::{draw_text, fill_rect, text_size};
+use super::font::{draw_text, text_size};
+use super::raster::fill_rect;
 use crate::map::{Grid, PreparedMap, CELL_SIZE};
 use image::{Rgb, RgbImage};
 

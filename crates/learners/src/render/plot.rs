@@ -1,14 +1,18 @@
-//! Line plots to PNG (learning curves, mean |ASZ| over time): axes with
-//! "nice" tick values and numeric labels, a title, axis labels and a legend.
+//! Line plots to PNG (learning curves, mean |ASZ| over time), drawn with
+//! plotters: axes with "nice" tick values and numeric labels, a title, axis
+//! labels and a legend in the corner that hides the fewest points.
 //! Non-finite values (NaN, ±inf) are skipped and break the line; empty and
 //! flat data give a plot with a sensible range instead of a panic.
 
-use super::text::{
-    draw_line, draw_rect, draw_text, draw_text_centered, draw_text_up, fill_disc, fill_rect,
-    text_size,
-};
+use super::canvas::Canvas;
+use super::font;
 use anyhow::{Context, Result};
-use image::{ImageFormat, Rgb, RgbImage};
+use image::{ImageFormat, RgbImage};
+use plotters::coord::ranged1d::KeyPointHint;
+use plotters::coord::Shift;
+use plotters::element::Text as PlotText;
+use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
 use std::path::Path;
 
 /// One line of a plot. Series with an empty label are left out of the legend.
@@ -48,11 +52,10 @@ pub fn palette(i: usize) -> [u8; 3] {
     PALETTE[i % PALETTE.len()]
 }
 
-const BACKGROUND: Rgb<u8> = Rgb([255, 255, 255]);
-const AXIS: Rgb<u8> = Rgb([40, 40, 40]);
-const GRID: Rgb<u8> = Rgb([228, 228, 228]);
-const TEXT: Rgb<u8> = Rgb([20, 20, 20]);
-const MUTED: Rgb<u8> = Rgb([120, 120, 120]);
+const AXIS: RGBColor = RGBColor(40, 40, 40);
+const GRID: RGBColor = RGBColor(228, 228, 228);
+const TEXT: RGBColor = RGBColor(20, 20, 20);
+const MUTED: RGBColor = RGBColor(120, 120, 120);
 
 /// The tick values of an axis covering [lo, hi] with about `target` ticks, at
 /// 1, 2 or 5 times a power of ten; the first tick is <= lo and the last >= hi.
@@ -189,7 +192,8 @@ pub fn tick_labels(ticks: &[f64]) -> Vec<String> {
         .collect()
 }
 
-/// Where the data area of a plot lies and which values its edges stand for.
+/// Where the data area of a plot lies and which values its edges stand for,
+/// as plotters laid it out.
 #[derive(Clone, Debug, PartialEq)]
 pub struct PlotFrame {
     /// Pixel bounds of the data area: left, top, right, bottom (inclusive).
@@ -231,12 +235,12 @@ impl PlotFrame {
     }
 }
 
-/// Text scale for a plot of this size.
-fn text_scale(width: u32, height: u32) -> u32 {
+/// Text sizes for a plot of this size: (labels, title) in pixels.
+fn font_sizes(width: u32, height: u32) -> (u32, u32) {
     if width.min(height) >= 1000 {
-        2
+        (24, 28)
     } else {
-        1
+        (13, 15)
     }
 }
 
@@ -255,7 +259,7 @@ fn data_range(series: &[Series]) -> Option<((f64, f64), (f64, f64))> {
     r
 }
 
-/// Lays out a plot of `width x height` pixels for this data.
+/// The layout of `line_plot`'s data area for this data and size.
 pub fn plot_frame(
     series: &[Series],
     title: &str,
@@ -264,41 +268,7 @@ pub fn plot_frame(
     width: u32,
     height: u32,
 ) -> PlotFrame {
-    let ts = text_scale(width, height);
-    let ch = (8 * ts) as i64;
-    let pad = (6 * ts) as i64;
-    let tick = (4 * ts) as i64;
-    let ((xl, xh), (yl, yh)) = data_range(series).unwrap_or(((0.0, 1.0), (0.0, 1.0)));
-    let y_target = ((height as i64 / (ch * 5)).clamp(2, 8)) as usize;
-    let y_ticks = nice_ticks(yl, yh, y_target);
-    let y_label_w = tick_labels(&y_ticks)
-        .iter()
-        .map(|l| text_size(l, ts).0 as i64)
-        .max()
-        .unwrap_or(0);
-    let top = pad + if title.is_empty() { 0 } else { ch + pad };
-    let left = pad + if y_label.is_empty() { 0 } else { ch + pad } + y_label_w + pad / 2 + tick;
-    let bottom_margin =
-        tick + pad / 2 + ch + pad + if x_label.is_empty() { 0 } else { ch + pad / 2 };
-    // Room for about 10 characters per x tick label.
-    let plot_w = (width as i64 - left - pad * 3).max(1);
-    let x_target = ((plot_w / (ch * 10)).clamp(2, 10)) as usize;
-    let x_ticks = nice_ticks(xl, xh, x_target);
-    let x_last_w = tick_labels(&x_ticks)
-        .last()
-        .map(|l| text_size(l, ts).0 as i64)
-        .unwrap_or(0);
-    let right_margin = pad.max(x_last_w / 2 + pad);
-    let right = (width as i64 - 1 - right_margin).max(left + 1);
-    let bottom = (height as i64 - 1 - bottom_margin).max(top + 1);
-    PlotFrame {
-        left,
-        top,
-        right,
-        bottom,
-        x_ticks,
-        y_ticks,
-    }
+    draw_line_plot(series, title, x_label, y_label, width, height).1
 }
 
 /// Draws `series` as lines on one pair of axes. Non-finite points are skipped
@@ -313,204 +283,341 @@ pub fn line_plot(
     width: u32,
     height: u32,
 ) -> RgbImage {
+    draw_line_plot(series, title, x_label, y_label, width, height).0
+}
+
+fn draw_line_plot(
+    series: &[Series],
+    title: &str,
+    x_label: &str,
+    y_label: &str,
+    width: u32,
+    height: u32,
+) -> (RgbImage, PlotFrame) {
     let (width, height) = (width.max(1), height.max(1));
-    let mut img = RgbImage::from_pixel(width, height, BACKGROUND);
-    let ts = text_scale(width, height);
-    let ch = (8 * ts) as i32;
-    let pad = (6 * ts) as i32;
-    let tick = (4 * ts) as i64;
-    let f = plot_frame(series, title, x_label, y_label, width, height);
-    let (plot_w, plot_h) = (f.right - f.left, f.bottom - f.top);
+    let ((xl, xh), (yl, yh)) = data_range(series).unwrap_or(((0.0, 1.0), (0.0, 1.0)));
+    // A tick every 40 pixels or more up the y axis, every 80 or more
+    // along the x axis (room for about 10 characters per label); twice that
+    // on large images, whose text is twice as large.
+    let ts = if width.min(height) >= 1000 { 2 } else { 1 };
+    let y_ticks = nice_ticks(yl, yh, (height / (40 * ts)).clamp(2, 8) as usize);
+    let x_ticks = nice_ticks(
+        xl,
+        xh,
+        (width.saturating_sub(80 * ts) / (80 * ts)).clamp(2, 10) as usize,
+    );
+    let mut buf = vec![255u8; width as usize * height as usize * 3];
+    let area = {
+        let root = Canvas::new(&mut buf, (width, height)).into_drawing_area();
+        let text = Text {
+            title,
+            x_label,
+            y_label,
+        };
+        // Too small for axes and text (or a font that will not load): the
+        // series alone over the whole image, so that nothing panics.
+        let area = draw_chart(&root, series, &text, &x_ticks, &y_ticks)
+            .or_else(|_| {
+                root.fill(&WHITE).ok();
+                draw_chart(&root, series, &Text::NONE, &x_ticks, &y_ticks)
+            })
+            .unwrap_or((0..width as i32, 0..height as i32));
+        root.present().ok();
+        area
+    };
+    let img = RgbImage::from_raw(width, height, buf).expect("buffer of width x height x 3");
+    let frame = PlotFrame {
+        left: area.0.start as i64,
+        top: area.1.start as i64,
+        right: (area.0.end as i64 - 1).max(area.0.start as i64),
+        bottom: (area.1.end as i64 - 1).max(area.1.start as i64),
+        x_ticks,
+        y_ticks,
+    };
+    (img, frame)
+}
 
-    // Grid lines, then axes box.
-    for &t in &f.x_ticks {
-        let (px, _) = f.to_pixel(t, 0.0);
-        fill_rect(&mut img, px.floor() as i64, f.top, 1, plot_h + 1, GRID);
+/// An axis over [lo, hi] whose ticks (and grid lines) are exactly
+/// `nice_ticks`'s, so plotters draws the ticks the frame reports.
+#[derive(Clone)]
+struct TickAxis {
+    lo: f64,
+    hi: f64,
+    ticks: Vec<f64>,
+}
+
+impl TickAxis {
+    fn new(ticks: &[f64], margin: f64) -> TickAxis {
+        let (lo, hi) = widen_by(ticks, margin);
+        TickAxis {
+            lo,
+            hi,
+            ticks: ticks.to_vec(),
+        }
     }
-    for &t in &f.y_ticks {
-        let (_, py) = f.to_pixel(0.0, t);
-        fill_rect(&mut img, f.left, py.floor() as i64, plot_w + 1, 1, GRID);
+}
+
+impl Ranged for TickAxis {
+    type FormatOption = plotters::coord::ranged1d::DefaultFormatting;
+    type ValueType = f64;
+
+    fn map(&self, v: &f64, limit: (i32, i32)) -> i32 {
+        let t = (v - self.lo) / (self.hi - self.lo);
+        let px = limit.0 as f64 + t * (limit.1 - limit.0) as f64;
+        // A value beyond any pixel (1e300 on a unit axis) pins to a far
+        // edge instead of wrapping.
+        if px.is_finite() {
+            px.round().clamp(-1e6, 1e6) as i32
+        } else {
+            limit.0
+        }
     }
 
-    // The series.
-    let thickness = 1.6 * ts as f64;
+    fn key_points<Hint: KeyPointHint>(&self, hint: Hint) -> Vec<f64> {
+        // Grid lines at the ticks only: no lighter lines between them.
+        if hint.weight().allow_light_points() {
+            Vec::new()
+        } else {
+            self.ticks.clone()
+        }
+    }
+
+    fn range(&self) -> std::ops::Range<f64> {
+        self.lo..self.hi
+    }
+}
+
+/// A plot's words.
+struct Text<'a> {
+    title: &'a str,
+    x_label: &'a str,
+    y_label: &'a str,
+}
+
+impl Text<'_> {
+    const NONE: Text<'static> = Text {
+        title: "",
+        x_label: "",
+        y_label: "",
+    };
+}
+
+type Area<'a> = DrawingArea<Canvas<'a>, Shift>;
+type DrawResult<T> =
+    Result<T, DrawingAreaErrorKind<<Canvas<'static> as DrawingBackend>::ErrorType>>;
+
+/// Draws the chart; returns the pixel ranges of its data area.
+fn draw_chart(
+    root: &Area,
+    series: &[Series],
+    text: &Text,
+    x_ticks: &[f64],
+    y_ticks: &[f64],
+) -> DrawResult<(std::ops::Range<i32>, std::ops::Range<i32>)> {
+    font::register();
+    let (width, height) = root.dim_in_pixel();
+    let (label_px, title_px) = font_sizes(width, height);
+    let label_font = (font::FAMILY, label_px).into_font().color(&TEXT);
+    let (x_axis, y_axis) = (
+        TickAxis::new(x_ticks, X_MARGIN),
+        TickAxis::new(y_ticks, Y_MARGIN),
+    );
+    let (x0, x1, y0, y1) = (x_axis.lo, x_axis.hi, y_axis.lo, y_axis.hi);
+    let x_labels = tick_labels(x_ticks);
+    let y_labels = tick_labels(y_ticks);
+    let label_of = |ticks: &[f64], labels: &[String], v: f64| -> String {
+        ticks
+            .iter()
+            .position(|t| *t == v)
+            .map(|i| labels[i].clone())
+            .unwrap_or_default()
+    };
+    let y_label_w = y_labels
+        .iter()
+        .map(|l| root.estimate_text_size(l, &label_font).map(|(w, _)| w))
+        .collect::<Result<Vec<u32>, _>>()?
+        .into_iter()
+        .max()
+        .unwrap_or(0);
+    let x_last_w = root
+        .estimate_text_size(x_labels.last().map_or("", |l| l.as_str()), &label_font)?
+        .0;
+    let pad = label_px / 2;
+    let desc = |s: &str| if s.is_empty() { 0 } else { label_px + pad };
+    let mut builder = ChartBuilder::on(root);
+    builder
+        .margin_top(pad)
+        .margin_right(pad.max(x_last_w / 2 + pad))
+        .margin_left(pad)
+        .x_label_area_size(label_px + 2 * pad + desc(text.x_label))
+        .y_label_area_size(y_label_w + 2 * pad + desc(text.y_label));
+    if !text.title.is_empty() {
+        builder.caption(
+            text.title,
+            (font::FAMILY, title_px).into_font().color(&TEXT),
+        );
+    }
+    let mut chart = builder.build_cartesian_2d(x_axis, y_axis)?;
+    let x_fmt = |v: &f64| label_of(x_ticks, &x_labels, *v);
+    let y_fmt = |v: &f64| label_of(y_ticks, &y_labels, *v);
+    chart
+        .configure_mesh()
+        .bold_line_style(GRID)
+        .light_line_style(TRANSPARENT)
+        .axis_style(AXIS)
+        .label_style(label_font.clone())
+        .axis_desc_style(label_font.clone())
+        .x_desc(text.x_label)
+        .y_desc(text.y_label)
+        .x_label_formatter(&x_fmt)
+        .y_label_formatter(&y_fmt)
+        .set_all_tick_mark_size(pad / 2 + 1)
+        .draw()?;
+
+    let plot_area = chart.plotting_area().clone();
     let mut any_data = false;
     for s in series {
-        let color = Rgb(s.color);
+        let color = RGBColor(s.color[0], s.color[1], s.color[2]);
+        let style = color.stroke_width(if label_px > 20 { 3 } else { 2 });
         let finite: Vec<Option<(f64, f64)>> = s
             .points
             .iter()
-            .map(|&(x, y)| (x.is_finite() && y.is_finite()).then(|| f.to_pixel(x, y)))
+            .map(|&(x, y)| (x.is_finite() && y.is_finite()).then_some((x, y)))
             .collect();
         let n_finite = finite.iter().flatten().count();
         any_data |= n_finite > 0;
-        for w in finite.windows(2) {
-            if let (Some(a), Some(b)) = (w[0], w[1]) {
-                draw_line(&mut img, a.0, a.1, b.0, b.1, thickness, color);
+        // A line per run of finite points: a NaN leaves a gap.
+        let runs: Vec<Vec<(f64, f64)>> = finite
+            .split(|p| p.is_none())
+            .map(|run| run.iter().flatten().copied().collect::<Vec<_>>())
+            .filter(|run| !run.is_empty())
+            .collect();
+        let mut labelled = false;
+        for run in runs.iter().map(|r| r.as_slice()).chain(
+            // A labelled series without data still gets its legend entry.
+            (runs.is_empty()).then_some(&[][..]),
+        ) {
+            let drawn = chart.draw_series(LineSeries::new(run.iter().copied(), style))?;
+            if !labelled && !s.label.is_empty() {
+                drawn
+                    .label(s.label.as_str())
+                    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], style));
+                labelled = true;
             }
         }
+        let marker = label_px as f64 * 0.18;
         for (i, p) in finite.iter().enumerate() {
-            let Some(p) = p else { continue };
+            let Some(p) = *p else { continue };
             let prev = i > 0 && finite[i - 1].is_some();
             let next = i + 1 < finite.len() && finite[i + 1].is_some();
             if n_finite <= 25 || !(prev || next) {
-                fill_disc(&mut img, p.0, p.1, 2.5 * ts as f64, color);
+                plot_area.draw(&Circle::new(p, marker.round() as i32, color.filled()))?;
             }
         }
     }
-    draw_rect(&mut img, f.left, f.top, plot_w + 1, plot_h + 1, AXIS);
     if !any_data {
-        let msg = "no data";
-        let (tw, th) = text_size(msg, ts);
-        draw_text(
-            &mut img,
-            ((f.left + f.right) / 2 - tw as i64 / 2) as i32,
-            ((f.top + f.bottom) / 2 - th as i64 / 2) as i32,
-            msg,
-            MUTED,
-            ts,
-        );
+        let (xm, ym) = ((x0 + x1) / 2.0, (y0 + y1) / 2.0);
+        plot_area.draw(&PlotText::new(
+            "no data",
+            (xm, ym),
+            label_font
+                .color(&MUTED)
+                .pos(Pos::new(HPos::Center, VPos::Center)),
+        ))?;
     }
-
-    // Ticks and their labels.
-    for (t, label) in f.x_ticks.iter().zip(tick_labels(&f.x_ticks)) {
-        let (px, _) = f.to_pixel(*t, 0.0);
-        let px = px.floor() as i64;
-        fill_rect(&mut img, px, f.bottom + 1, 1, tick, AXIS);
-        draw_text_centered(
-            &mut img,
-            px as i32,
-            (f.bottom + 1 + tick) as i32 + pad / 2,
-            &label,
-            TEXT,
-            ts,
-        );
+    let legend_entries: Vec<&str> = series
+        .iter()
+        .filter(|s| !s.label.is_empty())
+        .map(|s| s.label.as_str())
+        .collect();
+    if !legend_entries.is_empty() {
+        let corner = legend_corner(&chart, series, &legend_entries, &label_font, pad as i32);
+        chart
+            .configure_series_labels()
+            .position(corner)
+            .margin(pad)
+            .legend_area_size(22)
+            .label_font(label_font.clone())
+            .background_style(WHITE)
+            .border_style(RGBColor(190, 190, 190))
+            .draw()?;
     }
-    for (t, label) in f.y_ticks.iter().zip(tick_labels(&f.y_ticks)) {
-        let (_, py) = f.to_pixel(0.0, *t);
-        let py = py.floor() as i64;
-        fill_rect(&mut img, f.left - tick, py, tick, 1, AXIS);
-        let (tw, _) = text_size(&label, ts);
-        draw_text(
-            &mut img,
-            (f.left - tick - tw as i64) as i32 - pad / 2,
-            py as i32 - ch / 2,
-            &label,
-            TEXT,
-            ts,
-        );
-    }
-
-    // Title and axis labels.
-    if !title.is_empty() {
-        draw_text_centered(&mut img, (width / 2) as i32, pad, title, TEXT, ts);
-    }
-    if !x_label.is_empty() {
-        draw_text_centered(
-            &mut img,
-            ((f.left + f.right) / 2) as i32,
-            height as i32 - pad / 2 - ch,
-            x_label,
-            TEXT,
-            ts,
-        );
-    }
-    if !y_label.is_empty() {
-        let (tw, _) = text_size(y_label, ts);
-        draw_text_up(
-            &mut img,
-            pad,
-            ((f.top + f.bottom) / 2 - tw as i64 / 2) as i32,
-            y_label,
-            TEXT,
-            ts,
-        );
-    }
-
-    draw_legend(&mut img, series, &f, ts);
-    img
+    Ok(chart.plotting_area().get_pixel_range())
 }
 
-/// A boxed legend in the corner of the data area that hides the fewest points.
-fn draw_legend(img: &mut RgbImage, series: &[Series], f: &PlotFrame, ts: u32) {
-    let entries: Vec<&Series> = series.iter().filter(|s| !s.label.is_empty()).collect();
-    if entries.is_empty() {
-        return;
+/// The corner of the data area where the legend hides the fewest points
+/// (data points and samples along the lines between them).
+fn legend_corner(
+    chart: &ChartContext<'_, Canvas<'_>, Cartesian2d<TickAxis, TickAxis>>,
+    series: &[Series],
+    entries: &[&str],
+    font: &TextStyle,
+    pad: i32,
+) -> SeriesLabelPosition {
+    let area = chart.plotting_area();
+    let (aw, ah) = area.dim_in_pixel();
+    // The box plotters will draw: the same sizes as `SeriesLabelStyle::draw`.
+    let mut text = MultiLineText::<_, &str>::new((0, 0), font);
+    for e in entries {
+        text.push_line(*e);
     }
-    let ch = (8 * ts) as i64;
-    let pad = (4 * ts) as i64;
-    let swatch = (16 * ts) as i64;
-    let row_h = ch + pad;
-    let label_w = entries
-        .iter()
-        .map(|s| text_size(&s.label, ts).0 as i64)
-        .max()
-        .unwrap_or(0);
-    let box_w = pad + swatch + pad + label_w + pad;
-    let box_h = pad + entries.len() as i64 * row_h;
-    let margin = pad;
+    // The font measured every label already (the mesh); a failure here
+    // leaves the legend at the default corner.
+    let Ok((w, h)) = text.estimate_dimension() else {
+        return SeriesLabelPosition::UpperRight;
+    };
+    let (bw, bh) = (w + 22 + 2 * pad, h + 2 * pad);
+    let (x_range, y_range) = area.get_pixel_range();
     let corners = [
-        (f.right - margin - box_w, f.top + margin), // top right
-        (f.left + margin + 1, f.top + margin),      // top left
-        (f.right - margin - box_w, f.bottom - margin - box_h), // bottom right
-        (f.left + margin + 1, f.bottom - margin - box_h), // bottom left
+        SeriesLabelPosition::UpperRight,
+        SeriesLabelPosition::UpperLeft,
+        SeriesLabelPosition::LowerRight,
+        SeriesLabelPosition::LowerLeft,
     ];
-    // Count data samples (points and segment midpoints) under each box.
-    let covered = |(bx, by): (i64, i64)| -> usize {
-        let inside = |p: (f64, f64)| {
-            p.0 >= bx as f64
-                && p.0 <= (bx + box_w) as f64
-                && p.1 >= by as f64
-                && p.1 <= (by + box_h) as f64
-        };
+    let origin = |c: &SeriesLabelPosition| -> (i32, i32) {
+        let left = matches!(
+            c,
+            SeriesLabelPosition::UpperLeft | SeriesLabelPosition::LowerLeft
+        );
+        let upper = matches!(
+            c,
+            SeriesLabelPosition::UpperLeft | SeriesLabelPosition::UpperRight
+        );
+        (
+            x_range.start + if left { 5 } else { aw as i32 - bw - 5 },
+            y_range.start + if upper { 5 } else { ah as i32 - bh - 5 },
+        )
+    };
+    let covered = |c: &SeriesLabelPosition| -> usize {
+        let (bx, by) = origin(c);
+        let inside = |p: (i32, i32)| p.0 >= bx && p.0 <= bx + bw && p.1 >= by && p.1 <= by + bh;
         let mut n = 0;
         for s in series {
-            let px: Vec<Option<(f64, f64)>> = s
+            let px: Vec<Option<(i32, i32)>> = s
                 .points
                 .iter()
-                .map(|&(x, y)| (x.is_finite() && y.is_finite()).then(|| f.to_pixel(x, y)))
+                .map(|&(x, y)| {
+                    (x.is_finite() && y.is_finite()).then(|| chart.backend_coord(&(x, y)))
+                })
                 .collect();
             for (i, p) in px.iter().enumerate() {
                 let Some(p) = *p else { continue };
                 n += inside(p) as usize;
                 if let Some(Some(q)) = px.get(i + 1) {
                     // Sample long segments so a line crossing the box counts.
-                    let steps = (((q.0 - p.0).abs() + (q.1 - p.1).abs()) / 4.0)
+                    let steps = (((q.0 - p.0).abs() + (q.1 - p.1).abs()) as f64 / 4.0)
                         .ceil()
-                        .clamp(1.0, 200.0) as usize;
+                        .clamp(1.0, 200.0) as i32;
                     for k in 1..steps {
-                        let t = k as f64 / steps as f64;
-                        n += inside((p.0 + (q.0 - p.0) * t, p.1 + (q.1 - p.1) * t)) as usize;
+                        n += inside((p.0 + (q.0 - p.0) * k / steps, p.1 + (q.1 - p.1) * k / steps))
+                            as usize;
                     }
                 }
             }
         }
         n
     };
-    let (bx, by) = corners.iter().copied().min_by_key(|&c| covered(c)).unwrap();
-    fill_rect(img, bx, by, box_w, box_h, BACKGROUND);
-    draw_rect(img, bx, by, box_w, box_h, Rgb([190, 190, 190]));
-    for (i, s) in entries.iter().enumerate() {
-        let y = by + pad + i as i64 * row_h;
-        let mid = y as f64 + ch as f64 / 2.0;
-        draw_line(
-            img,
-            (bx + pad) as f64,
-            mid,
-            (bx + pad + swatch) as f64,
-            mid,
-            2.0 * ts as f64,
-            Rgb(s.color),
-        );
-        draw_text(
-            img,
-            (bx + pad + swatch + pad) as i32,
-            y as i32,
-            &s.label,
-            TEXT,
-            ts,
-        );
-    }
+    corners.into_iter().min_by_key(|c| covered(c)).unwrap()
 }
 
 /// Writes `img` as a PNG, creating missing parent folders; errors name the path.
@@ -654,7 +761,7 @@ mod tests {
         // Title text is drawn above the data area.
         assert!(img
             .enumerate_pixels()
-            .any(|(_, y, p)| (y as i64) < f.top && *p == TEXT));
+            .any(|(_, y, p)| (y as i64) < f.top && p.0 == [TEXT.0, TEXT.1, TEXT.2]));
     }
 
     #[test]
