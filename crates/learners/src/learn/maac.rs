@@ -28,8 +28,8 @@
 
 use super::adam::backward_clipped;
 use super::offpolicy::{
-    check_replay, gumbel_noise, one_hot, td_target, Batch, OffPolicy, OffPolicyParts, Params,
-    ReplayLearner, ReplaySchedule, SequenceReplay,
+    batch_td_targets, check_replay, gumbel_noise, mean_entropy, one_hot, Batch, CriticTrunk,
+    OffPolicy, ReplayCore, ReplaySettings,
 };
 use super::rollout::{check_max_bad_updates, BadUpdate, UpdateStats};
 use super::Algorithm;
@@ -110,6 +110,21 @@ impl Default for MaacConfig {
 }
 
 impl MaacConfig {
+    /// The settings its replay and optimisers are built with.
+    pub fn replay_settings(&self) -> ReplaySettings {
+        ReplaySettings {
+            actor_lr: self.actor_lr,
+            critic_lr: self.critic_lr,
+            adam_eps: self.adam_eps,
+            buffer_steps: self.buffer_steps,
+            chunk_len: self.chunk_len,
+            batch_size: self.batch_size,
+            replay_ratio: self.replay_ratio,
+            learning_starts: self.learning_starts,
+            max_bad_updates: self.max_bad_updates,
+        }
+    }
+
     pub fn validate(&self, net: &NetConfig) -> Result<(), ConfigError> {
         in_interval("actor_lr", self.actor_lr, 0.0, 0.1, false)?;
         in_interval("critic_lr", self.critic_lr, 0.0, 0.1, false)?;
@@ -179,6 +194,17 @@ pub struct AttentionCritic {
     team: i64,
 }
 
+impl CriticTrunk for AttentionCritic {
+    /// Recurrent states of a chunk, each robot's own observation.
+    fn unroll(&self, patches: &Tensor, vectors: &Tensor, h0: &Tensor, masks: &Tensor) -> Tensor {
+        self.trunk.unroll(patches, vectors, h0, masks)
+    }
+
+    fn step(&self, patches: &Tensor, vectors: &Tensor, h: &Tensor) -> Tensor {
+        self.trunk.step(patches, vectors, h).1
+    }
+}
+
 impl AttentionCritic {
     pub fn new(
         p: &nn::Path,
@@ -208,21 +234,6 @@ impl AttentionCritic {
             heads,
             team: team as i64,
         }
-    }
-
-    /// Recurrent states of a chunk, each robot's own observation.
-    pub fn unroll(
-        &self,
-        patches: &Tensor,
-        vectors: &Tensor,
-        h0: &Tensor,
-        masks: &Tensor,
-    ) -> Tensor {
-        self.trunk.unroll(patches, vectors, h0, masks)
-    }
-
-    pub fn step(&self, patches: &Tensor, vectors: &Tensor, h: &Tensor) -> Tensor {
-        self.trunk.step(patches, vectors, h).1
     }
 
     /// From states [N, hidden] and one-hot actions [N, 5] of rows of whole
@@ -263,16 +274,12 @@ impl AttentionCritic {
 
 pub struct MaacLearner {
     pub cfg: MaacConfig,
-    pub net: NetConfig,
-    pub device: Device,
-    pub team: usize,
-    /// Online and target variables, optimisers and clocks.
-    pub params: Params,
+    /// Shape, team, variables and optimisers, replay.
+    pub core: ReplayCore,
     pub actor: Actor,
     pub critic: AttentionCritic,
     pub target_actor: Actor,
     pub target_critic: AttentionCritic,
-    pub replay: SequenceReplay,
 }
 
 /// (sampled actions [N], their log-probabilities [N]) of logits [N, 5]:
@@ -293,78 +300,54 @@ impl MaacLearner {
         device: Device,
     ) -> MaacLearner {
         let heads = cfg.attention_heads;
-        let (params, (actor, critic, target_actor, target_critic)) = Params::new(
-            device,
-            cfg.actor_lr,
-            cfg.critic_lr,
-            cfg.adam_eps,
-            |p| Actor::new(p, &net, vector_len),
-            |p| AttentionCritic::new(p, &net, vector_len, team, heads),
-        );
-        let replay = SequenceReplay::new(
-            (cfg.buffer_steps / cfg.chunk_len).max(1),
-            cfg.chunk_len,
-            team,
-            net.input_side(),
+        let critic_net = net.clone();
+        let (core, (actor, critic, target_actor, target_critic)) = ReplayCore::new(
+            cfg.replay_settings(),
+            net,
             vector_len,
-            net.hidden as usize,
+            team,
+            1,
+            device,
+            |p| AttentionCritic::new(p, &critic_net, vector_len, team, heads),
         );
         MaacLearner {
             cfg,
-            net,
-            device,
-            team,
-            params,
+            core,
             actor,
             critic,
             target_actor,
             target_critic,
-            replay,
         }
     }
 
-    /// The soft TD targets of a batch, [len * rows].
+    /// The soft TD targets of a batch, [len * rows]: the target critic's Q
+    /// of an action the target actor samples, less alpha times its
+    /// log-probability.
     fn targets(&self, b: &Batch, rng: &mut ChaCha8Rng) -> Tensor {
-        let (l, n) = (b.len as i64, b.rows as i64);
-        let alpha = self.cfg.entropy_coef;
-        tch::no_grad(|| {
-            let ha = self
-                .target_actor
-                .unroll_states(&b.patches, &b.vectors, &b.actor_h0, &b.masks);
-            let hc = self
-                .target_critic
-                .unroll(&b.patches, &b.vectors, &b.critic_h0, &b.masks);
-            let soft_value = |ha: &Tensor, hc: &Tensor, rng: &mut ChaCha8Rng| {
-                let (a, logp) = sample_actions(&self.target_actor.logits(ha), rng);
-                let (q, _) = self
-                    .target_critic
-                    .q_all(hc, &one_hot(&a, Action::COUNT as i64));
-                q.gather(1, &a.unsqueeze(1), false).squeeze_dim(1) - logp * alpha
-            };
-            let next = soft_value(&ha, &hc, rng).narrow(0, n, l * n);
-            let mut final_value = next.zeros_like();
-            if let Some((state_rows, final_rows, at)) = b.truncated_rows() {
-                let p = b.final_patches.index_select(0, &final_rows);
-                let v = b.final_vectors.index_select(0, &final_rows);
-                let (_, ha_f) = self
-                    .target_actor
-                    .step(&p, &v, &ha.index_select(0, &state_rows));
-                let hc_f = self
-                    .target_critic
-                    .step(&p, &v, &hc.index_select(0, &state_rows));
-                final_value = final_value.index_copy(0, &at, &soft_value(&ha_f, &hc_f, rng));
-            }
-            td_target(
-                &b.rewards,
-                &b.dones,
-                &b.truncated,
-                &next,
-                &final_value,
-                self.cfg.gamma,
-            )
+        let (actor, critic, alpha) = (
+            &self.target_actor,
+            &self.target_critic,
+            self.cfg.entropy_coef,
+        );
+        batch_td_targets(b, actor, critic, self.cfg.gamma, |ha, hc| {
+            let (a, logp) = sample_actions(&actor.logits(ha), rng);
+            let (q, _) = critic.q_all(hc, &one_hot(&a, Action::COUNT as i64));
+            q.gather(1, &a.unsqueeze(1), false).squeeze_dim(1) - logp * alpha
         })
     }
+}
 
+impl OffPolicy for MaacLearner {
+    const ALGORITHM: Algorithm = Algorithm::Maac;
+    fn core(&self) -> &ReplayCore {
+        &self.core
+    }
+    fn core_mut(&mut self) -> &mut ReplayCore {
+        &mut self.core
+    }
+    fn policy(&self) -> &Actor {
+        &self.actor
+    }
     /// One gradient step of critic, actor and targets on a batch.
     fn gradient_step(
         &mut self,
@@ -409,79 +392,26 @@ impl MaacLearner {
         let critic_norm = backward_clipped(
             &critic_loss,
             &mut [(
-                &mut self.params.critic_adam,
-                cfg.critic_max_grad_norm * self.team as f64,
+                &mut self.core.params.critic_adam,
+                cfg.critic_max_grad_norm * self.core.team as f64,
             )],
         )[0];
         let actor_norm = backward_clipped(
             &actor_loss,
-            &mut [(&mut self.params.actor_adam, cfg.actor_max_grad_norm)],
+            &mut [(&mut self.core.params.actor_adam, cfg.actor_max_grad_norm)],
         )[0];
         if !(actor_norm.is_finite() && critic_norm.is_finite()) {
             return Err(BadUpdate(format!(
                 "gradient norm not finite (actor {actor_norm}, critic {critic_norm})"
             )));
         }
-        self.params.critic_adam.step();
-        self.params.actor_adam.step();
-        self.params.update_targets(cfg.tau);
-        self.params.gradient_steps += 1;
+        self.core.params.critic_adam.step();
+        self.core.params.actor_adam.step();
+        self.core.params.finish_step(cfg.tau);
 
-        let entropy = tch::no_grad(|| {
-            -(logp_all.exp() * &logp_all)
-                .sum_dim_intlist(-1, false, Kind::Float)
-                .mean(Kind::Float)
-        });
-        stats.policy_loss += al;
-        stats.value_loss += cl;
-        stats.entropy += entropy.double_value(&[]);
-        stats.actor_grad_norm += actor_norm;
-        stats.critic_grad_norm += critic_norm;
-        stats.gradient_steps += 1;
+        let entropy = mean_entropy(&logp_all);
+        stats.add_step(al, cl, entropy, (actor_norm, critic_norm));
         Ok(())
-    }
-}
-
-impl ReplayLearner for MaacLearner {
-    fn replay(&mut self) -> &mut SequenceReplay {
-        &mut self.replay
-    }
-    fn params(&mut self) -> &mut Params {
-        &mut self.params
-    }
-    fn schedule(&self) -> ReplaySchedule {
-        ReplaySchedule {
-            replay_ratio: self.cfg.replay_ratio,
-            batch_size: self.cfg.batch_size,
-            learning_starts: self.cfg.learning_starts,
-        }
-    }
-    fn device(&self) -> Device {
-        self.device
-    }
-    fn gradient_step(
-        &mut self,
-        b: &Batch,
-        stats: &mut UpdateStats,
-        rng: &mut ChaCha8Rng,
-    ) -> Result<(), BadUpdate> {
-        MaacLearner::gradient_step(self, b, stats, rng)
-    }
-}
-
-impl OffPolicy for MaacLearner {
-    const ALGORITHM: Algorithm = Algorithm::Maac;
-    fn parts(&self) -> OffPolicyParts<'_> {
-        OffPolicyParts {
-            net: &self.net,
-            actor: &self.actor,
-            team: self.team,
-            // The attention critic reads each robot's own row.
-            critic_agents: 1,
-            chunk_len: self.cfg.chunk_len,
-            max_bad_updates: self.cfg.max_bad_updates,
-            params: &self.params,
-        }
     }
     fn critic_h(&self, patches: &Tensor, vectors: &Tensor, h: &Tensor) -> Tensor {
         self.critic.step(patches, vectors, h)

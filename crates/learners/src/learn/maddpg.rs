@@ -22,8 +22,8 @@
 use super::adam::backward_clipped;
 use super::mappo::{mates_index, Mappo};
 use super::offpolicy::{
-    check_replay, gumbel_noise, gumbel_softmax_st, one_hot, td_target, Batch, OffPolicy,
-    OffPolicyParts, Params, ReplayLearner, ReplaySchedule, SequenceReplay,
+    batch_td_targets, check_replay, gumbel_noise, gumbel_softmax_st, mean_entropy, one_hot, Batch,
+    CriticTrunk, OffPolicy, ReplayCore, ReplaySettings,
 };
 use super::ppo::CriticView;
 use super::rollout::{check_max_bad_updates, BadUpdate, UpdateStats};
@@ -119,6 +119,21 @@ impl Default for MaddpgConfig {
 }
 
 impl MaddpgConfig {
+    /// The settings its replay and optimisers are built with.
+    pub fn replay_settings(&self) -> ReplaySettings {
+        ReplaySettings {
+            actor_lr: self.actor_lr,
+            critic_lr: self.critic_lr,
+            adam_eps: self.adam_eps,
+            buffer_steps: self.buffer_steps,
+            chunk_len: self.chunk_len,
+            batch_size: self.batch_size,
+            replay_ratio: self.replay_ratio,
+            learning_starts: self.learning_starts,
+            max_bad_updates: self.max_bad_updates,
+        }
+    }
+
     pub fn validate(&self) -> Result<(), ConfigError> {
         in_interval("actor_lr", self.actor_lr, 0.0, 0.1, false)?;
         in_interval("critic_lr", self.critic_lr, 0.0, 0.1, false)?;
@@ -157,6 +172,19 @@ pub struct QCritic {
     team: usize,
 }
 
+impl CriticTrunk for QCritic {
+    /// Recurrent states of a chunk over rows of whole teams.
+    fn unroll(&self, patches: &Tensor, vectors: &Tensor, h0: &Tensor, masks: &Tensor) -> Tensor {
+        let (cp, cv) = Mappo.critic_inputs(patches, vectors, self.team);
+        self.trunk.unroll(&cp, &cv, h0, masks)
+    }
+
+    fn step(&self, patches: &Tensor, vectors: &Tensor, h: &Tensor) -> Tensor {
+        let (cp, cv) = Mappo.critic_inputs(patches, vectors, self.team);
+        self.trunk.step(&cp, &cv, h).1
+    }
+}
+
 impl QCritic {
     pub fn new(p: &nn::Path, net: &NetConfig, vector_len: usize, team: usize) -> QCritic {
         let h = net.hidden;
@@ -167,23 +195,6 @@ impl QCritic {
             out: nn::linear(p / "q_out", h, 1, Default::default()),
             team,
         }
-    }
-
-    /// Recurrent states of a chunk over rows of whole teams.
-    pub fn unroll(
-        &self,
-        patches: &Tensor,
-        vectors: &Tensor,
-        h0: &Tensor,
-        masks: &Tensor,
-    ) -> Tensor {
-        let (cp, cv) = Mappo.critic_inputs(patches, vectors, self.team);
-        self.trunk.unroll(&cp, &cv, h0, masks)
-    }
-
-    pub fn step(&self, patches: &Tensor, vectors: &Tensor, h: &Tensor) -> Tensor {
-        let (cp, cv) = Mappo.critic_inputs(patches, vectors, self.team);
-        self.trunk.step(&cp, &cv, h).1
     }
 
     /// Q [N] from states [N, hidden] and the team's actions [N, team * 5].
@@ -210,16 +221,12 @@ pub fn team_actions(own: &Tensor, all: &Tensor, team: usize) -> Tensor {
 
 pub struct MaddpgLearner {
     pub cfg: MaddpgConfig,
-    pub net: NetConfig,
-    pub device: Device,
-    pub team: usize,
-    /// Online and target variables, optimisers and clocks.
-    pub params: Params,
+    /// Shape, team, variables and optimisers, replay.
+    pub core: ReplayCore,
     pub actor: Actor,
     pub critic: QCritic,
     pub target_actor: Actor,
     pub target_critic: QCritic,
-    pub replay: SequenceReplay,
 }
 
 impl MaddpgLearner {
@@ -230,80 +237,48 @@ impl MaddpgLearner {
         team: usize,
         device: Device,
     ) -> MaddpgLearner {
-        let (params, (actor, critic, target_actor, target_critic)) = Params::new(
-            device,
-            cfg.actor_lr,
-            cfg.critic_lr,
-            cfg.adam_eps,
-            |p| Actor::new(p, &net, vector_len),
-            |p| QCritic::new(p, &net, vector_len, team),
-        );
-        let replay = SequenceReplay::new(
-            (cfg.buffer_steps / cfg.chunk_len).max(1),
-            cfg.chunk_len,
-            team,
-            net.input_side(),
+        let critic_net = net.clone();
+        let (core, (actor, critic, target_actor, target_critic)) = ReplayCore::new(
+            cfg.replay_settings(),
+            net,
             vector_len,
-            net.hidden as usize,
+            team,
+            team,
+            device,
+            |p| QCritic::new(p, &critic_net, vector_len, team),
         );
         MaddpgLearner {
             cfg,
-            net,
-            device,
-            team,
-            params,
+            core,
             actor,
             critic,
             target_actor,
             target_critic,
-            replay,
         }
     }
 
-    /// The TD targets of a batch, [len * rows].
+    /// The TD targets of a batch, [len * rows]: the target critic's Q of
+    /// the target actor's greedy actions.
     fn targets(&self, b: &Batch) -> Tensor {
-        let (l, n) = (b.len as i64, b.rows as i64);
-        tch::no_grad(|| {
-            let ha = self
-                .target_actor
-                .unroll_states(&b.patches, &b.vectors, &b.actor_h0, &b.masks);
-            let hc = self
-                .target_critic
-                .unroll(&b.patches, &b.vectors, &b.critic_h0, &b.masks);
-            let greedy = |states: &Tensor| {
-                one_hot(
-                    &self.target_actor.logits(states).argmax(-1, false),
-                    Action::COUNT as i64,
-                )
-            };
-            let value = |ha: &Tensor, hc: &Tensor| {
-                let a = greedy(ha);
-                self.target_critic.q(hc, &team_actions(&a, &a, self.team))
-            };
-            let next = value(&ha, &hc).narrow(0, n, l * n);
-            let mut final_value = next.zeros_like();
-            if let Some((state_rows, final_rows, at)) = b.truncated_rows() {
-                let p = b.final_patches.index_select(0, &final_rows);
-                let v = b.final_vectors.index_select(0, &final_rows);
-                let (_, ha_f) = self
-                    .target_actor
-                    .step(&p, &v, &ha.index_select(0, &state_rows));
-                let hc_f = self
-                    .target_critic
-                    .step(&p, &v, &hc.index_select(0, &state_rows));
-                final_value = final_value.index_copy(0, &at, &value(&ha_f, &hc_f));
-            }
-            td_target(
-                &b.rewards,
-                &b.dones,
-                &b.truncated,
-                &next,
-                &final_value,
-                self.cfg.gamma,
-            )
+        let (actor, critic, team) = (&self.target_actor, &self.target_critic, self.core.team);
+        batch_td_targets(b, actor, critic, self.cfg.gamma, |ha, hc| {
+            let a = one_hot(&actor.logits(ha).argmax(-1, false), Action::COUNT as i64);
+            critic.q(hc, &team_actions(&a, &a, team))
         })
     }
+}
 
+impl OffPolicy for MaddpgLearner {
+    const ALGORITHM: Algorithm = Algorithm::Maddpg;
+    fn core(&self) -> &ReplayCore {
+        &self.core
+    }
+    fn core_mut(&mut self) -> &mut ReplayCore {
+        &mut self.core
+    }
+    fn policy(&self) -> &Actor {
+        &self.actor
+    }
     /// One gradient step of critic, actor and targets on a batch.
     fn gradient_step(
         &mut self,
@@ -321,7 +296,7 @@ impl MaddpgLearner {
         let hc = self.critic.unroll(&p, &v, &b.critic_h0, &m);
         let q = self.critic.q(
             &hc,
-            &team_actions(&buffer_actions, &buffer_actions, self.team),
+            &team_actions(&buffer_actions, &buffer_actions, self.core.team),
         );
         let critic_loss = (&q - &y).square().mean(Kind::Float);
         let cl = critic_loss.double_value(&[]);
@@ -330,12 +305,12 @@ impl MaddpgLearner {
         }
         let critic_norm = backward_clipped(
             &critic_loss,
-            &mut [(&mut self.params.critic_adam, cfg.max_grad_norm)],
+            &mut [(&mut self.core.params.critic_adam, cfg.max_grad_norm)],
         )[0];
         if !critic_norm.is_finite() {
             return Err(BadUpdate(format!("critic gradient norm {critic_norm}")));
         }
-        self.params.critic_adam.step();
+        self.core.params.critic_adam.step();
 
         let ha = self.actor.unroll_states(&p, &v, &b.actor_h0, &m);
         let logits = self.actor.logits(&ha);
@@ -343,7 +318,7 @@ impl MaddpgLearner {
             gumbel_softmax_st(&logits, &gumbel_noise(&logits, rng), cfg.gumbel_temperature);
         let q_pi = self.critic.q(
             &hc.detach(),
-            &team_actions(&sampled, &buffer_actions, self.team),
+            &team_actions(&sampled, &buffer_actions, self.core.team),
         );
         let actor_loss =
             -q_pi.mean(Kind::Float) + cfg.logit_reg * logits.square().mean(Kind::Float);
@@ -353,71 +328,17 @@ impl MaddpgLearner {
         }
         let actor_norm = backward_clipped(
             &actor_loss,
-            &mut [(&mut self.params.actor_adam, cfg.max_grad_norm)],
+            &mut [(&mut self.core.params.actor_adam, cfg.max_grad_norm)],
         )[0];
         if !actor_norm.is_finite() {
             return Err(BadUpdate(format!("actor gradient norm {actor_norm}")));
         }
-        self.params.actor_adam.step();
-        self.params.update_targets(cfg.tau);
-        self.params.gradient_steps += 1;
+        self.core.params.actor_adam.step();
+        self.core.params.finish_step(cfg.tau);
 
-        let entropy = tch::no_grad(|| {
-            let lp = logits.log_softmax(-1, Kind::Float);
-            -(lp.exp() * &lp)
-                .sum_dim_intlist(-1, false, Kind::Float)
-                .mean(Kind::Float)
-        });
-        stats.policy_loss += al;
-        stats.value_loss += cl;
-        stats.entropy += entropy.double_value(&[]);
-        stats.actor_grad_norm += actor_norm;
-        stats.critic_grad_norm += critic_norm;
-        stats.gradient_steps += 1;
+        let entropy = mean_entropy(&logits.log_softmax(-1, Kind::Float));
+        stats.add_step(al, cl, entropy, (actor_norm, critic_norm));
         Ok(())
-    }
-}
-
-impl ReplayLearner for MaddpgLearner {
-    fn replay(&mut self) -> &mut SequenceReplay {
-        &mut self.replay
-    }
-    fn params(&mut self) -> &mut Params {
-        &mut self.params
-    }
-    fn schedule(&self) -> ReplaySchedule {
-        ReplaySchedule {
-            replay_ratio: self.cfg.replay_ratio,
-            batch_size: self.cfg.batch_size,
-            learning_starts: self.cfg.learning_starts,
-        }
-    }
-    fn device(&self) -> Device {
-        self.device
-    }
-    fn gradient_step(
-        &mut self,
-        b: &Batch,
-        stats: &mut UpdateStats,
-        rng: &mut ChaCha8Rng,
-    ) -> Result<(), BadUpdate> {
-        MaddpgLearner::gradient_step(self, b, stats, rng)
-    }
-}
-
-impl OffPolicy for MaddpgLearner {
-    const ALGORITHM: Algorithm = Algorithm::Maddpg;
-    fn parts(&self) -> OffPolicyParts<'_> {
-        OffPolicyParts {
-            net: &self.net,
-            actor: &self.actor,
-            team: self.team,
-            // The Q critic reads the whole team.
-            critic_agents: self.team,
-            chunk_len: self.cfg.chunk_len,
-            max_bad_updates: self.cfg.max_bad_updates,
-            params: &self.params,
-        }
     }
     fn critic_h(&self, patches: &Tensor, vectors: &Tensor, h: &Tensor) -> Tensor {
         self.critic.step(patches, vectors, h)
@@ -425,7 +346,8 @@ impl OffPolicy for MaddpgLearner {
     /// Epsilon-greedy, annealed over the world-steps collected.
     fn explore(&self) -> f64 {
         let c = &self.cfg;
-        let done = (self.params.collected_steps as f64 / c.epsilon_anneal_steps as f64).min(1.0);
+        let done =
+            (self.core.params.collected_steps as f64 / c.epsilon_anneal_steps as f64).min(1.0);
         c.epsilon_start + (c.epsilon_finish - c.epsilon_start) * done
     }
 }

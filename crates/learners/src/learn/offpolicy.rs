@@ -488,6 +488,13 @@ impl Params {
         soft_update(&self.target_critic, &self.critic, tau);
     }
 
+    /// Ends a gradient step whose optimisers have stepped: the targets
+    /// move `tau` of the way and the step is counted.
+    pub fn finish_step(&mut self, tau: f64) {
+        self.update_targets(tau);
+        self.gradient_steps += 1;
+    }
+
     pub fn undo_point(&self) -> Undo {
         Undo {
             point: UndoPoint::take(&self.stores(), &[&self.actor_adam, &self.critic_adam]),
@@ -568,20 +575,89 @@ impl Params {
     }
 }
 
-/// How an update phase draws on the replay: the fields both configs share.
-pub struct ReplaySchedule {
-    pub replay_ratio: f64,
+/// The replay settings every off-policy config has, read once when a
+/// learner is built.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ReplaySettings {
+    pub actor_lr: f64,
+    pub critic_lr: f64,
+    pub adam_eps: f64,
+    pub buffer_steps: usize,
+    pub chunk_len: usize,
     pub batch_size: usize,
+    pub replay_ratio: f64,
     pub learning_starts: usize,
+    pub max_bad_updates: u32,
 }
 
-/// What the update phase MADDPG and MAAC share needs of each, and the
-/// phase itself; the algorithms differ only in their gradient step.
-pub trait ReplayLearner {
-    fn replay(&mut self) -> &mut SequenceReplay;
-    fn params(&mut self) -> &mut Params;
-    fn schedule(&self) -> ReplaySchedule;
-    fn device(&self) -> Device;
+/// What an off-policy learner holds beside its own networks and settings:
+/// the networks' shape, the team, the variables and optimisers (`Params`),
+/// the replay and how an update phase draws on it. MADDPG and MAAC build it
+/// alike and differ only in their critic and gradient step.
+pub struct ReplayCore {
+    pub net: NetConfig,
+    pub device: Device,
+    pub team: usize,
+    /// How many robots' rows the critic reads (the Q critic the whole team,
+    /// the attention critic each robot's own).
+    pub critic_agents: usize,
+    pub settings: ReplaySettings,
+    /// Online and target variables, optimisers and clocks.
+    pub params: Params,
+    pub replay: SequenceReplay,
+}
+
+impl ReplayCore {
+    /// The core of a learner whose actor is `Actor` and whose critic
+    /// `critic` builds, with those modules (online and target).
+    #[allow(clippy::too_many_arguments)]
+    pub fn new<C>(
+        settings: ReplaySettings,
+        net: NetConfig,
+        vector_len: usize,
+        team: usize,
+        critic_agents: usize,
+        device: Device,
+        critic: impl Fn(&nn::Path) -> C,
+    ) -> (ReplayCore, Modules<Actor, C>) {
+        let (params, modules) = Params::new(
+            device,
+            settings.actor_lr,
+            settings.critic_lr,
+            settings.adam_eps,
+            |p| Actor::new(p, &net, vector_len),
+            critic,
+        );
+        let replay = SequenceReplay::new(
+            (settings.buffer_steps / settings.chunk_len).max(1),
+            settings.chunk_len,
+            team,
+            net.input_side(),
+            vector_len,
+            net.hidden as usize,
+        );
+        let core = ReplayCore {
+            net,
+            device,
+            team,
+            critic_agents,
+            settings,
+            params,
+            replay,
+        };
+        (core, modules)
+    }
+}
+
+/// An off-policy learner: its algorithm, its core, its actor, its gradient
+/// step, its critic's step while acting and its exploration. Every one is a
+/// `Learner` through the one impl below, so the plumbing MADDPG and MAAC
+/// share (the update phase, checkpoints, restore) is written once.
+pub trait OffPolicy {
+    const ALGORITHM: Algorithm;
+    fn core(&self) -> &ReplayCore;
+    fn core_mut(&mut self) -> &mut ReplayCore;
+    fn policy(&self) -> &Actor;
     /// One gradient step on a sampled batch (critic, actor, targets), its
     /// losses and norms added to `stats`.
     fn gradient_step(
@@ -590,39 +666,99 @@ pub trait ReplayLearner {
         stats: &mut UpdateStats,
         rng: &mut ChaCha8Rng,
     ) -> Result<(), BadUpdate>;
-
-    /// After each rollout: its chunks into the replay and its world-steps
-    /// onto the clock; then, once the replay holds `learning_starts`
-    /// world-steps, `gradient_steps(..)` sampled batches. A non-finite step
-    /// undoes the whole phase (weights, targets, moments), not the replay.
-    fn update_phase(
-        &mut self,
-        ro: &Rollout,
-        rng: &mut ChaCha8Rng,
-    ) -> Result<UpdateStats, BadUpdate> {
-        let replay = self.replay();
-        replay.push_rollout(ro);
-        let (filled, len, team) = (replay.filled, replay.len, replay.team);
-        let new_steps = ro.steps * ro.rows / team;
-        self.params().collected_steps += new_steps as u64;
-        let mut stats = UpdateStats::default();
-        let schedule = self.schedule();
-        if filled * len < schedule.learning_starts {
-            return Ok(stats);
-        }
-        let undo = self.params().undo_point();
-        let steps = gradient_steps(schedule.replay_ratio, new_steps, schedule.batch_size, len);
-        let device = self.device();
-        for _ in 0..steps {
-            let b = self.replay().sample(schedule.batch_size, rng, device);
-            if let Err(bad) = self.gradient_step(&b, &mut stats, rng) {
-                self.params().undo(undo);
-                return Err(bad);
-            }
-        }
-        stats.average();
-        Ok(stats)
+    /// The critic's next recurrent state (an off-policy critic values
+    /// nothing while acting).
+    fn critic_h(&self, patches: &Tensor, vectors: &Tensor, h: &Tensor) -> Tensor;
+    /// Share of actions drawn uniformly while training.
+    fn explore(&self) -> f64 {
+        0.0
     }
+}
+
+/// After each rollout: its chunks into the replay and its world-steps onto
+/// the clock; then, once the replay holds `learning_starts` world-steps,
+/// `gradient_steps(..)` sampled batches. A non-finite step undoes the whole
+/// phase (weights, targets, moments), not the replay.
+fn update_phase<T: OffPolicy>(
+    learner: &mut T,
+    ro: &Rollout,
+    rng: &mut ChaCha8Rng,
+) -> Result<UpdateStats, BadUpdate> {
+    let core = learner.core_mut();
+    core.replay.push_rollout(ro);
+    let (filled, len, team) = (core.replay.filled, core.replay.len, core.replay.team);
+    let new_steps = ro.steps * ro.rows / team;
+    core.params.collected_steps += new_steps as u64;
+    let mut stats = UpdateStats::default();
+    let (batch_size, device) = (core.settings.batch_size, core.device);
+    if filled * len < core.settings.learning_starts {
+        return Ok(stats);
+    }
+    let undo = core.params.undo_point();
+    let steps = gradient_steps(core.settings.replay_ratio, new_steps, batch_size, len);
+    for _ in 0..steps {
+        let b = learner.core_mut().replay.sample(batch_size, rng, device);
+        if let Err(bad) = learner.gradient_step(&b, &mut stats, rng) {
+            learner.core_mut().params.undo(undo);
+            return Err(bad);
+        }
+    }
+    stats.average();
+    Ok(stats)
+}
+
+/// A recurrent critic's trunk, as the TD targets read it: its states over
+/// a batch's sequences, and one step on from a state.
+pub trait CriticTrunk {
+    fn unroll(&self, patches: &Tensor, vectors: &Tensor, h0: &Tensor, masks: &Tensor) -> Tensor;
+    fn step(&self, patches: &Tensor, vectors: &Tensor, h: &Tensor) -> Tensor;
+}
+
+/// The TD targets of a batch, [len * rows], from the target networks:
+/// `value(actor states, critic states)` of every next state, and of the
+/// states that episodes cut off by the step limit reached, bootstrapped
+/// there; no gradient. MADDPG's value is the greedy action's Q, MAAC's the
+/// soft value of a sampled one.
+pub fn batch_td_targets<C: CriticTrunk>(
+    b: &Batch,
+    actor: &Actor,
+    critic: &C,
+    gamma: f64,
+    mut value: impl FnMut(&Tensor, &Tensor) -> Tensor,
+) -> Tensor {
+    let (l, n) = (b.len as i64, b.rows as i64);
+    tch::no_grad(|| {
+        let ha = actor.unroll_states(&b.patches, &b.vectors, &b.actor_h0, &b.masks);
+        let hc = critic.unroll(&b.patches, &b.vectors, &b.critic_h0, &b.masks);
+        let next = value(&ha, &hc).narrow(0, n, l * n);
+        let mut final_value = next.zeros_like();
+        if let Some((state_rows, final_rows, at)) = b.truncated_rows() {
+            let p = b.final_patches.index_select(0, &final_rows);
+            let v = b.final_vectors.index_select(0, &final_rows);
+            let (_, ha_f) = actor.step(&p, &v, &ha.index_select(0, &state_rows));
+            let hc_f = critic.step(&p, &v, &hc.index_select(0, &state_rows));
+            final_value = final_value.index_copy(0, &at, &value(&ha_f, &hc_f));
+        }
+        td_target(
+            &b.rewards,
+            &b.dones,
+            &b.truncated,
+            &next,
+            &final_value,
+            gamma,
+        )
+    })
+}
+
+/// The policy's mean entropy over rows of log-probabilities [N, 5] (for
+/// the logs; no gradient).
+pub fn mean_entropy(log_probs: &Tensor) -> f64 {
+    tch::no_grad(|| {
+        -(log_probs.exp() * log_probs)
+            .sum_dim_intlist(-1, false, Kind::Float)
+            .mean(Kind::Float)
+    })
+    .double_value(&[])
 }
 
 /// Gradient steps that sample `replay_ratio` x `new_steps` world-steps in
@@ -659,53 +795,24 @@ pub fn check_replay(
     )
 }
 
-/// What an off-policy learner's `Learner` side reads of it: its networks'
-/// shape and actor, its team and how many robots its critic reads, its
-/// chunk length, its patience and its `Params`.
-pub struct OffPolicyParts<'a> {
-    pub net: &'a NetConfig,
-    pub actor: &'a Actor,
-    pub team: usize,
-    pub critic_agents: usize,
-    pub chunk_len: usize,
-    pub max_bad_updates: u32,
-    pub params: &'a Params,
-}
-
-/// An off-policy learner: its algorithm, its parts, its critic's step while
-/// acting and its exploration, beside the replay and gradient step of
-/// `ReplayLearner`. Every one is a `Learner` through the one impl below,
-/// so the plumbing MADDPG and MAAC share is written once.
-pub trait OffPolicy: ReplayLearner {
-    const ALGORITHM: Algorithm;
-    fn parts(&self) -> OffPolicyParts<'_>;
-    /// The critic's next recurrent state (an off-policy critic values
-    /// nothing while acting).
-    fn critic_h(&self, patches: &Tensor, vectors: &Tensor, h: &Tensor) -> Tensor;
-    /// Share of actions drawn uniformly while training.
-    fn explore(&self) -> f64 {
-        0.0
-    }
-}
-
 impl<T: OffPolicy> Learner for T {
     fn algorithm(&self) -> Algorithm {
         T::ALGORITHM
     }
     fn net(&self) -> &NetConfig {
-        self.parts().net
+        &self.core().net
     }
     fn actor(&self) -> &Actor {
-        self.parts().actor
+        self.policy()
     }
     fn team(&self) -> usize {
-        self.parts().team
+        self.core().team
     }
     fn critic_agents(&self) -> usize {
-        self.parts().critic_agents
+        self.core().critic_agents
     }
     fn chunk_len(&self) -> usize {
-        self.parts().chunk_len
+        self.core().settings.chunk_len
     }
     fn needs_values(&self) -> bool {
         false
@@ -722,16 +829,16 @@ impl<T: OffPolicy> Learner for T {
         self.explore()
     }
     fn update(&mut self, ro: &Rollout, rng: &mut ChaCha8Rng) -> Result<UpdateStats, BadUpdate> {
-        self.update_phase(ro, rng)
+        update_phase(self, ro, rng)
     }
     fn max_bad_updates(&self) -> u32 {
-        self.parts().max_bad_updates
+        self.core().settings.max_bad_updates
     }
     fn checkpoint_files(&self) -> Vec<(&'static str, NamedTensors)> {
-        self.parts().params.checkpoint_files()
+        self.core().params.checkpoint_files()
     }
     fn learner_state(&self) -> serde_json::Value {
-        self.parts().params.state()
+        self.core().params.state()
     }
     /// Weights, target networks, Adam moments and clocks come back exactly;
     /// the replay starts empty and refills for `learning_starts` steps
@@ -744,8 +851,9 @@ impl<T: OffPolicy> Learner for T {
         state: serde_json::Value,
         dir: &Path,
     ) -> anyhow::Result<()> {
-        self.params().restore(files, state, dir)?;
-        self.replay().clear();
+        let core = self.core_mut();
+        core.params.restore(files, state, dir)?;
+        core.replay.clear();
         Ok(())
     }
 }

@@ -105,6 +105,17 @@ pub struct UpdateStats {
 }
 
 impl UpdateStats {
+    /// Adds one actor-critic gradient step's losses, the policy's entropy
+    /// and the gradient norms to the sums.
+    pub fn add_step(&mut self, actor_loss: f64, critic_loss: f64, entropy: f64, norms: (f64, f64)) {
+        self.policy_loss += actor_loss;
+        self.value_loss += critic_loss;
+        self.entropy += entropy;
+        self.actor_grad_norm += norms.0;
+        self.critic_grad_norm += norms.1;
+        self.gradient_steps += 1;
+    }
+
     /// Sums over gradient steps become means.
     pub fn average(&mut self) {
         let n = self.gradient_steps.max(1) as f64;
