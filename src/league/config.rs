@@ -412,7 +412,10 @@ impl LeagueConfig {
                 return Err(ConfigError::new(
                     format!("{}.play", side.name()),
                     format!("\"{play}\""),
-                    "a league's learner learns: mappo, ippo, maddpg or maac",
+                    format!(
+                        "a league's learner learns: {}",
+                        crate::learn::kind::learner_names("or")
+                    ),
                 ));
             }
             self.train_config(side).validate()?;

@@ -218,7 +218,7 @@ fn learner_and_rollout() -> (PpoLearner, Rollout) {
     };
     let (steps, rows, vl) = (10, 4, 10);
     let learner = PpoLearner::new(
-        t2e::learn::Algorithm::Mappo,
+        &t2e::learn::mappo::KIND,
         cfg,
         net.clone(),
         vl,

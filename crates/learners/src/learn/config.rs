@@ -3,6 +3,7 @@
 //! field by field with errors that name the file and the field.
 
 use super::extra_maps::ExtraMapsConfig;
+use super::kind::{kind, learner_names};
 use super::maac::MaacConfig;
 use super::maddpg::MaddpgConfig;
 use super::map_sampling::MapSampling;
@@ -192,7 +193,10 @@ impl FromStr for Play {
                 ConfigError::new(
                     "play",
                     format!("\"{play}\""),
-                    format!("{e}; or mappo / ippo / maddpg / maac to learn"),
+                    format!(
+                        "{e}; or {} to learn",
+                        Algorithm::ALL.map(|a| a.name()).join(" / ")
+                    ),
                 )
             })
     }
@@ -240,34 +244,25 @@ impl<D: SideDefaults> SideConfig<D> {
             defaults: PhantomData,
         }
     }
+}
 
+impl SideConfig {
     /// The recurrent chunk length `algorithm` trains on.
     pub fn chunk_len(&self, algorithm: Algorithm) -> usize {
-        match algorithm {
-            Algorithm::Mappo | Algorithm::Ippo => self.ppo.chunk_len,
-            Algorithm::Maddpg => self.maddpg.chunk_len,
-            Algorithm::Maac => self.maac.chunk_len,
-        }
+        kind(algorithm).chunk_len(self)
     }
 
     /// The discount `algorithm` learns with (the shaping term uses it too).
     pub fn gamma(&self, algorithm: Algorithm) -> f64 {
-        match algorithm {
-            Algorithm::Mappo | Algorithm::Ippo => self.ppo.gamma,
-            Algorithm::Maddpg => self.maddpg.gamma,
-            Algorithm::Maac => self.maac.gamma,
-        }
+        kind(algorithm).gamma(self)
     }
 
     /// Checks the settings of `algorithm`; the error names the field.
     fn validate_learner(&self, algorithm: Algorithm) -> Result<(), ConfigError> {
         self.net.validate().map_err(|e| e.within("net"))?;
         self.shaping.validate().map_err(|e| e.within("shaping"))?;
-        match algorithm {
-            Algorithm::Mappo | Algorithm::Ippo => self.ppo.validate().map_err(|e| e.within("ppo")),
-            Algorithm::Maddpg => self.maddpg.validate().map_err(|e| e.within("maddpg")),
-            Algorithm::Maac => self.maac.validate(&self.net).map_err(|e| e.within("maac")),
-        }
+        let k = kind(algorithm);
+        k.validate(self).map_err(|e| e.within(k.settings_table()))
     }
 }
 
@@ -361,24 +356,13 @@ impl TrainConfig {
                     side_cfg
                         .validate_learner(algorithm)
                         .map_err(|e| e.within(name))?;
-                    crate::nn::prior::check(
-                        side_cfg.net.heuristic_prior,
-                        side,
-                        !algorithm.off_policy(),
-                    )
-                    .map_err(|e| e.within("net").within(name))?;
-                    crate::nn::prior::check_kl(
-                        side_cfg.ppo.heuristic_kl,
-                        side,
-                        !algorithm.off_policy(),
-                    )
-                    .map_err(|e| e.within("ppo").within(name))?;
+                    let k = kind(algorithm);
+                    crate::nn::prior::check(side_cfg.net.heuristic_prior, side, !k.off_policy())
+                        .map_err(|e| e.within("net").within(name))?;
+                    crate::nn::prior::check_kl(side_cfg.ppo.heuristic_kl, side, !k.off_policy())
+                        .map_err(|e| e.within("ppo").within(name))?;
                     let chunk_len = side_cfg.chunk_len(algorithm);
-                    let field = if algorithm.off_policy() {
-                        algorithm.name()
-                    } else {
-                        "ppo"
-                    };
+                    let field = k.settings_table();
                     if !self.rollout_steps.is_multiple_of(chunk_len) {
                         return Err(ConfigError::new(
                             "rollout_steps",
@@ -388,7 +372,7 @@ impl TrainConfig {
                     }
                     // A replayed sequence holds the state of at most one
                     // truncation to bootstrap from.
-                    if algorithm.off_policy() && self.env.episode_length as usize <= chunk_len {
+                    if k.off_policy() && self.env.episode_length as usize <= chunk_len {
                         return Err(ConfigError::new(
                             "env.episode_length",
                             self.env.episode_length,
@@ -407,7 +391,10 @@ impl TrainConfig {
         if learners == 0 {
             return Err(ConfigError::about(
                 "captors.play, target.play",
-                "neither is a learner (mappo, ippo, maddpg or maac): nothing to train",
+                format!(
+                    "neither is a learner ({}): nothing to train",
+                    learner_names("or")
+                ),
             ));
         }
         Ok(())

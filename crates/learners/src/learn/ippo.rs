@@ -2,10 +2,16 @@
 //! one critic, but the critic sees only the robot's own observation, exactly
 //! what its actor sees. Everything else is the PPO of `ppo.rs`.
 
-use super::ppo::CriticView;
+use super::ppo::{CriticView, PpoKind};
+use super::Algorithm;
 use tch::Tensor;
 
 pub struct Ippo;
+
+pub const KIND: PpoKind = PpoKind {
+    algorithm: Algorithm::Ippo,
+    view: || Box::new(Ippo),
+};
 
 impl CriticView for Ippo {
     fn critic_agents(&self, _team: usize) -> usize {

@@ -27,6 +27,9 @@
 //!    - targets: theta' <- tau theta + (1 - tau) theta'.
 
 use super::adam::backward_clipped;
+use super::config::SideConfig;
+use super::kind::LearnerKind;
+use super::learner::Learner;
 use super::offpolicy::{
     batch_td_targets, check_replay, gumbel_noise, mean_entropy, one_hot, Batch, CriticTrunk,
     OffPolicy, ReplayCore, ReplaySettings,
@@ -269,6 +272,39 @@ impl AttentionCritic {
             .leaky_relu()
             .apply(&self.q_out);
         (q, logits)
+    }
+}
+
+/// MAAC's kind: its settings are the side's `maac` table.
+pub struct MaacKind;
+
+pub const KIND: MaacKind = MaacKind;
+
+impl LearnerKind for MaacKind {
+    fn settings_table(&self) -> &'static str {
+        "maac"
+    }
+    fn chunk_len(&self, side: &SideConfig) -> usize {
+        side.maac.chunk_len
+    }
+    fn gamma(&self, side: &SideConfig) -> f64 {
+        side.maac.gamma
+    }
+    fn validate(&self, side: &SideConfig) -> Result<(), ConfigError> {
+        side.maac.validate(&side.net)
+    }
+    fn replay(&self, side: &SideConfig) -> Option<(usize, usize)> {
+        Some((side.maac.buffer_steps, side.maac.chunk_len))
+    }
+    fn build(
+        &self,
+        side: &SideConfig,
+        vector_len: usize,
+        team: usize,
+        device: Device,
+    ) -> Box<dyn Learner> {
+        let (cfg, net) = (side.maac.clone(), side.net.clone());
+        Box::new(MaacLearner::new(cfg, net, vector_len, team, device))
     }
 }
 

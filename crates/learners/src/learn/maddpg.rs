@@ -20,6 +20,9 @@
 //!    - targets: theta' <- tau theta + (1 - tau) theta'.
 
 use super::adam::backward_clipped;
+use super::config::SideConfig;
+use super::kind::LearnerKind;
+use super::learner::Learner;
 use super::mappo::{mates_index, Mappo};
 use super::offpolicy::{
     batch_td_targets, check_replay, gumbel_noise, gumbel_softmax_st, mean_entropy, one_hot, Batch,
@@ -217,6 +220,39 @@ pub fn team_actions(own: &Tensor, all: &Tensor, team: usize) -> Tensor {
         .index_select(0, &mates_index(n as usize, team, own.device()))
         .view([n, -1]);
     Tensor::cat(&[own, &mates], 1)
+}
+
+/// MADDPG's kind: its settings are the side's `maddpg` table.
+pub struct MaddpgKind;
+
+pub const KIND: MaddpgKind = MaddpgKind;
+
+impl LearnerKind for MaddpgKind {
+    fn settings_table(&self) -> &'static str {
+        "maddpg"
+    }
+    fn chunk_len(&self, side: &SideConfig) -> usize {
+        side.maddpg.chunk_len
+    }
+    fn gamma(&self, side: &SideConfig) -> f64 {
+        side.maddpg.gamma
+    }
+    fn validate(&self, side: &SideConfig) -> Result<(), ConfigError> {
+        side.maddpg.validate()
+    }
+    fn replay(&self, side: &SideConfig) -> Option<(usize, usize)> {
+        Some((side.maddpg.buffer_steps, side.maddpg.chunk_len))
+    }
+    fn build(
+        &self,
+        side: &SideConfig,
+        vector_len: usize,
+        team: usize,
+        device: Device,
+    ) -> Box<dyn Learner> {
+        let (cfg, net) = (side.maddpg.clone(), side.net.clone());
+        Box::new(MaddpgLearner::new(cfg, net, vector_len, team, device))
+    }
 }
 
 pub struct MaddpgLearner {

@@ -4,10 +4,16 @@
 //! teammates' in index order, so every robot gets its own value estimate.
 //! Everything else is the PPO of `ppo.rs`.
 
-use super::ppo::CriticView;
+use super::ppo::{CriticView, PpoKind};
+use super::Algorithm;
 use tch::{Device, Kind, Tensor};
 
 pub struct Mappo;
+
+pub const KIND: PpoKind = PpoKind {
+    algorithm: Algorithm::Mappo,
+    view: || Box::new(Mappo),
+};
 
 impl CriticView for Mappo {
     fn critic_agents(&self, team: usize) -> usize {

@@ -8,6 +8,7 @@ pub mod adam;
 pub mod config;
 pub mod extra_maps;
 pub mod ippo;
+pub mod kind;
 pub mod learner;
 pub mod maac;
 pub mod maddpg;
@@ -22,12 +23,4 @@ pub mod train;
 pub mod undo;
 
 pub use crate::algorithm::Algorithm;
-
-/// What PPO's critic reads: the whole team's observations (MAPPO) or the
-/// robot's own (IPPO, and anything else asked).
-pub fn critic_view(algorithm: Algorithm) -> Box<dyn ppo::CriticView> {
-    match algorithm {
-        Algorithm::Mappo => Box::new(mappo::Mappo),
-        _ => Box::new(ippo::Ippo),
-    }
-}
+pub use kind::{kind, LearnerKind};

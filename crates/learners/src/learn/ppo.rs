@@ -5,6 +5,8 @@
 //! MAPPO and IPPO differ only in what the critic reads (`mappo.rs`, `ippo.rs`).
 
 use super::adam::{backward_clipped, Adam};
+use super::config::SideConfig;
+use super::kind::LearnerKind;
 use super::learner::{file, optimizer_file, restore_optimizers, Learner, NamedTensors};
 use super::rollout::{check_max_bad_updates, BadUpdate, Rollout, UpdateStats};
 use super::undo::UndoPoint;
@@ -282,16 +284,53 @@ pub struct PpoLearner {
     pub view: Box<dyn CriticView>,
 }
 
+/// MAPPO's and IPPO's kind: PPO over the `ppo` settings, with the critic
+/// view that tells them apart.
+pub struct PpoKind {
+    pub algorithm: Algorithm,
+    pub view: fn() -> Box<dyn CriticView>,
+}
+
+impl LearnerKind for PpoKind {
+    fn settings_table(&self) -> &'static str {
+        "ppo"
+    }
+    fn chunk_len(&self, side: &SideConfig) -> usize {
+        side.ppo.chunk_len
+    }
+    fn gamma(&self, side: &SideConfig) -> f64 {
+        side.ppo.gamma
+    }
+    fn validate(&self, side: &SideConfig) -> Result<(), ConfigError> {
+        side.ppo.validate()
+    }
+    /// Each epoch a forward and a backward (about three forwards) of actor
+    /// and critic over every row.
+    fn update_flops(&self, side: &SideConfig, actor: f64, critic: f64) -> f64 {
+        3.0 * side.ppo.epochs as f64 * (actor + critic)
+    }
+    fn build(
+        &self,
+        side: &SideConfig,
+        vector_len: usize,
+        team: usize,
+        device: Device,
+    ) -> Box<dyn Learner> {
+        let (cfg, net) = (side.ppo.clone(), side.net.clone());
+        Box::new(PpoLearner::new(self, cfg, net, vector_len, team, device))
+    }
+}
+
 impl PpoLearner {
     pub fn new(
-        algorithm: Algorithm,
+        kind: &PpoKind,
         cfg: PpoConfig,
         net: NetConfig,
         vector_len: usize,
         team: usize,
         device: Device,
     ) -> PpoLearner {
-        let view = super::critic_view(algorithm);
+        let (algorithm, view) = (kind.algorithm, (kind.view)());
         let actor_vs = nn::VarStore::new(device);
         let actor = Actor::new(&actor_vs.root(), &net, vector_len);
         let critic_vs = nn::VarStore::new(device);
@@ -887,7 +926,7 @@ mod tests {
         let rows = worlds * team;
         let learner = crate::nn::seeded(5, || {
             PpoLearner::new(
-                Algorithm::Mappo,
+                &super::super::mappo::KIND,
                 PpoConfig {
                     chunk_len: 3,
                     ..PpoConfig::default()

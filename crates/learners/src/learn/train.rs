@@ -13,12 +13,10 @@ use super::acting::{gather_side, gather_worlds, sample};
 pub use super::config::{
     check_rollout, DeviceChoice, Play, SideConfig, SideDefaults, TrainConfig, TrainDefaults,
 };
+use super::kind::kind;
 use super::learner::Learner;
-use super::maac::MaacLearner;
-use super::maddpg::MaddpgLearner;
 use super::offpolicy::sequence_bytes;
 use super::persist::{self, RunDir, RunState};
-use super::ppo::PpoLearner;
 use super::rollout::{Rollout, UpdateStats};
 use super::shaping::shaping_term;
 use super::Algorithm;
@@ -148,7 +146,7 @@ impl SideUpdate {
             ],
         };
         // KL and clipping are PPO's; an off-policy learner leaves them empty.
-        let ppo_only = |x: f64| (!self.algorithm.off_policy()).then_some(x);
+        let ppo_only = |x: f64| (!kind(self.algorithm).off_policy()).then_some(x);
         for (f, v) in fields.into_iter().zip([
             Some(u.policy_loss),
             Some(u.value_loss),
@@ -817,16 +815,11 @@ impl Trainer {
                 0.0
             };
             let rows = (ls.rows * self.cfg.rollout_steps) as f64;
-            let update = match ls.learner.algorithm() {
-                Algorithm::Mappo | Algorithm::Ippo => {
-                    let side_cfg = match ls.side {
-                        Side::Captors => &self.cfg.captors,
-                        Side::Target => &self.cfg.target,
-                    };
-                    3.0 * side_cfg.ppo.epochs as f64 * (actor + critic)
-                }
-                Algorithm::Maddpg | Algorithm::Maac => f64::NAN,
+            let side_cfg = match ls.side {
+                Side::Captors => &self.cfg.captors,
+                Side::Target => &self.cfg.target,
             };
+            let update = kind(ls.learner.algorithm()).update_flops(side_cfg, actor, critic);
             total += rows * (actor + critic + update);
         }
         total
@@ -849,12 +842,9 @@ fn build_learner(
     team: usize,
     device: Device,
 ) -> Result<Box<dyn Learner>> {
-    let net = side_cfg.net.clone();
-    if algorithm.off_policy() {
-        let (steps, len) = match algorithm {
-            Algorithm::Maddpg => (side_cfg.maddpg.buffer_steps, side_cfg.maddpg.chunk_len),
-            _ => (side_cfg.maac.buffer_steps, side_cfg.maac.chunk_len),
-        };
+    let k = kind(algorithm);
+    if let Some((steps, len)) = k.replay(side_cfg) {
+        let net = &side_cfg.net;
         let bytes = (steps / len).max(1)
             * sequence_bytes(len, team, net.input_len(), vector_len, net.hidden as usize);
         const LIMIT: usize = 16 << 30;
@@ -862,36 +852,13 @@ fn build_learner(
             bail!(
                 "{}.{}.buffer_steps = {steps}: the replay would take {:.1} GiB (at most {} GiB); lower it or net.patch_pool / net.hidden",
                 side.name(),
-                algorithm.name(),
+                k.settings_table(),
                 bytes as f64 / (1u64 << 30) as f64,
                 LIMIT >> 30
             );
         }
     }
-    Ok(match algorithm {
-        Algorithm::Mappo | Algorithm::Ippo => Box::new(PpoLearner::new(
-            algorithm,
-            side_cfg.ppo.clone(),
-            net,
-            vector_len,
-            team,
-            device,
-        )),
-        Algorithm::Maddpg => Box::new(MaddpgLearner::new(
-            side_cfg.maddpg.clone(),
-            net,
-            vector_len,
-            team,
-            device,
-        )),
-        Algorithm::Maac => Box::new(MaacLearner::new(
-            side_cfg.maac.clone(),
-            net,
-            vector_len,
-            team,
-            device,
-        )),
-    })
+    Ok(k.build(side_cfg, vector_len, team, device))
 }
 
 /// The states that episodes cut off by the step limit reached (the vector
