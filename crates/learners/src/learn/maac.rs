@@ -27,12 +27,9 @@
 //!    - targets: theta' <- tau theta + (1 - tau) theta'.
 
 use super::adam::backward_clipped;
-use super::config::SideConfig;
-use super::kind::LearnerKind;
-use super::learner::Learner;
 use super::offpolicy::{
     batch_td_targets, check_replay, gumbel_noise, mean_entropy, one_hot, Batch, CriticTrunk,
-    OffPolicy, ReplayCore, ReplaySettings,
+    OffPolicy, ReplayConfig, ReplayCore, ReplayKind, ReplaySettings,
 };
 use super::rollout::{check_max_bad_updates, BadUpdate, UpdateStats};
 use super::Algorithm;
@@ -112,9 +109,9 @@ impl Default for MaacConfig {
     }
 }
 
-impl MaacConfig {
+impl ReplayConfig for MaacConfig {
     /// The settings its replay and optimisers are built with.
-    pub fn replay_settings(&self) -> ReplaySettings {
+    fn replay_settings(&self) -> ReplaySettings {
         ReplaySettings {
             actor_lr: self.actor_lr,
             critic_lr: self.critic_lr,
@@ -127,7 +124,15 @@ impl MaacConfig {
             max_bad_updates: self.max_bad_updates,
         }
     }
+    fn gamma(&self) -> f64 {
+        self.gamma
+    }
+    fn check(&self, net: &NetConfig) -> Result<(), ConfigError> {
+        self.validate(net)
+    }
+}
 
+impl MaacConfig {
     pub fn validate(&self, net: &NetConfig) -> Result<(), ConfigError> {
         in_interval("actor_lr", self.actor_lr, 0.0, 0.1, false)?;
         in_interval("critic_lr", self.critic_lr, 0.0, 0.1, false)?;
@@ -276,37 +281,13 @@ impl AttentionCritic {
 }
 
 /// MAAC's kind: its settings are the side's `maac` table.
-pub struct MaacKind;
-
-pub const KIND: MaacKind = MaacKind;
-
-impl LearnerKind for MaacKind {
-    fn settings_table(&self) -> &'static str {
-        "maac"
-    }
-    fn chunk_len(&self, side: &SideConfig) -> usize {
-        side.maac.chunk_len
-    }
-    fn gamma(&self, side: &SideConfig) -> f64 {
-        side.maac.gamma
-    }
-    fn validate(&self, side: &SideConfig) -> Result<(), ConfigError> {
-        side.maac.validate(&side.net)
-    }
-    fn replay(&self, side: &SideConfig) -> Option<(usize, usize)> {
-        Some((side.maac.buffer_steps, side.maac.chunk_len))
-    }
-    fn build(
-        &self,
-        side: &SideConfig,
-        vector_len: usize,
-        team: usize,
-        device: Device,
-    ) -> Box<dyn Learner> {
-        let (cfg, net) = (side.maac.clone(), side.net.clone());
+pub const KIND: ReplayKind<MaacConfig> = ReplayKind {
+    table: "maac",
+    settings: |side| &side.maac,
+    build: |cfg, net, vector_len, team, device| {
         Box::new(MaacLearner::new(cfg, net, vector_len, team, device))
-    }
-}
+    },
+};
 
 pub struct MaacLearner {
     pub cfg: MaacConfig,

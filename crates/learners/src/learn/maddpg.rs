@@ -20,13 +20,10 @@
 //!    - targets: theta' <- tau theta + (1 - tau) theta'.
 
 use super::adam::backward_clipped;
-use super::config::SideConfig;
-use super::kind::LearnerKind;
-use super::learner::Learner;
 use super::mappo::{mates_index, Mappo};
 use super::offpolicy::{
     batch_td_targets, check_replay, gumbel_noise, gumbel_softmax_st, mean_entropy, one_hot, Batch,
-    CriticTrunk, OffPolicy, ReplayCore, ReplaySettings,
+    CriticTrunk, OffPolicy, ReplayConfig, ReplayCore, ReplayKind, ReplaySettings,
 };
 use super::ppo::CriticView;
 use super::rollout::{check_max_bad_updates, BadUpdate, UpdateStats};
@@ -121,9 +118,9 @@ impl Default for MaddpgConfig {
     }
 }
 
-impl MaddpgConfig {
+impl ReplayConfig for MaddpgConfig {
     /// The settings its replay and optimisers are built with.
-    pub fn replay_settings(&self) -> ReplaySettings {
+    fn replay_settings(&self) -> ReplaySettings {
         ReplaySettings {
             actor_lr: self.actor_lr,
             critic_lr: self.critic_lr,
@@ -136,7 +133,15 @@ impl MaddpgConfig {
             max_bad_updates: self.max_bad_updates,
         }
     }
+    fn gamma(&self) -> f64 {
+        self.gamma
+    }
+    fn check(&self, _net: &NetConfig) -> Result<(), ConfigError> {
+        self.validate()
+    }
+}
 
+impl MaddpgConfig {
     pub fn validate(&self) -> Result<(), ConfigError> {
         in_interval("actor_lr", self.actor_lr, 0.0, 0.1, false)?;
         in_interval("critic_lr", self.critic_lr, 0.0, 0.1, false)?;
@@ -223,37 +228,13 @@ pub fn team_actions(own: &Tensor, all: &Tensor, team: usize) -> Tensor {
 }
 
 /// MADDPG's kind: its settings are the side's `maddpg` table.
-pub struct MaddpgKind;
-
-pub const KIND: MaddpgKind = MaddpgKind;
-
-impl LearnerKind for MaddpgKind {
-    fn settings_table(&self) -> &'static str {
-        "maddpg"
-    }
-    fn chunk_len(&self, side: &SideConfig) -> usize {
-        side.maddpg.chunk_len
-    }
-    fn gamma(&self, side: &SideConfig) -> f64 {
-        side.maddpg.gamma
-    }
-    fn validate(&self, side: &SideConfig) -> Result<(), ConfigError> {
-        side.maddpg.validate()
-    }
-    fn replay(&self, side: &SideConfig) -> Option<(usize, usize)> {
-        Some((side.maddpg.buffer_steps, side.maddpg.chunk_len))
-    }
-    fn build(
-        &self,
-        side: &SideConfig,
-        vector_len: usize,
-        team: usize,
-        device: Device,
-    ) -> Box<dyn Learner> {
-        let (cfg, net) = (side.maddpg.clone(), side.net.clone());
+pub const KIND: ReplayKind<MaddpgConfig> = ReplayKind {
+    table: "maddpg",
+    settings: |side| &side.maddpg,
+    build: |cfg, net, vector_len, team, device| {
         Box::new(MaddpgLearner::new(cfg, net, vector_len, team, device))
-    }
-}
+    },
+};
 
 pub struct MaddpgLearner {
     pub cfg: MaddpgConfig,

@@ -14,6 +14,8 @@
 //! next episode's first one.
 
 use super::adam::Adam;
+use super::config::SideConfig;
+use super::kind::LearnerKind;
 use super::learner::{file, optimizer_file, restore_optimizers, Learner, NamedTensors};
 use super::rollout::{BadUpdate, Rollout, UpdateStats};
 use super::undo::UndoPoint;
@@ -588,6 +590,51 @@ pub struct ReplaySettings {
     pub replay_ratio: f64,
     pub learning_starts: usize,
     pub max_bad_updates: u32,
+}
+
+/// What the off-policy kind reads of an algorithm's settings table.
+pub trait ReplayConfig: Clone + Sync {
+    fn replay_settings(&self) -> ReplaySettings;
+    fn gamma(&self) -> f64;
+    /// Checks the table (some settings depend on the networks' shape).
+    fn check(&self, net: &NetConfig) -> Result<(), ConfigError>;
+}
+
+/// MADDPG's and MAAC's kind: where their table is in a side's config and
+/// how a learner is built from it; the rest follows from the table.
+pub struct ReplayKind<C: ReplayConfig> {
+    pub table: &'static str,
+    pub settings: fn(&SideConfig) -> &C,
+    pub build: fn(C, NetConfig, usize, usize, Device) -> Box<dyn Learner>,
+}
+
+impl<C: ReplayConfig> LearnerKind for ReplayKind<C> {
+    fn settings_table(&self) -> &'static str {
+        self.table
+    }
+    fn chunk_len(&self, side: &SideConfig) -> usize {
+        (self.settings)(side).replay_settings().chunk_len
+    }
+    fn gamma(&self, side: &SideConfig) -> f64 {
+        (self.settings)(side).gamma()
+    }
+    fn validate(&self, side: &SideConfig) -> Result<(), ConfigError> {
+        (self.settings)(side).check(&side.net)
+    }
+    fn replay(&self, side: &SideConfig) -> Option<(usize, usize)> {
+        let s = (self.settings)(side).replay_settings();
+        Some((s.buffer_steps, s.chunk_len))
+    }
+    fn build(
+        &self,
+        side: &SideConfig,
+        vector_len: usize,
+        team: usize,
+        device: Device,
+    ) -> Box<dyn Learner> {
+        let cfg = (self.settings)(side).clone();
+        (self.build)(cfg, side.net.clone(), vector_len, team, device)
+    }
 }
 
 /// What an off-policy learner holds beside its own networks and settings:
