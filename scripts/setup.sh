@@ -1,19 +1,23 @@
 #!/usr/bin/env bash
 # Sets up a fresh machine: a project-local virtualenv with PyTorch 2.11.0 from
 # PyPI (the libtorch that tch 0.24 expects), a ./libtorch link to its torch
-# folder (read by .cargo/config.toml), and a release build of t2e-league.
-# Idempotent: a second run only rebuilds what changed.
+# folder (read by .cargo/config.toml), a release build of t2e-league, and the
+# Python package (`import t2e`, built from python/ with maturin) with what its
+# tests use. Idempotent: a second run only rebuilds what changed.
+# --no-build: the virtualenv and its packages only.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
 TORCH_VERSION=2.11.0
 PYTHON=${PYTHON:-python3}
+# The Python side: the build backend, the env's dependencies, the test runner.
+PY_PACKAGES="maturin==1.16.0 numpy==2.4.6 gymnasium==1.4.0 pettingzoo==1.27.0 pytest==9.2.0"
 
+if [ ! -x .venv/bin/python ]; then
+  echo "== creating .venv"
+  "$PYTHON" -m venv .venv
+fi
 if [ -z "${LIBTORCH:-}" ]; then
-  if [ ! -x .venv/bin/python ]; then
-    echo "== creating .venv"
-    "$PYTHON" -m venv .venv
-  fi
   if ! .venv/bin/python -c "import torch, sys; sys.exit(torch.__version__.split('+')[0] != '$TORCH_VERSION')" 2>/dev/null; then
     echo "== installing torch==$TORCH_VERSION into .venv (about 5 GB, about a minute)"
     .venv/bin/python -m pip install --quiet --upgrade pip
@@ -23,8 +27,13 @@ if [ -z "${LIBTORCH:-}" ]; then
   ln -sfn "$torch_dir" libtorch
   echo "== libtorch -> $torch_dir"
 fi
+# Pinned: a second run finds them installed and reaches no index.
+# shellcheck disable=SC2086
+.venv/bin/python -m pip install --quiet $PY_PACKAGES
 
 if [ "${1:-}" != "--no-build" ]; then
   echo "== cargo build --release"
   cargo build --release
+  echo "== pip install ./python (import t2e)"
+  .venv/bin/python -m pip install --quiet --no-build-isolation ./python
 fi

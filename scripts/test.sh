@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # The test command (README, CI): installs what a fresh machine lacks, then
-# runs every test against the Gibson maps in ../shared/maps/gibson. The
+# runs every test against the Gibson maps in ../shared/maps/gibson: the Rust
+# tests, then the Python package's (python/tests). The
 # store's tests run against real PostgreSQL servers that the tests start
 # with scripts/postgres.sh in a folder of this run's own; they are stopped
 # and removed when the tests end, pass or fail.
@@ -18,3 +19,12 @@ cleanup() {
 }
 trap cleanup EXIT
 cargo test --release "$@"
+# The Python package, built as a user installs it, and its tests: ours and
+# PettingZoo's own API and seed tests. Only for the whole suite: arguments
+# select Rust tests.
+if [ $# -eq 0 ]; then
+  echo "== pip install ./python"
+  .venv/bin/python -m pip install --quiet --no-build-isolation ./python
+  echo "== pytest python/tests"
+  .venv/bin/pytest -q python/tests
+fi
