@@ -14,14 +14,19 @@ use t2e_core::map::catalog::load_prepared;
 use t2e_core::map::PreparedMap;
 use t2e_core::protocol::Protocol;
 
-fn value_error(argument: &str, value: impl std::fmt::Display, rule: impl std::fmt::Display) -> PyErr {
+fn value_error(
+    argument: &str,
+    value: impl std::fmt::Display,
+    rule: impl std::fmt::Display,
+) -> PyErr {
     PyValueError::new_err(format!("{argument} = {value}: {rule}"))
 }
 
 /// The maps `spec` names, checked against the protocol: as training maps
 /// under "held-out" and "paper", and as the Gibson test set under "test".
 fn maps_for(spec: &str, protocol: &str) -> PyResult<Arc<Vec<Arc<PreparedMap>>>> {
-    let maps = load_prepared(spec).map_err(|e| value_error("maps", format!("'{spec}'"), format!("{e:#}")))?;
+    let maps = load_prepared(spec)
+        .map_err(|e| value_error("maps", format!("'{spec}'"), format!("{e:#}")))?;
     match protocol {
         "held-out" | "paper" => {
             let p = if protocol == "paper" { Protocol::Paper } else { Protocol::HeldOut };
@@ -60,15 +65,33 @@ pub struct Env {
 impl Env {
     #[new]
     #[pyo3(signature = (maps, num_captors = 3, speed_ratio = 1.0, protocol = "held-out", episode_length = 500))]
-    fn new(maps: &str, num_captors: i64, speed_ratio: f64, protocol: &str, episode_length: i64) -> PyResult<Env> {
+    fn new(
+        maps: &str,
+        num_captors: i64,
+        speed_ratio: f64,
+        protocol: &str,
+        episode_length: i64,
+    ) -> PyResult<Env> {
         if !(1..=32).contains(&num_captors) {
-            return Err(value_error("num_captors", num_captors, "must be between 1 and 32"));
+            return Err(value_error(
+                "num_captors",
+                num_captors,
+                "must be between 1 and 32",
+            ));
         }
         if !(speed_ratio.is_finite() && speed_ratio > 0.0 && speed_ratio <= 10.0) {
-            return Err(value_error("speed_ratio", speed_ratio, "must be a number in (0, 10]: v_e / v_p, 1.0 to 1.4 in the paper"));
+            return Err(value_error(
+                "speed_ratio",
+                speed_ratio,
+                "must be a number in (0, 10]: v_e / v_p, 1.0 to 1.4 in the paper",
+            ));
         }
         if !(1..=1_000_000).contains(&episode_length) {
-            return Err(value_error("episode_length", episode_length, "must be between 1 and 1000000 steps"));
+            return Err(value_error(
+                "episode_length",
+                episode_length,
+                "must be between 1 and 1000000 steps",
+            ));
         }
         let cfg = EnvConfig {
             num_captors: num_captors as usize,
@@ -77,10 +100,14 @@ impl Env {
             episode_length: episode_length as u32,
             ..EnvConfig::default()
         };
-        cfg.validate().map_err(|e| PyValueError::new_err(e.to_string()))?;
+        cfg.validate()
+            .map_err(|e| PyValueError::new_err(e.to_string()))?;
         let maps = maps_for(maps, protocol)?;
         let env = TrapEnv::new(cfg, maps).map_err(|e| PyValueError::new_err(e.to_string()))?;
-        Ok(Env { env, running: false })
+        Ok(Env {
+            env,
+            running: false,
+        })
     }
 
     /// Agent names, captors first: captor_0 .. captor_{K-1}, target.
@@ -121,19 +148,27 @@ impl Env {
     /// The names of the maps episodes are drawn from.
     #[getter]
     fn map_names(&self) -> Vec<String> {
-        self.env.maps().iter().map(|m| m.grid.name.clone()).collect()
+        self.env
+            .maps()
+            .iter()
+            .map(|m| m.grid.name.clone())
+            .collect()
     }
 
     /// Starts the episode of `seed` (same seed, same episode): the
     /// observations, vectors [N, 5 + 5 K] float32 and patches [N, 48, 48]
     /// uint8 (1 = obstacle), captors first.
-    fn reset<'py>(&mut self, py: Python<'py>, seed: i64) -> PyResult<(Bound<'py, PyArray2<f32>>, Bound<'py, PyArray3<u8>>)> {
+    fn reset<'py>(
+        &mut self,
+        py: Python<'py>,
+        seed: i64,
+    ) -> PyResult<(Bound<'py, PyArray2<f32>>, Bound<'py, PyArray3<u8>>)> {
         if seed < 0 {
             return Err(value_error("seed", seed, "must be a non-negative integer"));
         }
-        self.env
-            .reset_state(seed as u64)
-            .map_err(|e| PyRuntimeError::new_err(format!("placing the robots of episode {seed}: {e}")))?;
+        self.env.reset_state(seed as u64).map_err(|e| {
+            PyRuntimeError::new_err(format!("placing the robots of episode {seed}: {e}"))
+        })?;
         self.running = true;
         self.observations(py)
     }
@@ -146,19 +181,40 @@ impl Env {
         &mut self,
         py: Python<'py>,
         actions: PyReadonlyArray1<'py, i64>,
-    ) -> PyResult<(Bound<'py, PyArray2<f32>>, Bound<'py, PyArray3<u8>>, Bound<'py, PyArray1<f32>>, bool, bool, bool)> {
+    ) -> PyResult<(
+        Bound<'py, PyArray2<f32>>,
+        Bound<'py, PyArray3<u8>>,
+        Bound<'py, PyArray1<f32>>,
+        bool,
+        bool,
+        bool,
+    )> {
         if !self.running {
             return Err(PyRuntimeError::new_err(
                 "step() without a running episode: call reset() first, and again after an episode ends",
             ));
         }
         let n = self.env.num_agents();
-        let a = actions.as_slice().map_err(|_| value_error("actions", "a non-contiguous array", "must be a contiguous int64 array"))?;
+        let a = actions.as_slice().map_err(|_| {
+            value_error(
+                "actions",
+                "a non-contiguous array",
+                "must be a contiguous int64 array",
+            )
+        })?;
         if a.len() != n {
-            return Err(value_error("actions", format!("{} values", a.len()), format!("must hold one action per agent ({n})")));
+            return Err(value_error(
+                "actions",
+                format!("{} values", a.len()),
+                format!("must hold one action per agent ({n})"),
+            ));
         }
         if let Some(bad) = a.iter().find(|x| !(0..Action::COUNT as i64).contains(x)) {
-            return Err(value_error("actions", bad, format!("an action is an integer in 0..{}", Action::COUNT)));
+            return Err(value_error(
+                "actions",
+                bad,
+                format!("an action is an integer in 0..{}", Action::COUNT),
+            ));
         }
         let actions: Vec<Action> = a.iter().map(|&x| Action::from_index(x as usize)).collect();
         let mut rewards = vec![0f32; n];
@@ -167,7 +223,14 @@ impl Env {
         let truncated = !terminated && self.env.steps >= self.env.cfg.episode_length;
         self.running = !(terminated || truncated);
         let (vectors, patches) = self.observations(py)?;
-        Ok((vectors, patches, PyArray1::from_vec(py, rewards), terminated, truncated, info.captured))
+        Ok((
+            vectors,
+            patches,
+            PyArray1::from_vec(py, rewards),
+            terminated,
+            truncated,
+            info.captured,
+        ))
     }
 
     /// |ASZ| of the current state in square metres (spec §4): the free
@@ -178,7 +241,10 @@ impl Env {
 }
 
 impl Env {
-    fn observations<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyArray2<f32>>, Bound<'py, PyArray3<u8>>)> {
+    fn observations<'py>(
+        &self,
+        py: Python<'py>,
+    ) -> PyResult<(Bound<'py, PyArray2<f32>>, Bound<'py, PyArray3<u8>>)> {
         let (n, vl) = (self.env.num_agents(), self.env.cfg.vector_len());
         let mut vectors = vec![0f32; n * vl];
         let mut patches = vec![0u8; n * PATCH * PATCH];
