@@ -35,5 +35,5 @@ if [ "${1:-}" != "--no-build" ]; then
   echo "== cargo build --release"
   cargo build --release
   echo "== pip install ./python (import t2e)"
-  .venv/bin/python -m pip install --quiet --no-build-isolation ./python
+  PATH="$PWD/.venv/bin:$PATH" .venv/bin/python -m pip install --quiet --no-build-isolation ./python
 fi

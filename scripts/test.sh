@@ -24,7 +24,7 @@ cargo test --release "$@"
 # select Rust tests.
 if [ $# -eq 0 ]; then
   echo "== pip install ./python"
-  .venv/bin/python -m pip install --quiet --no-build-isolation ./python
+  PATH="$PWD/.venv/bin:$PATH" .venv/bin/python -m pip install --quiet --no-build-isolation ./python
   echo "== pytest python/tests"
   .venv/bin/pytest -q python/tests
 fi

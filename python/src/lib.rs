@@ -1,47 +1,78 @@
 //! `t2e._core`: the T2E environment for Python, over the core crate (no
 //! libtorch). `Env` is one world with captors first and the target last;
-//! the PettingZoo wrapper in `t2e/env.py` turns its arrays into per-agent
+//! `VectorEnv` steps many in Rust, without the GIL, with auto-reset;
+//! `Policy` plays the rule-based robots and the ASZ-greedy planner. The
+//! PettingZoo wrapper in `t2e/env.py` turns `Env`'s arrays into per-agent
 //! dicts and spaces. Every argument is checked here too, so a bad value is
 //! a Python exception naming it, never a panic of the interpreter.
 
-use numpy::{PyArray1, PyArray2, PyArray3, PyArrayMethods, PyReadonlyArray1};
+use numpy::{
+    PyArray1, PyArray2, PyArray3, PyArray4, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2,
+    PyUntypedArrayMethods,
+};
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
-use std::sync::Arc;
-use t2e_core::asz::cells_to_m2;
-use t2e_core::env::{Action, EnvConfig, TrapEnv, PATCH};
+use std::sync::{Arc, Mutex, MutexGuard};
+use t2e_core::asz::{cells_to_m2, FastMarching, Source};
+use t2e_core::env::{Action, Controller, EnvConfig, Side, TrapEnv, VecEnv, PATCH};
+use t2e_core::heuristics::{AszGreedy, Heuristic, RandomActions, Still};
 use t2e_core::map::catalog::load_prepared;
 use t2e_core::map::PreparedMap;
 use t2e_core::protocol::Protocol;
 
-fn value_error(
-    argument: &str,
-    value: impl std::fmt::Display,
-    rule: impl std::fmt::Display,
-) -> PyErr {
+fn value_error(argument: &str, value: impl std::fmt::Display, rule: impl std::fmt::Display) -> PyErr {
     PyValueError::new_err(format!("{argument} = {value}: {rule}"))
+}
+
+/// A seed: an integer in 0..2^64.
+fn seed_of(seed: &Bound<'_, PyAny>) -> PyResult<u64> {
+    let wide: i128 = seed
+        .extract()
+        .map_err(|_| value_error("seed", seed, "must be an integer in 0..2**64"))?;
+    u64::try_from(wide).map_err(|_| value_error("seed", wide, "must be an integer in 0..2**64"))
+}
+
+/// The settings of an environment, each checked and named when refused.
+fn env_config(num_captors: i64, speed_ratio: f64, episode_length: i64) -> PyResult<EnvConfig> {
+    if !(1..=32).contains(&num_captors) {
+        return Err(value_error("num_captors", num_captors, "must be between 1 and 32"));
+    }
+    if !(speed_ratio.is_finite() && speed_ratio > 0.0 && speed_ratio <= 10.0) {
+        return Err(value_error(
+            "speed_ratio",
+            speed_ratio,
+            "must be a number in (0, 10]: v_e / v_p, 1.0 to 1.4 in the paper",
+        ));
+    }
+    if !(1..=1_000_000).contains(&episode_length) {
+        return Err(value_error("episode_length", episode_length, "must be between 1 and 1000000 steps"));
+    }
+    let cfg = EnvConfig {
+        num_captors: num_captors as usize,
+        captor_speed: 1.0,
+        target_speed: speed_ratio,
+        episode_length: episode_length as u32,
+        ..EnvConfig::default()
+    };
+    cfg.validate().map_err(|e| PyValueError::new_err(e.to_string()))?;
+    Ok(cfg)
+}
+
+/// Actions from integers, each checked to be one of the five.
+fn actions_of(a: &[i64]) -> PyResult<Vec<Action>> {
+    if let Some(bad) = a.iter().find(|x| !(0..Action::COUNT as i64).contains(x)) {
+        return Err(value_error("actions", bad, format!("an action is an integer in 0..{}", Action::COUNT)));
+    }
+    Ok(a.iter().map(|&x| Action::from_index(x as usize)).collect())
 }
 
 /// The maps `spec` names, checked against the protocol: as training maps
 /// under "held-out" and "paper", and as the Gibson test set under "test".
 fn maps_for(spec: &str, protocol: &str) -> PyResult<Arc<Vec<Arc<PreparedMap>>>> {
-    let maps = load_prepared(spec)
-        .map_err(|e| value_error("maps", format!("'{spec}'"), format!("{e:#}")))?;
-    match protocol {
-        "held-out" | "paper" => {
-            let p = if protocol == "paper" { Protocol::Paper } else { Protocol::HeldOut };
-            p.check_training_maps(spec, &maps)
-                .map_err(|e| value_error("maps", format!("'{spec}'"), e))?;
-        }
-        "test" => {
-            if let Some(m) = maps.iter().find(|m| t2e_core::map::testset::gibson_name(&m.grid).is_none()) {
-                return Err(value_error(
-                    "maps",
-                    format!("'{spec}'"),
-                    format!("map '{}' is not a Gibson test map; protocol = \"test\" plays the test set (small, medium, large, gibson)", m.grid.name),
-                ));
-            }
-        }
+    let protocol = match protocol {
+        "held-out" => Some(Protocol::HeldOut),
+        "paper" => Some(Protocol::Paper),
+        "test" => None,
         other => {
             return Err(value_error(
                 "protocol",
@@ -49,9 +80,29 @@ fn maps_for(spec: &str, protocol: &str) -> PyResult<Arc<Vec<Arc<PreparedMap>>>> 
                 "must be \"held-out\" (train on maps that are not the Gibson test set), \"paper\" (train on the 26 Gibson maps) or \"test\" (play the Gibson test set)",
             ))
         }
+    };
+    let maps = load_prepared(spec).map_err(|e| value_error("maps", format!("'{spec}'"), format!("{e:#}")))?;
+    match protocol {
+        Some(p) => p
+            .check_training_maps(spec, &maps)
+            .map_err(|e| value_error("maps", format!("'{spec}'"), e))?,
+        None => {
+            if let Some(m) = maps.iter().find(|m| t2e_core::map::testset::gibson_name(&m.grid).is_none()) {
+                return Err(value_error(
+                    "maps",
+                    format!("'{spec}'"),
+                    format!(
+                        "map '{}' is not a Gibson test map; protocol = \"test\" plays the test set (small, medium, large, gibson)",
+                        m.grid.name
+                    ),
+                ));
+            }
+        }
     }
     Ok(maps)
 }
+
+type Observations<'py> = (Bound<'py, PyArray2<f32>>, Bound<'py, PyArray3<u8>>);
 
 /// One T2E world: K captors and a target on maps chosen per episode.
 #[pyclass(module = "t2e._core")]
@@ -65,49 +116,11 @@ pub struct Env {
 impl Env {
     #[new]
     #[pyo3(signature = (maps, num_captors = 3, speed_ratio = 1.0, protocol = "held-out", episode_length = 500))]
-    fn new(
-        maps: &str,
-        num_captors: i64,
-        speed_ratio: f64,
-        protocol: &str,
-        episode_length: i64,
-    ) -> PyResult<Env> {
-        if !(1..=32).contains(&num_captors) {
-            return Err(value_error(
-                "num_captors",
-                num_captors,
-                "must be between 1 and 32",
-            ));
-        }
-        if !(speed_ratio.is_finite() && speed_ratio > 0.0 && speed_ratio <= 10.0) {
-            return Err(value_error(
-                "speed_ratio",
-                speed_ratio,
-                "must be a number in (0, 10]: v_e / v_p, 1.0 to 1.4 in the paper",
-            ));
-        }
-        if !(1..=1_000_000).contains(&episode_length) {
-            return Err(value_error(
-                "episode_length",
-                episode_length,
-                "must be between 1 and 1000000 steps",
-            ));
-        }
-        let cfg = EnvConfig {
-            num_captors: num_captors as usize,
-            captor_speed: 1.0,
-            target_speed: speed_ratio,
-            episode_length: episode_length as u32,
-            ..EnvConfig::default()
-        };
-        cfg.validate()
-            .map_err(|e| PyValueError::new_err(e.to_string()))?;
+    fn new(maps: &str, num_captors: i64, speed_ratio: f64, protocol: &str, episode_length: i64) -> PyResult<Env> {
+        let cfg = env_config(num_captors, speed_ratio, episode_length)?;
         let maps = maps_for(maps, protocol)?;
         let env = TrapEnv::new(cfg, maps).map_err(|e| PyValueError::new_err(e.to_string()))?;
-        Ok(Env {
-            env,
-            running: false,
-        })
+        Ok(Env { env, running: false })
     }
 
     /// Agent names, captors first: captor_0 .. captor_{K-1}, target.
@@ -139,6 +152,12 @@ impl Env {
         self.env.steps
     }
 
+    /// The seed of this episode.
+    #[getter]
+    fn seed(&self) -> u64 {
+        self.env.seed
+    }
+
     /// The name of this episode's map.
     #[getter]
     fn map_name(&self) -> String {
@@ -148,29 +167,25 @@ impl Env {
     /// The names of the maps episodes are drawn from.
     #[getter]
     fn map_names(&self) -> Vec<String> {
-        self.env
-            .maps()
-            .iter()
-            .map(|m| m.grid.name.clone())
-            .collect()
+        self.env.maps().iter().map(|m| m.grid.name.clone()).collect()
+    }
+
+    /// Every robot's (x, y, heading) in metres and radians, captors first.
+    #[getter]
+    fn poses(&self) -> Vec<(f64, f64, f64)> {
+        self.env.robots.iter().map(|r| (r.pos[0], r.pos[1], r.theta)).collect()
     }
 
     /// Starts the episode of `seed` (same seed, same episode): the
     /// observations, vectors [N, 5 + 5 K] float32 and patches [N, 48, 48]
     /// uint8 (1 = obstacle), captors first.
-    fn reset<'py>(
-        &mut self,
-        py: Python<'py>,
-        seed: i64,
-    ) -> PyResult<(Bound<'py, PyArray2<f32>>, Bound<'py, PyArray3<u8>>)> {
-        if seed < 0 {
-            return Err(value_error("seed", seed, "must be a non-negative integer"));
-        }
-        self.env.reset_state(seed as u64).map_err(|e| {
-            PyRuntimeError::new_err(format!("placing the robots of episode {seed}: {e}"))
-        })?;
+    fn reset<'py>(&mut self, py: Python<'py>, seed: &Bound<'py, PyAny>) -> PyResult<Observations<'py>> {
+        let seed = seed_of(seed)?;
+        self.env
+            .reset_state(seed)
+            .map_err(|e| PyRuntimeError::new_err(format!("placing the robots of episode {seed}: {e}")))?;
         self.running = true;
-        self.observations(py)
+        Ok(self.observations(py))
     }
 
     /// One step: `actions` [N] integers in 0..5 (Action order of the spec),
@@ -181,56 +196,27 @@ impl Env {
         &mut self,
         py: Python<'py>,
         actions: PyReadonlyArray1<'py, i64>,
-    ) -> PyResult<(
-        Bound<'py, PyArray2<f32>>,
-        Bound<'py, PyArray3<u8>>,
-        Bound<'py, PyArray1<f32>>,
-        bool,
-        bool,
-        bool,
-    )> {
+    ) -> PyResult<(Bound<'py, PyArray2<f32>>, Bound<'py, PyArray3<u8>>, Bound<'py, PyArray1<f32>>, bool, bool, bool)> {
         if !self.running {
             return Err(PyRuntimeError::new_err(
                 "step() without a running episode: call reset() first, and again after an episode ends",
             ));
         }
         let n = self.env.num_agents();
-        let a = actions.as_slice().map_err(|_| {
-            value_error(
-                "actions",
-                "a non-contiguous array",
-                "must be a contiguous int64 array",
-            )
-        })?;
+        let a = actions
+            .as_slice()
+            .map_err(|_| value_error("actions", "a non-contiguous array", "must be a contiguous int64 array"))?;
         if a.len() != n {
-            return Err(value_error(
-                "actions",
-                format!("{} values", a.len()),
-                format!("must hold one action per agent ({n})"),
-            ));
+            return Err(value_error("actions", format!("{} values", a.len()), format!("must hold one action per agent ({n})")));
         }
-        if let Some(bad) = a.iter().find(|x| !(0..Action::COUNT as i64).contains(x)) {
-            return Err(value_error(
-                "actions",
-                bad,
-                format!("an action is an integer in 0..{}", Action::COUNT),
-            ));
-        }
-        let actions: Vec<Action> = a.iter().map(|&x| Action::from_index(x as usize)).collect();
+        let actions = actions_of(a)?;
         let mut rewards = vec![0f32; n];
         let info = self.env.step_state(&actions, &mut rewards);
         let terminated = self.env.captured;
         let truncated = !terminated && self.env.steps >= self.env.cfg.episode_length;
         self.running = !(terminated || truncated);
-        let (vectors, patches) = self.observations(py)?;
-        Ok((
-            vectors,
-            patches,
-            PyArray1::from_vec(py, rewards),
-            terminated,
-            truncated,
-            info.captured,
-        ))
+        let (vectors, patches) = self.observations(py);
+        Ok((vectors, patches, PyArray1::from_vec(py, rewards), terminated, truncated, info.captured))
     }
 
     /// |ASZ| of the current state in square metres (spec §4): the free
@@ -241,10 +227,7 @@ impl Env {
 }
 
 impl Env {
-    fn observations<'py>(
-        &self,
-        py: Python<'py>,
-    ) -> PyResult<(Bound<'py, PyArray2<f32>>, Bound<'py, PyArray3<u8>>)> {
+    fn observations<'py>(&self, py: Python<'py>) -> Observations<'py> {
         let (n, vl) = (self.env.num_agents(), self.env.cfg.vector_len());
         let mut vectors = vec![0f32; n * vl];
         let mut patches = vec![0u8; n * PATCH * PATCH];
@@ -255,16 +238,240 @@ impl Env {
                 &mut patches[i * PATCH * PATCH..(i + 1) * PATCH * PATCH],
             );
         }
+        (
+            PyArray1::from_vec(py, vectors).reshape([n, vl]).expect("n x vector_len values"),
+            PyArray1::from_vec(py, patches).reshape([n, PATCH, PATCH]).expect("n x 48 x 48 values"),
+        )
+    }
+}
+
+/// A controller that plays one side from the environment's state.
+#[pyclass(module = "t2e._core")]
+pub struct Policy {
+    // A controller is Send but not Sync; Python objects may be shared
+    // between threads, so it sits behind a lock.
+    controller: Mutex<Box<dyn Controller>>,
+    side: Side,
+    /// (seed, map) of the episode the controller was last reset for.
+    episode: Option<(u64, String)>,
+}
+
+/// The value behind a lock; a panic while holding it left no half-done
+/// state that matters here, so a poisoned lock is taken as it is.
+fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
+    m.lock().unwrap_or_else(|p| p.into_inner())
+}
+
+/// A controller by name: heuristic, greedy, greedy:K, random or still.
+fn controller_of(name: &str) -> PyResult<Box<dyn Controller>> {
+    let greedy = |k: usize| -> PyResult<Box<dyn Controller>> {
+        if (1..=AszGreedy::MAX_COARSENING).contains(&k) {
+            Ok(Box::new(AszGreedy::new(k)))
+        } else {
+            Err(value_error("name", format!("'{name}'"), format!("greedy:K takes K in 1..={}", AszGreedy::MAX_COARSENING)))
+        }
+    };
+    match name {
+        "heuristic" => Ok(Box::new(Heuristic)),
+        "greedy" => greedy(1),
+        "random" => Ok(Box::new(RandomActions::new())),
+        "still" => Ok(Box::new(Still)),
+        _ => match name.strip_prefix("greedy:").map(str::parse::<usize>) {
+            Some(Ok(k)) => greedy(k),
+            _ => Err(value_error(
+                "name",
+                format!("'{name}'"),
+                "must be heuristic (the expert captors or the rule-based target), greedy or greedy:K (the ASZ-greedy planner), random or still",
+            )),
+        },
+    }
+}
+
+#[pymethods]
+impl Policy {
+    #[new]
+    fn new(name: &str, side: &str) -> PyResult<Policy> {
+        let side = match side {
+            "captors" => Side::Captors,
+            "target" => Side::Target,
+            other => return Err(value_error("side", format!("'{other}'"), "must be \"captors\" or \"target\"")),
+        };
+        Ok(Policy {
+            controller: Mutex::new(controller_of(name)?),
+            side,
+            episode: None,
+        })
+    }
+
+    #[getter]
+    fn name(&self) -> String {
+        lock(&self.controller).name()
+    }
+
+    /// The actions of its side's robots in `env`'s current state, as the
+    /// Rust evaluation plays them (the controller is reset at each new
+    /// episode, from the episode's seed).
+    fn act<'py>(&mut self, py: Python<'py>, env: PyRef<'py, Env>) -> PyResult<Bound<'py, PyArray1<i64>>> {
+        if !env.running {
+            return Err(PyRuntimeError::new_err("act() without a running episode: reset the env first"));
+        }
+        let e = &env.env;
+        let episode = (e.seed, e.map().grid.name.clone());
+        let mut controller = lock(&self.controller);
+        if e.steps == 0 || self.episode.as_ref() != Some(&episode) {
+            controller.reset(e, e.seed);
+            self.episode = Some(episode);
+        }
+        let k = e.num_captors();
+        let mut out = vec![Action::Stop; self.side.agents(k).len()];
+        controller.act(e, self.side, &mut out);
+        Ok(PyArray1::from_vec(py, out.iter().map(|a| a.index() as i64).collect()))
+    }
+}
+
+/// `n` worlds stepped together in Rust (in parallel, without the GIL),
+/// each starting its next episode as soon as one ends.
+#[pyclass(module = "t2e._core")]
+pub struct VectorEnv {
+    // Behind a lock for the same reason as `Policy`'s controller.
+    venv: Mutex<VecEnv>,
+    started: bool,
+}
+
+#[pymethods]
+impl VectorEnv {
+    #[new]
+    #[pyo3(signature = (num_envs, maps, num_captors = 3, speed_ratio = 1.0, protocol = "held-out", episode_length = 500, seed = None))]
+    fn new(
+        num_envs: i64,
+        maps: &str,
+        num_captors: i64,
+        speed_ratio: f64,
+        protocol: &str,
+        episode_length: i64,
+        seed: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<VectorEnv> {
+        if !(1..=65_536).contains(&num_envs) {
+            return Err(value_error("num_envs", num_envs, "must be between 1 and 65536"));
+        }
+        let cfg = env_config(num_captors, speed_ratio, episode_length)?;
+        let maps = maps_for(maps, protocol)?;
+        let seed = seed.map(seed_of).transpose()?.unwrap_or(0);
+        let venv = VecEnv::new(cfg, maps, num_envs as usize, seed).map_err(|e| PyValueError::new_err(e.to_string()))?;
+        Ok(VectorEnv {
+            venv: Mutex::new(venv),
+            started: false,
+        })
+    }
+
+    #[getter]
+    fn num_envs(&self) -> usize {
+        lock(&self.venv).num_envs()
+    }
+
+    #[getter]
+    fn num_agents(&self) -> usize {
+        lock(&self.venv).num_agents()
+    }
+
+    #[getter]
+    fn vector_len(&self) -> usize {
+        lock(&self.venv).cfg.vector_len()
+    }
+
+    /// Starts episode 0 of every world: vectors [n, N, 5 + 5 K] float32 and
+    /// patches [n, N, 48, 48] uint8.
+    fn reset<'py>(&mut self, py: Python<'py>) -> PyResult<(Bound<'py, PyArray3<f32>>, Bound<'py, PyArray4<u8>>)> {
+        let mut venv = lock(&self.venv);
+        let worlds: &mut VecEnv = &mut venv;
+        py.detach(|| worlds.reset()).map_err(|e| PyRuntimeError::new_err(format!("placing the robots: {e}")))?;
+        self.started = true;
+        Ok(observations(py, &venv))
+    }
+
+    /// One step of every world: `actions` [n, N] int64. Returns (vectors,
+    /// patches, rewards [n, N], terminated [n], truncated [n]); a world whose
+    /// episode ended already holds its next episode's first observation.
+    #[allow(clippy::type_complexity)]
+    fn step<'py>(
+        &mut self,
+        py: Python<'py>,
+        actions: PyReadonlyArray2<'py, i64>,
+    ) -> PyResult<(
+        Bound<'py, PyArray3<f32>>,
+        Bound<'py, PyArray4<u8>>,
+        Bound<'py, PyArray2<f32>>,
+        Bound<'py, PyArray1<bool>>,
+        Bound<'py, PyArray1<bool>>,
+    )> {
+        if !self.started {
+            return Err(PyRuntimeError::new_err("step() before reset()"));
+        }
+        let mut venv = lock(&self.venv);
+        let (n, na) = (venv.num_envs(), venv.num_agents());
+        let shape = actions.shape();
+        if shape != [n, na] {
+            return Err(value_error(
+                "actions",
+                format!("an array of shape {shape:?}"),
+                format!("must be [num_envs, agents] = [{n}, {na}]"),
+            ));
+        }
+        let a = actions
+            .as_slice()
+            .map_err(|_| value_error("actions", "a non-contiguous array", "must be a contiguous int64 array"))?;
+        let actions = actions_of(a)?;
+        let worlds: &mut VecEnv = &mut venv;
+        py.detach(|| worlds.step(&actions)).map_err(|e| PyRuntimeError::new_err(format!("placing the robots: {e}")))?;
+        let (vectors, patches) = observations(py, &venv);
+        let rewards = PyArray1::from_slice(py, &venv.rewards).reshape([n, na]).expect("n x agents rewards");
         Ok((
-            PyArray1::from_vec(py, vectors).reshape([n, vl])?,
-            PyArray1::from_vec(py, patches).reshape([n, PATCH, PATCH])?,
+            vectors,
+            patches,
+            rewards,
+            PyArray1::from_slice(py, &venv.terminated),
+            PyArray1::from_slice(py, &venv.truncated),
         ))
     }
+}
+
+/// The worlds' observations as arrays [n, N, ...].
+fn observations<'py>(py: Python<'py>, venv: &VecEnv) -> (Bound<'py, PyArray3<f32>>, Bound<'py, PyArray4<u8>>) {
+    let (n, na, vl) = (venv.num_envs(), venv.num_agents(), venv.cfg.vector_len());
+    (
+        PyArray1::from_slice(py, &venv.vectors).reshape([n, na, vl]).expect("vectors"),
+        PyArray1::from_slice(py, &venv.patches).reshape([n, na, PATCH, PATCH]).expect("patches"),
+    )
+}
+
+/// |ASZ| in m² of `env`'s map with the robots at other places: the free
+/// area the target (at `target`, speed `target_speed`) reaches before every
+/// captor (at `captors`, speed 1).
+#[pyfunction]
+#[pyo3(signature = (env, captors, target, target_speed = 1.0))]
+fn asz_area(env: PyRef<'_, Env>, captors: Vec<(f64, f64)>, target: (f64, f64), target_speed: f64) -> PyResult<f64> {
+    let finite = |p: &(f64, f64)| p.0.is_finite() && p.1.is_finite();
+    if captors.is_empty() || !captors.iter().all(finite) {
+        return Err(value_error("captors", format!("{captors:?}"), "must be one or more finite (x, y) positions in metres"));
+    }
+    if !finite(&target) {
+        return Err(value_error("target", format!("{target:?}"), "must be a finite (x, y) position in metres"));
+    }
+    if !(target_speed.is_finite() && target_speed > 0.0) {
+        return Err(value_error("target_speed", target_speed, "must be a positive number"));
+    }
+    let sources: Vec<Source> = captors.iter().map(|&(x, y)| Source { pos: [x, y], speed: 1.0 }).collect();
+    let target = Source { pos: [target.0, target.1], speed: target_speed };
+    let cells = FastMarching::new().asz_cells(&**env.env.map(), target, &sources);
+    Ok(cells_to_m2(cells))
 }
 
 #[pymodule]
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Env>()?;
+    m.add_class::<VectorEnv>()?;
+    m.add_class::<Policy>()?;
+    m.add_function(wrap_pyfunction!(asz_area, m)?)?;
     m.add("ACTIONS", Action::COUNT)?;
     Ok(())
 }

@@ -4,10 +4,45 @@
 environment of t2e-league: K captor robots try to trap one target robot on
 real indoor maps. Observations per agent are a dict of the 48 x 48 obstacle
 patch around the robot (uint8, 1 = obstacle) and its vector (float32,
-5 + 5 K numbers); actions are integers in 0..5. See docs/guide/python.md.
+5 + 5 K numbers); actions are integers in 0..5. ``t2e.vector_env(n, ...)``
+steps n worlds at once in Rust, with numpy arrays in and out. See
+docs/guide/python.md.
 """
 
-from ._core import ACTIONS, Env
+from ._core import ACTIONS, Env, Policy, VectorEnv, asz_area
 from .env import T2EParallelEnv, parallel_env
+from .policies import ScriptedPolicy, expert_captors, greedy_captors, rule_based_target
 
-__all__ = ["ACTIONS", "Env", "T2EParallelEnv", "parallel_env"]
+
+def vector_env(
+    num_envs: int,
+    maps: str = "shipped",
+    num_captors: int = 3,
+    speed_ratio: float = 1.0,
+    protocol: str = "held-out",
+    episode_length: int = 500,
+    seed: int = 0,
+) -> VectorEnv:
+    """``num_envs`` worlds stepped together in Rust, in parallel and without
+    the GIL. ``reset()`` returns (vectors [n, N, 5 + 5 K] float32, patches
+    [n, N, 48, 48] uint8); ``step(actions [n, N] int64)`` returns (vectors,
+    patches, rewards [n, N], terminated [n], truncated [n]). A world whose
+    episode ends starts the next at once (its seed drawn from ``seed``, the
+    world and the episode), so the arrays always hold live episodes."""
+    return VectorEnv(num_envs, maps, num_captors, speed_ratio, protocol, episode_length, seed)
+
+
+__all__ = [
+    "ACTIONS",
+    "Env",
+    "Policy",
+    "ScriptedPolicy",
+    "T2EParallelEnv",
+    "VectorEnv",
+    "asz_area",
+    "expert_captors",
+    "greedy_captors",
+    "parallel_env",
+    "rule_based_target",
+    "vector_env",
+]

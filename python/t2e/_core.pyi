@@ -1,6 +1,6 @@
 """Type stubs of the Rust extension `t2e._core`."""
 
-from typing import List, Tuple
+from typing import List, Optional, Tuple
 
 import numpy as np
 import numpy.typing as npt
@@ -44,3 +44,53 @@ class Env:
         bool,
     ]: ...
     def asz_area(self) -> float: ...
+    @property
+    def seed(self) -> int: ...
+    @property
+    def poses(self) -> List[Tuple[float, float, float]]: ...
+
+class Policy:
+    """A controller that plays one side ("captors" or "target") from the
+    env's state: heuristic, greedy, greedy:K, random or still."""
+
+    def __init__(self, name: str, side: str) -> None: ...
+    @property
+    def name(self) -> str: ...
+    def act(self, env: Env) -> npt.NDArray[np.int64]: ...
+
+class VectorEnv:
+    """n worlds stepped together in Rust, with auto-reset."""
+
+    def __init__(
+        self,
+        num_envs: int,
+        maps: str,
+        num_captors: int = 3,
+        speed_ratio: float = 1.0,
+        protocol: str = "held-out",
+        episode_length: int = 500,
+        seed: Optional[int] = None,
+    ) -> None: ...
+    @property
+    def num_envs(self) -> int: ...
+    @property
+    def num_agents(self) -> int: ...
+    @property
+    def vector_len(self) -> int: ...
+    def reset(self) -> Tuple[npt.NDArray[np.float32], npt.NDArray[np.uint8]]: ...
+    def step(
+        self, actions: npt.NDArray[np.int64]
+    ) -> Tuple[
+        npt.NDArray[np.float32],
+        npt.NDArray[np.uint8],
+        npt.NDArray[np.float32],
+        npt.NDArray[np.bool_],
+        npt.NDArray[np.bool_],
+    ]: ...
+
+def asz_area(
+    env: Env,
+    captors: List[Tuple[float, float]],
+    target: Tuple[float, float],
+    target_speed: float = 1.0,
+) -> float: ...

@@ -11,9 +11,8 @@ from pettingzoo import ParallelEnv
 
 from ._core import ACTIONS, Env
 
-# Episode seeds drawn when reset() gets none: below 2**63, the Rust side's
-# range for a Python int.
-_SEED_LIMIT = 2**63
+# Episode seeds are those of the Rust side: integers in 0..2**64.
+_SEED_LIMIT = 2**64
 
 
 class T2EParallelEnv(ParallelEnv):
@@ -76,13 +75,13 @@ class T2EParallelEnv(ParallelEnv):
         ``options`` is accepted as PettingZoo passes it, and read for
         nothing: an episode is its seed."""
         if seed is None:
-            episode = int(self._rng.integers(_SEED_LIMIT))
+            episode = int(self._rng.integers(_SEED_LIMIT, dtype=np.uint64))
         else:
             _check_int("seed", seed)
             if seed < 0:
                 raise ValueError(f"seed = {seed}: must be a non-negative integer")
             if seed >= _SEED_LIMIT:
-                raise ValueError(f"seed = {seed}: must be below 2**63")
+                raise ValueError(f"seed = {seed}: must be below 2**64")
             episode = int(seed)
             self._rng = np.random.default_rng(episode)
         vectors, patches = self._env.reset(episode)
