@@ -11,7 +11,17 @@ docs/guide/python.md.
 
 from ._core import ACTIONS, Env, Policy, VectorEnv, asz_area
 from .env import T2EParallelEnv, parallel_env
+from . import torch_policy  # noqa: F401  (torch is imported when a policy loads)
 from .policies import ScriptedPolicy, expert_captors, greedy_captors, rule_based_target
+
+
+def load_policy(folder):
+    """An exported player (``t2e-league export``, or a training run's
+    checkpoint folder) as a PyTorch actor playing its side; see
+    ``t2e.torch_policy``. Needs torch installed."""
+    from .torch_policy import load_policy as load
+
+    return load(folder)
 
 
 def vector_env(
@@ -42,6 +52,7 @@ __all__ = [
     "asz_area",
     "expert_captors",
     "greedy_captors",
+    "load_policy",
     "parallel_env",
     "rule_based_target",
     "vector_env",

@@ -1,0 +1,290 @@
+"""Exported players in PyTorch: ``t2e.load_policy(folder)`` rebuilds the
+actor of a checkpoint folder (from ``export``, or a training run's
+``checkpoints/NAME``) and plays its side greedily, as the Rust controller
+``ckpt:FOLDER`` does. PyTorch is imported only here, so the environment
+itself needs no torch."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import struct
+from pathlib import Path
+from typing import Dict, Optional
+
+import numpy as np
+
+FORMAT = 2
+ACTIONS = 5
+PATCH = 48
+POSITION_SCALE = 8.0
+MIN_DISTANCE = 1e-3
+VECTOR_INPUTS = ("layer_norm", "scaled", "egocentric")
+
+
+class PolicyError(ValueError):
+    """A checkpoint folder that cannot be played: names the file and why."""
+
+
+def _refuse(path: Path, reason: str) -> PolicyError:
+    return PolicyError(f"{path}: {reason}")
+
+
+def _read_safetensors(path: Path):
+    """The tensors of a safetensors file, as torch tensors (float32 only)."""
+    import torch
+
+    data = path.read_bytes()
+    if len(data) < 8:
+        raise _refuse(path, "too short for a safetensors file")
+    (n,) = struct.unpack("<Q", data[:8])
+    if 8 + n > len(data):
+        raise _refuse(path, "its header runs past the end of the file")
+    try:
+        header = json.loads(data[8 : 8 + n])
+    except ValueError as e:
+        raise _refuse(path, f"its header is not JSON ({e})") from None
+    body = memoryview(data)[8 + n :]
+    tensors = {}
+    for name, entry in header.items():
+        if name == "__metadata__":
+            continue
+        if entry.get("dtype") != "F32":
+            raise _refuse(path, f"tensor {name} is {entry.get('dtype')}, not F32")
+        start, end = entry["data_offsets"]
+        shape = entry["shape"]
+        if end - start != 4 * math.prod(shape) or end > len(body):
+            raise _refuse(path, f"tensor {name}: {end - start} bytes for shape {shape}")
+        t = torch.frombuffer(bytearray(body[start:end]), dtype=torch.float32).reshape(shape)
+        if not torch.isfinite(t).all():
+            raise _refuse(path, f"tensor {name} holds non-finite weights")
+        tensors[name] = t
+    return tensors
+
+
+def _read_meta(folder: Path) -> dict:
+    path = folder / "meta.json"
+    if not path.is_file():
+        raise _refuse(path, "missing: not a checkpoint folder (export one with `t2e-league export`)")
+    try:
+        meta = json.loads(path.read_text())
+    except ValueError as e:
+        raise _refuse(path, f"not JSON ({e})") from None
+    if meta.get("format") != FORMAT:
+        raise _refuse(path, f"format {meta.get('format')}; this package reads format {FORMAT}")
+    if meta.get("side") not in ("captors", "target"):
+        raise _refuse(path, f"side {meta.get('side')!r} is neither captors nor target")
+    net = meta.get("net", {})
+    if net.get("vector_input", "layer_norm") not in VECTOR_INPUTS:
+        raise _refuse(path, f"net.vector_input {net.get('vector_input')!r} is not one of {VECTOR_INPUTS}")
+    if PATCH % int(net.get("patch_pool", 2)) != 0:
+        raise _refuse(path, f"net.patch_pool {net.get('patch_pool')} does not divide {PATCH}")
+    for name, digest in meta.get("files", {}).items():
+        file = folder / name
+        if not file.is_file():
+            raise _refuse(file, "missing, though meta.json lists it")
+        actual = hashlib.sha256(file.read_bytes()).hexdigest()
+        if actual != digest:
+            raise _refuse(file, f"SHA-256 {actual[:12]}... is not the {digest[:12]}... meta.json records: the file changed")
+    if "actor.safetensors" not in meta.get("files", {}):
+        raise _refuse(path, "lists no actor.safetensors")
+    return meta
+
+
+def _vector_features(v, agents: int, kind: str):
+    """The network's first layer's input from vectors [B, 5 + 5N]
+    (`VectorInput` in the Rust nn module)."""
+    import torch
+
+    if kind == "layer_norm":
+        return v
+    per = v.shape[-1] // agents
+    n = (per - 5) // 5
+    if kind == "scaled":
+        parts_lin, parts_ang = [], []
+        for a in range(agents):
+            b = a * per
+            idx = [b, b + 1, b + 2, b + 3] + [b + 5 + k for k in range(2 * n)] + [b + 5 + 2 * n + k for k in range(2 * n)]
+            scale = [1.0, 1.0, 1 / POSITION_SCALE, 1 / POSITION_SCALE] + [1.0] * (2 * n) + [1 / POSITION_SCALE] * (2 * n)
+            parts_lin.append(v[..., idx] * torch.tensor(scale, dtype=v.dtype))
+            parts_ang.append(v[..., [b + 4] + [b + 5 + 4 * n + k for k in range(n)]])
+        lin, ang = torch.cat(parts_lin, -1), torch.cat(parts_ang, -1)
+        return torch.cat([lin, ang.sin(), ang.cos()], -1)
+    # egocentric
+    own = [[a * per + k for a in range(agents)] for k in range(5)]
+    vx, vy, px, py, heading = (v[..., i] for i in own)
+    cos, sin = heading.cos(), heading.sin()
+
+    def turn(x, y, c, s):
+        return x * c + y * s, y * c - x * s
+
+    own_forward, own_left = turn(vx, vy, cos, sin)
+
+    def other(k, j):
+        return [5 + 2 * j, 5 + 2 * j + 1, 5 + 2 * n + 2 * j, 5 + 2 * n + 2 * j + 1, 5 + 4 * n + j][k]
+
+    grid = tuple(v.shape[:-1]) + (agents, n)
+    ovx, ovy, ox, oy, oh = (
+        v[..., [a * per + other(k, j) for a in range(agents) for j in range(n)]].reshape(grid) for k in range(5)
+    )
+    c, s = cos.unsqueeze(-1), sin.unsqueeze(-1)
+    off_f, off_l = turn(ox, oy, c, s)
+    dist = (off_f * off_f + off_l * off_l).sqrt()
+    reach = dist.clamp_min(MIN_DISTANCE)
+    vel_f, vel_l = turn(ovx, ovy, c, s)
+
+    def flat(t):
+        return t.flatten(-2, -1)
+
+    return torch.cat(
+        [
+            own_forward, own_left, px / POSITION_SCALE, py / POSITION_SCALE, sin, cos,
+            flat(off_f / POSITION_SCALE), flat(off_l / POSITION_SCALE), flat(dist / POSITION_SCALE),
+            flat(off_f / reach), flat(off_l / reach), flat(vel_f), flat(vel_l), flat(oh.sin()), flat(oh.cos()),
+        ],
+        -1,
+    )
+
+
+def _build_actor(net: dict, vector_len: int):
+    import torch
+    from torch import nn
+
+    hidden = int(net.get("hidden", 64))
+    c1, c2 = (int(c) for c in net.get("conv_channels", (8, 16)))
+    side = PATCH // int(net.get("patch_pool", 2))
+    side = ((side - 3) // 2 + 1 - 3) // 2 + 1
+    kind = net.get("vector_input", "layer_norm")
+    per, n = vector_len, (vector_len - 5) // 5
+    width = {"layer_norm": vector_len, "scaled": per + 1 + n, "egocentric": 6 + 9 * n}[kind]
+
+    class Encoder(nn.Module):
+        def __init__(self):
+            super().__init__()
+            self.conv1 = nn.Conv2d(1, c1, 3, stride=2)
+            self.conv2 = nn.Conv2d(c1, c2, 3, stride=2)
+            self.patch_fc = nn.Linear(c2 * side * side, hidden)
+            if kind != "scaled":
+                self.vector_norm = nn.LayerNorm(width)
+            self.vector_fc = nn.Linear(width, hidden)
+            self.merge_fc = nn.Linear(2 * hidden, hidden)
+
+        def forward(self, patches, vectors):
+            x = torch.relu(self.conv2(torch.relu(self.conv1(patches.float()))))
+            x = torch.relu(self.patch_fc(x.flatten(1)))
+            v = _vector_features(vectors, 1, kind)
+            if kind != "scaled":
+                v = self.vector_norm(v)
+            v = torch.relu(self.vector_fc(v))
+            return torch.relu(self.merge_fc(torch.cat([x, v], 1)))
+
+    class Actor(nn.Module):
+        def __init__(self):
+            super().__init__()
+            self.encoder = Encoder()
+            self.gru = nn.GRU(hidden, hidden)
+            self.head = nn.Linear(hidden, ACTIONS)
+
+        def forward(self, patches, vectors, h):
+            x = self.encoder(patches, vectors)
+            _, h = self.gru(x.unsqueeze(0), h.unsqueeze(0))
+            h = h.squeeze(0)
+            return self.head(h), h
+
+    return Actor()
+
+
+def _pool(patches: np.ndarray, pool: int) -> np.ndarray:
+    """[B, 48, 48] -> [B, 48 / pool, 48 / pool]: a pooled cell is an
+    obstacle where any of its cells is (the Rust `pool_patch`)."""
+    b = patches.shape[0]
+    s = PATCH // pool
+    return patches.reshape(b, s, pool, s, pool).max(axis=(2, 4))
+
+
+class TorchPolicy:
+    """An exported player's actor in PyTorch, playing its side greedily.
+
+    Call it with the observations ``reset``/``step`` returned (and the env,
+    for a target whose checkpoint leans on the rule-based target's action);
+    it returns the side's actions. The recurrent state starts over at each
+    new episode of the env (or after ``reset()``)."""
+
+    def __init__(self, folder):
+        import torch
+
+        folder = Path(folder)
+        self.folder = folder
+        self.meta = _read_meta(folder)
+        self.side = self.meta["side"]
+        self.num_captors = int(self.meta["num_captors"])
+        self.net = self.meta["net"]
+        self.vector_len = 5 + 5 * self.num_captors
+        self.prior = float(self.net.get("heuristic_prior", 0.0))
+        self.actor = _build_actor(self.net, self.vector_len)
+        weights = _read_safetensors(folder / "actor.safetensors")
+        own = self.actor.state_dict()
+        if set(weights) != set(own):
+            raise _refuse(folder / "actor.safetensors", f"tensors {sorted(set(weights) ^ set(own))} do not fit the actor meta.json describes")
+        for name, t in weights.items():
+            if tuple(t.shape) != tuple(own[name].shape):
+                raise _refuse(folder / "actor.safetensors", f"tensor {name} has shape {tuple(t.shape)}, the actor {tuple(own[name].shape)}")
+        self.actor.load_state_dict(weights)
+        self.actor.eval()
+        self._hidden = None
+        self._episode = None
+        self._torch = torch
+
+    def agents(self, env) -> list:
+        return [a for a in env.possible_agents if (a == "target") == (self.side == "target")]
+
+    def reset(self):
+        self._hidden = None
+
+    def logits(self, patches: np.ndarray, vectors: np.ndarray):
+        """Logits [B, 5] of one step for rows of observations (patches
+        [B, 48, 48] uint8, vectors [B, 5 + 5 K] float32), advancing the
+        recurrent state."""
+        torch = self._torch
+        pooled = _pool(np.asarray(patches, dtype=np.uint8), int(self.net.get("patch_pool", 2)))
+        p = torch.from_numpy(np.ascontiguousarray(pooled)).unsqueeze(1)
+        v = torch.from_numpy(np.ascontiguousarray(vectors, dtype=np.float32))
+        if self._hidden is None or self._hidden.shape[0] != v.shape[0]:
+            self._hidden = torch.zeros(v.shape[0], self.actor.gru.hidden_size)
+        with torch.no_grad():
+            logits, self._hidden = self.actor(p, v, self._hidden)
+        return logits
+
+    def __call__(self, observations: dict, env=None) -> Dict[str, int]:
+        torch = self._torch
+        if env is not None:
+            episode = (env._env.seed, env._env.map_name)
+            if env._env.steps == 0 or episode != self._episode:
+                self.reset()
+                self._episode = episode
+        agents = [a for a in observations if (a == "target") == (self.side == "target")]
+        if not agents:
+            raise ValueError(f"observations hold no {self.side} agent")
+        patches = np.stack([observations[a]["patch"] for a in agents])
+        vectors = np.stack([observations[a]["vector"] for a in agents])
+        if vectors.shape[1] != self.vector_len:
+            raise ValueError(
+                f"observations: vectors of {vectors.shape[1]} numbers; {self.folder} was trained with "
+                f"{self.num_captors} captors ({self.vector_len} numbers)"
+            )
+        logits = self.logits(patches, vectors)
+        if self.prior > 0 and self.side == "target":
+            if env is None:
+                raise ValueError(f"{self.folder / 'meta.json'}: this target leans on the rule-based target's action; pass the env")
+            from ._core import Policy
+
+            hint = int(Policy("heuristic", "target").act(env._env)[0])
+            logits = logits + self.prior * torch.nn.functional.one_hot(torch.tensor([hint]), ACTIONS).float()
+        return {a: int(i) for a, i in zip(agents, logits.argmax(1).tolist())}
+
+
+def load_policy(folder) -> TorchPolicy:
+    """The actor of a checkpoint folder in PyTorch; refuses a corrupted or
+    mismatched folder with the file and the reason (``PolicyError``)."""
+    return TorchPolicy(folder)

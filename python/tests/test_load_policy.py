@@ -1,0 +1,94 @@
+"""Exported players play in Python as in Rust: the Rust evaluation of a
+checkpoint (`ckpt:FOLDER`, greedy) and the PyTorch actor `load_policy`
+builds from the same folder play the same episodes, step for step; bad
+folders are refused with the file and the reason."""
+
+import csv
+import json
+import shutil
+import subprocess
+from pathlib import Path
+
+import pytest
+
+import t2e
+
+torch = pytest.importorskip("torch")
+
+ROOT = Path(__file__).resolve().parents[2]
+STORED = ROOT / "tests" / "fixtures" / "stored"
+
+
+def rust_episodes(tmp_path, captors, target, k):
+    out = tmp_path / "eval"
+    subprocess.run(
+        [str(ROOT / "target" / "release" / "t2e-league"), "eval", "--captors", captors, "--target", target,
+         "--maps", "shipped", "--k", str(k), "--speed-ratio", "1.0", "--episodes", "3", "--seed", "4",
+         "--out", str(out)],
+        check=True, capture_output=True, cwd=ROOT,
+    )
+    return [row for path in sorted(out.rglob("episodes.csv")) for row in csv.DictReader(open(path))]
+
+
+@pytest.mark.parametrize("side, folder", [("captors", "export-captors"), ("target", "export-target")])
+def test_an_exported_player_plays_the_rust_controllers_episodes(tmp_path, side, folder):
+    player = STORED / folder
+    policy = t2e.load_policy(player)
+    assert policy.side == side
+    k = policy.num_captors
+    captors, target = ("ckpt:" + str(player), "heuristic") if side == "captors" else ("heuristic", "ckpt:" + str(player))
+    rows = rust_episodes(tmp_path, captors, target, k)
+    assert len(rows) == 3
+    env = t2e.parallel_env(maps="shipped", num_captors=k, episode_length=500, asz_info=False)
+    other = t2e.ScriptedPolicy("heuristic", "target" if side == "captors" else "captors")
+    for row in rows:
+        observations, _ = env.reset(seed=int(row["seed"]))
+        steps, captured = 0, False
+        while env.agents:
+            actions = {**policy(observations, env), **other(env)}
+            observations, _, _, _, infos = env.step(actions)
+            steps += 1
+            captured = infos["target"]["captured"]
+        assert (steps, captured) == (int(row["steps"]), row["captured"] == "true"), row
+
+
+def test_a_corrupted_or_mismatched_folder_is_refused_with_the_file_and_the_reason(tmp_path):
+    good = STORED / "export-captors"
+
+    def copy(name):
+        d = tmp_path / name
+        shutil.copytree(good, d)
+        return d
+
+    changed = copy("changed")
+    data = bytearray((changed / "actor.safetensors").read_bytes())
+    data[-1] ^= 0x01
+    (changed / "actor.safetensors").write_bytes(bytes(data))
+    with pytest.raises(t2e.torch_policy.PolicyError, match="actor.safetensors.*SHA-256"):
+        t2e.load_policy(changed)
+
+    no_meta = copy("no-meta")
+    (no_meta / "meta.json").unlink()
+    with pytest.raises(t2e.torch_policy.PolicyError, match="meta.json.*missing"):
+        t2e.load_policy(no_meta)
+
+    future = copy("future")
+    meta = json.loads((future / "meta.json").read_text())
+    meta["format"] = 99
+    (future / "meta.json").write_text(json.dumps(meta))
+    with pytest.raises(t2e.torch_policy.PolicyError, match="format 99"):
+        t2e.load_policy(future)
+
+    wider = copy("wider")
+    meta = json.loads((wider / "meta.json").read_text())
+    meta["net"]["hidden"] = 16
+    (wider / "meta.json").write_text(json.dumps(meta))
+    with pytest.raises(t2e.torch_policy.PolicyError, match="actor.safetensors.*shape"):
+        t2e.load_policy(wider)
+
+    # Trained with 2 captors, shown 3: the vectors do not fit.
+    policy = t2e.load_policy(good)
+    env = t2e.parallel_env(maps="shipped", num_captors=3)
+    observations, _ = env.reset(seed=0)
+    with pytest.raises(ValueError, match="2 captors"):
+        policy(observations, env)
