@@ -8,6 +8,10 @@
 //! Safety rules:
 //! - A lease that cannot be renewed because another worker holds the seat
 //!   now (it expired) ends the child at once: a seat never trains twice.
+//! - Each claim holds its seat under a name of its own (the worker's, then
+//!   `/N`): a seat row deleted and defined anew, then taken again by this
+//!   same worker, is a new lease, and the old one's renewal fails, so the
+//!   seat does not run twice here either.
 //! - A worker that cannot reach the store for as long as its leases last
 //!   ends its children itself before another worker may take their seats.
 //! - A worker killed with -9 takes its children with it (`PR_SET_PDEATHSIG`);
@@ -90,8 +94,9 @@ fn check_pool(dir: &LeagueDir, store: &Store) -> Result<()> {
 
 const GONE: &str = "its seat row is gone from the store (deleted?); the manager defines it again";
 
-/// Why `renew_lease` failed, as the store shows it now.
-fn why_lost(store: &Store, lease: &SeatLease) -> String {
+/// Why `renew_lease` failed, as the store shows it now; `worker` is this
+/// worker's name, which its claims' holders extend.
+fn why_lost(store: &Store, lease: &SeatLease, worker: &str) -> String {
     match store.seats() {
         Err(e) => format!("the store cannot tell why: {e}"),
         Ok(seats) => match seats.into_iter().find(|s| s.name == lease.seat) {
@@ -103,6 +108,11 @@ fn why_lost(store: &Store, lease: &SeatLease) -> String {
                 format!("the seat was ended ({}) by someone else", s.state.name())
             }
             Some(s) => match s.holder {
+                // This worker took the seat again, under another claim,
+                // while still holding the old one: the old row was gone.
+                Some(h) if claim_of(&h) == Some(worker) => {
+                    format!("{GONE}, and this worker has taken it again ({h})")
+                }
                 Some(h) => format!(
                     "another worker ({h} on {}) holds it now",
                     s.host.as_deref().unwrap_or("?")
@@ -111,6 +121,11 @@ fn why_lost(store: &Store, lease: &SeatLease) -> String {
             },
         },
     }
+}
+
+/// The worker a claim's holder belongs to (`WORKER/N` -> `WORKER`).
+fn claim_of(holder: &str) -> Option<&str> {
+    holder.rsplit_once('/').map(|(worker, _)| worker)
 }
 
 /// Runs seats until every seat of the league is done (Ok), one fails (an
@@ -145,6 +160,7 @@ pub fn run_worker(dir: &LeagueDir, opts: &WorkerOptions, stop: &AtomicBool) -> R
     let mut failure: Option<String> = None;
     let mut last_renewed = Instant::now();
     let mut last_claim = Instant::now() - Duration::from_secs(60);
+    let mut claims = 0u64;
     tracing::info!(
         "worker {holder}: league {} ({}), pool {}, up to {} seats",
         opened.cfg.name,
@@ -176,7 +192,7 @@ pub fn run_worker(dir: &LeagueDir, opts: &WorkerOptions, stop: &AtomicBool) -> R
                         tracing::warn!(
                             "worker {holder}: lost the lease of {} ({}); ending its process",
                             h.lease.seat,
-                            why_lost(&store, &h.lease)
+                            why_lost(&store, &h.lease, &holder)
                         );
                         if let Some(mut c) = h.proc.child.take() {
                             c.kill().ok();
@@ -275,7 +291,9 @@ pub fn run_worker(dir: &LeagueDir, opts: &WorkerOptions, stop: &AtomicBool) -> R
                 tracing::info!("worker {holder}: every seat of the league is done");
                 return Ok(());
             }
-            if let Some(lease) = store.claim_seat(&holder, &opts.host, lease_ms)? {
+            claims += 1;
+            let claim = format!("{holder}/{claims}");
+            if let Some(lease) = store.claim_seat(&claim, &opts.host, lease_ms)? {
                 let Some(role) = Role::from_name(&lease.seat) else {
                     store.release_seat(&lease)?;
                     bail!(
