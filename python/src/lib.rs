@@ -19,8 +19,13 @@ use t2e_core::heuristics::{AszGreedy, Heuristic, RandomActions, Still};
 use t2e_core::map::catalog::load_prepared;
 use t2e_core::map::PreparedMap;
 use t2e_core::protocol::Protocol;
+use t2e_core::render::episode::{LiveRender, RenderOptions};
 
-fn value_error(argument: &str, value: impl std::fmt::Display, rule: impl std::fmt::Display) -> PyErr {
+fn value_error(
+    argument: &str,
+    value: impl std::fmt::Display,
+    rule: impl std::fmt::Display,
+) -> PyErr {
     PyValueError::new_err(format!("{argument} = {value}: {rule}"))
 }
 
@@ -35,7 +40,11 @@ fn seed_of(seed: &Bound<'_, PyAny>) -> PyResult<u64> {
 /// The settings of an environment, each checked and named when refused.
 fn env_config(num_captors: i64, speed_ratio: f64, episode_length: i64) -> PyResult<EnvConfig> {
     if !(1..=32).contains(&num_captors) {
-        return Err(value_error("num_captors", num_captors, "must be between 1 and 32"));
+        return Err(value_error(
+            "num_captors",
+            num_captors,
+            "must be between 1 and 32",
+        ));
     }
     if !(speed_ratio.is_finite() && speed_ratio > 0.0 && speed_ratio <= 10.0) {
         return Err(value_error(
@@ -45,7 +54,11 @@ fn env_config(num_captors: i64, speed_ratio: f64, episode_length: i64) -> PyResu
         ));
     }
     if !(1..=1_000_000).contains(&episode_length) {
-        return Err(value_error("episode_length", episode_length, "must be between 1 and 1000000 steps"));
+        return Err(value_error(
+            "episode_length",
+            episode_length,
+            "must be between 1 and 1000000 steps",
+        ));
     }
     let cfg = EnvConfig {
         num_captors: num_captors as usize,
@@ -54,14 +67,19 @@ fn env_config(num_captors: i64, speed_ratio: f64, episode_length: i64) -> PyResu
         episode_length: episode_length as u32,
         ..EnvConfig::default()
     };
-    cfg.validate().map_err(|e| PyValueError::new_err(e.to_string()))?;
+    cfg.validate()
+        .map_err(|e| PyValueError::new_err(e.to_string()))?;
     Ok(cfg)
 }
 
 /// Actions from integers, each checked to be one of the five.
 fn actions_of(a: &[i64]) -> PyResult<Vec<Action>> {
     if let Some(bad) = a.iter().find(|x| !(0..Action::COUNT as i64).contains(x)) {
-        return Err(value_error("actions", bad, format!("an action is an integer in 0..{}", Action::COUNT)));
+        return Err(value_error(
+            "actions",
+            bad,
+            format!("an action is an integer in 0..{}", Action::COUNT),
+        ));
     }
     Ok(a.iter().map(|&x| Action::from_index(x as usize)).collect())
 }
@@ -81,13 +99,17 @@ fn maps_for(spec: &str, protocol: &str) -> PyResult<Arc<Vec<Arc<PreparedMap>>>> 
             ))
         }
     };
-    let maps = load_prepared(spec).map_err(|e| value_error("maps", format!("'{spec}'"), format!("{e:#}")))?;
+    let maps = load_prepared(spec)
+        .map_err(|e| value_error("maps", format!("'{spec}'"), format!("{e:#}")))?;
     match protocol {
         Some(p) => p
             .check_training_maps(spec, &maps)
             .map_err(|e| value_error("maps", format!("'{spec}'"), e))?,
         None => {
-            if let Some(m) = maps.iter().find(|m| t2e_core::map::testset::gibson_name(&m.grid).is_none()) {
+            if let Some(m) = maps
+                .iter()
+                .find(|m| t2e_core::map::testset::gibson_name(&m.grid).is_none())
+            {
                 return Err(value_error(
                     "maps",
                     format!("'{spec}'"),
@@ -110,17 +132,32 @@ pub struct Env {
     env: TrapEnv,
     /// Whether `reset` has been called and the episode has not ended.
     running: bool,
+    /// Frames of the episode, when the env renders (trails need every step).
+    render: Option<RenderOptions>,
+    live: Option<LiveRender>,
 }
 
 #[pymethods]
 impl Env {
     #[new]
-    #[pyo3(signature = (maps, num_captors = 3, speed_ratio = 1.0, protocol = "held-out", episode_length = 500))]
-    fn new(maps: &str, num_captors: i64, speed_ratio: f64, protocol: &str, episode_length: i64) -> PyResult<Env> {
+    #[pyo3(signature = (maps, num_captors = 3, speed_ratio = 1.0, protocol = "held-out", episode_length = 500, render = false))]
+    fn new(
+        maps: &str,
+        num_captors: i64,
+        speed_ratio: f64,
+        protocol: &str,
+        episode_length: i64,
+        render: bool,
+    ) -> PyResult<Env> {
         let cfg = env_config(num_captors, speed_ratio, episode_length)?;
         let maps = maps_for(maps, protocol)?;
         let env = TrapEnv::new(cfg, maps).map_err(|e| PyValueError::new_err(e.to_string()))?;
-        Ok(Env { env, running: false })
+        Ok(Env {
+            env,
+            running: false,
+            render: render.then(RenderOptions::default),
+            live: None,
+        })
     }
 
     /// Agent names, captors first: captor_0 .. captor_{K-1}, target.
@@ -167,24 +204,39 @@ impl Env {
     /// The names of the maps episodes are drawn from.
     #[getter]
     fn map_names(&self) -> Vec<String> {
-        self.env.maps().iter().map(|m| m.grid.name.clone()).collect()
+        self.env
+            .maps()
+            .iter()
+            .map(|m| m.grid.name.clone())
+            .collect()
     }
 
     /// Every robot's (x, y, heading) in metres and radians, captors first.
     #[getter]
     fn poses(&self) -> Vec<(f64, f64, f64)> {
-        self.env.robots.iter().map(|r| (r.pos[0], r.pos[1], r.theta)).collect()
+        self.env
+            .robots
+            .iter()
+            .map(|r| (r.pos[0], r.pos[1], r.theta))
+            .collect()
     }
 
     /// Starts the episode of `seed` (same seed, same episode): the
     /// observations, vectors [N, 5 + 5 K] float32 and patches [N, 48, 48]
     /// uint8 (1 = obstacle), captors first.
-    fn reset<'py>(&mut self, py: Python<'py>, seed: &Bound<'py, PyAny>) -> PyResult<Observations<'py>> {
+    fn reset<'py>(
+        &mut self,
+        py: Python<'py>,
+        seed: &Bound<'py, PyAny>,
+    ) -> PyResult<Observations<'py>> {
         let seed = seed_of(seed)?;
-        self.env
-            .reset_state(seed)
-            .map_err(|e| PyRuntimeError::new_err(format!("placing the robots of episode {seed}: {e}")))?;
+        self.env.reset_state(seed).map_err(|e| {
+            PyRuntimeError::new_err(format!("placing the robots of episode {seed}: {e}"))
+        })?;
         self.running = true;
+        if let Some(opts) = &self.render {
+            self.live = Some(LiveRender::new(&self.env, opts, "python", "python"));
+        }
         Ok(self.observations(py))
     }
 
@@ -196,18 +248,33 @@ impl Env {
         &mut self,
         py: Python<'py>,
         actions: PyReadonlyArray1<'py, i64>,
-    ) -> PyResult<(Bound<'py, PyArray2<f32>>, Bound<'py, PyArray3<u8>>, Bound<'py, PyArray1<f32>>, bool, bool, bool)> {
+    ) -> PyResult<(
+        Bound<'py, PyArray2<f32>>,
+        Bound<'py, PyArray3<u8>>,
+        Bound<'py, PyArray1<f32>>,
+        bool,
+        bool,
+        bool,
+    )> {
         if !self.running {
             return Err(PyRuntimeError::new_err(
                 "step() without a running episode: call reset() first, and again after an episode ends",
             ));
         }
         let n = self.env.num_agents();
-        let a = actions
-            .as_slice()
-            .map_err(|_| value_error("actions", "a non-contiguous array", "must be a contiguous int64 array"))?;
+        let a = actions.as_slice().map_err(|_| {
+            value_error(
+                "actions",
+                "a non-contiguous array",
+                "must be a contiguous int64 array",
+            )
+        })?;
         if a.len() != n {
-            return Err(value_error("actions", format!("{} values", a.len()), format!("must hold one action per agent ({n})")));
+            return Err(value_error(
+                "actions",
+                format!("{} values", a.len()),
+                format!("must hold one action per agent ({n})"),
+            ));
         }
         let actions = actions_of(a)?;
         let mut rewards = vec![0f32; n];
@@ -215,8 +282,31 @@ impl Env {
         let terminated = self.env.captured;
         let truncated = !terminated && self.env.steps >= self.env.cfg.episode_length;
         self.running = !(terminated || truncated);
+        if let Some(live) = &mut self.live {
+            live.record(&self.env);
+        }
         let (vectors, patches) = self.observations(py);
-        Ok((vectors, patches, PyArray1::from_vec(py, rewards), terminated, truncated, info.captured))
+        Ok((
+            vectors,
+            patches,
+            PyArray1::from_vec(py, rewards),
+            terminated,
+            truncated,
+            info.captured,
+        ))
+    }
+
+    /// The current state as an RGB frame [H, W, 3] uint8: the map, the ASZ
+    /// shaded, the robots with their trails, as `t2e-league render` draws.
+    fn render<'py>(&mut self, py: Python<'py>) -> PyResult<Bound<'py, PyArray3<u8>>> {
+        let live = self.live.as_mut().ok_or_else(|| {
+            PyRuntimeError::new_err("render(): make the env with render=True (render_mode=\"rgb_array\") and reset() it first")
+        })?;
+        let frame = live.frame(&self.env);
+        let (w, h) = frame.dimensions();
+        Ok(PyArray1::from_vec(py, frame.into_raw())
+            .reshape([h as usize, w as usize, 3])
+            .expect("h x w x 3 bytes"))
     }
 
     /// |ASZ| of the current state in square metres (spec §4): the free
@@ -239,8 +329,12 @@ impl Env {
             );
         }
         (
-            PyArray1::from_vec(py, vectors).reshape([n, vl]).expect("n x vector_len values"),
-            PyArray1::from_vec(py, patches).reshape([n, PATCH, PATCH]).expect("n x 48 x 48 values"),
+            PyArray1::from_vec(py, vectors)
+                .reshape([n, vl])
+                .expect("n x vector_len values"),
+            PyArray1::from_vec(py, patches)
+                .reshape([n, PATCH, PATCH])
+                .expect("n x 48 x 48 values"),
         )
     }
 }
@@ -268,7 +362,11 @@ fn controller_of(name: &str) -> PyResult<Box<dyn Controller>> {
         if (1..=AszGreedy::MAX_COARSENING).contains(&k) {
             Ok(Box::new(AszGreedy::new(k)))
         } else {
-            Err(value_error("name", format!("'{name}'"), format!("greedy:K takes K in 1..={}", AszGreedy::MAX_COARSENING)))
+            Err(value_error(
+                "name",
+                format!("'{name}'"),
+                format!("greedy:K takes K in 1..={}", AszGreedy::MAX_COARSENING),
+            ))
         }
     };
     match name {
@@ -294,7 +392,13 @@ impl Policy {
         let side = match side {
             "captors" => Side::Captors,
             "target" => Side::Target,
-            other => return Err(value_error("side", format!("'{other}'"), "must be \"captors\" or \"target\"")),
+            other => {
+                return Err(value_error(
+                    "side",
+                    format!("'{other}'"),
+                    "must be \"captors\" or \"target\"",
+                ))
+            }
         };
         Ok(Policy {
             controller: Mutex::new(controller_of(name)?),
@@ -311,9 +415,15 @@ impl Policy {
     /// The actions of its side's robots in `env`'s current state, as the
     /// Rust evaluation plays them (the controller is reset at each new
     /// episode, from the episode's seed).
-    fn act<'py>(&mut self, py: Python<'py>, env: PyRef<'py, Env>) -> PyResult<Bound<'py, PyArray1<i64>>> {
+    fn act<'py>(
+        &mut self,
+        py: Python<'py>,
+        env: PyRef<'py, Env>,
+    ) -> PyResult<Bound<'py, PyArray1<i64>>> {
         if !env.running {
-            return Err(PyRuntimeError::new_err("act() without a running episode: reset the env first"));
+            return Err(PyRuntimeError::new_err(
+                "act() without a running episode: reset the env first",
+            ));
         }
         let e = &env.env;
         let episode = (e.seed, e.map().grid.name.clone());
@@ -325,7 +435,10 @@ impl Policy {
         let k = e.num_captors();
         let mut out = vec![Action::Stop; self.side.agents(k).len()];
         controller.act(e, self.side, &mut out);
-        Ok(PyArray1::from_vec(py, out.iter().map(|a| a.index() as i64).collect()))
+        Ok(PyArray1::from_vec(
+            py,
+            out.iter().map(|a| a.index() as i64).collect(),
+        ))
     }
 }
 
@@ -352,12 +465,17 @@ impl VectorEnv {
         seed: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<VectorEnv> {
         if !(1..=65_536).contains(&num_envs) {
-            return Err(value_error("num_envs", num_envs, "must be between 1 and 65536"));
+            return Err(value_error(
+                "num_envs",
+                num_envs,
+                "must be between 1 and 65536",
+            ));
         }
         let cfg = env_config(num_captors, speed_ratio, episode_length)?;
         let maps = maps_for(maps, protocol)?;
         let seed = seed.map(seed_of).transpose()?.unwrap_or(0);
-        let venv = VecEnv::new(cfg, maps, num_envs as usize, seed).map_err(|e| PyValueError::new_err(e.to_string()))?;
+        let venv = VecEnv::new(cfg, maps, num_envs as usize, seed)
+            .map_err(|e| PyValueError::new_err(e.to_string()))?;
         Ok(VectorEnv {
             venv: Mutex::new(venv),
             started: false,
@@ -381,10 +499,14 @@ impl VectorEnv {
 
     /// Starts episode 0 of every world: vectors [n, N, 5 + 5 K] float32 and
     /// patches [n, N, 48, 48] uint8.
-    fn reset<'py>(&mut self, py: Python<'py>) -> PyResult<(Bound<'py, PyArray3<f32>>, Bound<'py, PyArray4<u8>>)> {
+    fn reset<'py>(
+        &mut self,
+        py: Python<'py>,
+    ) -> PyResult<(Bound<'py, PyArray3<f32>>, Bound<'py, PyArray4<u8>>)> {
         let mut venv = lock(&self.venv);
         let worlds: &mut VecEnv = &mut venv;
-        py.detach(|| worlds.reset()).map_err(|e| PyRuntimeError::new_err(format!("placing the robots: {e}")))?;
+        py.detach(|| worlds.reset())
+            .map_err(|e| PyRuntimeError::new_err(format!("placing the robots: {e}")))?;
         self.started = true;
         Ok(observations(py, &venv))
     }
@@ -417,14 +539,21 @@ impl VectorEnv {
                 format!("must be [num_envs, agents] = [{n}, {na}]"),
             ));
         }
-        let a = actions
-            .as_slice()
-            .map_err(|_| value_error("actions", "a non-contiguous array", "must be a contiguous int64 array"))?;
+        let a = actions.as_slice().map_err(|_| {
+            value_error(
+                "actions",
+                "a non-contiguous array",
+                "must be a contiguous int64 array",
+            )
+        })?;
         let actions = actions_of(a)?;
         let worlds: &mut VecEnv = &mut venv;
-        py.detach(|| worlds.step(&actions)).map_err(|e| PyRuntimeError::new_err(format!("placing the robots: {e}")))?;
+        py.detach(|| worlds.step(&actions))
+            .map_err(|e| PyRuntimeError::new_err(format!("placing the robots: {e}")))?;
         let (vectors, patches) = observations(py, &venv);
-        let rewards = PyArray1::from_slice(py, &venv.rewards).reshape([n, na]).expect("n x agents rewards");
+        let rewards = PyArray1::from_slice(py, &venv.rewards)
+            .reshape([n, na])
+            .expect("n x agents rewards");
         Ok((
             vectors,
             patches,
@@ -436,11 +565,18 @@ impl VectorEnv {
 }
 
 /// The worlds' observations as arrays [n, N, ...].
-fn observations<'py>(py: Python<'py>, venv: &VecEnv) -> (Bound<'py, PyArray3<f32>>, Bound<'py, PyArray4<u8>>) {
+fn observations<'py>(
+    py: Python<'py>,
+    venv: &VecEnv,
+) -> (Bound<'py, PyArray3<f32>>, Bound<'py, PyArray4<u8>>) {
     let (n, na, vl) = (venv.num_envs(), venv.num_agents(), venv.cfg.vector_len());
     (
-        PyArray1::from_slice(py, &venv.vectors).reshape([n, na, vl]).expect("vectors"),
-        PyArray1::from_slice(py, &venv.patches).reshape([n, na, PATCH, PATCH]).expect("patches"),
+        PyArray1::from_slice(py, &venv.vectors)
+            .reshape([n, na, vl])
+            .expect("vectors"),
+        PyArray1::from_slice(py, &venv.patches)
+            .reshape([n, na, PATCH, PATCH])
+            .expect("patches"),
     )
 }
 
@@ -449,19 +585,45 @@ fn observations<'py>(py: Python<'py>, venv: &VecEnv) -> (Bound<'py, PyArray3<f32
 /// captor (at `captors`, speed 1).
 #[pyfunction]
 #[pyo3(signature = (env, captors, target, target_speed = 1.0))]
-fn asz_area(env: PyRef<'_, Env>, captors: Vec<(f64, f64)>, target: (f64, f64), target_speed: f64) -> PyResult<f64> {
+fn asz_area(
+    env: PyRef<'_, Env>,
+    captors: Vec<(f64, f64)>,
+    target: (f64, f64),
+    target_speed: f64,
+) -> PyResult<f64> {
     let finite = |p: &(f64, f64)| p.0.is_finite() && p.1.is_finite();
     if captors.is_empty() || !captors.iter().all(finite) {
-        return Err(value_error("captors", format!("{captors:?}"), "must be one or more finite (x, y) positions in metres"));
+        return Err(value_error(
+            "captors",
+            format!("{captors:?}"),
+            "must be one or more finite (x, y) positions in metres",
+        ));
     }
     if !finite(&target) {
-        return Err(value_error("target", format!("{target:?}"), "must be a finite (x, y) position in metres"));
+        return Err(value_error(
+            "target",
+            format!("{target:?}"),
+            "must be a finite (x, y) position in metres",
+        ));
     }
     if !(target_speed.is_finite() && target_speed > 0.0) {
-        return Err(value_error("target_speed", target_speed, "must be a positive number"));
+        return Err(value_error(
+            "target_speed",
+            target_speed,
+            "must be a positive number",
+        ));
     }
-    let sources: Vec<Source> = captors.iter().map(|&(x, y)| Source { pos: [x, y], speed: 1.0 }).collect();
-    let target = Source { pos: [target.0, target.1], speed: target_speed };
+    let sources: Vec<Source> = captors
+        .iter()
+        .map(|&(x, y)| Source {
+            pos: [x, y],
+            speed: 1.0,
+        })
+        .collect();
+    let target = Source {
+        pos: [target.0, target.1],
+        speed: target_speed,
+    };
     let cells = FastMarching::new().asz_cells(&**env.env.map(), target, &sources);
     Ok(cells_to_m2(cells))
 }

@@ -25,7 +25,7 @@ class T2EParallelEnv(ParallelEnv):
     (m^2, computed when ``asz_info`` is on) and ``map``.
     """
 
-    metadata = {"name": "t2e_v0", "render_modes": [], "is_parallelizable": True}
+    metadata = {"name": "t2e_v0", "render_modes": ["rgb_array"], "is_parallelizable": True, "render_fps": 10}
 
     def __init__(
         self,
@@ -45,9 +45,11 @@ class T2EParallelEnv(ParallelEnv):
             raise TypeError(f"maps = {maps!r}: must be a string such as 'shipped', 'generated:20' or 'small,medium,large'")
         if not isinstance(protocol, str):
             raise TypeError(f"protocol = {protocol!r}: must be 'held-out', 'paper' or 'test'")
-        if render_mode is not None:
-            raise ValueError(f"render_mode = {render_mode!r}: rendering from Python is not available yet; use None")
-        self._env = Env(maps, int(num_captors), float(speed_ratio), protocol, int(episode_length))
+        if render_mode not in (None, "rgb_array"):
+            raise ValueError(f"render_mode = {render_mode!r}: must be None or 'rgb_array'")
+        self._env = Env(
+            maps, int(num_captors), float(speed_ratio), protocol, int(episode_length), render_mode == "rgb_array"
+        )
         self.render_mode = render_mode
         self.asz_info = bool(asz_info)
         self.possible_agents = list(self._env.agent_names)
@@ -114,6 +116,15 @@ class T2EParallelEnv(ParallelEnv):
         if terminated or truncated:
             self.agents = []
         return observations, reward, terminations, truncations, infos
+
+    def render(self):
+        """The current state as an RGB frame [H, W, 3] uint8 (``render_mode
+        = "rgb_array"``): the map, the ASZ shaded, the robots and their
+        trails, as ``t2e-league render`` draws them. None without a render
+        mode."""
+        if self.render_mode is None:
+            return None
+        return self._env.render()
 
     def asz_area(self) -> float:
         """|ASZ| of the current state in m^2."""

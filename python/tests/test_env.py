@@ -76,6 +76,7 @@ def test_an_episode_truncates_at_its_length_and_then_refuses_to_step():
         (dict(episode_length=0), ValueError, "episode_length"),
         (dict(protocol="heldout"), ValueError, "protocol"),
         (dict(render_mode="human"), ValueError, "render_mode"),
+        (dict(render_mode="rgb"), ValueError, "render_mode"),
     ],
 )
 def test_bad_settings_are_refused_naming_the_argument(kwargs, error, named):
@@ -108,3 +109,18 @@ def test_bad_actions_and_seeds_are_refused_naming_them():
     # After the refusals the episode goes on as if nothing happened.
     obs, *_ = env.step(good)
     assert set(obs) == set(env.possible_agents)
+
+
+def test_frames_show_the_episode_as_it_goes():
+    env = make(render_mode="rgb_array")
+    env.reset(seed=4)
+    first = env.render()
+    assert first.ndim == 3 and first.shape[2] == 3 and first.dtype == np.uint8
+    for _ in range(10):
+        env.step({a: 0 for a in env.agents})
+    later = env.render()
+    assert later.shape == first.shape and not np.array_equal(later, first)
+    # The target is drawn as a red disc of its 0.2 m radius.
+    for frame in (first, later):
+        assert np.all(frame == [225, 35, 35], axis=-1).sum() > 50
+    assert make().render() is None

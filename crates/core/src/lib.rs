@@ -11,6 +11,7 @@ pub mod fs;
 pub mod heuristics;
 pub mod map;
 pub mod protocol;
+pub mod render;
 pub mod util;
 
 /// The project's root folder (where `maps/` and `../shared` are found

@@ -23,6 +23,7 @@ use image::codecs::gif::{GifEncoder, Repeat};
 use image::{Delay, Frame, Rgb, RgbImage, RgbaImage};
 use std::collections::VecDeque;
 use std::path::Path;
+use std::sync::Arc;
 
 /// How an episode is drawn.
 #[derive(Clone, Debug, PartialEq)]
@@ -276,17 +277,39 @@ fn march_regions(fm: &mut FastMarching, env: &TrapEnv) -> usize {
 }
 
 /// Per-step state kept for drawing.
-struct Painter<'a> {
+struct Painter {
     layout: FrameLayout,
     base: RgbImage,
-    map: &'a PreparedMap,
+    map: Arc<PreparedMap>,
     fm: FastMarching,
     trails: Vec<VecDeque<[f64; 2]>>,
     footer: String,
     show_asz: bool,
 }
 
-impl Painter<'_> {
+impl Painter {
+    /// A painter for `env`'s current episode, its first state recorded.
+    fn new(env: &TrapEnv, opts: &RenderOptions, footer: String) -> Painter {
+        let map = env.map().clone();
+        let min_width = header_width(
+            env.cfg.episode_length,
+            &footer,
+            text_scale_for(opts.scale.max(1)),
+        );
+        let layout = FrameLayout::with_min_width(&map.grid, opts, min_width);
+        let mut painter = Painter {
+            base: base_image(&map.grid, &layout),
+            layout,
+            map,
+            fm: FastMarching::new(),
+            trails: vec![VecDeque::with_capacity(TRAIL_STEPS + 1); env.num_agents()],
+            footer,
+            show_asz: opts.show_asz,
+        };
+        painter.record(env);
+        painter
+    }
+
     fn record(&mut self, env: &TrapEnv) {
         for (t, r) in self.trails.iter_mut().zip(&env.robots) {
             if t.len() == TRAIL_STEPS + 1 {
@@ -497,6 +520,54 @@ pub fn remove_dead_temporaries(out: &Path) {
     }
 }
 
+/// The footer of a frame: map, team sizes, who plays and the speed ratio.
+fn footer_line(env: &TrapEnv, captors: &str, target: &str) -> String {
+    format!(
+        "{}  {}v1  {} vs {}  v_e/v_p = {:.1}",
+        env.map().grid.name,
+        env.num_captors(),
+        captors,
+        target,
+        env.cfg.speed_ratio()
+    )
+}
+
+/// Frames of an episode played elsewhere (the Python env's `render()`):
+/// the same picture `render_episode` draws, trails included. `record`
+/// after every step; `frame` draws the current state.
+pub struct LiveRender {
+    painter: Painter,
+    /// (seed, map) of the episode being drawn.
+    episode: (u64, String),
+}
+
+impl LiveRender {
+    /// Starts drawing `env`'s current episode; `captors` and `target` name
+    /// who plays, for the footer.
+    pub fn new(env: &TrapEnv, opts: &RenderOptions, captors: &str, target: &str) -> LiveRender {
+        LiveRender {
+            painter: Painter::new(env, opts, footer_line(env, captors, target)),
+            episode: (env.seed, env.map().grid.name.clone()),
+        }
+    }
+
+    /// Whether this render follows `env`'s current episode (it must start
+    /// over after a reset).
+    pub fn follows(&self, env: &TrapEnv) -> bool {
+        env.steps > 0 && self.episode == (env.seed, env.map().grid.name.clone())
+    }
+
+    /// Adds the state after a step to the trails.
+    pub fn record(&mut self, env: &TrapEnv) {
+        self.painter.record(env);
+    }
+
+    /// The current state as an RGB image.
+    pub fn frame(&mut self, env: &TrapEnv) -> RgbImage {
+        self.painter.frame(env).0
+    }
+}
+
 /// Plays one episode from `seed` with the two controllers and writes it to
 /// `out` as a looping GIF (parent folders are created). The environment is
 /// left in the episode's final state.
@@ -512,32 +583,10 @@ pub fn render_episode(
         .map_err(|e| anyhow!("episode seed {seed}: {e}"))?;
     captors.reset(env, seed);
     target.reset(env, seed);
-    let map = env.map().clone();
     let k = env.num_captors();
-    let footer = format!(
-        "{}  {}v1  {} vs {}  v_e/v_p = {:.1}",
-        map.grid.name,
-        k,
-        captors.name(),
-        target.name(),
-        env.cfg.speed_ratio()
-    );
-    let min_width = header_width(
-        env.cfg.episode_length,
-        &footer,
-        text_scale_for(opts.scale.max(1)),
-    );
-    let layout = FrameLayout::with_min_width(&map.grid, opts, min_width);
-    let mut painter = Painter {
-        base: base_image(&map.grid, &layout),
-        layout,
-        map: &map,
-        fm: FastMarching::new(),
-        trails: vec![VecDeque::with_capacity(TRAIL_STEPS + 1); env.num_agents()],
-        footer,
-        show_asz: opts.show_asz,
-    };
-    painter.record(env);
+    let footer = footer_line(env, &captors.name(), &target.name());
+    let mut painter = Painter::new(env, opts, footer);
+    let map = painter.map.clone();
 
     let delay = opts.frame_delay_ms.max(10);
     let every = opts.every.max(1);
@@ -603,11 +652,10 @@ pub fn render_episode(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::controllers::ControllerSpec;
     use crate::env::{EnvConfig, Robot};
+    use crate::heuristics::{Heuristic, Still};
     use image::codecs::gif::GifDecoder;
     use image::AnimationDecoder;
-    use std::sync::Arc;
 
     /// A 6 m x 5 m room in the middle of a 16 m world, with a pillar.
     fn room_map() -> Arc<Vec<Arc<PreparedMap>>> {
@@ -668,8 +716,8 @@ mod tests {
         dir: &Path,
     ) -> (TrapEnv, EpisodeSummary, Vec<RgbaImage>, FrameLayout) {
         let mut env = env(20);
-        let mut captors = ControllerSpec::Heuristic.build(Side::Captors).unwrap();
-        let mut target = ControllerSpec::Heuristic.build(Side::Target).unwrap();
+        let mut captors: Box<dyn Controller> = Box::new(Heuristic);
+        let mut target: Box<dyn Controller> = Box::new(Heuristic);
         let opts = RenderOptions {
             every,
             ..RenderOptions::default()
@@ -796,8 +844,8 @@ mod tests {
     fn without_asz_shading_no_green() {
         let dir = tempfile::tempdir().unwrap();
         let mut env = env(3);
-        let mut captors = ControllerSpec::Still.build(Side::Captors).unwrap();
-        let mut target = ControllerSpec::Still.build(Side::Target).unwrap();
+        let mut captors: Box<dyn Controller> = Box::new(Still);
+        let mut target: Box<dyn Controller> = Box::new(Still);
         let opts = RenderOptions {
             show_asz: false,
             crop: false,
