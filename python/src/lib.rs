@@ -454,7 +454,8 @@ pub struct VectorEnv {
 #[pymethods]
 impl VectorEnv {
     #[new]
-    #[pyo3(signature = (num_envs, maps, num_captors = 3, speed_ratio = 1.0, protocol = "held-out", episode_length = 500, seed = None))]
+    #[pyo3(signature = (num_envs, maps, num_captors = 3, speed_ratio = 1.0, protocol = "held-out", episode_length = 500, seed = None, captors = None, target = None))]
+    #[allow(clippy::too_many_arguments)]
     fn new(
         num_envs: i64,
         maps: &str,
@@ -463,6 +464,8 @@ impl VectorEnv {
         protocol: &str,
         episode_length: i64,
         seed: Option<&Bound<'_, PyAny>>,
+        captors: Option<&str>,
+        target: Option<&str>,
     ) -> PyResult<VectorEnv> {
         if !(1..=65_536).contains(&num_envs) {
             return Err(value_error(
@@ -474,8 +477,22 @@ impl VectorEnv {
         let cfg = env_config(num_captors, speed_ratio, episode_length)?;
         let maps = maps_for(maps, protocol)?;
         let seed = seed.map(seed_of).transpose()?.unwrap_or(0);
-        let venv = VecEnv::new(cfg, maps, num_envs as usize, seed)
+        let mut venv = VecEnv::new(cfg, maps, num_envs as usize, seed)
             .map_err(|e| PyValueError::new_err(e.to_string()))?;
+        // A side a controller plays in Rust: its actions passed to `step`
+        // are ignored, and no Python code runs for it.
+        for (side, name) in [(Side::Captors, captors), (Side::Target, target)] {
+            if let Some(name) = name {
+                controller_of(name).map_err(|_| {
+                    value_error(
+                        side.name(),
+                        format!("'{name}'"),
+                        "must be heuristic, greedy, greedy:K, random or still",
+                    )
+                })?;
+                venv.script(side, || controller_of(name).expect("checked above"));
+            }
+        }
         Ok(VectorEnv {
             venv: Mutex::new(venv),
             started: false,

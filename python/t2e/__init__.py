@@ -32,14 +32,19 @@ def vector_env(
     protocol: str = "held-out",
     episode_length: int = 500,
     seed: int = 0,
+    captors: str = None,
+    target: str = None,
 ) -> VectorEnv:
     """``num_envs`` worlds stepped together in Rust, in parallel and without
     the GIL. ``reset()`` returns (vectors [n, N, 5 + 5 K] float32, patches
     [n, N, 48, 48] uint8); ``step(actions [n, N] int64)`` returns (vectors,
     patches, rewards [n, N], terminated [n], truncated [n]). A world whose
     episode ends starts the next at once (its seed drawn from ``seed``, the
-    world and the episode), so the arrays always hold live episodes."""
-    return VectorEnv(num_envs, maps, num_captors, speed_ratio, protocol, episode_length, seed)
+    world and the episode), so the arrays always hold live episodes.
+    ``captors`` or ``target`` names a controller that plays that side in
+    Rust (heuristic, greedy, greedy:K, random, still); the actions given
+    for it are then ignored."""
+    return VectorEnv(num_envs, maps, num_captors, speed_ratio, protocol, episode_length, seed, captors, target)
 
 
 __all__ = [

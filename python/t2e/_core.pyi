@@ -72,6 +72,8 @@ class VectorEnv:
         protocol: str = "held-out",
         episode_length: int = 500,
         seed: Optional[int] = None,
+        captors: Optional[str] = None,
+        target: Optional[str] = None,
     ) -> None: ...
     @property
     def num_envs(self) -> int: ...
