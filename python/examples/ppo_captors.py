@@ -48,30 +48,55 @@ class Args:
     pool: int = 4
     """The 48 x 48 patch is max-pooled to 12 x 12 before the CNN."""
     hidden: int = 64
+    reward_scale: float = 0.01
+    """Rewards are learned from times this (a capture pays 200); the curve
+    reports them unscaled."""
     seed: int = 0
     threads: int = 1
     out: str = "runs/py-ppo"
 
 
-class Agent(nn.Module):
+class Encoder(nn.Module):
     """A small CNN over the pooled obstacle patch and an MLP over the
-    vector, shared by the policy and value heads."""
+    vector turned into the robot's own frame (the egocentric features of
+    t2e-league's networks), concatenated."""
 
     def __init__(self, vector_len: int, side: int, hidden: int):
         super().__init__()
+        width = 6 + 9 * ((vector_len - 5) // 5)
         self.patch = nn.Sequential(
             nn.Conv2d(1, 8, 3, stride=2), nn.ReLU(), nn.Flatten(),
             nn.Linear(8 * ((side - 3) // 2 + 1) ** 2, hidden), nn.ReLU(),
         )
-        self.vector = nn.Sequential(nn.LayerNorm(vector_len), nn.Linear(vector_len, hidden), nn.ReLU())
-        self.trunk = nn.Sequential(nn.Linear(2 * hidden, hidden), nn.ReLU())
+        self.vector = nn.Sequential(nn.LayerNorm(width), nn.Linear(width, hidden), nn.ReLU())
+        self.merge = nn.Sequential(nn.Linear(2 * hidden, hidden), nn.ReLU())
+
+    def forward(self, patches, vectors):
+        v = egocentric(vectors)
+        return self.merge(torch.cat([self.patch(patches), self.vector(v)], -1))
+
+
+def egocentric(vectors):
+    from t2e.torch_policy import _vector_features
+
+    return _vector_features(vectors, 1, "egocentric")
+
+
+class Agent(nn.Module):
+    """Actor and critic, each with its own encoder (CleanRL's layout): the
+    critic's large value errors do not pull on the policy's features."""
+
+    def __init__(self, vector_len: int, side: int, hidden: int):
+        super().__init__()
+        self.actor = nn.Sequential(Encoder(vector_len, side, hidden))
+        self.critic = nn.Sequential(Encoder(vector_len, side, hidden))
         self.policy = nn.Linear(hidden, t2e.ACTIONS)
         self.value = nn.Linear(hidden, 1)
         nn.init.uniform_(self.policy.weight, -0.01, 0.01)
 
     def forward(self, patches, vectors):
-        x = self.trunk(torch.cat([self.patch(patches), self.vector(vectors)], -1))
-        return self.policy(x), self.value(x).squeeze(-1)
+        logits = self.policy(self.actor[0](patches, vectors))
+        return logits, self.value(self.critic[0](patches, vectors)).squeeze(-1)
 
 
 def pool(patches: np.ndarray, k: int) -> torch.Tensor:
@@ -128,7 +153,7 @@ def main(args: Args) -> Path:
             step_actions = np.zeros((n, agents), dtype=np.int64)
             step_actions[:, :k] = a.numpy().reshape(n, k)
             vectors, patches, r, terminated, truncated = venv.step(step_actions)
-            rewards[t] = torch.from_numpy(r[:, :k].reshape(rows).copy())
+            rewards[t] = torch.from_numpy(r[:, :k].reshape(rows).copy()) * args.reward_scale
             ended = terminated | truncated
             # A capture ends the game; a truncation is cut short, but this
             # sketch does not bootstrap there (see docs/algorithms/mappo.md).
