@@ -1,5 +1,6 @@
 //! Adam with its moments kept as named tensors, shared by every learner.
 
+use super::rollout::BadUpdate;
 use tch::{nn, Device, Kind, Tensor};
 
 /// A saved optimizer state that does not fit the network it is loaded into.
@@ -39,6 +40,23 @@ pub fn backward_clipped(loss: &Tensor, optimizers: &mut [(&mut Adam, f64)]) -> V
         .iter_mut()
         .map(|(adam, max_norm)| adam.clip_grad_norm(*max_norm))
         .collect()
+}
+
+/// One optimiser's step on `loss`, as the off-policy learners take them:
+/// backpropagate, clip to `max_norm`, refuse a non-finite norm (naming
+/// `what` is the network), then step. Returns the norm before clipping.
+pub fn minimize(
+    loss: &Tensor,
+    adam: &mut Adam,
+    max_norm: f64,
+    what: &str,
+) -> Result<f64, BadUpdate> {
+    let norm = backward_clipped(loss, &mut [(&mut *adam, max_norm)])[0];
+    if !norm.is_finite() {
+        return Err(BadUpdate(format!("{what} gradient norm {norm}")));
+    }
+    adam.step();
+    Ok(norm)
 }
 
 impl Adam {

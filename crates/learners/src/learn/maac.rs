@@ -26,7 +26,7 @@
 //!      the factor held constant, plus a penalty on the logits;
 //!    - targets: theta' <- tau theta + (1 - tau) theta'.
 
-use super::adam::backward_clipped;
+use super::adam::minimize;
 use super::offpolicy::{
     batch_td_targets, check_replay, gumbel_noise, mean_entropy, one_hot, Batch, CriticTrunk,
     OffPolicy, ReplayConfig, ReplayCore, ReplayKind, ReplaySettings,
@@ -406,25 +406,14 @@ impl OffPolicy for MaacLearner {
         if !(cl.is_finite() && al.is_finite()) {
             return Err(BadUpdate(format!("critic loss {cl}, actor loss {al}")));
         }
-        let critic_norm = backward_clipped(
-            &critic_loss,
-            &mut [(
-                &mut self.core.params.critic_adam,
-                cfg.critic_max_grad_norm * self.core.team as f64,
-            )],
-        )[0];
-        let actor_norm = backward_clipped(
-            &actor_loss,
-            &mut [(&mut self.core.params.actor_adam, cfg.actor_max_grad_norm)],
-        )[0];
-        if !(actor_norm.is_finite() && critic_norm.is_finite()) {
-            return Err(BadUpdate(format!(
-                "gradient norm not finite (actor {actor_norm}, critic {critic_norm})"
-            )));
-        }
-        self.core.params.critic_adam.step();
-        self.core.params.actor_adam.step();
-        self.core.params.finish_step(cfg.tau);
+        // The actor's loss reads the critic only through the detached
+        // advantage, so stepping the critic first changes nothing for it.
+        let critic_max = cfg.critic_max_grad_norm * self.core.team as f64;
+        let params = &mut self.core.params;
+        let critic_norm = minimize(&critic_loss, &mut params.critic_adam, critic_max, "critic")?;
+        let actor_max = cfg.actor_max_grad_norm;
+        let actor_norm = minimize(&actor_loss, &mut params.actor_adam, actor_max, "actor")?;
+        params.finish_step(cfg.tau);
 
         let entropy = mean_entropy(&logp_all);
         stats.add_step(al, cl, entropy, (actor_norm, critic_norm));

@@ -19,7 +19,7 @@
 //!      small penalty on the logits (the original's regulariser);
 //!    - targets: theta' <- tau theta + (1 - tau) theta'.
 
-use super::adam::backward_clipped;
+use super::adam::minimize;
 use super::mappo::{mates_index, Mappo};
 use super::offpolicy::{
     batch_td_targets, check_replay, gumbel_noise, gumbel_softmax_st, mean_entropy, one_hot, Batch,
@@ -320,14 +320,13 @@ impl OffPolicy for MaddpgLearner {
         if !cl.is_finite() {
             return Err(BadUpdate(format!("critic loss {cl}")));
         }
-        let critic_norm = backward_clipped(
+        let params = &mut self.core.params;
+        let critic_norm = minimize(
             &critic_loss,
-            &mut [(&mut self.core.params.critic_adam, cfg.max_grad_norm)],
-        )[0];
-        if !critic_norm.is_finite() {
-            return Err(BadUpdate(format!("critic gradient norm {critic_norm}")));
-        }
-        self.core.params.critic_adam.step();
+            &mut params.critic_adam,
+            cfg.max_grad_norm,
+            "critic",
+        )?;
 
         let ha = self.actor.unroll_states(&p, &v, &b.actor_h0, &m);
         let logits = self.actor.logits(&ha);
@@ -343,15 +342,14 @@ impl OffPolicy for MaddpgLearner {
         if !al.is_finite() {
             return Err(BadUpdate(format!("actor loss {al}")));
         }
-        let actor_norm = backward_clipped(
+        let params = &mut self.core.params;
+        let actor_norm = minimize(
             &actor_loss,
-            &mut [(&mut self.core.params.actor_adam, cfg.max_grad_norm)],
-        )[0];
-        if !actor_norm.is_finite() {
-            return Err(BadUpdate(format!("actor gradient norm {actor_norm}")));
-        }
-        self.core.params.actor_adam.step();
-        self.core.params.finish_step(cfg.tau);
+            &mut params.actor_adam,
+            cfg.max_grad_norm,
+            "actor",
+        )?;
+        params.finish_step(cfg.tau);
 
         let entropy = mean_entropy(&logits.log_softmax(-1, Kind::Float));
         stats.add_step(al, cl, entropy, (actor_norm, critic_norm));
