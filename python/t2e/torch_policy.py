@@ -235,6 +235,8 @@ class TorchPolicy:
         self._hidden = None
         self._episode = None
         self._torch = torch
+        # The rule-based target's action, for a checkpoint that leans on it.
+        self._hint = None
 
     def agents(self, env) -> list:
         return [a for a in env.possible_agents if (a == "target") == (self.side == "target")]
@@ -277,9 +279,11 @@ class TorchPolicy:
         if self.prior > 0 and self.side == "target":
             if env is None:
                 raise ValueError(f"{self.folder / 'meta.json'}: this target leans on the rule-based target's action; pass the env")
-            from ._core import Policy
+            if self._hint is None:
+                from ._core import Policy
 
-            hint = int(Policy("heuristic", "target").act(env._env)[0])
+                self._hint = Policy("heuristic", "target")
+            hint = int(self._hint.act(env._env)[0])
             logits = logits + self.prior * torch.nn.functional.one_hot(torch.tensor([hint]), ACTIONS).float()
         return {a: int(i) for a, i in zip(agents, logits.argmax(1).tolist())}
 

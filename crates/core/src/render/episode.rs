@@ -537,8 +537,6 @@ fn footer_line(env: &TrapEnv, captors: &str, target: &str) -> String {
 /// after every step; `frame` draws the current state.
 pub struct LiveRender {
     painter: Painter,
-    /// (seed, map) of the episode being drawn.
-    episode: (u64, String),
 }
 
 impl LiveRender {
@@ -547,14 +545,7 @@ impl LiveRender {
     pub fn new(env: &TrapEnv, opts: &RenderOptions, captors: &str, target: &str) -> LiveRender {
         LiveRender {
             painter: Painter::new(env, opts, footer_line(env, captors, target)),
-            episode: (env.seed, env.map().grid.name.clone()),
         }
-    }
-
-    /// Whether this render follows `env`'s current episode (it must start
-    /// over after a reset).
-    pub fn follows(&self, env: &TrapEnv) -> bool {
-        env.steps > 0 && self.episode == (env.seed, env.map().grid.name.clone())
     }
 
     /// Adds the state after a step to the trails.

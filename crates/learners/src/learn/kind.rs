@@ -22,7 +22,7 @@ pub trait LearnerKind: Sync {
     /// Whether it learns from a replay of past experience (and so cannot
     /// take a KL pull towards a prior, nor values states while acting).
     fn off_policy(&self) -> bool {
-        self.replay(&SideConfig::default()).is_some()
+        false
     }
     /// Steps per recurrent chunk it trains on.
     fn chunk_len(&self, side: &SideConfig) -> usize;

@@ -612,6 +612,9 @@ impl<C: ReplayConfig> LearnerKind for ReplayKind<C> {
     fn settings_table(&self) -> &'static str {
         self.table
     }
+    fn off_policy(&self) -> bool {
+        true
+    }
     fn chunk_len(&self, side: &SideConfig) -> usize {
         (self.settings)(side).replay_settings().chunk_len
     }
