@@ -5,7 +5,7 @@
 use crate::asz::{CoarseLattice, FastMarching, Lattice, Source};
 use crate::env::physics::{self, dist};
 use crate::env::{Action, Controller, Side, TrapEnv};
-use crate::map::prepared::{ray_dirs, NUM_RAYS};
+use crate::map::prepared::ray_dirs;
 use crate::map::PreparedMap;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -20,8 +20,8 @@ const WALL_WEIGHT: f64 = 0.6;
 /// about 5% of their decisions (tests/integration/conformance.rs).
 pub fn wall_force(map: &PreparedMap, pos: [f64; 2], d: f64) -> [f64; 2] {
     let mut f = [0.0, 0.0];
-    for u in ray_dirs().iter().take(NUM_RAYS) {
-        let dm = map.stepped_wall_distance(pos, *u, d);
+    for (m, u) in ray_dirs().iter().enumerate() {
+        let dm = map.stepped_wall_distance(pos, m, d);
         f[0] -= d / dm * u[0];
         f[1] -= d / dm * u[1];
     }

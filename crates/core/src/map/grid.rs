@@ -197,7 +197,7 @@ impl Grid {
     #[inline]
     pub fn cell_of(&self, p: [f64; 2]) -> (isize, isize) {
         let (c, r) = self.to_cell_coords(p);
-        (r.floor() as isize, c.floor() as isize)
+        (floor_isize(r), floor_isize(c))
     }
 
     /// Keeps only the largest 4-connected free component; returns how many
@@ -288,5 +288,60 @@ mod tests {
         assert_eq!(g.keep_largest_component(), 1);
         assert_eq!(g.free_cells(), 5);
         assert!(!g.is_free(8, 8));
+    }
+}
+
+/// `x.floor() as isize`, to the bit, without the libm call that `floor`
+/// costs on the baseline x86-64 target (no SSE4.1 `roundsd`): the rule-based
+/// robots' wall rays spent a fifth of their time in it. NaN gives 0 and
+/// out-of-range values saturate, as the cast does.
+#[inline(always)]
+pub fn floor_isize(x: f64) -> isize {
+    let t = x as i64; // rounds towards zero, saturates, NaN -> 0
+    t.saturating_sub(((t as f64) > x) as i64) as isize
+}
+
+#[cfg(test)]
+mod floor_tests {
+    use super::floor_isize;
+
+    #[test]
+    fn floor_isize_is_floor_as_isize_to_the_bit() {
+        let mut xs = vec![
+            0.0,
+            -0.0,
+            0.5,
+            -0.5,
+            1.0,
+            -1.0,
+            1.0 - 1e-16,
+            -1e-300,
+            2.5e15,
+            -2.5e15,
+            4503599627370495.5,
+            -4503599627370495.5,
+            9.3e18,
+            -9.3e18,
+            1e300,
+            -1e300,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NAN,
+            f64::MIN_POSITIVE,
+            -f64::MIN_POSITIVE,
+        ];
+        let mut state = 0x9E37_79B9_7F4A_7C15u64;
+        for _ in 0..100_000 {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            // Cell coordinates of points near and far from the grid, and
+            // values a hair either side of integers.
+            let x = (state % 2_000_000) as f64 / 1000.0 - 1000.0;
+            xs.extend([x, x.round(), x.round() + 1e-12, x.round() - 1e-12]);
+        }
+        for x in xs {
+            assert_eq!(floor_isize(x), x.floor() as isize, "x = {x:e}");
+        }
     }
 }

@@ -5,7 +5,8 @@
 //! robots' long wall rays (spec §7) are sampled per query; the clearance lets
 //! them skip samples that cannot be in an obstacle.
 
-use super::grid::{Grid, CELL_SIZE};
+use super::grid::{floor_isize, Grid, CELL_SIZE};
+use std::sync::atomic::{AtomicU8, Ordering};
 
 /// Obstacle border around the grid in the padded copy; covers the corner of a
 /// rotated 48x48 patch (24 * sqrt 2 < 34 cells) and short rays.
@@ -19,15 +20,19 @@ const HALF_DIAG: f64 = CELL_SIZE * std::f64::consts::SQRT_2 / 2.0;
 /// Sample spacing of the rule-based robots' wall rays (spec §7).
 pub const WALL_RAY_STEP: f64 = 0.1;
 
-/// Unit vectors of the 12 world rays, with exact zeros on the axes.
+/// Unit vectors of the 12 world rays, with exact zeros on the axes
+/// (computed once: every robot's wall force reads them each step).
 pub fn ray_dirs() -> [[f64; 2]; NUM_RAYS] {
-    let mut dirs = [[0.0; 2]; NUM_RAYS];
-    for (m, d) in dirs.iter_mut().enumerate() {
-        let a = (m as f64 * 30.0).to_radians();
-        let snap = |v: f64| if v.abs() < 1e-12 { 0.0 } else { v };
-        *d = [snap(a.cos()), snap(a.sin())];
-    }
-    dirs
+    static DIRS: std::sync::OnceLock<[[f64; 2]; NUM_RAYS]> = std::sync::OnceLock::new();
+    *DIRS.get_or_init(|| {
+        let mut dirs = [[0.0; 2]; NUM_RAYS];
+        for (m, d) in dirs.iter_mut().enumerate() {
+            let a = (m as f64 * 30.0).to_radians();
+            let snap = |v: f64| if v.abs() < 1e-12 { 0.0 } else { v };
+            *d = [snap(a.cos()), snap(a.sin())];
+        }
+        dirs
+    })
 }
 
 pub struct PreparedMap {
@@ -40,6 +45,18 @@ pub struct PreparedMap {
     pub clearance: Vec<f32>,
     /// Grid indices of free cells whose centre is more than 0.4 m from any obstacle.
     pub spawn_cells: Vec<u32>,
+    /// Per padded cell, like `obstacle`, times world ray m (index cell *
+    /// NUM_RAYS + m): after a wall-ray sample in this cell, the step to the
+    /// next sample of ray m that could lie in an obstacle (`ray_step_of`),
+    /// or `IN_OBSTACLE`; 0 until a ray first needs it. Filled lazily (most
+    /// cells never hold a robot, and preparing all of them took 80 ms a
+    /// map); any thread may fill an entry, always with the same value.
+    ray_steps: Vec<AtomicU8>,
+    /// Per padded cell (row, col): 1 when any of (row, col), (row, col + 1),
+    /// (row + 1, col), (row + 1, col + 1) is an obstacle, so that one load
+    /// says whether a unit square with its corner in the cell touches one
+    /// (`ray_step_of`). The last row and column are 1.
+    square_blocked: Vec<u8>,
     /// Unique per prepared map, so reusable buffers know when the map changed.
     pub id: u64,
 }
@@ -75,12 +92,25 @@ impl PreparedMap {
             .filter(|&i| clearance[i] as f64 > PLACEMENT_CLEARANCE + 1e-9)
             .map(|i| i as u32)
             .collect();
+        let ray_steps = (0..stride * stride * NUM_RAYS)
+            .map(|_| AtomicU8::new(0))
+            .collect();
+        let mut square_blocked = vec![1u8; stride * stride];
+        for r in 0..stride - 1 {
+            for c in 0..stride - 1 {
+                let i = r * stride + c;
+                square_blocked[i] =
+                    obstacle[i] | obstacle[i + 1] | obstacle[i + stride] | obstacle[i + stride + 1];
+            }
+        }
         PreparedMap {
             grid,
             stride,
             obstacle,
             clearance,
             spawn_cells,
+            ray_steps,
+            square_blocked,
             id: fresh_id(),
         }
     }
@@ -130,8 +160,8 @@ impl PreparedMap {
         }
         let (x, y) = self.grid.to_cell_coords(p);
         let rr = radius / CELL_SIZE;
-        let (r0, r1) = ((y - rr).floor() as isize, (y + rr).floor() as isize);
-        let (c0, c1) = ((x - rr).floor() as isize, (x + rr).floor() as isize);
+        let (r0, r1) = (floor_isize(y - rr), floor_isize(y + rr));
+        let (c0, c1) = (floor_isize(x - rr), floor_isize(x + rr));
         for row in r0..=r1 {
             let dy = (row as f64 - y).max(0.0).max(y - (row + 1) as f64);
             for col in c0..=c1 {
@@ -152,7 +182,7 @@ impl PreparedMap {
     pub fn ray_distance(&self, p: [f64; 2], dir: [f64; 2], max: f64) -> f64 {
         let (x, y) = self.grid.to_cell_coords(p);
         let (dx, dy) = (dir[0], -dir[1]);
-        let (mut col, mut row) = (x.floor() as isize, y.floor() as isize);
+        let (mut col, mut row) = (floor_isize(x), floor_isize(y));
         if self.blocked(row, col) {
             return 0.0;
         }
@@ -187,36 +217,46 @@ impl PreparedMap {
         }
     }
 
-    /// The rule-based robots' wall distance d_m of spec §7: sample `p + s dir`
-    /// at s = 0.1, 0.2, ... m up to `max`; the first sample inside an obstacle
-    /// cell (or outside the grid) gives d_m = s, and d_m = `max` if none is.
-    /// Being sampled, it depends on `p` itself, not only on its cell, and can
-    /// step over an obstacle corner thinner than the step: that is the
-    /// definition the reference's robots follow, so it is kept exactly. The
-    /// clearance only skips samples that provably lie in free cells: a point
-    /// in cell X is at least clearance(X) - 2 half-diagonals from any point of
-    /// an obstacle cell.
-    pub fn stepped_wall_distance(&self, p: [f64; 2], dir: [f64; 2], max: f64) -> f64 {
+    /// The rule-based robots' wall distance d_m of spec §7 along world ray
+    /// `m` (`ray_dirs()[m]`): sample `p + s dir` at s = 0.1, 0.2, ... m up to
+    /// `max`; the first sample inside an obstacle cell (or outside the grid)
+    /// gives d_m = s, and d_m = `max` if none is. Being sampled, it depends
+    /// on `p` itself, not only on its cell, and can step over an obstacle
+    /// corner thinner than the step: that is the definition the reference's
+    /// robots follow, so it is kept exactly. Only samples that provably lie
+    /// in free cells are skipped (`ray_steps_from`).
+    pub fn stepped_wall_distance(&self, p: [f64; 2], m: usize, max: f64) -> f64 {
+        let dir = ray_dirs()[m];
         let samples = (max / WALL_RAY_STEP + 1e-9).floor() as usize;
+        let lim = (self.side() + PAD) as isize;
         let mut k = 1;
         while k <= samples {
             let s = k as f64 * WALL_RAY_STEP;
             let q = [p[0] + s * dir[0], p[1] + s * dir[1]];
             let (row, col) = self.grid.cell_of(q);
-            if self.blocked(row, col) {
+            if row < -(PAD as isize) || col < -(PAD as isize) || row >= lim || col >= lim {
                 return s;
             }
-            let safe = self.clearance[row as usize * self.side() + col as usize] as f64
-                - 2.0 * HALF_DIAG
-                - 1e-6;
-            k += ((safe / WALL_RAY_STEP).floor() as usize).max(1);
+            // One load says both whether the sample is in an obstacle and
+            // which sample could be the next one in an obstacle.
+            let entry = &self.ray_steps[self.padded_index(row, col) * NUM_RAYS + m];
+            let mut step = entry.load(Ordering::Relaxed);
+            if step == 0 {
+                step = self.ray_step_of(row, col, m);
+                entry.store(step, Ordering::Relaxed);
+            }
+            if step == IN_OBSTACLE {
+                return s;
+            }
+            k += step as usize;
         }
         max
     }
 
     /// `stepped_wall_distance` testing every sample (the definition itself,
     /// for tests and for checking the skipping).
-    pub fn stepped_wall_distance_naive(&self, p: [f64; 2], dir: [f64; 2], max: f64) -> f64 {
+    pub fn stepped_wall_distance_naive(&self, p: [f64; 2], m: usize, max: f64) -> f64 {
+        let dir = ray_dirs()[m];
         let samples = (max / WALL_RAY_STEP + 1e-9).floor() as usize;
         for k in 1..=samples {
             let s = k as f64 * WALL_RAY_STEP;
@@ -226,6 +266,64 @@ impl PreparedMap {
             }
         }
         max
+    }
+}
+
+/// `ray_steps`' mark of a sample in an obstacle cell.
+const IN_OBSTACLE: u8 = u8::MAX;
+
+impl PreparedMap {
+    /// After a wall-ray sample in grid cell (row, col), padding included:
+    /// the step along ray m to the next sample that could lie in an
+    /// obstacle cell, or `IN_OBSTACLE`. Sample k + i lies in the cell's
+    /// square moved i steps (2i cells) along the ray, wherever in the square
+    /// sample k was; when every cell that moved square touches (closed,
+    /// widened by 1e-6 cells against rounding) is free, sample k + i is in a
+    /// free cell. The clearance gives a bound for every ray at once: a point
+    /// of the cell is at least clearance - 2 half-diagonals from any point
+    /// of an obstacle cell. At least 1 (the next sample is the one to test),
+    /// at most 128 (a shorter step is as exact).
+    fn ray_step_of(&self, row: isize, col: isize, m: usize) -> u8 {
+        const MAX: usize = 32;
+        const EPS: f64 = 1e-6;
+        if self.blocked(row, col) {
+            return IN_OBSTACLE;
+        }
+        let clearance = self.clearance[row as usize * self.side() + col as usize];
+        let safe = clearance as f64 - 2.0 * HALF_DIAG - 1e-6;
+        let by_clearance = floor_isize(safe / WALL_RAY_STEP).clamp(1, MAX as isize) as usize;
+        let cells_per_step = WALL_RAY_STEP / CELL_SIZE;
+        // Grid columns grow with x, rows with -y.
+        let dir = ray_dirs()[m];
+        let (dc, dr) = (dir[0] * cells_per_step, -dir[1] * cells_per_step);
+        // Samples after this one known to be free; the clearance's are.
+        let mut known_free = by_clearance - 1;
+        while known_free + 1 < MAX {
+            let i = (known_free + 1) as f64;
+            let (c0, r0) = (col as f64 + i * dc - EPS, row as f64 + i * dr - EPS);
+            let (c1, r1) = (c0 + 1.0 + 2.0 * EPS, r0 + 1.0 + 2.0 * EPS);
+            let (rows, cols) = (
+                floor_isize(r0)..=floor_isize(r1),
+                floor_isize(c0)..=floor_isize(c1),
+            );
+            let lim = (self.side() + PAD - 1) as isize;
+            let all_free = if rows.end() - rows.start() == 1
+                && cols.end() - cols.start() == 1
+                && (-(PAD as isize)..lim).contains(rows.start())
+                && (-(PAD as isize)..lim).contains(cols.start())
+            {
+                // The usual case: the square touches 2 x 2 cells.
+                self.square_blocked[self.padded_index(*rows.start(), *cols.start())] == 0
+            } else {
+                rows.clone()
+                    .all(|r| cols.clone().all(|c| !self.blocked(r, c)))
+            };
+            if !all_free {
+                break;
+            }
+            known_free += 1;
+        }
+        (known_free + 1) as u8
     }
 }
 
@@ -351,15 +449,15 @@ mod tests {
         let m = PreparedMap::new(room(100, 140, 100, 160));
         let dirs = ray_dirs();
         // East from x = -1.03: samples at -0.93, ..., -0.03 are free, 0.07 is not.
-        let d = m.stepped_wall_distance([-1.03, 2.0], dirs[0], 16.0);
+        let d = m.stepped_wall_distance([-1.03, 2.0], 0, 16.0);
         assert!((d - 1.1).abs() < 1e-12, "{d}");
         // The exact distance is 1.03; the stepped one rounds up to the next sample.
         assert!((m.ray_distance([-1.03, 2.0], dirs[0], 16.0) - 1.03).abs() < 1e-9);
         // Moving the robot 0.02 m inside its cell changes the answer: 1.01 -> 1.1, 0.99 -> 1.0.
-        let d = m.stepped_wall_distance([-0.99, 2.0], dirs[0], 16.0);
+        let d = m.stepped_wall_distance([-0.99, 2.0], 0, 16.0);
         assert!((d - 1.0).abs() < 1e-12, "{d}");
         // Nothing within the limit: D.
-        assert_eq!(m.stepped_wall_distance([-1.03, 2.0], dirs[0], 0.5), 0.5);
+        assert_eq!(m.stepped_wall_distance([-1.03, 2.0], 0, 0.5), 0.5);
     }
 
     #[test]
@@ -375,15 +473,23 @@ mod tests {
                 g.set_free(r, c, false);
             }
         }
-        let m = PreparedMap::new(g);
+        // And scattered cells and short bars, so that rays graze corners
+        // at every angle.
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
-        for _ in 0..4000 {
+        for _ in 0..300 {
+            let (r, c) = (rng.gen_range(40..280), rng.gen_range(40..280));
+            for k in 0..rng.gen_range(1..4) {
+                g.set_free(r, c + k, false);
+            }
+        }
+        let m = PreparedMap::new(g);
+        for _ in 0..40_000 {
             let p = [rng.gen_range(-6.0..6.0), rng.gen_range(-6.0..6.0)];
-            let dir = ray_dirs()[rng.gen_range(0..NUM_RAYS)];
+            let ray = rng.gen_range(0..NUM_RAYS);
             assert_eq!(
-                m.stepped_wall_distance(p, dir, 16.0).to_bits(),
-                m.stepped_wall_distance_naive(p, dir, 16.0).to_bits(),
-                "{p:?} {dir:?}"
+                m.stepped_wall_distance(p, ray, 16.0).to_bits(),
+                m.stepped_wall_distance_naive(p, ray, 16.0).to_bits(),
+                "{p:?} ray {ray}"
             );
         }
     }
