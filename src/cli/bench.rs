@@ -166,7 +166,14 @@ struct Row {
     per_op: Duration,
     unit: &'static str,
     reference: Option<f64>,
+    /// Microseconds per op measured before the environment's speed work
+    /// (`BEFORE_DATE`), where that row was measured the same way.
+    before_us: Option<f64>,
 }
+
+/// When the `before_us` figures were measured: `bench --threads 1` on the
+/// Gibson maps, on a 2-core machine of the kind the docs' tables come from.
+pub(super) const BEFORE_DATE: &str = "2026-11-26";
 
 /// Repeats `op` (which reports how many units it did) for about `secs` seconds.
 fn measure(secs: f64, mut op: impl FnMut() -> u64) -> Duration {
@@ -286,18 +293,21 @@ pub fn run(args: BenchArgs) -> Result<()> {
     };
 
     let one_pool = rayon::ThreadPoolBuilder::new().num_threads(1).build()?;
-    for (what, both, obs, reference) in [
+    let on_gibson = env_spec == "gibson";
+    for (what, both, obs, reference, before_us) in [
         (
             "env step, 3v1, observations, rule-based target, random captors, 1 core",
             false,
             true,
             Some(275.0),
+            11.44,
         ),
         (
             "env step, 3v1, no observations, both sides heuristic, 1 core",
             true,
             false,
             Some(160.0),
+            11.84,
         ),
     ] {
         let mut env = TrapEnv::new(cfg.clone(), maps.clone()).map_err(anyhow::Error::msg)?;
@@ -315,6 +325,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
             per_op: per,
             unit: "steps/s",
             reference,
+            before_us: on_gibson.then_some(before_us),
         });
     }
 
@@ -337,6 +348,8 @@ pub fn run(args: BenchArgs) -> Result<()> {
         per_op: per,
         unit: "steps/s",
         reference: Some(275.0 * threads as f64),
+        // 65.7 k world-steps/s on one thread with 64 worlds.
+        before_us: (on_gibson && threads == 1 && args.envs == 64).then_some(1e6 / 65.7e3),
     });
 
     // One observation build (vector + 48x48 patch) of one robot.
@@ -355,15 +368,16 @@ pub fn run(args: BenchArgs) -> Result<()> {
         per_op: per,
         unit: "obs/s",
         reference: None,
+        before_us: on_gibson.then_some(1.90),
     });
 
     // ASZ on the smallest, a medium and the largest Gibson map, over random placements.
     if gibson {
         let dir = map::catalog::gibson_dir().unwrap();
-        for (name, reference_ms) in [
-            ("Kettle_floor_trav_0_v3", Some(14.0)),
-            ("Ladue_floor_trav_0_v3", None),
-            ("Graceville_floor_trav_0_v3", Some(23.0)),
+        for (name, reference_ms, before_us) in [
+            ("Kettle_floor_trav_0_v3", Some(14.0), 202.0),
+            ("Ladue_floor_trav_0_v3", None, 587.0),
+            ("Graceville_floor_trav_0_v3", Some(23.0), 1185.0),
         ] {
             let m = Arc::new(PreparedMap::new(map::load_png(
                 &dir.join(format!("{name}.png")),
@@ -390,6 +404,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
                 per_op: per,
                 unit: "ASZ/s",
                 reference: reference_ms.map(|ms: f64| 1000.0 / ms),
+                before_us: Some(before_us),
             });
             let per = measure(secs, || {
                 let (c, t) = &starts[i % starts.len()];
@@ -404,6 +419,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
                 per_op: per,
                 unit: "marches/s",
                 reference: None,
+                before_us: None,
             });
         }
     }
@@ -412,24 +428,29 @@ pub fn run(args: BenchArgs) -> Result<()> {
         "maps for env rows: {env_spec}; {:.1} s per row; {threads} rayon threads\n",
         secs
     );
-    println!("| what | time per op | rate | reference (Python, same machine) | speed-up |");
-    println!("|---|---|---|---|---|");
+    println!(
+        "| what | time per op | rate | {BEFORE_DATE} | x {BEFORE_DATE} | reference (Python, same machine) | speed-up |"
+    );
+    println!("|---|---|---|---|---|---|---|");
     for r in rows {
+        let per_us = r.per_op.as_secs_f64() * 1e6;
         let rate = 1.0 / r.per_op.as_secs_f64();
         let (reference, ratio) = match r.reference {
             Some(x) => (format!("{x:.0} {}", r.unit), format!("{:.0}x", rate / x)),
             None => ("-".into(), "-".into()),
         };
+        let (before, speedup) = match r.before_us {
+            Some(b) => (format!("{b:.2} us"), format!("{:.2}x", b / per_us)),
+            None => ("-".into(), "-".into()),
+        };
         println!(
-            "| {} | {:.2} us | {:.0} {} | {} | {} |",
-            r.what,
-            r.per_op.as_secs_f64() * 1e6,
-            rate,
-            r.unit,
-            reference,
-            ratio
+            "| {} | {per_us:.2} us | {rate:.0} {} | {before} | {speedup} | {reference} | {ratio} |",
+            r.what, r.unit,
         );
     }
+    println!(
+        "\n{BEFORE_DATE}: the same row measured with `bench --threads 1` on the Gibson maps before the environment's speed work; compare ratios measured side by side on a quiet machine"
+    );
     // The ASZ-greedy captor does 4 ASZ per captor per step.
     super::bench_greedy::run(&cfg, &maps, &env_spec, secs)
 }

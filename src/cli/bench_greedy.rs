@@ -67,8 +67,14 @@ pub fn run(
         "\nASZ-greedy, one decision for {k} captors, over {} states of expert-captor episodes on {env_spec} (every 20th step of the first 200, 8 episodes), {secs:.1} s per row, 1 thread\n",
         states.len()
     );
-    println!("| controller | cell | time per decision | decisions/s | x greedy | same action as greedy |");
-    println!("|---|---|---|---|---|---|");
+    // The spec's cells' decision before the environment's speed work
+    // (bench.rs's BEFORE_DATE), on the Gibson maps.
+    let before_ms = (env_spec == "gibson").then_some(7.86);
+    println!(
+        "| controller | cell | time per decision | decisions/s | x greedy | {before} | x {before} | same action as greedy |",
+        before = super::bench::BEFORE_DATE
+    );
+    println!("|---|---|---|---|---|---|---|---|");
     let mut first_rate = None;
     for coarsening in COARSENINGS {
         let mut greedy = AszGreedy::new(coarsening);
@@ -92,8 +98,12 @@ pub fn run(
         let per = start.elapsed().as_secs_f64() / decisions as f64;
         let rate = 1.0 / per;
         let base = *first_rate.get_or_insert(rate);
+        let (before, speedup) = match before_ms.filter(|_| coarsening == 1) {
+            Some(b) => (format!("{b:.2} ms"), format!("{:.2}x", b / (per * 1e3))),
+            None => ("-".into(), "-".into()),
+        };
         println!(
-            "| {} | {:.2} m | {:.2} ms | {:.0} | {:.1}x | {:.1}% ({same} of {total}) |",
+            "| {} | {:.2} m | {:.2} ms | {:.0} | {:.1}x | {before} | {speedup} | {:.1}% ({same} of {total}) |",
             greedy.name(),
             0.05 * coarsening as f64,
             per * 1e3,
