@@ -224,7 +224,7 @@ impl PreparedMap {
     /// on `p` itself, not only on its cell, and can step over an obstacle
     /// corner thinner than the step: that is the definition the reference's
     /// robots follow, so it is kept exactly. Only samples that provably lie
-    /// in free cells are skipped (`ray_steps_from`).
+    /// in free cells are skipped (`ray_step_of`).
     pub fn stepped_wall_distance(&self, p: [f64; 2], m: usize, max: f64) -> f64 {
         let dir = ray_dirs()[m];
         let samples = (max / WALL_RAY_STEP + 1e-9).floor() as usize;
