@@ -346,3 +346,97 @@ fn randomised_experts_draw_their_constants_per_episode_and_replay_with_the_seed(
         .to_string()
         .contains("expert:SEED"));
 }
+
+/// The ASZ-greedy rule as the spec states it, one full march per move: the
+/// fast path (turns sharing a march, moves abandoned once their region
+/// outgrows the smallest) must pick the same action on every state.
+fn greedy_by_definition(env: &TrapEnv, i: usize, fm: &mut t2e::asz::FastMarching) -> Action {
+    let actions = [
+        Action::Forward,
+        Action::Backward,
+        Action::TurnRight,
+        Action::TurnLeft,
+    ];
+    let (mut captors, target) = env.asz_sources();
+    let sizes: Vec<usize> = actions
+        .iter()
+        .map(|&a| {
+            captors[i] = Source {
+                pos: moved_alone(env, i, a).pos,
+                speed: env.spec(i).max_speed,
+            };
+            fm.asz_cells(&**env.map(), target, &captors)
+        })
+        .collect();
+    if sizes.iter().any(|&s| s != sizes[0]) {
+        let best = (0..4).min_by_key(|&a| sizes[a]).unwrap();
+        return actions[best];
+    }
+    let map = env.map();
+    fm.distance_field(&**map, target.pos);
+    let geodesic = |a: Action| {
+        let (r, c) = map.grid.cell_of(moved_alone(env, i, a).pos);
+        if map.grid.is_free(r, c) {
+            fm.time(map.padded_index(r, c))
+        } else {
+            f32::INFINITY
+        }
+    };
+    let best = (0..4)
+        .min_by(|&a, &b| geodesic(actions[a]).total_cmp(&geodesic(actions[b])))
+        .unwrap();
+    actions[best]
+}
+
+#[test]
+fn fast_greedy_captors_pick_the_definitions_action_on_real_states() {
+    let maps = t2e::map::catalog::load_prepared("gibson").unwrap();
+    let cfg = EnvConfig {
+        num_captors: 3,
+        episode_length: 500,
+        ..EnvConfig::default()
+    };
+    let mut env = TrapEnv::new(cfg, maps).unwrap();
+    let mut greedy = AszGreedy::default();
+    let mut fm = t2e::asz::FastMarching::new();
+    let mut rewards = vec![0f32; 4];
+    let (mut decisions, mut by_size) = (0, 0);
+    for seed in 0..26u64 {
+        env.reset_state(seed).unwrap();
+        // States along an episode of the rule-based robots, where captors
+        // close in and the moves' regions differ.
+        for step in 0..(40 + 9 * seed) {
+            let mut acts = [Action::Stop; 4];
+            Heuristic.act(&env, Side::Captors, &mut acts[..3]);
+            Heuristic.act(&env, Side::Target, &mut acts[3..]);
+            env.step_state(&acts, &mut rewards);
+            if env.is_done() {
+                break;
+            }
+            if step % 20 != 19 {
+                continue;
+            }
+            for i in 0..3 {
+                let expected = greedy_by_definition(&env, i, &mut fm);
+                assert_eq!(
+                    greedy.captor_action(&env, i),
+                    expected,
+                    "seed {seed}, step {step}, captor {i}"
+                );
+                decisions += 1;
+                let (mut captors, target) = env.asz_sources();
+                let mut sizes = [0; 2];
+                for (k, a) in [Action::Forward, Action::Backward].into_iter().enumerate() {
+                    captors[i].pos = moved_alone(&env, i, a).pos;
+                    sizes[k] = fm.asz_cells(&**env.map(), target, &captors);
+                }
+                by_size += usize::from(sizes[0] != sizes[1]);
+            }
+        }
+    }
+    // Most decisions must be decided by the sizes, or the pruning is untested.
+    assert!(
+        decisions >= 100 && by_size * 2 > decisions,
+        "{decisions} decisions, {by_size} by size"
+    );
+}
