@@ -129,6 +129,12 @@ pub struct ExploiterConfig {
     pub win_rate: f64,
     /// ...or after this many env steps anyway.
     pub timeout_env_steps: u64,
+    /// The target exploiter's `heuristic_prior` (0: none), in place of the
+    /// main target's (`[target.net]`): a main target held near the
+    /// rule-based one by its prior still wants an exploiter that is free
+    /// to find the captors' weaknesses. Left out: the main target's.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub target_prior: Option<f64>,
 }
 
 impl Default for ExploiterConfig {
@@ -138,6 +144,7 @@ impl Default for ExploiterConfig {
             target: false,
             win_rate: 0.7,
             timeout_env_steps: 200_000,
+            target_prior: None,
         }
     }
 }
@@ -226,6 +233,9 @@ impl LeagueConfig {
         if seat.is_exploiter() {
             t.name = seat.name();
             t.seed ^= 0xE7_0000;
+            if let (Side::Target, Some(prior)) = (seat.side, self.exploiters.target_prior) {
+                t.target.net.heuristic_prior = prior;
+            }
         }
         t
     }
@@ -361,6 +371,22 @@ impl LeagueConfig {
             1.0,
             true,
         )?;
+        if let Some(prior) = self.exploiters.target_prior {
+            in_interval(
+                "exploiters.target_prior",
+                prior,
+                0.0,
+                crate::nn::prior::MAX_WEIGHT,
+                true,
+            )?;
+            if !self.exploiters.target {
+                return Err(ConfigError::new(
+                    "exploiters.target_prior",
+                    prior,
+                    "the league has no target exploiter (exploiters.target = false)",
+                ));
+            }
+        }
         let at_least_one = 1..=u64::MAX;
         in_range(
             "exploiters.timeout_env_steps",
@@ -458,6 +484,49 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(err.starts_with("target.play = \"heuristic\""), "{err}");
+    }
+
+    #[test]
+    fn the_target_exploiter_takes_its_own_prior_and_nothing_else_changes() {
+        let text = "[target.net]\nheuristic_prior = 10.0\n[exploiters]\ntarget = true\n";
+        let main_only = LeagueConfig::parse(text).unwrap();
+        let seat = |side| Seat::exploiter(side);
+        let prior =
+            |cfg: &LeagueConfig, s: Seat| cfg.seat_train_config(s).target.net.heuristic_prior;
+        // Left out, the exploiter leans on the main target's prior, and the
+        // stored config (its hash) is what it was.
+        assert_eq!(prior(&main_only, seat(Side::Target)), 10.0);
+        assert!(!toml::to_string(&main_only)
+            .unwrap()
+            .contains("target_prior"));
+        let free = LeagueConfig::parse(&format!("{text}target_prior = 0.0\n")).unwrap();
+        assert_eq!(prior(&free, seat(Side::Target)), 0.0);
+        assert_eq!(prior(&free, Seat::main(Side::Target)), 10.0);
+        assert_eq!(
+            free.seat_train_config(seat(Side::Captors)),
+            main_only.seat_train_config(seat(Side::Captors))
+        );
+        // Out of range, or with no target exploiter to take it: refused, named.
+        for (bad, why) in [
+            ("target_prior = -1.0\n", "must be"),
+            ("target_prior = inf\n", "must be"),
+            ("target_prior = 21.0\n", "must be"),
+        ] {
+            let err = LeagueConfig::parse(&format!("{text}{bad}"))
+                .unwrap_err()
+                .to_string();
+            assert!(
+                err.starts_with("exploiters.target_prior") && err.contains(why),
+                "{err}"
+            );
+        }
+        let err = LeagueConfig::parse("[exploiters]\ntarget_prior = 0.0\n")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.starts_with("exploiters.target_prior") && err.contains("no target exploiter"),
+            "{err}"
+        );
     }
 
     #[test]
