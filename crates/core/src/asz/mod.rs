@@ -347,19 +347,6 @@ impl FastMarching {
         sources: &[Source],
         stop_label: Option<u8>,
     ) -> usize {
-        self.march_capped(map, sources, stop_label, usize::MAX)
-    }
-
-    /// `march`, abandoned as soon as more than `cap` cells are settled with
-    /// `stop_label`: the count then returned exceeds `cap` but is not the
-    /// region's size (a planner that keeps the smallest region needs no more).
-    fn march_capped<L: Lattice + ?Sized>(
-        &mut self,
-        map: &L,
-        sources: &[Source],
-        stop_label: Option<u8>,
-        cap: usize,
-    ) -> usize {
         assert!(sources.len() < NO_LABEL as usize);
         self.prepare(map);
         let s = self.stride;
@@ -389,9 +376,6 @@ impl FastMarching {
             if Some(label) == stop_label {
                 pending_stop -= 1;
                 settled_stop += 1;
-                if settled_stop > cap {
-                    break;
-                }
             }
             let cost = costs[label as usize];
             debug_assert!(cell >= s && cell + s < self.cells.len());
@@ -465,38 +449,6 @@ impl FastMarching {
         sources.push(target);
         self.march(map, &sources, Some(captors.len() as u8))
     }
-}
-
-/// |ASZ| in cells for each of several placements of one robot, the others
-/// fixed; `sources[moving]` is replaced by each of `placements` in turn.
-/// With `smallest_only`, a size larger than the smallest one seen so far
-/// may be abandoned early and reported as any number above that smallest
-/// one: the smallest sizes, their positions and whether all sizes are equal
-/// stay exact. Placements equal to the bit to an earlier one reuse its size
-/// (a robot's two turns leave it at the same position).
-pub fn asz_sizes_over_placements<L: Lattice + ?Sized, const N: usize>(
-    fm: &mut FastMarching,
-    map: &L,
-    sources: &mut [Source],
-    target: usize,
-    moving: usize,
-    placements: &[[f64; 2]; N],
-    smallest_only: bool,
-) -> [usize; N] {
-    let mut sizes = [0usize; N];
-    let mut smallest = usize::MAX;
-    for a in 0..N {
-        let bits = placements[a].map(f64::to_bits);
-        if let Some(b) = (0..a).find(|&b| placements[b].map(f64::to_bits) == bits) {
-            sizes[a] = sizes[b];
-            continue;
-        }
-        sources[moving].pos = placements[a];
-        let cap = if smallest_only { smallest } else { usize::MAX };
-        sizes[a] = fm.march_capped(map, sources, Some(target as u8), cap);
-        smallest = smallest.min(sizes[a]);
-    }
-    sizes
 }
 
 /// |ASZ| in m^2.
@@ -663,45 +615,5 @@ mod tests {
             diff < 0.01,
             "one pass {fast} vs separate marches {separate}"
         );
-    }
-
-    #[test]
-    fn sizes_over_placements_match_one_march_each_and_keep_the_smallest_exact() {
-        let map = PreparedMap::new(room(60, 260, 60, 260));
-        let mut fm = FastMarching::new();
-        let at = |r, c| map.grid.cell_center(r, c);
-        let src = |p| Source { pos: p, speed: 1.0 };
-        let target = src(at(150, 150));
-        let captors = [src(at(100, 100)), src(at(100, 220)), src(at(230, 160))];
-        // Captor 2 tried at five places, the third repeating the first.
-        let places = [
-            at(200, 160),
-            at(160, 100),
-            at(200, 160),
-            at(240, 240),
-            at(170, 150),
-        ];
-        let by_definition = places.map(|p| {
-            let mut c = captors;
-            c[2].pos = p;
-            fm.asz_cells(&map, target, &c)
-        });
-        let mut sources = captors.to_vec();
-        sources.push(target);
-        let all = asz_sizes_over_placements(&mut fm, &map, &mut sources, 3, 2, &places, false);
-        assert_eq!(all, by_definition);
-        let smallest = *by_definition.iter().min().unwrap();
-        assert!(by_definition.iter().filter(|&&s| s == smallest).count() == 1);
-        assert!(by_definition.iter().any(|&s| s > smallest + 100));
-        let pruned = asz_sizes_over_placements(&mut fm, &map, &mut sources, 3, 2, &places, true);
-        for (p, d) in pruned.iter().zip(by_definition) {
-            if d == smallest {
-                assert_eq!(*p, d);
-            } else {
-                assert!(*p > smallest && *p <= d, "pruned {p}, by definition {d}");
-            }
-        }
-        // Some march was abandoned, or the test shows nothing.
-        assert_ne!(pruned, by_definition);
     }
 }

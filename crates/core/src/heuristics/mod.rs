@@ -2,7 +2,7 @@
 //! robots, each behind the one `Controller` trait. The names users give
 //! controllers live one level up, in `crate::controllers`.
 
-use crate::asz::{asz_sizes_over_placements, CoarseLattice, FastMarching, Lattice, Source};
+use crate::asz::{CoarseLattice, FastMarching, Lattice, Source};
 use crate::env::physics::{self, dist};
 use crate::env::{Action, Controller, Side, TrapEnv};
 use crate::map::prepared::ray_dirs;
@@ -358,21 +358,7 @@ fn target_asz_sizes<L: Lattice + ?Sized>(
     speed: f64,
     moved: &[[f64; 2]; 4],
 ) -> [usize; 4] {
-    let mut sources = captors.to_vec();
-    sources.push(Source {
-        pos: moved[0],
-        speed,
-    });
-    let target = captors.len();
-    asz_sizes_over_placements(
-        marching,
-        lattice,
-        &mut sources,
-        target,
-        target,
-        moved,
-        false,
-    )
+    moved.map(|pos| marching.asz_cells(lattice, Source { pos, speed }, captors))
 }
 
 /// The index of the greedy action, given where each action takes captor `i`.
@@ -384,21 +370,12 @@ fn greedy_choice<L: Lattice>(
     i: usize,
     moved: &[[f64; 2]; 4],
 ) -> usize {
-    let (mut sources, target) = env.asz_sources();
-    sources[i].speed = env.spec(i).max_speed;
-    sources.push(target);
-    let target_label = sources.len() - 1;
-    // Only the smallest size and whether all are equal decide, so a move
-    // whose region has outgrown the smallest so far is abandoned.
-    let sizes = asz_sizes_over_placements(
-        marching,
-        lattice,
-        &mut sources,
-        target_label,
-        i,
-        moved,
-        true,
-    );
+    let (mut captors, target) = env.asz_sources();
+    let speed = env.spec(i).max_speed;
+    let sizes = moved.map(|pos| {
+        captors[i] = Source { pos, speed };
+        marching.asz_cells(lattice, target, &captors)
+    });
     if sizes.iter().any(|&s| s != sizes[0]) {
         return (0..4).min_by_key(|&a| sizes[a]).unwrap();
     }
