@@ -508,25 +508,20 @@ mod tests {
         );
         // Out of range, or with no target exploiter to take it: refused, named.
         for (bad, why) in [
-            ("target_prior = -1.0\n", "must be"),
-            ("target_prior = inf\n", "must be"),
-            ("target_prior = 21.0\n", "must be"),
+            (format!("{text}target_prior = -1.0\n"), "must be"),
+            (format!("{text}target_prior = inf\n"), "must be"),
+            (format!("{text}target_prior = 21.0\n"), "must be"),
+            (
+                "[exploiters]\ntarget_prior = 0.0\n".to_string(),
+                "no target exploiter",
+            ),
         ] {
-            let err = LeagueConfig::parse(&format!("{text}{bad}"))
-                .unwrap_err()
-                .to_string();
+            let err = LeagueConfig::parse(&bad).unwrap_err().to_string();
             assert!(
                 err.starts_with("exploiters.target_prior") && err.contains(why),
                 "{err}"
             );
         }
-        let err = LeagueConfig::parse("[exploiters]\ntarget_prior = 0.0\n")
-            .unwrap_err()
-            .to_string();
-        assert!(
-            err.starts_with("exploiters.target_prior") && err.contains("no target exploiter"),
-            "{err}"
-        );
     }
 
     #[test]
