@@ -135,6 +135,19 @@ pub struct ExploiterConfig {
     /// to find the captors' weaknesses. Left out: the main target's.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub target_prior: Option<f64>,
+    /// false: the target exploiter never goes back to its initial weights
+    /// and adds a snapshot of itself every `snapshots.every_env_steps`,
+    /// winning or not (`win_rate` and `timeout_env_steps` then apply to
+    /// the captor exploiter only). It becomes a second target line that
+    /// keeps learning against captors-main, as naive co-evolution's target
+    /// does, and whose snapshots the main captors draw by PFSP. Left out
+    /// (true): it resets after each snapshot, as AlphaStar's exploiters do.
+    #[serde(skip_serializing_if = "is_true")]
+    pub target_resets: bool,
+}
+
+fn is_true(b: &bool) -> bool {
+    *b
 }
 
 impl Default for ExploiterConfig {
@@ -145,6 +158,7 @@ impl Default for ExploiterConfig {
             win_rate: 0.7,
             timeout_env_steps: 200_000,
             target_prior: None,
+            target_resets: true,
         }
     }
 }
@@ -155,6 +169,13 @@ impl ExploiterConfig {
             Side::Captors => self.captors,
             Side::Target => self.target,
         }
+    }
+
+    /// Whether `seat` goes back to its initial weights after each snapshot:
+    /// an exploiter does, unless it is the target exploiter and
+    /// `target_resets = false`.
+    pub fn resets_after_snapshot(&self, seat: Seat) -> bool {
+        seat.is_exploiter() && (seat.side == Side::Captors || self.target_resets)
     }
 }
 
@@ -223,11 +244,12 @@ impl LeagueConfig {
         }
     }
 
-    /// The training config of one main learner: its side learns; the other
+    /// The training config of `seat`'s learner: its side learns; the other
     /// side is played per world by opponents the league draws (a still
-    /// placeholder until the first draw).
-    /// The training config of a main learner; an exploiter's differs in its
-    /// name and seed (its own initial weights and episodes).
+    /// placeholder until the first draw). An exploiter's differs from its
+    /// side's main learner in its name and seed (its own initial weights
+    /// and episodes), and the target exploiter in its prior where
+    /// `exploiters.target_prior` is set.
     pub fn seat_train_config(&self, seat: Seat) -> TrainConfig {
         let mut t = self.train_config(seat.side);
         if seat.is_exploiter() {
@@ -386,6 +408,13 @@ impl LeagueConfig {
                     "the league has no target exploiter (exploiters.target = false)",
                 ));
             }
+        }
+        if !self.exploiters.target_resets && !self.exploiters.target {
+            return Err(ConfigError::new(
+                "exploiters.target_resets",
+                false,
+                "the league has no target exploiter (exploiters.target = false)",
+            ));
         }
         let at_least_one = 1..=u64::MAX;
         in_range(

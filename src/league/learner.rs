@@ -235,7 +235,6 @@ impl<'a> LeagueHooks<'a> {
                 Err(err) => {
                     // A member whose files are gone or corrupt leaves the pool; the league goes on.
                     tracing::warn!("quarantining {}: {err:#}", member.name);
-                    tracing::warn!("quarantining {}: {err:#}", member.name);
                     self.store.quarantine(member.id, &format!("{err:#}"))?;
                     self.refresh()?;
                     self.slots_window = None;
@@ -352,12 +351,22 @@ impl SnapshotRule {
     /// A seat's rule: exploiters snapshot on their own win rate and
     /// timeout (`[exploiters]`), main learners on `[snapshots]`.
     pub fn of(cfg: &LeagueConfig, seat: Seat) -> SnapshotRule {
+        let every_env_steps = cfg.snapshots.every_env_steps;
+        if seat.is_exploiter() && !cfg.exploiters.resets_after_snapshot(seat) {
+            // An exploiter that never resets has no attempt to end: it joins
+            // the pool on a clock, winning or not.
+            return SnapshotRule {
+                every_env_steps,
+                win_rate: 0.0,
+                timeout_env_steps: every_env_steps,
+            };
+        }
         let (win_rate, timeout_env_steps) = match seat.role {
             SeatRole::Main => (cfg.snapshots.win_rate, cfg.snapshots.timeout_env_steps),
             SeatRole::Exploiter => (cfg.exploiters.win_rate, cfg.exploiters.timeout_env_steps),
         };
         SnapshotRule {
-            every_env_steps: cfg.snapshots.every_env_steps,
+            every_env_steps,
             win_rate,
             timeout_env_steps,
         }
@@ -611,7 +620,8 @@ fn train_learner(
     } = started;
     let run_dir = dir.seat_dir(seat);
     let initial = run_dir.join("initial");
-    if seat.resets_after_snapshot() && !initial.join("meta.json").is_file() {
+    let resets = cfg.exploiters.resets_after_snapshot(seat);
+    if resets && !initial.join("meta.json").is_file() {
         // What every reset returns to (written once, before any training).
         trainer.save_side(side, &initial)?;
     }
@@ -634,7 +644,7 @@ fn train_learner(
         .map(|p| p.env_steps)
         .max()
         .unwrap_or(0);
-    if seat.resets_after_snapshot() && last_snapshot == trainer.env_steps && trainer.env_steps > 0 {
+    if resets && last_snapshot == trainer.env_steps && trainer.env_steps > 0 {
         // Killed between its snapshot and its reset: reset now, or it would
         // go on training the weights it just added to the pool.
         trainer.reset_learner(side, &initial)?;
@@ -693,7 +703,7 @@ fn train_learner(
             last_snapshot = trainer.env_steps;
             wins_at_snapshot = hooks.wins;
             games_at_snapshot = hooks.games;
-            if seat.resets_after_snapshot() {
+            if resets {
                 trainer.reset_learner(side, &initial)?;
                 // The reset is the new resume point: a restart must not
                 // bring back the weights that were just snapshotted.
@@ -797,6 +807,62 @@ mod tests {
             "the timeout, winning or not"
         );
         assert!(should_snapshot(80_000, 0, 20, rule));
+    }
+
+    #[test]
+    fn a_target_exploiter_that_keeps_learning_snapshots_on_the_clock_and_never_resets() {
+        let text = "[snapshots]\nevery_env_steps = 50_000\nwin_rate = 0.55\ntimeout_env_steps = 90_000\n\
+                    [exploiters]\ncaptors = true\ntarget = true\nwin_rate = 0.7\ntimeout_env_steps = 120_000\n";
+        let resetting = LeagueConfig::parse(text).unwrap();
+        let keeping = LeagueConfig::parse(&format!("{text}target_resets = false\n")).unwrap();
+        let (captors_x, target_x) = (
+            Seat::exploiter(Side::Captors),
+            Seat::exploiter(Side::Target),
+        );
+        // Which seats reset, in each league.
+        for (cfg, target_resets) in [(&resetting, true), (&keeping, false)] {
+            let r = |seat| cfg.exploiters.resets_after_snapshot(seat);
+            assert!(!r(Seat::main(Side::Captors)) && !r(Seat::main(Side::Target)));
+            assert!(r(captors_x));
+            assert_eq!(r(target_x), target_resets);
+        }
+        // The resetting exploiter: its own win rate and timeout.
+        let rule = SnapshotRule::of(&resetting, target_x);
+        assert!(!should_snapshot(50_000, 13, 20, rule), "65% is under 70%");
+        assert!(should_snapshot(50_000, 14, 20, rule));
+        assert!(!should_snapshot(119_999, 0, 20, rule));
+        // The one that keeps learning: every 50 k env steps, losing or not.
+        let rule = SnapshotRule::of(&keeping, target_x);
+        assert!(!should_snapshot(49_999, 20, 20, rule));
+        assert!(should_snapshot(50_000, 0, 20, rule));
+        assert!(should_snapshot(50_000, 0, 0, rule));
+        // Nothing else moves: the captor exploiter and the main learners.
+        for seat in [
+            captors_x,
+            Seat::main(Side::Captors),
+            Seat::main(Side::Target),
+        ] {
+            assert_eq!(
+                SnapshotRule::of(&keeping, seat),
+                SnapshotRule::of(&resetting, seat)
+            );
+        }
+        assert_eq!(
+            SnapshotRule::of(&keeping, captors_x).timeout_env_steps,
+            120_000
+        );
+        // Left out, the stored config does not name it (its hash is unchanged);
+        // without a target exploiter it is refused, named.
+        assert!(!toml::to_string(&resetting)
+            .unwrap()
+            .contains("target_resets"));
+        let err = LeagueConfig::parse("[exploiters]\ntarget_resets = false\n")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.starts_with("exploiters.target_resets") && err.contains("no target exploiter"),
+            "{err}"
+        );
     }
 
     #[test]

@@ -78,11 +78,6 @@ impl Seat {
     pub fn keeps_pace(self) -> bool {
         self.role == SeatRole::Main
     }
-
-    /// Goes back to its initial weights after each snapshot.
-    pub fn resets_after_snapshot(self) -> bool {
-        self.role == SeatRole::Exploiter
-    }
 }
 
 /// The player name of a side's permanent heuristic member.
@@ -99,31 +94,17 @@ mod tests {
 
     #[test]
     fn each_seat_answers_the_leagues_questions_as_its_role_says() {
-        // (seat, name, main line only, curriculum, pace, reset)
+        // (seat, name, main line only, curriculum, pace); whether it resets is
+        // the config's (`ExploiterConfig::resets_after_snapshot`)
         let table = [
-            (
-                Seat::main(Side::Captors),
-                "captors-main",
-                false,
-                true,
-                true,
-                false,
-            ),
-            (
-                Seat::main(Side::Target),
-                "target-main",
-                false,
-                false,
-                true,
-                false,
-            ),
+            (Seat::main(Side::Captors), "captors-main", false, true, true),
+            (Seat::main(Side::Target), "target-main", false, false, true),
             (
                 Seat::exploiter(Side::Captors),
                 "captors-exploiter",
                 true,
                 false,
                 false,
-                true,
             ),
             (
                 Seat::exploiter(Side::Target),
@@ -131,15 +112,13 @@ mod tests {
                 true,
                 false,
                 false,
-                true,
             ),
         ];
-        for (seat, name, main_line, curriculum, pace, reset) in table {
+        for (seat, name, main_line, curriculum, pace) in table {
             assert_eq!(seat.name(), name);
             assert_eq!(seat.draws_main_line_only(), main_line, "{name}");
             assert_eq!(seat.drives_curriculum(), curriculum, "{name}");
             assert_eq!(seat.keeps_pace(), pace, "{name}");
-            assert_eq!(seat.resets_after_snapshot(), reset, "{name}");
         }
     }
 }
