@@ -56,6 +56,7 @@ fn evaluate_pending(
     maps: &Arc<Vec<Arc<PreparedMap>>>,
     store: &Store,
     stop: &AtomicBool,
+    done_before: u64,
 ) -> Result<usize> {
     let players = store.players()?;
     let mut played = 0;
@@ -179,6 +180,15 @@ fn evaluate_pending(
                     }
                 }
                 played += 1;
+                // A heartbeat per episode: a backlog of snapshots can take
+                // this loop longer than the silence after which `status`
+                // calls a process on another host dead.
+                store.heartbeat(
+                    EVALUATOR,
+                    BeatState::Evaluating,
+                    done_before + played as u64,
+                    None,
+                )?;
                 let busy = started.elapsed().as_secs_f64();
                 let idle = busy * (1.0 - cfg.evaluator.cpu_share) / cfg.evaluator.cpu_share;
                 std::thread::sleep(Duration::from_secs_f64(idle.min(10.0)));
@@ -279,7 +289,7 @@ pub fn run_evaluator(dir: &LeagueDir, stop: &AtomicBool) -> Result<Outcome> {
     let mut total = store.matches_recorded_by(EVALUATOR)? + store.held_out_count()?;
     store.heartbeat(EVALUATOR, BeatState::Evaluating, total, None)?;
     while !stop.load(Ordering::SeqCst) {
-        let played = evaluate_pending(dir, &cfg, &panels, &maps, &store, stop)?;
+        let played = evaluate_pending(dir, &cfg, &panels, &maps, &store, stop, total)?;
         total += played as u64;
         if played == 0 {
             let beats = store.heartbeats()?;
@@ -290,7 +300,7 @@ pub fn run_evaluator(dir: &LeagueDir, stop: &AtomicBool) -> Result<Outcome> {
             });
             if done {
                 // One more pass: a last snapshot may have landed since.
-                if evaluate_pending(dir, &cfg, &panels, &maps, &store, stop)? == 0 {
+                if evaluate_pending(dir, &cfg, &panels, &maps, &store, stop, total)? == 0 {
                     break;
                 }
                 continue;

@@ -1248,6 +1248,25 @@ fn killed_during_validation_games_the_league_records_no_half_result() {
     std::thread::sleep(Duration::from_secs(2));
     let rows = validation_rows(&l);
     assert!(rows.iter().all(|r| r.episodes <= 3), "{rows:?}");
+    // Killed mid-pass, its heartbeat had kept count episode by episode (at
+    // most the one it was killed after recording is missing), so a busy
+    // evaluator never looks silent to `status`.
+    {
+        let store = Store::open_existing(&l.dir.store).unwrap();
+        let recorded =
+            store.matches_recorded_by("evaluator").unwrap() + store.held_out_count().unwrap();
+        let beat = store
+            .heartbeats()
+            .unwrap()
+            .into_iter()
+            .find(|b| b.learner == "evaluator")
+            .expect("the evaluator's heartbeat");
+        assert!(
+            recorded >= 1 && beat.env_steps + 1 >= recorded && beat.env_steps <= recorded,
+            "heartbeat at {} panel episodes, {recorded} recorded",
+            beat.env_steps
+        );
+    }
     // No half result chooses: export --best picks a snapshot whose games
     // are all played, or none.
     let out = l.tmp.join("best-while-killed");
