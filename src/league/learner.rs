@@ -348,21 +348,17 @@ pub struct SnapshotRule {
 }
 
 impl SnapshotRule {
-    /// A seat's rule: exploiters snapshot on their own win rate and
-    /// timeout (`[exploiters]`), main learners on `[snapshots]`.
+    /// A seat's rule: main learners snapshot on `[snapshots]`, exploiters
+    /// on their own win rate and timeout (`[exploiters]`), and an exploiter
+    /// that never resets (`target_resets = false`) on a clock, winning or
+    /// not: it has no attempt to end.
     pub fn of(cfg: &LeagueConfig, seat: Seat) -> SnapshotRule {
         let every_env_steps = cfg.snapshots.every_env_steps;
-        if seat.is_exploiter() && !cfg.exploiters.resets_after_snapshot(seat) {
-            // An exploiter that never resets has no attempt to end: it joins
-            // the pool on a clock, winning or not.
-            return SnapshotRule {
-                every_env_steps,
-                win_rate: 0.0,
-                timeout_env_steps: every_env_steps,
-            };
-        }
         let (win_rate, timeout_env_steps) = match seat.role {
             SeatRole::Main => (cfg.snapshots.win_rate, cfg.snapshots.timeout_env_steps),
+            SeatRole::Exploiter if !cfg.exploiters.resets_after_snapshot(seat) => {
+                (0.0, every_env_steps)
+            }
             SeatRole::Exploiter => (cfg.exploiters.win_rate, cfg.exploiters.timeout_env_steps),
         };
         SnapshotRule {
