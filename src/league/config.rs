@@ -409,6 +409,13 @@ impl LeagueConfig {
                 ));
             }
         }
+        if self.matchmaking.target_exploiter_share > 0.0 && !self.exploiters.target {
+            return Err(ConfigError::new(
+                "matchmaking.target_exploiter_share",
+                self.matchmaking.target_exploiter_share,
+                "the league has no target exploiter (exploiters.target = false)",
+            ));
+        }
         if !self.exploiters.target_resets && !self.exploiters.target {
             return Err(ConfigError::new(
                 "exploiters.target_resets",
@@ -653,6 +660,14 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(err.contains("captor"), "{err}");
+        let err = LeagueConfig::parse("[matchmaking]\ntarget_exploiter_share = 0.3\n")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.starts_with("matchmaking.target_exploiter_share = 0.3"),
+            "{err}"
+        );
+        assert!(err.contains("no target exploiter"), "{err}");
         let err = LeagueConfig::parse("[matchmaking]\nmembers_share = 0.2\n")
             .unwrap_err()
             .to_string();

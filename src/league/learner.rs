@@ -12,7 +12,7 @@ use super::config::LeagueConfig;
 use super::curriculum::Curriculum;
 use super::dir::LeagueDir;
 use super::matchmaking::{
-    choose_opponent, draw_seed, pick_slot, slot_seed, Candidate, MatchmakingConfig, Opponent,
+    choose_opponent, draw_seed, pick_slot, slot_seed, Candidate, Fixed, MatchmakingConfig, Opponent,
 };
 use super::opponents::{OpponentNets, WorldOpponent};
 use super::players::{learner_name, Seat, SeatRole};
@@ -43,6 +43,7 @@ pub struct LeagueHooks<'a> {
     /// The other side's extra heuristic members (`[members]`), by id.
     extras: Vec<i64>,
     main: Option<i64>,
+    target_exploiter: Option<i64>,
     worlds: Vec<WorldOpponent>,
     /// The other side's networks in play: loaded, stacked, run.
     pub nets: OpponentNets,
@@ -74,6 +75,9 @@ impl<'a> LeagueHooks<'a> {
             matchmaking.main_share = 1.0;
             matchmaking.members_share = 0.0;
         }
+        if seat != Seat::main(Side::Captors) {
+            matchmaking.target_exploiter_share = 0.0;
+        }
         let mut hooks = LeagueHooks {
             store,
             dir,
@@ -87,6 +91,7 @@ impl<'a> LeagueHooks<'a> {
             candidates: Vec::new(),
             extras: Vec::new(),
             main: None,
+            target_exploiter: None,
             worlds: Vec::new(),
             nets: OpponentNets::new(side.other(), cfg.opponent_cache, cfg.greedy_opponents),
             slots: Vec::new(),
@@ -127,6 +132,7 @@ impl<'a> LeagueHooks<'a> {
         let playable = super::pool::playable(&self.store.players()?, self.seat());
         self.members = playable.members;
         self.main = playable.main;
+        self.target_exploiter = playable.exploiter.filter(|_| self.side == Side::Captors);
         let extra_names = self.cfg.members.extra_names(self.side.other());
         self.extras = self
             .members
@@ -172,15 +178,20 @@ impl<'a> LeagueHooks<'a> {
         let other = self.other();
         let seed = draw_seed(self.cfg.seed, self.learner_id, e, venv.env(e).seed);
         let mm = &self.matchmaking;
+        let fixed = Fixed {
+            main: self.main,
+            extras: &self.extras,
+            target_exploiter: self.target_exploiter,
+        };
         let pick = if mm.slots == 0 {
-            choose_opponent(&self.candidates, self.main, &self.extras, mm, seed)
+            choose_opponent(&self.candidates, fixed, mm, seed)
         } else {
             let window = self.vector_steps / self.cfg.episode_length as u64;
             if self.slots_window != Some(window) {
                 self.slots = (0..mm.slots)
                     .filter_map(|s| {
                         let seed = slot_seed(self.cfg.seed, self.learner_id, s, window);
-                        choose_opponent(&self.candidates, self.main, &self.extras, mm, seed)
+                        choose_opponent(&self.candidates, fixed, mm, seed)
                     })
                     .collect();
                 self.slots_window = Some(window);

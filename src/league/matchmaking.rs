@@ -38,6 +38,15 @@ pub struct MatchmakingConfig {
     /// stored config) leaves every draw as it was.
     #[serde(skip_serializing_if = "is_zero")]
     pub members_share: f64,
+    /// Share of the main captors' episodes against the target exploiter's
+    /// newest snapshot (`[exploiters] target = true`). PFSP rarely draws a
+    /// target line the captors mostly beat (a prior-free exploiter that
+    /// never resets got 17-20% of captors-main's games), yet such a line is
+    /// what keeps naive co-evolution's captors hard to exploit. The main
+    /// target and the exploiters ignore it. 0 (the default, left out of
+    /// the stored config) leaves every draw as it was.
+    #[serde(skip_serializing_if = "is_zero")]
+    pub target_exploiter_share: f64,
     /// Share of the PFSP probability spread evenly over all members, so no
     /// member starves (a member never drawn never gets a win rate).
     pub floor: f64,
@@ -64,6 +73,7 @@ impl Default for MatchmakingConfig {
             p: 2.0,
             main_share: 0.35,
             members_share: 0.0,
+            target_exploiter_share: 0.0,
             floor: 0.05,
             slots: 1,
         }
@@ -80,6 +90,7 @@ impl MatchmakingConfig {
         for (name, v) in [
             ("main_share", self.main_share),
             ("members_share", self.members_share),
+            ("target_exploiter_share", self.target_exploiter_share),
             ("floor", self.floor),
         ] {
             in_interval(name, v, 0.0, 1.0, true)?;
@@ -89,6 +100,16 @@ impl MatchmakingConfig {
                 "members_share",
                 self.members_share,
                 format!("with main_share = {} the shares exceed 1", self.main_share),
+            ));
+        }
+        if self.main_share + self.members_share + self.target_exploiter_share > 1.0 {
+            return Err(ConfigError::new(
+                "target_exploiter_share",
+                self.target_exploiter_share,
+                format!(
+                    "with main_share = {} and members_share = {} the shares exceed 1",
+                    self.main_share, self.members_share
+                ),
             ));
         }
         in_range(
@@ -180,26 +201,46 @@ pub fn pick_slot(slots: usize, seed: u64) -> usize {
     ((u * slots as f64) as usize).min(slots.saturating_sub(1))
 }
 
-/// Draws an opponent for one episode. `main` is None when the other side
-/// has no main learner snapshot yet; an empty pool plays the main learner.
-/// `extras`: the other side's extra heuristic members, drawn uniformly in
-/// `members_share` of the episodes (by PFSP in the rest, like any member).
+/// The members a learner plays for a fixed share of its episodes, beside
+/// PFSP over the whole pool.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Fixed<'a> {
+    /// The other side's main learner's newest snapshot (`main_share`); None
+    /// until it has one. An empty pool plays it.
+    pub main: Option<i64>,
+    /// The other side's extra heuristic members, drawn uniformly in
+    /// `members_share` of the episodes (by PFSP in the rest, like any member).
+    pub extras: &'a [i64],
+    /// The target exploiter's newest snapshot (`target_exploiter_share`),
+    /// for the main captors; None until it has one, or for other learners.
+    pub target_exploiter: Option<i64>,
+}
+
+/// Draws an opponent for one episode. The shares split [0, 1) in the order
+/// main, extras, target exploiter, then PFSP; a share whose member is
+/// missing falls to PFSP.
 pub fn choose_opponent(
     pool: &[Candidate],
-    main: Option<i64>,
-    extras: &[i64],
+    fixed: Fixed,
     cfg: &MatchmakingConfig,
     seed: u64,
 ) -> Option<Opponent> {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let u: f64 = rng.gen();
-    if main.is_some() && (pool.is_empty() || u < cfg.main_share) {
+    if fixed.main.is_some() && (pool.is_empty() || u < cfg.main_share) {
         return Some(Opponent::Main);
     }
-    if !extras.is_empty() && (cfg.main_share..cfg.main_share + cfg.members_share).contains(&u) {
+    let extras = fixed.extras;
+    let extras_end = cfg.main_share + cfg.members_share;
+    if !extras.is_empty() && (cfg.main_share..extras_end).contains(&u) {
         let v: f64 = rng.gen();
         let i = ((v * extras.len() as f64) as usize).min(extras.len() - 1);
         return Some(Opponent::Member(extras[i]));
+    }
+    if let Some(exploiter) = fixed.target_exploiter {
+        if (extras_end..extras_end + cfg.target_exploiter_share).contains(&u) {
+            return Some(Opponent::Member(exploiter));
+        }
     }
     let probs = pfsp_probabilities(pool, cfg);
     if probs.is_empty() {
@@ -218,6 +259,14 @@ pub fn choose_opponent(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn fixed(main: Option<i64>, extras: &[i64]) -> Fixed<'_> {
+        Fixed {
+            main,
+            extras,
+            target_exploiter: None,
+        }
+    }
 
     fn cand(player: i64, wins: f64, games: f64) -> Candidate {
         Candidate {
@@ -280,9 +329,9 @@ mod tests {
             vec![0.5, 0.5]
         );
         assert!(pfsp_probabilities(&[], &cfg).is_empty());
-        assert_eq!(choose_opponent(&[], None, &[], &cfg, 1), None);
+        assert_eq!(choose_opponent(&[], fixed(None, &[]), &cfg, 1), None);
         assert_eq!(
-            choose_opponent(&[], Some(7), &[], &cfg, 1),
+            choose_opponent(&[], fixed(Some(7), &[]), &cfg, 1),
             Some(Opponent::Main)
         );
     }
@@ -296,9 +345,9 @@ mod tests {
         let n = 40_000;
         for episode in 0..n {
             let seed = draw_seed(9, 2, 3, episode);
-            let o = choose_opponent(&pool, Some(99), &[], &cfg, seed).unwrap();
+            let o = choose_opponent(&pool, fixed(Some(99), &[]), &cfg, seed).unwrap();
             assert_eq!(
-                choose_opponent(&pool, Some(99), &[], &cfg, seed),
+                choose_opponent(&pool, fixed(Some(99), &[]), &cfg, seed),
                 Some(o),
                 "replays"
             );
@@ -340,7 +389,7 @@ mod tests {
         let mut counts = [0usize; 4];
         for episode in 0..n {
             let seed = draw_seed(9, 2, 3, episode);
-            counts[match choose_opponent(&pool, Some(99), &[3], &cfg, seed).unwrap() {
+            counts[match choose_opponent(&pool, fixed(Some(99), &[3]), &cfg, seed).unwrap() {
                 Opponent::Main => 0,
                 Opponent::Member(id) => id as usize,
             }] += 1;
@@ -348,8 +397,8 @@ mod tests {
             // a league without them.
             let plain = MatchmakingConfig::default();
             assert_eq!(
-                choose_opponent(&pool, Some(99), &[3], &plain, seed),
-                choose_opponent(&pool, Some(99), &[], &plain, seed)
+                choose_opponent(&pool, fixed(Some(99), &[3]), &plain, seed),
+                choose_opponent(&pool, fixed(Some(99), &[]), &plain, seed)
             );
         }
         let share = |c: usize| c as f64 / n as f64;
@@ -378,7 +427,13 @@ mod tests {
         for window in 0..windows {
             let slots: Vec<Opponent> = (0..cfg.slots)
                 .map(|s| {
-                    choose_opponent(&pool, Some(99), &[], &cfg, slot_seed(9, 2, s, window)).unwrap()
+                    choose_opponent(
+                        &pool,
+                        fixed(Some(99), &[]),
+                        &cfg,
+                        slot_seed(9, 2, s, window),
+                    )
+                    .unwrap()
                 })
                 .collect();
             let mut in_play = std::collections::HashSet::new();
@@ -411,5 +466,70 @@ mod tests {
             .map(|e| pick_slot(3, draw_seed(1, 1, 0, e)))
             .collect();
         assert_eq!(picks.len(), 3, "every slot gets picked");
+    }
+
+    #[test]
+    fn the_target_exploiter_gets_its_share_after_main_and_extras_and_zero_changes_no_draw() {
+        // Member 4 is the target exploiter's newest snapshot, member 3 an
+        // extra heuristic: [0, 0.35) main, [0.35, 0.45) the extra,
+        // [0.45, 0.75) the exploiter, [0.75, 1) PFSP over all four.
+        let pool = [
+            cand(1, 1.0, 4.0),
+            cand(2, 3.0, 4.0),
+            cand(3, 4.0, 4.0),
+            cand(4, 3.0, 4.0),
+        ];
+        let cfg = MatchmakingConfig {
+            members_share: 0.1,
+            target_exploiter_share: 0.3,
+            ..MatchmakingConfig::default()
+        };
+        let with_line = Fixed {
+            main: Some(99),
+            extras: &[3],
+            target_exploiter: Some(4),
+        };
+        let p = pfsp_probabilities(&pool, &cfg);
+        let n = 40_000;
+        let mut counts = [0usize; 5];
+        for episode in 0..n {
+            let seed = draw_seed(9, 2, 3, episode);
+            counts[match choose_opponent(&pool, with_line, &cfg, seed).unwrap() {
+                Opponent::Main => 0,
+                Opponent::Member(id) => id as usize,
+            }] += 1;
+            // Without a share, the exploiter changes nothing; without a
+            // snapshot yet, its share goes to PFSP and main keeps its own.
+            let plain = MatchmakingConfig {
+                members_share: 0.1,
+                ..MatchmakingConfig::default()
+            };
+            assert_eq!(
+                choose_opponent(&pool, with_line, &plain, seed),
+                choose_opponent(&pool, fixed(Some(99), &[3]), &plain, seed)
+            );
+            let no_snapshot = choose_opponent(&pool, fixed(Some(99), &[3]), &cfg, seed);
+            if no_snapshot == Some(Opponent::Main) {
+                assert_eq!(choose_opponent(&pool, with_line, &cfg, seed), no_snapshot);
+            }
+        }
+        let share = |c: usize| c as f64 / n as f64;
+        assert!((share(counts[0]) - 0.35).abs() < 0.01, "{counts:?}");
+        assert!((share(counts[1]) - 0.25 * p[0]).abs() < 0.01, "{counts:?}");
+        assert!(
+            (share(counts[3]) - (0.1 + 0.25 * p[2])).abs() < 0.01,
+            "{counts:?}"
+        );
+        // The learner wins 3 of 4 against the exploiter: PFSP adds little.
+        let want4 = 0.3 + 0.25 * p[3];
+        assert!((share(counts[4]) - want4).abs() < 0.01, "{counts:?} {p:?}");
+        let bad = MatchmakingConfig {
+            members_share: 0.3,
+            target_exploiter_share: 0.4,
+            ..MatchmakingConfig::default()
+        };
+        let err = bad.validate().unwrap_err().to_string();
+        assert!(err.starts_with("target_exploiter_share = 0.4"), "{err}");
+        assert!(err.contains("exceed 1"), "{err}");
     }
 }

@@ -33,6 +33,9 @@ pub struct Playable {
     pub members: Vec<Player>,
     /// The other side's main learner's newest snapshot among them.
     pub main: Option<i64>,
+    /// The other side's exploiter's newest snapshot among them (a main
+    /// learner's only: an exploiter draws the main line alone).
+    pub exploiter: Option<i64>,
 }
 
 /// The members a learner of `seat` may draw. A main learner draws every
@@ -40,10 +43,9 @@ pub struct Playable {
 /// learner's snapshots, and the heuristics to play until there is one.
 pub fn playable(players: &[Player], seat: Seat) -> Playable {
     let other = seat.side.other();
-    let other_main = players
-        .iter()
-        .find(|p| p.name == learner_name(other))
-        .map(|p| p.id);
+    let id_of = |name: String| players.iter().find(|p| p.name == name).map(|p| p.id);
+    let other_main = id_of(learner_name(other));
+    let other_exploiter = id_of(Seat::exploiter(other).name());
     let of_other_main = |m: &Player| m.parent.is_some() && m.parent == other_main;
     let members: Vec<Player> = players
         .iter()
@@ -52,12 +54,18 @@ pub fn playable(players: &[Player], seat: Seat) -> Playable {
         .filter(|p| !seat.draws_main_line_only() || p.kind == Kind::Heuristic || of_other_main(p))
         .cloned()
         .collect();
-    let main = members
-        .iter()
-        .filter(|m| m.kind == Kind::Snapshot && of_other_main(m))
-        .max_by_key(|m| m.env_steps)
-        .map(|m| m.id);
-    Playable { members, main }
+    let newest_of = |parent: Option<i64>| {
+        members
+            .iter()
+            .filter(|m| m.kind == Kind::Snapshot && parent.is_some() && m.parent == parent)
+            .max_by_key(|m| m.env_steps)
+            .map(|m| m.id)
+    };
+    Playable {
+        main: newest_of(other_main),
+        exploiter: newest_of(other_exploiter),
+        members,
+    }
 }
 
 /// The player name of `seat`'s snapshot at `env_steps`.
@@ -429,10 +437,15 @@ mod tests {
             "learners and quarantined members never play"
         );
         assert_eq!(main.main, Some(7), "the newest snapshot that plays");
+        assert_eq!(main.exploiter, Some(8), "the exploiter's newest snapshot");
 
         let exploiter = playable(&players, Seat::exploiter(Target));
         assert_eq!(ids(&exploiter), [1, 6, 7]);
         assert_eq!(exploiter.main, Some(7));
+        assert_eq!(
+            exploiter.exploiter, None,
+            "an exploiter draws the main line only"
+        );
 
         // Before the other main learner has a snapshot: the heuristic only.
         let early = playable(&players[..5], Seat::exploiter(Target));
@@ -441,5 +454,6 @@ mod tests {
 
         let captors = playable(&players, Seat::main(Captors));
         assert_eq!(ids(&captors), [2]);
+        assert_eq!(captors.exploiter, None, "the target has no exploiter");
     }
 }
