@@ -60,10 +60,7 @@ fn evaluate_pending(
 ) -> Result<usize> {
     let players = store.players()?;
     let mut played = 0;
-    for member in players
-        .iter()
-        .filter(|p| p.kind == Kind::Snapshot && p.quarantined.is_none())
-    {
+    for (member, validates) in panel_queue(&players) {
         let mut opponents: Vec<PanelOpponent> = players
             .iter()
             .filter(|p| p.name == heuristic_name(member.side.other()))
@@ -73,6 +70,9 @@ fn evaluate_pending(
             (Panel::HeldOut, &panels.held_out),
             (Panel::Validation, &panels.validation),
         ] {
+            if panel == Panel::Validation && !validates {
+                continue;
+            }
             for (side, specs) in list {
                 if *side == member.side {
                     opponents.extend(
@@ -198,6 +198,30 @@ fn evaluate_pending(
     Ok(played)
 }
 
+/// The snapshots the evaluator plays, in order, each with whether it plays
+/// the validation panel. The main learners' snapshots come first: their
+/// validation chooses what `export --best` exports, and should not wait
+/// behind a backlog of exploiter snapshots (a target exploiter that never
+/// resets adds one every `snapshots.every_env_steps`). Only they play the
+/// validation panel, since nothing reads any other snapshot's validation;
+/// every snapshot plays the heuristic member (its rating) and the held-out
+/// panel.
+pub fn panel_queue(players: &[Player]) -> Vec<(&Player, bool)> {
+    let mains: Vec<i64> = [Side::Captors, Side::Target]
+        .iter()
+        .filter_map(|side| players.iter().find(|p| p.name == learner_name(*side)))
+        .map(|p| p.id)
+        .collect();
+    let mut queue: Vec<(&Player, bool)> = players
+        .iter()
+        .filter(|p| p.kind == Kind::Snapshot && p.quarantined.is_none())
+        .map(|p| (p, p.parent.is_some_and(|parent| mains.contains(&parent))))
+        .collect();
+    // Stable: each group keeps the store's order (oldest first).
+    queue.sort_by_key(|(_, main_line)| !main_line);
+    queue
+}
+
 /// The held-out and validation opponents per member side, checkpoints
 /// loaded and checked against the league's game, and the validation maps,
 /// checked to hold no test map.
@@ -321,4 +345,61 @@ pub fn run_evaluator(dir: &LeagueDir, stop: &AtomicBool) -> Result<Outcome> {
     store.heartbeat(EVALUATOR, state, total, None)?;
     tracing::info!("evaluator: {state}, {total} panel episodes played in this league");
     Ok(outcome)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::league::store::test_player as player;
+
+    #[test]
+    fn main_line_snapshots_come_first_and_alone_play_the_validation_panel() {
+        use Side::*;
+        let mut players = vec![
+            player(1, "expert-captors", Captors, Kind::Heuristic, None, 0),
+            player(2, "rule-based-target", Target, Kind::Heuristic, None, 0),
+            player(3, "captors-main", Captors, Kind::Learner, None, 300),
+            player(4, "target-main", Target, Kind::Learner, None, 300),
+            player(5, "target-exploiter", Target, Kind::Exploiter, None, 300),
+            player(
+                6,
+                "target-exploiter-snap-100",
+                Target,
+                Kind::Snapshot,
+                Some(5),
+                100,
+            ),
+            player(7, "captors-snap-100", Captors, Kind::Snapshot, Some(3), 100),
+            player(8, "coop", Captors, Kind::Snapshot, None, 900),
+            player(9, "target-snap-200", Target, Kind::Snapshot, Some(4), 200),
+            player(
+                10,
+                "target-exploiter-snap-200",
+                Target,
+                Kind::Snapshot,
+                Some(5),
+                200,
+            ),
+            player(
+                11,
+                "captors-snap-200",
+                Captors,
+                Kind::Snapshot,
+                Some(3),
+                200,
+            ),
+        ];
+        players[10].quarantined = Some("files gone".into());
+        let queue: Vec<(i64, bool)> = panel_queue(&players)
+            .into_iter()
+            .map(|(p, validates)| (p.id, validates))
+            .collect();
+        // The main lines' snapshots, oldest first, with validation; then the
+        // exploiter's and the permanent member's, without; never the
+        // quarantined one, the learners or the heuristics.
+        assert_eq!(
+            queue,
+            [(7, true), (9, true), (6, false), (8, false), (10, false)]
+        );
+    }
 }
