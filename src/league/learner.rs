@@ -75,9 +75,6 @@ impl<'a> LeagueHooks<'a> {
             matchmaking.main_share = 1.0;
             matchmaking.members_share = 0.0;
         }
-        if seat != Seat::main(Side::Captors) {
-            matchmaking.target_exploiter_share = 0.0;
-        }
         let mut hooks = LeagueHooks {
             store,
             dir,
@@ -132,6 +129,8 @@ impl<'a> LeagueHooks<'a> {
         let playable = super::pool::playable(&self.store.players()?, self.seat());
         self.members = playable.members;
         self.main = playable.main;
+        // Only the main captors draw the target exploiter (`target_exploiter_share`);
+        // without it, the share falls to PFSP. An exploiter's `playable` has none.
         self.target_exploiter = playable.exploiter.filter(|_| self.side == Side::Captors);
         let extra_names = self.cfg.members.extra_names(self.side.other());
         self.extras = self

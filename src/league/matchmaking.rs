@@ -95,21 +95,26 @@ impl MatchmakingConfig {
         ] {
             in_interval(name, v, 0.0, 1.0, true)?;
         }
-        if self.main_share + self.members_share > 1.0 {
-            return Err(ConfigError::new(
-                "members_share",
-                self.members_share,
-                format!("with main_share = {} the shares exceed 1", self.main_share),
-            ));
-        }
+        // The shares split [0, 1) in turn: the error names the last one set.
         if self.main_share + self.members_share + self.target_exploiter_share > 1.0 {
-            return Err(ConfigError::new(
-                "target_exploiter_share",
-                self.target_exploiter_share,
-                format!(
-                    "with main_share = {} and members_share = {} the shares exceed 1",
+            let (name, share, before) = if self.target_exploiter_share > 0.0 {
+                let before = format!(
+                    "main_share = {} and members_share = {}",
                     self.main_share, self.members_share
-                ),
+                );
+                (
+                    "target_exploiter_share",
+                    self.target_exploiter_share,
+                    before,
+                )
+            } else {
+                let before = format!("main_share = {}", self.main_share);
+                ("members_share", self.members_share, before)
+            };
+            return Err(ConfigError::new(
+                name,
+                share,
+                format!("with {before} the shares exceed 1"),
             ));
         }
         in_range(
