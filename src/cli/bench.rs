@@ -371,6 +371,27 @@ pub fn run(args: BenchArgs) -> Result<()> {
         before_us: on_gibson.then_some(1.90),
     });
 
+    // The held-out protocol's check of a league's 60 generated training maps
+    // against the test maps, which every held-out run pays at its start
+    // (0.17 s on one thread, 2026-11-28).
+    let generated = map::catalog::load_prepared("generated:20")?;
+    let per = measure(secs, || {
+        crate::protocol::Protocol::HeldOut
+            .check_training_maps("generated:20", &generated)
+            .expect("generated maps pass the held-out check");
+        1
+    });
+    rows.push(Row {
+        what: format!(
+            "held-out check of {} generated training maps",
+            generated.len()
+        ),
+        per_op: per,
+        unit: "checks/s",
+        reference: None,
+        before_us: None,
+    });
+
     // ASZ on the smallest, a medium and the largest Gibson map, over random placements.
     if gibson {
         let dir = map::catalog::gibson_dir().unwrap();
