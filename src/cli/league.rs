@@ -173,6 +173,13 @@ pub struct ExploitArgs {
     /// v_e / v_p (default: the league's first curriculum stage).
     #[arg(long)]
     pub speed_ratio: Option<f64>,
+    /// A target best response's `heuristic_prior`: 10 leans on the
+    /// rule-based target's action, 0 starts from nothing (default: the
+    /// league's target learner's). Give the same value to compare two
+    /// leagues' captors: a prior-free best response can stay weaker than the
+    /// rule-based target.
+    #[arg(long)]
+    pub heuristic_prior: Option<f64>,
     /// Threads for libtorch and rayon alike.
     #[arg(long, default_value_t = 1)]
     pub threads: usize,
@@ -503,6 +510,7 @@ pub fn exploit(args: ExploitArgs) -> Result<()> {
         episodes: args.episodes,
         episode_length: args.episode_length,
         speed_ratio: args.speed_ratio,
+        heuristic_prior: args.heuristic_prior,
         threads: args.threads,
         progress: !args.quiet,
     };
