@@ -16,11 +16,7 @@ pub fn export(dir: &LeagueDir, player: &str, out: &Path) -> Result<()> {
             format!(
                 "no player '{player}' in {} (players: {})",
                 dir.root.display(),
-                players
-                    .iter()
-                    .map(|p| p.name.as_str())
-                    .collect::<Vec<_>>()
-                    .join(", ")
+                crate::league::store::player_names(&players)
             )
         })?;
     let Some((rel, meta_sha)) = &p.checkpoint else {

@@ -41,8 +41,8 @@ pub use leases::{ManagerLease, SeatLease};
 #[cfg(test)]
 pub use rows::test_player;
 pub use rows::{
-    inside_pool, BeatState, Crash, Heartbeat, Kind, MatchRecord, NewPlayer, PairResult, Player,
-    RatingEntry, SeatRow, SeatState, StageChange,
+    inside_pool, player_names, BeatState, Crash, Heartbeat, Kind, MatchRecord, NewPlayer,
+    PairResult, Player, RatingEntry, SeatRow, SeatState, StageChange,
 };
 pub use url::{Backend, StoreUrl};
 

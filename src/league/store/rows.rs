@@ -166,6 +166,23 @@ pub struct Player {
     pub quarantined: Option<String>,
 }
 
+/// The players for an error message: every one but the snapshots by name,
+/// the snapshots counted (a league keeps hundreds; `status` lists them).
+pub fn player_names(players: &[Player]) -> String {
+    let mut names: Vec<String> = players
+        .iter()
+        .filter(|p| p.kind != Kind::Snapshot)
+        .map(|p| p.name.clone())
+        .collect();
+    let snapshots = players.len() - names.len();
+    match snapshots {
+        0 => {}
+        1 => names.push("1 snapshot (`status` lists it)".into()),
+        n => names.push(format!("{n} snapshots (`status` lists them)")),
+    }
+    names.join(", ")
+}
+
 /// A player as the pure rules' tests build them: no checkpoint, stage 0,
 /// created at time 0, playing.
 #[cfg(test)]
