@@ -425,3 +425,32 @@ impl SeatRow {
         self.holder.is_some() && self.lease_until_ms >= now_ms
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn player_names_names_all_but_snapshots_and_counts_those() {
+        let p = |id, name: &str, kind| test_player(id, name, Side::Target, kind, None, 0);
+        let mut players = vec![
+            p(1, "target-main", Kind::Learner),
+            p(2, "rule-based-target", Kind::Heuristic),
+            p(3, "target-exploiter", Kind::Exploiter),
+        ];
+        assert_eq!(
+            player_names(&players),
+            "target-main, rule-based-target, target-exploiter"
+        );
+        players.push(p(4, "target-snap-000000051200", Kind::Snapshot));
+        assert_eq!(
+            player_names(&players),
+            "target-main, rule-based-target, target-exploiter, 1 snapshot (`status` lists it)"
+        );
+        players.push(p(5, "target-snap-000000102400", Kind::Snapshot));
+        assert_eq!(
+            player_names(&players),
+            "target-main, rule-based-target, target-exploiter, 2 snapshots (`status` lists them)"
+        );
+    }
+}
