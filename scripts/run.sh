@@ -7,7 +7,8 @@
 #     learner on 2 cores): MAPPO captors and MAPPO target against pools of
 #     each other's snapshots and the heuristics;
 #  3. the league's status, the export of the best member of each side, and
-#     the evaluation of both exports against the heuristics.
+#     the evaluation of both exports against the heuristics, with the
+#     heuristics alone on the same episodes as the bar.
 # Training maps are the shipped generated maps; evaluation here uses them
 # too (the Gibson test maps are for `eval --maps small,medium,large`).
 set -euo pipefail
@@ -31,4 +32,8 @@ $bin export "$captors" --dir $out/league --out $out/export-captors
 $bin export "$target" --dir $out/league --out $out/export-target
 $bin eval --captors ckpt:$out/export-captors --maps shipped --k 3 --speed-ratio 1.0 --episodes 100 --episode-length 500 --seed 0 --soa-every 0 --out $out/eval-captors
 $bin eval --target ckpt:$out/export-target --maps shipped --k 3 --speed-ratio 1.0 --episodes 100 --episode-length 500 --seed 0 --soa-every 0 --out $out/eval-target
-echo "== results in $out: heuristics/ (table, SoA), episode.gif, league/ (the league), status.txt, export-*/ (best members), eval-*/ (them against the heuristics)"
+# The bar for both lines above: the rule-based robots on the same 100
+# episodes (same seed, same starts).
+echo "== the rule-based baseline on the same episodes"
+$bin eval --maps shipped --k 3 --speed-ratio 1.0 --episodes 100 --episode-length 500 --seed 0 --soa-every 0 --out $out/eval-baseline
+echo "== results in $out: heuristics/ (table, SoA), episode.gif, league/ (the league), status.txt, export-*/ (best members), eval-*/ (them against the heuristics; eval-baseline: the heuristics alone, the bar)"

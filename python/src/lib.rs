@@ -29,6 +29,34 @@ fn value_error(
     PyValueError::new_err(format!("{argument} = {value}: {rule}"))
 }
 
+/// Runs `f`, turning a panic into a RuntimeError: PyO3's PanicException
+/// derives from BaseException, which `except Exception` does not catch.
+fn no_panic<T>(what: &str, f: impl FnOnce() -> PyResult<T>) -> PyResult<T> {
+    std::panic::catch_unwind(std::panic::AssertUnwindSafe(f)).unwrap_or_else(|payload| {
+        let message = payload
+            .downcast_ref::<String>()
+            .map(String::as_str)
+            .or_else(|| payload.downcast_ref::<&str>().copied())
+            .unwrap_or("no message");
+        Err(PyRuntimeError::new_err(format!(
+            "{what}: internal error ({message}); please report it with the arguments that caused it"
+        )))
+    })
+}
+
+/// The most captors an env takes (`EnvConfig::validate`).
+const MAX_CAPTORS: i64 = t2e_core::env::MAX_CAPTORS as i64;
+
+/// The most agents (worlds x robots) one `VectorEnv` holds: 65,536 worlds
+/// of 3 captors and a target. Each agent's observation alone is 2.3 kB,
+/// and a request past the memory there is would abort the interpreter.
+const MAX_VECTOR_AGENTS: i64 = 65_536 * 4;
+
+/// The most maps one env generates (`generated:N` makes N per class, each
+/// map prepared in memory); past it a request could exhaust memory, which
+/// aborts the interpreter instead of raising.
+const MAX_GENERATED_MAPS: u64 = 3_000;
+
 /// A seed: an integer in 0..2^64.
 fn seed_of(seed: &Bound<'_, PyAny>) -> PyResult<u64> {
     let wide: i128 = seed
@@ -39,11 +67,11 @@ fn seed_of(seed: &Bound<'_, PyAny>) -> PyResult<u64> {
 
 /// The settings of an environment, each checked and named when refused.
 fn env_config(num_captors: i64, speed_ratio: f64, episode_length: i64) -> PyResult<EnvConfig> {
-    if !(1..=32).contains(&num_captors) {
+    if !(1..=MAX_CAPTORS).contains(&num_captors) {
         return Err(value_error(
             "num_captors",
             num_captors,
-            "must be between 1 and 32",
+            format!("must be between 1 and {MAX_CAPTORS}"),
         ));
     }
     if !(speed_ratio.is_finite() && speed_ratio > 0.0 && speed_ratio <= 10.0) {
@@ -78,7 +106,7 @@ fn actions_of(a: &[i64]) -> PyResult<Vec<Action>> {
         return Err(value_error(
             "actions",
             bad,
-            format!("an action is an integer in 0..{}", Action::COUNT),
+            format!("an action is an integer from 0 to {}", Action::COUNT - 1),
         ));
     }
     Ok(a.iter().map(|&x| Action::from_index(x as usize)).collect())
@@ -99,6 +127,18 @@ fn maps_for(spec: &str, protocol: &str) -> PyResult<Arc<Vec<Arc<PreparedMap>>>> 
             ))
         }
     };
+    for part in spec.split(',') {
+        if let Some((seeds, classes)) = t2e_core::map::catalog::generated_set(part.trim()) {
+            let count = (seeds.end - seeds.start) * classes.len() as u64;
+            if count > MAX_GENERATED_MAPS {
+                return Err(value_error(
+                    "maps",
+                    format!("'{spec}'"),
+                    format!("{count} generated maps; one env holds at most {MAX_GENERATED_MAPS} (each is prepared in memory)"),
+                ));
+            }
+        }
+    }
     let maps = load_prepared(spec)
         .map_err(|e| value_error("maps", format!("'{spec}'"), format!("{e:#}")))?;
     match protocol {
@@ -132,6 +172,8 @@ pub struct Env {
     env: TrapEnv,
     /// Whether `reset` has been called and the episode has not ended.
     running: bool,
+    /// Whether `reset` has been called at all (a state exists).
+    started: bool,
     /// Frames of the episode, when the env renders (trails need every step).
     render: Option<RenderOptions>,
     live: Option<LiveRender>,
@@ -155,6 +197,7 @@ impl Env {
         Ok(Env {
             env,
             running: false,
+            started: false,
             render: render.then(RenderOptions::default),
             live: None,
         })
@@ -166,7 +209,7 @@ impl Env {
         self.env.agent_names()
     }
 
-    /// Length of an agent's vector observation, 5 + 5 K (spec §5).
+    /// Length of an agent's vector observation, 5 + 5 K (docs/reference/env.md).
     #[getter]
     fn vector_len(&self) -> usize {
         self.env.cfg.vector_len()
@@ -234,13 +277,14 @@ impl Env {
             PyRuntimeError::new_err(format!("placing the robots of episode {seed}: {e}"))
         })?;
         self.running = true;
+        self.started = true;
         if let Some(opts) = &self.render {
             self.live = Some(LiveRender::new(&self.env, opts, "python", "python"));
         }
         Ok(self.observations(py))
     }
 
-    /// One step: `actions` [N] integers in 0..5 (Action order of the spec),
+    /// One step: `actions` [N] integers from 0 to 4 (forward, turn left, turn right, stop, backward),
     /// captors first. Returns (vectors, patches, rewards [N] float32,
     /// terminated, truncated, captured).
     #[allow(clippy::type_complexity)]
@@ -262,13 +306,8 @@ impl Env {
             ));
         }
         let n = self.env.num_agents();
-        let a = actions.as_slice().map_err(|_| {
-            value_error(
-                "actions",
-                "a non-contiguous array",
-                "must be a contiguous int64 array",
-            )
-        })?;
+        // In index order, whatever the memory order or strides.
+        let a: Vec<i64> = actions.as_array().iter().copied().collect();
         if a.len() != n {
             return Err(value_error(
                 "actions",
@@ -276,7 +315,7 @@ impl Env {
                 format!("must hold one action per agent ({n})"),
             ));
         }
-        let actions = actions_of(a)?;
+        let actions = actions_of(&a)?;
         let mut rewards = vec![0f32; n];
         let info = self.env.step_state(&actions, &mut rewards);
         let terminated = self.env.captured;
@@ -309,10 +348,15 @@ impl Env {
             .expect("h x w x 3 bytes"))
     }
 
-    /// |ASZ| of the current state in square metres (spec §4): the free
+    /// |ASZ| of the current state in square metres: the free
     /// area the target reaches before every captor.
-    fn asz_area(&mut self) -> f64 {
-        cells_to_m2(self.env.asz_cells())
+    fn asz_area(&mut self) -> PyResult<f64> {
+        if !self.started {
+            return Err(PyRuntimeError::new_err(
+                "asz_area() before reset(): there is no state yet",
+            ));
+        }
+        no_panic("asz_area", || Ok(cells_to_m2(self.env.asz_cells())))
     }
 }
 
@@ -449,6 +493,8 @@ pub struct VectorEnv {
     // Behind a lock for the same reason as `Policy`'s controller.
     venv: Mutex<VecEnv>,
     started: bool,
+    /// The seed every world's episodes are drawn from.
+    seed: u64,
 }
 
 #[pymethods]
@@ -475,6 +521,16 @@ impl VectorEnv {
             ));
         }
         let cfg = env_config(num_captors, speed_ratio, episode_length)?;
+        if num_envs * (num_captors + 1) > MAX_VECTOR_AGENTS {
+            return Err(value_error(
+                "num_envs",
+                num_envs,
+                format!(
+                    "with {num_captors} captors that is {} agents; one vector env holds at most {MAX_VECTOR_AGENTS} (use several, or fewer worlds)",
+                    num_envs * (num_captors + 1)
+                ),
+            ));
+        }
         let maps = maps_for(maps, protocol)?;
         let seed = seed.map(seed_of).transpose()?.unwrap_or(0);
         let mut venv = VecEnv::new(cfg, maps, num_envs as usize, seed)
@@ -496,7 +552,14 @@ impl VectorEnv {
         Ok(VectorEnv {
             venv: Mutex::new(venv),
             started: false,
+            seed,
         })
+    }
+
+    /// The seed the worlds' episodes are drawn from.
+    #[getter]
+    fn seed(&self) -> u64 {
+        self.seed
     }
 
     #[getter]
@@ -556,14 +619,11 @@ impl VectorEnv {
                 format!("must be [num_envs, agents] = [{n}, {na}]"),
             ));
         }
-        let a = actions.as_slice().map_err(|_| {
-            value_error(
-                "actions",
-                "a non-contiguous array",
-                "must be a contiguous int64 array",
-            )
-        })?;
-        let actions = actions_of(a)?;
+        // Row by row (world by world), whatever the memory order: a
+        // Fortran-ordered or transposed array read in memory order would
+        // give worlds and agents each other's actions.
+        let a: Vec<i64> = actions.as_array().iter().copied().collect();
+        let actions = actions_of(&a)?;
         let worlds: &mut VecEnv = &mut venv;
         py.detach(|| worlds.step(&actions))
             .map_err(|e| PyRuntimeError::new_err(format!("placing the robots: {e}")))?;
@@ -616,6 +676,28 @@ fn asz_area(
             "must be one or more finite (x, y) positions in metres",
         ));
     }
+    if captors.len() > MAX_CAPTORS as usize {
+        return Err(value_error(
+            "captors",
+            format!("{} positions", captors.len()),
+            format!("at most {MAX_CAPTORS} captors, as an env holds"),
+        ));
+    }
+    let map = env.env.map();
+    let inside = |p: &(f64, f64)| {
+        let (r, c) = map.grid.cell_of([p.0, p.1]);
+        map.grid.is_free(r, c)
+    };
+    if !inside(&target) {
+        return Err(value_error(
+            "target",
+            format!("{target:?}"),
+            format!(
+                "is not on a free cell of the map {} (the ASZ of a target in a wall or off the map is not defined)",
+                map.grid.name
+            ),
+        ));
+    }
     if !finite(&target) {
         return Err(value_error(
             "target",
@@ -641,8 +723,13 @@ fn asz_area(
         pos: [target.0, target.1],
         speed: target_speed,
     };
-    let cells = FastMarching::new().asz_cells(&**env.env.map(), target, &sources);
-    Ok(cells_to_m2(cells))
+    no_panic("asz_area", || {
+        Ok(cells_to_m2(FastMarching::new().asz_cells(
+            &**env.env.map(),
+            target,
+            &sources,
+        )))
+    })
 }
 
 #[pymodule]

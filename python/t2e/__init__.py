@@ -31,7 +31,7 @@ def vector_env(
     speed_ratio: float = 1.0,
     protocol: str = "held-out",
     episode_length: int = 500,
-    seed: int = 0,
+    seed: int = None,
     captors: str = None,
     target: str = None,
 ) -> VectorEnv:
@@ -43,7 +43,20 @@ def vector_env(
     world and the episode), so the arrays always hold live episodes.
     ``captors`` or ``target`` names a controller that plays that side in
     Rust (heuristic, greedy, greedy:K, random, still); the actions given
-    for it are then ignored."""
+    for it are then ignored. ``seed=None`` draws a seed from the operating
+    system, as ``parallel_env().reset(seed=None)`` does; the env's ``seed``
+    attribute says which, so the run can be repeated."""
+    import numbers
+
+    for name, value in (("num_envs", num_envs), ("num_captors", num_captors), ("episode_length", episode_length)):
+        if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+            raise TypeError(f"{name} = {value!r}: must be an integer")
+    if seed is None:
+        import secrets
+
+        seed = secrets.randbits(64)
+    elif isinstance(seed, bool) or not isinstance(seed, numbers.Integral):
+        raise TypeError(f"seed = {seed!r}: must be an integer in 0..2**64 or None")
     return VectorEnv(num_envs, maps, num_captors, speed_ratio, protocol, episode_length, seed, captors, target)
 
 

@@ -20,7 +20,8 @@ class T2EParallelEnv(ParallelEnv):
 
     Agents are ``captor_0`` .. ``captor_{K-1}`` and ``target``. Each episode
     ends for all agents at once: ``terminations`` when the captors trap the
-    target (the ASZ falls below the capture threshold), ``truncations`` at
+    target (the fast capture rule: every probe around the target is
+    blocked; docs/reference/env.md), ``truncations`` at
     ``episode_length`` steps. ``infos`` carry ``captured``, ``asz_area``
     (m^2, computed when ``asz_info`` is on) and ``map``.
     """
@@ -45,6 +46,9 @@ class T2EParallelEnv(ParallelEnv):
             raise TypeError(f"maps = {maps!r}: must be a string such as 'shipped', 'generated:20' or 'small,medium,large'")
         if not isinstance(protocol, str):
             raise TypeError(f"protocol = {protocol!r}: must be 'held-out', 'paper' or 'test'")
+        if not isinstance(asz_info, (bool, np.bool_)):
+            # bool("no") is True: a string here would silently turn it on.
+            raise TypeError(f"asz_info = {asz_info!r}: must be True or False")
         if render_mode not in (None, "rgb_array"):
             raise ValueError(f"render_mode = {render_mode!r}: must be None or 'rgb_array'")
         self._env = Env(
@@ -155,9 +159,9 @@ def _action(agent: str, value: Any) -> int:
             raise ValueError(f"actions[{agent!r}]: an array of shape {value.shape}; one action is a scalar")
         value = value.reshape(()).item()
     if isinstance(value, bool) or not isinstance(value, numbers.Integral):
-        raise ValueError(f"actions[{agent!r}] = {value!r}: an action is an integer in 0..{ACTIONS}")
+        raise ValueError(f"actions[{agent!r}] = {value!r}: an action is an integer from 0 to {ACTIONS - 1}")
     if not 0 <= value < ACTIONS:
-        raise ValueError(f"actions[{agent!r}] = {value}: an action is an integer in 0..{ACTIONS}")
+        raise ValueError(f"actions[{agent!r}] = {value}: an action is an integer from 0 to {ACTIONS - 1}")
     return int(value)
 
 

@@ -28,12 +28,12 @@ class ScriptedPolicy:
 
 
 def rule_based_target() -> ScriptedPolicy:
-    """The spec's rule-based target."""
+    """The paper's rule-based target."""
     return ScriptedPolicy("heuristic", "target")
 
 
 def expert_captors() -> ScriptedPolicy:
-    """The spec's expert captors."""
+    """The paper's expert captors."""
     return ScriptedPolicy("heuristic", "captors")
 
 

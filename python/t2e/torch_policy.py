@@ -46,15 +46,27 @@ def _read_safetensors(path: Path):
     except ValueError as e:
         raise _refuse(path, f"its header is not JSON ({e})") from None
     body = memoryview(data)[8 + n :]
+    if not isinstance(header, dict):
+        raise _refuse(path, "its header is not a JSON object")
     tensors = {}
     for name, entry in header.items():
         if name == "__metadata__":
             continue
+        if not isinstance(entry, dict):
+            raise _refuse(path, f"tensor {name}: its entry is not an object")
         if entry.get("dtype") != "F32":
             raise _refuse(path, f"tensor {name} is {entry.get('dtype')}, not F32")
-        start, end = entry["data_offsets"]
-        shape = entry["shape"]
-        if end - start != 4 * math.prod(shape) or end > len(body):
+        offsets, shape = entry.get("data_offsets"), entry.get("shape")
+        if (
+            not isinstance(offsets, list)
+            or len(offsets) != 2
+            or not all(isinstance(x, int) and x >= 0 for x in offsets)
+            or not isinstance(shape, list)
+            or not all(isinstance(x, int) and x >= 0 for x in shape)
+        ):
+            raise _refuse(path, f"tensor {name}: data_offsets {offsets!r} or shape {shape!r} malformed")
+        start, end = offsets
+        if end < start or end - start != 4 * math.prod(shape) or end > len(body):
             raise _refuse(path, f"tensor {name}: {end - start} bytes for shape {shape}")
         t = torch.frombuffer(bytearray(body[start:end]), dtype=torch.float32).reshape(shape)
         if not torch.isfinite(t).all():
@@ -63,31 +75,106 @@ def _read_safetensors(path: Path):
     return tensors
 
 
+# Bounds on what meta.json may ask for: the largest networks the Rust
+# learners build are far below these; past them a tampered or foreign file
+# would allocate gigabytes before any weight is read.
+MAX_HIDDEN = 4096
+MAX_CONV_CHANNELS = 512
+PATCH_POOLS = (1, 2, 3, 4, 6)
+MAX_PRIOR = 20.0
+MAX_CAPTORS = 8
+
+
+def _verify_manifest(folder: Path) -> None:
+    """An exported folder's SHA256SUMS (meta.json included) against its
+    files; a training checkpoint has none (meta.json's hashes cover it)."""
+    manifest = folder / "SHA256SUMS"
+    if not manifest.is_file():
+        return
+    try:
+        text = manifest.read_text()
+    except (OSError, UnicodeDecodeError) as e:
+        raise _refuse(manifest, f"unreadable ({e})") from None
+    listed = set()
+    for number, line in enumerate(text.splitlines(), 1):
+        if not line.strip():
+            continue
+        want, sep, name = line.partition("  ")
+        if not sep or "/" in name or "\\" in name or name in ("", ".", ".."):
+            raise _refuse(manifest, f"line {number} is not `<sha256>  <file>`")
+        file = folder / name
+        if not file.is_file():
+            raise _refuse(file, "missing, though SHA256SUMS lists it")
+        actual = hashlib.sha256(file.read_bytes()).hexdigest()
+        if actual != want.strip():
+            raise _refuse(file, f"SHA-256 {actual[:12]}... is not the {want.strip()[:12]}... SHA256SUMS lists: the folder changed after it was exported")
+        listed.add(name)
+    if "meta.json" not in listed:
+        raise _refuse(manifest, "does not list meta.json")
+
+
+def _int_field(path: Path, meta: dict, key: str, low: int, high: int, default=None) -> int:
+    value = meta.get(key, default)
+    if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= high:
+        raise _refuse(path, f"{key} = {value!r}: must be an integer from {low} to {high}")
+    return value
+
+
 def _read_meta(folder: Path) -> dict:
+    if not folder.is_dir():
+        raise PolicyError(f"{folder}: not a folder (a checkpoint folder holds meta.json and actor.safetensors)")
+    _verify_manifest(folder)
     path = folder / "meta.json"
     if not path.is_file():
         raise _refuse(path, "missing: not a checkpoint folder (export one with `t2e-league export`)")
     try:
         meta = json.loads(path.read_text())
-    except ValueError as e:
+    except (ValueError, UnicodeDecodeError) as e:
         raise _refuse(path, f"not JSON ({e})") from None
+    if not isinstance(meta, dict):
+        raise _refuse(path, "not a JSON object")
     if meta.get("format") != FORMAT:
         raise _refuse(path, f"format {meta.get('format')}; this package reads format {FORMAT}")
     if meta.get("side") not in ("captors", "target"):
         raise _refuse(path, f"side {meta.get('side')!r} is neither captors nor target")
+    _int_field(path, meta, "num_captors", 1, MAX_CAPTORS)
     net = meta.get("net", {})
+    if not isinstance(net, dict):
+        raise _refuse(path, "net is not an object")
+    where = f"{path} (net)"
+    _int_field(Path(where), net, "hidden", 8, MAX_HIDDEN, 64)
+    if net.get("patch_pool", 2) not in PATCH_POOLS:
+        raise _refuse(path, f"net.patch_pool = {net.get('patch_pool')!r}: must be one of {PATCH_POOLS}")
+    _int_field(Path(where), net, "patch_pool", 1, PATCH, 2)
+    channels = net.get("conv_channels", [8, 16])
+    if (
+        not isinstance(channels, list)
+        or len(channels) != 2
+        or not all(isinstance(c, int) and not isinstance(c, bool) and 1 <= c <= MAX_CONV_CHANNELS for c in channels)
+    ):
+        raise _refuse(path, f"net.conv_channels = {channels!r}: must be two integers from 1 to {MAX_CONV_CHANNELS}")
     if net.get("vector_input", "layer_norm") not in VECTOR_INPUTS:
         raise _refuse(path, f"net.vector_input {net.get('vector_input')!r} is not one of {VECTOR_INPUTS}")
     if PATCH % int(net.get("patch_pool", 2)) != 0:
         raise _refuse(path, f"net.patch_pool {net.get('patch_pool')} does not divide {PATCH}")
-    for name, digest in meta.get("files", {}).items():
+    if PATCH // int(net.get("patch_pool", 2)) < 7:
+        raise _refuse(path, f"net.patch_pool {net.get('patch_pool')}: the pooled patch is too small for the actor's two convolutions")
+    prior = net.get("heuristic_prior", 0.0)
+    if isinstance(prior, bool) or not isinstance(prior, (int, float)) or not math.isfinite(prior) or not 0 <= prior <= MAX_PRIOR:
+        raise _refuse(path, f"net.heuristic_prior = {prior!r}: must be a number in [0, {MAX_PRIOR}]")
+    files = meta.get("files", {})
+    if not isinstance(files, dict):
+        raise _refuse(path, "files is not an object")
+    for name, digest in files.items():
+        if not isinstance(name, str) or "/" in name or name in ("", ".", ".."):
+            raise _refuse(path, f"files names {name!r}, not a file of the folder")
         file = folder / name
         if not file.is_file():
             raise _refuse(file, "missing, though meta.json lists it")
         actual = hashlib.sha256(file.read_bytes()).hexdigest()
         if actual != digest:
-            raise _refuse(file, f"SHA-256 {actual[:12]}... is not the {digest[:12]}... meta.json records: the file changed")
-    if "actor.safetensors" not in meta.get("files", {}):
+            raise _refuse(file, f"SHA-256 {actual[:12]}... is not the {str(digest)[:12]}... meta.json records: the file changed")
+    if "actor.safetensors" not in files:
         raise _refuse(path, "lists no actor.safetensors")
     return meta
 
@@ -291,4 +378,10 @@ class TorchPolicy:
 def load_policy(folder) -> TorchPolicy:
     """The actor of a checkpoint folder in PyTorch; refuses a corrupted or
     mismatched folder with the file and the reason (``PolicyError``)."""
-    return TorchPolicy(folder)
+    try:
+        return TorchPolicy(folder)
+    except PolicyError:
+        raise
+    except (KeyError, AttributeError, TypeError, ValueError, ZeroDivisionError, RuntimeError, OSError) as e:
+        # Whatever slipped past the checks above still names the folder.
+        raise PolicyError(f"{folder}: cannot be played ({type(e).__name__}: {e})") from e

@@ -55,9 +55,13 @@ def test_an_exported_player_plays_the_rust_controllers_episodes(tmp_path, side, 
 def test_a_corrupted_or_mismatched_folder_is_refused_with_the_file_and_the_reason(tmp_path):
     good = STORED / "export-captors"
 
-    def copy(name):
+    def copy(name, manifest=True):
         d = tmp_path / name
         shutil.copytree(good, d)
+        if not manifest:
+            # As a training run's checkpoint folder: meta.json's own hashes
+            # cover the weights, and meta.json's fields are checked alone.
+            (d / "SHA256SUMS").unlink()
         return d
 
     changed = copy("changed")
@@ -72,14 +76,14 @@ def test_a_corrupted_or_mismatched_folder_is_refused_with_the_file_and_the_reaso
     with pytest.raises(t2e.torch_policy.PolicyError, match="meta.json.*missing"):
         t2e.load_policy(no_meta)
 
-    future = copy("future")
+    future = copy("future", manifest=False)
     meta = json.loads((future / "meta.json").read_text())
     meta["format"] = 99
     (future / "meta.json").write_text(json.dumps(meta))
     with pytest.raises(t2e.torch_policy.PolicyError, match="format 99"):
         t2e.load_policy(future)
 
-    wider = copy("wider")
+    wider = copy("wider", manifest=False)
     meta = json.loads((wider / "meta.json").read_text())
     meta["net"]["hidden"] = 16
     (wider / "meta.json").write_text(json.dumps(meta))
@@ -92,3 +96,51 @@ def test_a_corrupted_or_mismatched_folder_is_refused_with_the_file_and_the_reaso
     observations, _ = env.reset(seed=0)
     with pytest.raises(ValueError, match="2 captors"):
         policy(observations, env)
+
+
+def test_an_export_is_checked_against_its_sha256sums_before_meta_json_is_believed(tmp_path):
+    good = STORED / "export-target"
+    relabelled = tmp_path / "relabelled"
+    shutil.copytree(good, relabelled)
+    meta = json.loads((relabelled / "meta.json").read_text())
+    assert meta["side"] == "target"
+    meta["side"] = "captors"
+    (relabelled / "meta.json").write_text(json.dumps(meta))
+    with pytest.raises(t2e.torch_policy.PolicyError, match="meta.json.*SHA256SUMS"):
+        t2e.load_policy(relabelled)
+
+
+@pytest.mark.parametrize(
+    "edit, says",
+    [
+        (lambda m: m["net"].update(hidden=40000), "hidden"),
+        (lambda m: m["net"].update(conv_channels=[8]), "conv_channels"),
+        (lambda m: m["net"].update(patch_pool=8), "patch_pool"),
+        (lambda m: m["net"].update(patch_pool=0), "patch_pool"),
+        (lambda m: m["net"].update(heuristic_prior=float("nan")), "heuristic_prior"),
+        (lambda m: m.update(num_captors=0), "num_captors"),
+        (lambda m: m.update(num_captors="3"), "num_captors"),
+        (lambda m: m.pop("num_captors"), "num_captors"),
+        (lambda m: m.update(net=[]), "net"),
+        (lambda m: m.update(files=[]), "files"),
+        (lambda m: m["files"].update({"../x": "0" * 64}), "files"),
+    ],
+)
+def test_meta_json_values_are_bounded_and_refused_as_policy_errors(tmp_path, edit, says):
+    folder = tmp_path / "edited"
+    shutil.copytree(STORED / "export-target", folder)
+    (folder / "SHA256SUMS").unlink()
+    meta = json.loads((folder / "meta.json").read_text())
+    edit(meta)
+    (folder / "meta.json").write_text(json.dumps(meta))
+    with pytest.raises(t2e.torch_policy.PolicyError, match=says):
+        t2e.load_policy(folder)
+
+
+def test_a_missing_folder_or_a_file_is_a_policy_error(tmp_path):
+    with pytest.raises(t2e.torch_policy.PolicyError, match="not a folder"):
+        t2e.load_policy(tmp_path / "nowhere")
+    file = tmp_path / "file"
+    file.write_text("x")
+    with pytest.raises(t2e.torch_policy.PolicyError, match="not a folder"):
+        t2e.load_policy(file)

@@ -77,14 +77,15 @@ pub struct EvalArgs {
     pub resume: bool,
 }
 
-/// One value of `--k`: a number of captors, 1 to 32.
+/// One value of `--k`: a number of captors, 1 to `MAX_CAPTORS`.
 fn parse_k(text: &str) -> Result<usize, String> {
     let k: i64 = text.trim().parse().map_err(|_| {
         format!("K = '{text}': not a whole number (K is the number of captors, e.g. --k 3,4)")
     })?;
-    if !(1..=32).contains(&k) {
+    let max = crate::env::MAX_CAPTORS as i64;
+    if !(1..=max).contains(&k) {
         return Err(format!(
-            "K = {k}: the number of captors must be at least 1 and at most 32"
+            "K = {k}: the number of captors must be at least 1 and at most {max}"
         ));
     }
     Ok(k as usize)

@@ -249,6 +249,17 @@ pub fn run(args: RunArgs) -> Result<()> {
             .count()
             + usize::from(cfg.evaluator.enabled)
     };
+    match args.workers {
+        Some(n) if n > seats => bail!(
+            "--workers {n}: this league has {seats} seats, and a local worker runs one; the other {} would sit idle (give at most {seats})",
+            n - seats
+        ),
+        Some(n) if n > 0 && n < seats => tracing::warn!(
+            "--workers {n} of {seats} seats: the other {} run only when workers on other hosts take them; until then the main learners wait for each other (pace_env_steps)",
+            seats - n
+        ),
+        _ => {}
+    }
     let launch = manager::Launch::Workers {
         local: args.workers.unwrap_or(seats),
         logs: dir.join("logs"),

@@ -62,6 +62,22 @@ pub enum MapsCommand {
         #[arg(long, value_name = "DIR")]
         out: PathBuf,
     },
+    /// Fetch the 26 Gibson test maps from the paper's public repository.
+    ///
+    /// Clones https://github.com/Dr-Xiaogaren/T2E (with git) at the pinned
+    /// commit, checks every map of scene/val/{easy,middle,hard}/ against the
+    /// content hashes and classes the binary embeds, and writes the PNGs and
+    /// a splits.csv (small / medium / large) to DIR. Point T2E_GIBSON_DIR at
+    /// DIR, or use ../shared/maps/gibson as DIR.
+    FetchGibson {
+        /// Output folder; created whole (an interrupted fetch leaves none).
+        #[arg(long, value_name = "DIR")]
+        out: PathBuf,
+        /// Read the maps from this checkout of the reference repository
+        /// instead of cloning it (no network needed).
+        #[arg(long, value_name = "CHECKOUT")]
+        from: Option<PathBuf>,
+    },
 }
 
 pub fn run(args: MapsArgs) -> Result<()> {
@@ -74,6 +90,7 @@ pub fn run(args: MapsArgs) -> Result<()> {
             count,
             out,
         } => generate_maps(class, seed, count, &out),
+        MapsCommand::FetchGibson { out, from } => fetch_gibson(&out, from.as_deref()),
     }
 }
 
@@ -139,6 +156,79 @@ fn list(spec: &str) -> Result<()> {
             failed.len(),
             entries.len(),
             failed.join(", ")
+        );
+    }
+    Ok(())
+}
+
+fn fetch_gibson(out: &Path, from: Option<&Path>) -> Result<()> {
+    use crate::map::gibson_source::{import_checkout, REFERENCE_COMMIT, REFERENCE_REPOSITORY};
+    let clone;
+    let checkout = match from {
+        Some(dir) => dir.to_path_buf(),
+        None => {
+            clone = tempfile_dir()?;
+            let dir = clone.join("T2E");
+            eprintln!("cloning {REFERENCE_REPOSITORY} at {REFERENCE_COMMIT} ...");
+            let cloned = run_git(&[
+                "clone",
+                "--quiet",
+                REFERENCE_REPOSITORY,
+                &dir.to_string_lossy(),
+            ])
+            .and_then(|()| {
+                run_git(&[
+                    "-C",
+                    &dir.to_string_lossy(),
+                    "checkout",
+                    "--quiet",
+                    REFERENCE_COMMIT,
+                ])
+            });
+            if let Err(e) = cloned {
+                let _ = std::fs::remove_dir_all(&clone);
+                return Err(e);
+            }
+            dir
+        }
+    };
+    let result = import_checkout(&checkout, out);
+    if from.is_none() {
+        let _ = std::fs::remove_dir_all(checkout.parent().unwrap_or(&checkout));
+    }
+    let maps = result?;
+    for class in SizeClass::ALL {
+        let n = maps.iter().filter(|m| m.class == class).count();
+        println!("{class}: {n} maps");
+    }
+    println!(
+        "{} maps checked against the embedded content hashes -> {} (set T2E_GIBSON_DIR={})",
+        maps.len(),
+        out.display(),
+        out.canonicalize()
+            .unwrap_or_else(|_| out.to_path_buf())
+            .display()
+    );
+    Ok(())
+}
+
+/// A fresh folder for the clone, beside the system's temporary files.
+fn tempfile_dir() -> Result<PathBuf> {
+    let dir = std::env::temp_dir().join(format!("t2e-fetch-gibson-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    Ok(dir)
+}
+
+fn run_git(args: &[&str]) -> Result<()> {
+    let status = std::process::Command::new("git")
+        .args(args)
+        .status()
+        .context("cannot run git (needed to fetch the maps; or clone the repository yourself and pass --from CHECKOUT)")?;
+    if !status.success() {
+        bail!(
+            "git {} failed ({status}); without network, clone the repository elsewhere and pass --from CHECKOUT",
+            args.join(" ")
         );
     }
     Ok(())

@@ -27,7 +27,7 @@ pub struct RenderArgs {
     #[arg(long, default_value = "heuristic")]
     pub target: ControllerSpec,
     /// Number of captors K.
-    #[arg(long, default_value_t = 3, allow_negative_numbers = true, value_parser = clap::value_parser!(u32).range(1..=32))]
+    #[arg(long, default_value_t = 3, allow_negative_numbers = true, value_parser = clap::value_parser!(u32).range(1..=crate::env::MAX_CAPTORS as i64))]
     pub k: u32,
     /// Target speed over captor speed (captors move at 1.0 m/s; 1.0, 1.2, 1.4 in the paper).
     #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]

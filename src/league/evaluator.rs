@@ -225,7 +225,7 @@ pub fn panel_queue(players: &[Player]) -> Vec<(&Player, bool)> {
 /// The held-out and validation opponents per member side, checkpoints
 /// loaded and checked against the league's game, and the validation maps,
 /// checked to hold no test map.
-fn load_panels(cfg: &LeagueConfig) -> Result<Panels, ConfigError> {
+pub(super) fn load_panels(cfg: &LeagueConfig) -> Result<Panels, ConfigError> {
     let env = crate::env::EnvConfig {
         num_captors: cfg.num_captors,
         target_speed: cfg.curriculum.stages[0],
@@ -306,9 +306,22 @@ pub fn run_evaluator(dir: &LeagueDir, stop: &AtomicBool) -> Result<Outcome> {
     let maps = crate::map::catalog::load_prepared(&cfg.maps)
         .with_context(|| format!("maps = \"{}\"", cfg.maps))
         .map_err(|e| anyhow::Error::new(CannotStart(format!("{e:#}"))))?;
-    let panels = load_panels(&cfg).map_err(|e| {
-        anyhow::Error::new(CannotStart(format!("{}: {e}", dir.config_path().display())))
-    })?;
+    let panels = load_panels(&cfg)
+        .and_then(|panels| {
+            // A league stored before maps were compared by content is
+            // refused here rather than validated on its training maps.
+            super::preflight::check_maps_apart(
+                "evaluator.validation_maps",
+                cfg.evaluator.validation_maps.as_deref().unwrap_or(""),
+                &panels.validation_maps,
+                &cfg.maps,
+                &maps,
+            )?;
+            Ok(panels)
+        })
+        .map_err(|e| {
+            anyhow::Error::new(CannotStart(format!("{}: {e}", dir.config_path().display())))
+        })?;
     // The count covers every evaluator process of this league, not only this one.
     let mut total = store.matches_recorded_by(EVALUATOR)? + store.held_out_count()?;
     store.heartbeat(EVALUATOR, BeatState::Evaluating, total, None)?;

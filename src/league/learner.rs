@@ -401,6 +401,7 @@ fn wait_for_other_main(
     });
     let started = Instant::now();
     let mut announced = false;
+    let mut next_warning = 60;
     while !stop.load(Ordering::SeqCst) {
         let beats = store.heartbeats()?;
         let now = super::store::now_ms();
@@ -418,6 +419,17 @@ fn wait_for_other_main(
                 mine
             );
             announced = true;
+        }
+        // Said again every minute: a seat nobody runs is waited for
+        // forever, and the one line above scrolls away.
+        let waited = started.elapsed().as_secs();
+        if waited >= next_warning {
+            next_warning += 60;
+            let why = match theirs {
+                None => format!("{other} has never run: no process or worker has taken its seat (start a `worker` on the league's store, or give `run --workers` one per seat)"),
+                Some((state, steps, _)) => format!("{other} is {state:?} at {steps} env steps"),
+            };
+            tracing::warn!("{}: waiting {waited} s for {other}; {why}", seat.name());
         }
         store.heartbeat(&seat.name(), BeatState::Waiting, mine, None)?;
         std::thread::sleep(std::time::Duration::from_millis(500));

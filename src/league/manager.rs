@@ -83,7 +83,11 @@ pub fn run_with(
         // lease, taken before any write), and a pool that turns out not to
         // be the league's must not get even a league.lock: plan first there.
         let external = dir.store != super::store::StoreUrl::in_dir(&dir.root);
-        let held = if dir.root.is_dir() && !external {
+        // A league.lock already there is the league's own: take it before
+        // the lease too, or a manager that is only frozen (its flock still
+        // held) would lose the lease to one that then fails on the lock,
+        // and on waking find itself replaced: no manager at all.
+        let held = if dir.root.is_dir() && (!external || dir.root.join("league.lock").is_file()) {
             Some(lock(dir)?)
         } else {
             None
@@ -121,6 +125,8 @@ pub fn run_with(
                 .map_err(|e| anyhow::anyhow!("{origin}: {e}"))?;
             super::pool::check_trained_members(&cfg)
                 .map_err(|e| anyhow::anyhow!("{origin}: {e:#}"))?;
+            super::preflight::check_new_league(&cfg, &maps)
+                .map_err(|e| anyhow::anyhow!("{origin}: {e}"))?;
             std::fs::create_dir_all(&dir.root)
                 .with_context(|| format!("cannot create {}", dir.root.display()))?;
             (cfg, None)

@@ -24,6 +24,9 @@
 //!   network opponents, matches, snapshots.
 //! - `evaluator`: its own process: every snapshot plays a fixed panel
 //!   (members, held-out teams, validation teams on validation maps).
+//! - `preflight`: the checks of a new league's config that need its maps
+//!   or checkpoints loaded (maps and checkpoints compared by content), run
+//!   before anything is written.
 //! - `selection`: the validation-best snapshot `export --best` exports.
 //! - `manager`: `t2e-league run`: spawns and supervises the learners and
 //!   the evaluator.
@@ -47,6 +50,7 @@ pub mod opponents;
 pub mod payoff;
 pub mod players;
 pub mod pool;
+pub mod preflight;
 pub mod process;
 pub mod ratings;
 pub mod seats;

@@ -25,8 +25,11 @@ pub struct Validated {
 /// Why no snapshot can be chosen.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum NoChoice {
-    #[error("the league has no validation panel: set [evaluator] validation_maps and validation_captors (or validation_targets) in its config")]
-    NoPanel,
+    #[error("the league has no validation panel for its {side}: its [evaluator] {field} is empty (set it, with validation_maps, in the league's config)")]
+    NoPanel {
+        side: &'static str,
+        field: &'static str,
+    },
     #[error("none of {learner}'s {snapshots} snapshots has finished its validation games yet ({episodes} episodes against each of {opponents}); wait for the evaluator, or export a player by name")]
     NoneComplete {
         learner: String,
@@ -51,7 +54,13 @@ pub fn rank_validated(
     episodes: u64,
 ) -> Result<Vec<Validated>, NoChoice> {
     if opponents.is_empty() {
-        return Err(NoChoice::NoPanel);
+        return Err(NoChoice::NoPanel {
+            side: side.name(),
+            field: match side {
+                Side::Captors => "validation_targets",
+                Side::Target => "validation_captors",
+            },
+        });
     }
     let learner = learner_name(side);
     let Some(main) = players.iter().find(|p| p.name == learner) else {
@@ -272,7 +281,10 @@ mod tests {
         );
         assert_eq!(
             rank_validated(&league(), &results, Side::Target, &[], 10),
-            Err(NoChoice::NoPanel)
+            Err(NoChoice::NoPanel {
+                side: "target",
+                field: "validation_captors"
+            })
         );
     }
 

@@ -58,6 +58,30 @@ impl WorkerOptions {
         if self.host.trim().is_empty() {
             bail!("--host: empty");
         }
+        // Status prints one seat per line, and holders are split on ':'.
+        if let Some(c) = self
+            .host
+            .chars()
+            .find(|c| c.is_control() || *c == ':' || c.is_whitespace())
+        {
+            bail!(
+                "--host {:?}: holds {:?}; a host name is one word without ':' (letters, digits, '-', '.', '_')",
+                self.host,
+                c
+            );
+        }
+        if self.host.len() > 253 {
+            bail!(
+                "--host: {} characters; a host name has at most 253",
+                self.host.len()
+            );
+        }
+        if self.logs.parent().is_some_and(|d| d.is_file()) {
+            bail!(
+                "--dir {}: a file, not a folder; the worker writes its logs under DIR/logs",
+                self.logs.parent().unwrap().display()
+            );
+        }
         Ok(())
     }
 }

@@ -618,3 +618,34 @@ fn the_asz_potential_rises_as_the_captors_close_in() {
     ));
     assert_eq!(at([(1.5, 1.5), (1.0, 1.5), (1.5, 1.0)]), corner);
 }
+
+/// `MAX_CAPTORS` is a count every map places: for each shipped map and
+/// each Gibson map (when present), 40 seeds at K = MAX_CAPTORS all reset.
+/// A larger K is refused by `EnvConfig::validate`, so no episode of an
+/// accepted setting fails at its reset.
+#[test]
+fn the_most_captors_are_placed_on_every_map() {
+    use t2e::map::catalog::load_prepared;
+    let mut sets = vec!["shipped"];
+    if t2e::map::catalog::gibson_dir().is_some() {
+        sets.push("gibson");
+    }
+    let mut failures = Vec::new();
+    for set in sets {
+        for map in load_prepared(set).unwrap().iter() {
+            let mut env = TrapEnv::new(cfg(MAX_CAPTORS), Arc::new(vec![map.clone()])).unwrap();
+            for seed in 0..40 {
+                if let Err(e) = env.reset_state(seed) {
+                    failures.push(format!("{} seed {seed}: {e}", map.grid.name));
+                }
+            }
+        }
+    }
+    assert!(
+        failures.is_empty(),
+        "{} resets failed:\n{}",
+        failures.len(),
+        failures.join("\n")
+    );
+    assert!(cfg(MAX_CAPTORS + 1).validate().is_err());
+}

@@ -187,3 +187,101 @@ fn write_test_map_fingerprints() {
     std::fs::write(&out, &bytes).unwrap();
     eprintln!("wrote {} ({} bytes)", out.display(), bytes.len());
 }
+
+/// `maps fetch-gibson --from` on a folder laid out as the reference
+/// repository (`scene/val/{easy,middle,hard}/`, built here from the Gibson
+/// folder by its splits.csv) writes the same 26 maps, byte for byte, with
+/// the same classes; a changed map, a map in the wrong class folder and a
+/// missing one are refused by name, and nothing is written.
+#[test]
+fn fetch_gibson_extracts_the_reference_layout() {
+    use std::process::Command;
+    use t2e::map::gibson_source::{read_flat, CLASS_FOLDERS};
+    let Some(gibson) = gibson_or_skip() else {
+        return;
+    };
+    let tmp = tempfile::tempdir().unwrap();
+    let checkout = tmp.path().join("T2E");
+    let entries = list_dir(&gibson).unwrap();
+    assert_eq!(entries.len(), 26);
+    let folder_of = |class: SizeClass| CLASS_FOLDERS.iter().find(|(_, c)| *c == class).unwrap().0;
+    for e in &entries {
+        let dir = checkout
+            .join("scene/val")
+            .join(folder_of(e.listed_class.unwrap()));
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::copy(&e.path, dir.join(format!("{}.png", e.name))).unwrap();
+    }
+    let fetch = |from: &std::path::Path, out: &std::path::Path| {
+        Command::new(env!("CARGO_BIN_EXE_t2e-league"))
+            .args(["maps", "fetch-gibson", "--from"])
+            .arg(from)
+            .arg("--out")
+            .arg(out)
+            .output()
+            .unwrap()
+    };
+    let out = tmp.path().join("maps/gibson");
+    let o = fetch(&checkout, &out);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let written = read_flat(&out).unwrap();
+    let original = read_flat(&gibson).unwrap();
+    assert_eq!(written, original);
+    for e in &entries {
+        let a = std::fs::read(&e.path).unwrap();
+        let b = std::fs::read(out.join(format!("{}.png", e.name))).unwrap();
+        assert!(a == b, "{} differs from its source", e.name);
+    }
+    // A second fetch into the finished folder is a no-op, not an error.
+    assert!(fetch(&checkout, &out).status.success());
+
+    // A map moved to another class folder.
+    let moved_from = checkout.join("scene/val/hard/Delton_floor_trav_0_v3.png");
+    let moved_to = checkout.join("scene/val/easy/Delton_floor_trav_0_v3.png");
+    std::fs::rename(&moved_from, &moved_to).unwrap();
+    let bad_out = tmp.path().join("bad");
+    let o = fetch(&checkout, &bad_out);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("Delton_floor_trav_0_v3.png") && err.contains("large"),
+        "{err}"
+    );
+    assert!(!bad_out.exists());
+    // Missing.
+    std::fs::remove_file(&moved_to).unwrap();
+    let o = fetch(&checkout, &bad_out);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("Delton_floor_trav_0_v3"),
+        "{err}"
+    );
+    // Changed content: one free pixel of another map painted black.
+    let victim = checkout.join("scene/val/middle/Churchton_floor_trav_0_v3.png");
+    let mut img = image::open(&victim).unwrap().to_luma8();
+    let (w, h) = img.dimensions();
+    // A 5 x 5 block inside open floor: it holds one sampled pixel whatever the padding.
+    let free = |x: u32, y: u32| img.get_pixel(x, y).0[0] == 255;
+    let spot = (10..h - 10)
+        .step_by(7)
+        .flat_map(|y| (10..w - 10).step_by(7).map(move |x| (x, y)))
+        .find(|&(x, y)| (x - 8..=x + 8).all(|i| (y - 8..=y + 8).all(|j| free(i, j))));
+    let (sx, sy) = spot.expect("open floor on Churchton");
+    for i in sx - 2..=sx + 2 {
+        for j in sy - 2..=sy + 2 {
+            img.put_pixel(i, j, image::Luma([0]));
+        }
+    }
+    let changed = true;
+    assert!(changed);
+    img.save(&victim).unwrap();
+    std::fs::copy(gibson.join("Delton_floor_trav_0_v3.png"), &moved_from).unwrap();
+    let o = fetch(&checkout, &bad_out);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success()
+            && err.contains("Churchton_floor_trav_0_v3.png")
+            && err.contains("SHA-256"),
+        "{err}"
+    );
+    assert!(!bad_out.exists());
+}

@@ -1325,3 +1325,84 @@ fn killed_during_validation_games_the_league_records_no_half_result() {
         "{rows:?}"
     );
 }
+
+/// A manager frozen past its lease (SIGSTOP for longer than the 30 s
+/// lease) still holds the pool's league.lock. A second manager on the
+/// same pool used to take the lease and then fail on the lock; the frozen
+/// one, woken, found itself replaced and stopped: no manager at all. The
+/// second is now refused at the lock before it touches the lease, and the
+/// first runs on to its end.
+#[test]
+fn a_frozen_manager_is_not_replaced_by_one_that_cannot_run() {
+    let l = league("frozen-manager", 1_000_000, "");
+    let store = l.tmp.join("store.db");
+    let pool = l.tmp.join("pool");
+    let args = |logs: &str| -> Vec<String> {
+        [
+            "run",
+            "--config",
+            l.config.to_str().unwrap(),
+            "--dir",
+            l.tmp.join(logs).to_str().unwrap(),
+            "--store",
+            store.to_str().unwrap(),
+            "--pool",
+            pool.to_str().unwrap(),
+            "--workers",
+            "0",
+            "--for",
+            "50s",
+        ]
+        .iter()
+        .map(|s| s.to_string())
+        .collect()
+    };
+    let first = Command::new(bin())
+        .args(args("logs-a"))
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let started = Instant::now();
+    while !(pool.join("league.json").is_file() && pool.join("league.lock").is_file()) {
+        assert!(
+            started.elapsed() < Duration::from_secs(60),
+            "the first manager never started"
+        );
+        std::thread::sleep(Duration::from_millis(200));
+    }
+    std::thread::sleep(Duration::from_secs(1));
+    unsafe {
+        libc::kill(first.id() as i32, libc::SIGSTOP);
+    }
+    // Past the lease (30 s without a renewal).
+    std::thread::sleep(Duration::from_secs(32));
+    let second = t2e(&args("logs-b")
+        .iter()
+        .map(String::as_str)
+        .collect::<Vec<_>>());
+    let err = String::from_utf8_lossy(&second.stderr).into_owned();
+    unsafe {
+        libc::kill(first.id() as i32, libc::SIGCONT);
+    }
+    assert!(
+        !second.status.success(),
+        "a second manager ran beside a frozen one"
+    );
+    assert!(err.contains("already running"), "{err}");
+    let lease = Store::open_read_only(&t2e::league::store::StoreUrl::Sqlite(store.clone()))
+        .unwrap()
+        .manager()
+        .unwrap();
+    assert!(
+        lease.as_ref().is_none_or(|m| m.pid == first.id() as i64),
+        "the second manager took the lease: {lease:?}"
+    );
+    let out = first.wait_with_output().unwrap();
+    let log = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        out.status.success(),
+        "the first manager did not run on: {log}"
+    );
+    assert!(!log.contains("another manager"), "{log}");
+}

@@ -2,6 +2,7 @@
 //! command compiles and links libtorch into one test binary rather than
 //! one per file. Run one file's tests with `./scripts/test.sh --test
 //! integration FILE::` (for example `store::`).
+mod bad_inputs;
 mod common;
 mod conformance;
 mod docs;

@@ -2,9 +2,9 @@
 # docs/experiments/2026-11-28-captors-vs-naive.md: for league seed S (the
 # first argument), naive co-evolution with the same seed (3 M env steps per
 # learner), then both sides' captors (the recommended league's captors-main,
-# runs/goal4/tshare-sS/captors, and naive co-evolution's captors-main)
+# runs/exploit-eval/tshare-sS/captors, and naive co-evolution's captors-main)
 # against both sides' learned targets (the league's validation-best target,
-# runs/goal4/tshare-sS/best, and naive co-evolution's target-main). Held-out
+# runs/exploit-eval/tshare-sS/best, and naive co-evolution's target-main). Held-out
 # protocol, 100 greedy episodes of 500 steps per Gibson class, 3:1 at
 # 1.0:1.0, evaluation seed 0. Needs target-exploiter-share.sh S and
 # target-exploiter-share-target.sh S (2026-11-27-league-exploitability) first.
@@ -19,7 +19,7 @@ case $s in
   2) config=docs/experiments/2026-11-27-league-captor-parity/naive-coevo-seed2.toml ;;
   *) echo "seed must be 0, 1 or 2" >&2; exit 2 ;;
 esac
-league=runs/goal4/tshare-s$s naive=runs/league/naive-s$s out=runs/goal3/s$s
+league=runs/exploit-eval/tshare-s$s naive=runs/league/naive-s$s out=runs/captors-eval/s$s
 mkdir -p $out
 if [ ! -f $out/naive-trained ]; then
   start=$(date +%s)

@@ -10,9 +10,9 @@ set -euo pipefail
 cd "$(dirname "$0")/../../.."
 bin=${BIN:-./target/release/t2e-league}
 for s in "$@"; do
-  for run in "1.0 runs/goal3/s$s/naive-captors" "1.2 runs/goal3/s$s/naive-captors" "1.2 runs/goal4/tshare-s$s/captors"; do
+  for run in "1.0 runs/captors-eval/s$s/naive-captors" "1.2 runs/captors-eval/s$s/naive-captors" "1.2 runs/exploit-eval/tshare-s$s/captors"; do
     read -r ratio team <<< "$run"
-    out=runs/goal3/rule-$ratio/$(echo $team | tr / -)
+    out=runs/captors-eval/rule-$ratio/$(echo $team | tr / -)
     [ -f $out/summary.json ] && continue
     OMP_NUM_THREADS=1 RAYON_NUM_THREADS=1 $bin eval --captors ckpt:$team --target heuristic \
       --maps small,medium,large --episodes 100 --seed 0 --speed-ratio $ratio --out $out --quiet > /dev/null

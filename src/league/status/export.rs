@@ -110,6 +110,12 @@ pub struct BestValidated {
 /// panel (`selection::rank_validated`), for `export --best`.
 pub fn best_validated(dir: &LeagueDir, side: Side) -> Result<BestValidated> {
     let (cfg, store) = open(dir)?;
+    if !cfg.evaluator.enabled {
+        bail!(
+            "{}: the league's evaluator is off ([evaluator] enabled = false), so no snapshot plays a validation panel; export a player by name",
+            dir.config_path().display()
+        );
+    }
     let opponents: Vec<String> = cfg
         .evaluator
         .validation(side)

@@ -130,6 +130,21 @@ pub fn now_ms() -> i64 {
         .unwrap_or(0)
 }
 
+/// Every table the migrations create (`tables_are_those_the_migrations_create`).
+const TABLES: [&str; 11] = [
+    "crashes",
+    "curriculum",
+    "exploits",
+    "heartbeats",
+    "held_out_episodes",
+    "league_config",
+    "manager_lease",
+    "matches",
+    "players",
+    "ratings",
+    "seats",
+];
+
 /// How a process opens the store.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Access {
@@ -142,6 +157,19 @@ enum Access {
 fn check_present(path: &Path) -> Result<(), StoreError> {
     match std::fs::metadata(path) {
         Ok(m) if m.len() > 0 => Ok(()),
+        // SQLite creates the file empty and then writes its tables: a store
+        // made in the last minute is most likely a league starting now.
+        Ok(m) if m
+            .modified()
+            .ok()
+            .and_then(|t| t.elapsed().ok())
+            .is_some_and(|age| age < std::time::Duration::from_secs(60)) =>
+        {
+            Err(StoreError::Invalid(format!(
+                "{}: empty (0 bytes) and created under a minute ago: a league is probably starting there; try again in a moment",
+                path.display()
+            )))
+        }
         Ok(_) => Err(StoreError::Invalid(format!(
             "{}: empty (0 bytes): the league's store was truncated",
             path.display()
@@ -494,8 +522,48 @@ impl Store {
                     })
                 }
             }
+            store.check_tables()?;
         }
         Ok(store)
+    }
+
+    /// Every table the migrations create is there. A migration recorded as
+    /// applied is never run again, so a table dropped since (by hand, or a
+    /// file restored in part) would otherwise surface as some later query's
+    /// error, or as a league that resumes and finds nothing to do.
+    fn check_tables(&self) -> Result<(), StoreError> {
+        let pool = &self.pool;
+        let query = match self.backend() {
+            Backend::Sqlite => "SELECT name FROM sqlite_master WHERE type = 'table'",
+            Backend::Postgres => {
+                "SELECT CAST(table_name AS TEXT) AS name FROM information_schema.tables WHERE table_schema = current_schema()"
+            }
+        };
+        let names: Vec<String> = self
+            .run(move || async move {
+                sqlx::query(query)
+                    .fetch_all(pool)
+                    .await?
+                    .iter()
+                    .map(|row| row.try_get::<String, _>("name"))
+                    .collect::<Result<Vec<String>, sqlx::Error>>()
+            })
+            .map_err(|e| {
+                StoreError::Invalid(format!("{}: cannot list its tables: {e}", self.url))
+            })?;
+        let missing: Vec<&str> = TABLES
+            .iter()
+            .copied()
+            .filter(|t| !names.iter().any(|n| n == t))
+            .collect();
+        if !missing.is_empty() {
+            return Err(StoreError::Invalid(format!(
+                "{}: the league's store has no table {}: it was damaged (a table dropped, or the file restored in part); restore the store from a copy",
+                self.url,
+                missing.join(", ")
+            )));
+        }
+        Ok(())
     }
 
     /// Brings the schema up to date. PostgreSQL serialises migrators with
@@ -613,6 +681,47 @@ impl Drop for Store {
 mod tests {
     use super::*;
     use crate::env::Side;
+
+    #[test]
+    fn tables_are_those_the_migrations_create() {
+        for dir in ["sqlite", "postgres"] {
+            let folder = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join("league/migrations")
+                .join(dir);
+            let mut created: Vec<String> = Vec::new();
+            for entry in std::fs::read_dir(&folder).unwrap() {
+                let text = std::fs::read_to_string(entry.unwrap().path()).unwrap();
+                for part in text.split("CREATE TABLE ").skip(1) {
+                    let name: String = part
+                        .trim_start_matches("IF NOT EXISTS ")
+                        .chars()
+                        .take_while(|c| c.is_alphanumeric() || *c == '_')
+                        .collect();
+                    created.push(name);
+                }
+            }
+            created.sort();
+            created.dedup();
+            assert_eq!(created, TABLES.to_vec(), "{dir}");
+        }
+    }
+
+    #[test]
+    fn a_store_missing_a_table_is_refused_naming_it() {
+        let dir = tempfile::tempdir().unwrap();
+        let url = StoreUrl::Sqlite(dir.path().join("league.db"));
+        let store = Store::open(&url).unwrap();
+        let pool = &store.pool;
+        store
+            .run(move || async move { sqlx::query("DROP TABLE ratings").execute(pool).await })
+            .unwrap();
+        drop(store);
+        let err = Store::open_existing(&url)
+            .err()
+            .expect("refused")
+            .to_string();
+        assert!(err.contains("no table ratings"), "{err}");
+    }
 
     #[test]
     fn a_busy_sqlite_database_is_waited_out_and_a_wrong_query_is_not() {

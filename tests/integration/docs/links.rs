@@ -186,6 +186,123 @@ fn every_page_is_in_the_summary_and_every_summary_entry_exists() {
     );
 }
 
+/// GitHub's anchor for a heading: lowercase, punctuation other than `-`
+/// and `_` dropped, spaces to `-`.
+pub fn slug(heading: &str) -> String {
+    heading
+        .trim()
+        .to_lowercase()
+        .chars()
+        .filter_map(|c| match c {
+            ' ' => Some('-'),
+            c if c.is_alphanumeric() || c == '-' || c == '_' => Some(c),
+            _ => None,
+        })
+        .collect()
+}
+
+/// The anchors a page offers: its headings' slugs (a repeated heading gets
+/// `-1`, `-2`, ... as on GitHub) and explicit `id="..."` / `name="..."`.
+pub fn anchors(text: &str) -> BTreeSet<String> {
+    let mut out = BTreeSet::new();
+    let mut seen: std::collections::BTreeMap<String, usize> = Default::default();
+    let mut fenced = false;
+    for line in text.lines() {
+        if line.trim_start().starts_with("```") {
+            fenced = !fenced;
+            continue;
+        }
+        if fenced {
+            continue;
+        }
+        if let Some(heading) = line.strip_prefix('#') {
+            let heading = heading.trim_start_matches('#');
+            if heading.starts_with(' ') {
+                // Inline code and links keep their text, not their markup.
+                let text: String = heading.replace('`', "");
+                let base = slug(&text);
+                let n = seen.entry(base.clone()).or_insert(0);
+                out.insert(if *n == 0 {
+                    base.clone()
+                } else {
+                    format!("{base}-{n}")
+                });
+                *n += 1;
+            }
+        }
+        for attr in ["id=\"", "name=\""] {
+            let mut rest = line;
+            while let Some(p) = rest.find(attr) {
+                rest = &rest[p + attr.len()..];
+                out.insert(rest.split('"').next().unwrap_or("").to_string());
+            }
+        }
+    }
+    out
+}
+
+#[test]
+fn every_anchor_resolves() {
+    let mut broken = Vec::new();
+    let mut checked = 0;
+    let mut cache: std::collections::BTreeMap<PathBuf, BTreeSet<String>> = Default::default();
+    for page in pages() {
+        let text = std::fs::read_to_string(&page).unwrap();
+        for target in link_targets(&text) {
+            let Some((path, anchor)) = target.split_once('#') else {
+                continue;
+            };
+            if target.contains("://") || anchor.is_empty() {
+                continue;
+            }
+            let file = if path.is_empty() {
+                page.clone()
+            } else {
+                resolve(&page, path)
+            };
+            if file.extension().is_none_or(|e| e != "md") || !file.exists() {
+                continue;
+            }
+            let have = cache
+                .entry(normalise(&file))
+                .or_insert_with(|| anchors(&std::fs::read_to_string(&file).unwrap()));
+            checked += 1;
+            if !have.contains(anchor) {
+                broken.push(format!(
+                    "{}: {target}",
+                    page.strip_prefix(root()).unwrap().display()
+                ));
+            }
+        }
+    }
+    assert!(
+        checked > 20,
+        "only {checked} anchors found: is the parser broken?"
+    );
+    assert!(
+        broken.is_empty(),
+        "{} links to anchors that no heading of the page gives:\n{}",
+        broken.len(),
+        broken.join("\n")
+    );
+}
+
+#[test]
+fn slugs_are_githubs() {
+    assert_eq!(
+        slug("A lever: a main target exploiter, three seeds"),
+        "a-lever-a-main-target-exploiter-three-seeds"
+    );
+    assert_eq!(slug("`greedy:K` and 1.0:1.2"), "greedyk-and-1012");
+    let a = anchors(
+        "# Title\n## Reproduce\n## Reproduce\n```\n# not a heading\n```\n<a id=\"x\"></a>\n",
+    );
+    assert_eq!(
+        a.into_iter().collect::<Vec<_>>(),
+        ["reproduce", "reproduce-1", "title", "x"]
+    );
+}
+
 fn normalise(path: &Path) -> PathBuf {
     let mut out = PathBuf::new();
     for part in path.components() {

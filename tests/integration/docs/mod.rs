@@ -9,3 +9,4 @@ mod configs;
 mod layering;
 mod links;
 mod quickstart;
+mod readme_figures;

@@ -13,7 +13,7 @@ pub mod potential;
 pub mod vec_env;
 
 pub use action::Action;
-pub use config::{CaptureRule, DriveForce, EnvConfig, RobotSpec};
+pub use config::{CaptureRule, DriveForce, EnvConfig, RobotSpec, MAX_CAPTORS};
 pub use controller::{Controller, Side};
 pub use observe::{PATCH, PATCH_LEN};
 pub use physics::Robot;

@@ -2,6 +2,7 @@
 pub mod catalog;
 pub mod fingerprint;
 pub mod generate;
+pub mod gibson_source;
 pub mod grid;
 pub mod load;
 pub mod prepared;

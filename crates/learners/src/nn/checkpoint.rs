@@ -174,6 +174,13 @@ pub enum CheckpointError {
     NoCheckpointInside { path: PathBuf, side: &'static str },
     #[error("{}: no such checkpoint", .0.display())]
     NoSuchCheckpoint(PathBuf),
+    /// An exported folder's `SHA256SUMS` disagrees with a file it lists.
+    #[error("{}: {what} (SHA256SUMS of {}): the folder changed after it was exported", .path.display(), .manifest.display())]
+    Manifest {
+        path: PathBuf,
+        manifest: PathBuf,
+        what: String,
+    },
     #[error(transparent)]
     RunDir(#[from] RunDirError),
     #[error(transparent)]
@@ -427,10 +434,11 @@ pub fn read_meta_hashed(dir: &Path) -> Result<(CheckpointMeta, String), Checkpoi
             meta.speed_ratio
         )));
     }
-    if meta.num_captors == 0 || meta.num_captors > 32 {
+    if meta.num_captors == 0 || meta.num_captors > crate::env::MAX_CAPTORS {
         return Err(invalid(format!(
-            "num_captors = {}: must be between 1 and 32",
-            meta.num_captors
+            "num_captors = {}: must be between 1 and {}",
+            meta.num_captors,
+            crate::env::MAX_CAPTORS
         )));
     }
     meta.net
@@ -485,9 +493,63 @@ pub struct PolicySnapshot {
     weights: Vec<(String, Vec<i64>, Vec<f32>)>,
 }
 
+/// Checks an exported folder against its `SHA256SUMS` (written by
+/// `export`, meta.json included), when it has one: every file it lists is
+/// present with that hash, and meta.json is among them. A training run's
+/// checkpoint folder has none; meta.json's own hashes cover its weights.
+pub fn verify_manifest(dir: &Path) -> Result<(), CheckpointError> {
+    let manifest = dir.join("SHA256SUMS");
+    if !manifest.is_file() {
+        return Ok(());
+    }
+    let refuse = |path: PathBuf, what: String| CheckpointError::Manifest {
+        path,
+        manifest: manifest.clone(),
+        what,
+    };
+    let text = std::fs::read_to_string(&manifest).map_err(|cause| CheckpointError::Unreadable {
+        path: manifest.clone(),
+        cause,
+    })?;
+    let mut listed_meta = false;
+    for (i, line) in text
+        .lines()
+        .enumerate()
+        .filter(|(_, l)| !l.trim().is_empty())
+    {
+        let Some((want, name)) = line.split_once("  ") else {
+            return Err(refuse(
+                manifest.clone(),
+                format!("line {} is not `<sha256>  <file>`", i + 1),
+            ));
+        };
+        if name.contains('/') || name.contains('\\') || name == ".." || name == "." {
+            return Err(refuse(
+                manifest.clone(),
+                format!("line {} names {name:?}, not a file of the folder", i + 1),
+            ));
+        }
+        let path = dir.join(name);
+        let got = crate::util::sha256_file(&path)
+            .map_err(|e| refuse(path.clone(), format!("listed but unreadable ({e})")))?;
+        if got != want.trim() {
+            return Err(refuse(
+                path,
+                format!("SHA-256 {got} is not the {} listed", want.trim()),
+            ));
+        }
+        listed_meta |= name == "meta.json";
+    }
+    if !listed_meta {
+        return Err(refuse(dir.join("meta.json"), "not listed".into()));
+    }
+    Ok(())
+}
+
 impl PolicySnapshot {
     pub fn load(path: &Path, side: Side) -> Result<PolicySnapshot, CheckpointError> {
         let dir = resolve_checkpoint(path, side)?;
+        verify_manifest(&dir)?;
         let (meta, meta_sha256) = read_meta_hashed(&dir)?;
         let tensors = read_checked(&dir, &meta, "actor.safetensors")?;
         let weights = tensors

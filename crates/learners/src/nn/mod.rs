@@ -196,6 +196,17 @@ impl NetConfig {
                 "must divide 48 and leave at least 8 pixels (1, 2, 3, 4 or 6)",
             ));
         }
+        // NaN compares false with everything: unchecked, a NaN weight
+        // would read as "off" where the prior is tested with `> 0`.
+        if !(self.heuristic_prior.is_finite()
+            && (0.0..=prior::MAX_WEIGHT).contains(&self.heuristic_prior))
+        {
+            return Err(ConfigError::new(
+                "heuristic_prior",
+                self.heuristic_prior,
+                format!("must be a number in [0, {}] (0: off)", prior::MAX_WEIGHT),
+            ));
+        }
         Ok(())
     }
 

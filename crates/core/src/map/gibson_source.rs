@@ -1,0 +1,284 @@
+//! Where the Gibson test maps come from, and how a copy of them is made and
+//! checked: the paper's public repository holds the 26 maps under
+//! `scene/val/{easy,middle,hard}/` (also all together under
+//! `scene/candidate/`); the folder names are the size classes. A copy is
+//! accepted only when every map decodes to the working grid whose content
+//! hash the project embeds (`map::testset::GIBSON_GRIDS`) and each folder
+//! gives the map the class the embedded fingerprints give it: a changed
+//! upstream file, a missing map or a map in another class folder is
+//! refused, naming the file.
+
+use super::grid::SizeClass;
+use super::load::load_png;
+use super::testset::{gibson_class, GIBSON_GRIDS};
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+/// The reference implementation, where the maps are published.
+pub const REFERENCE_REPOSITORY: &str = "https://github.com/Dr-Xiaogaren/T2E";
+
+/// The commit the maps are taken from (its newest on 2026-11-28). The maps
+/// are checked by content, so a later commit with the same maps works too;
+/// this one is what `maps fetch-gibson` checks out.
+pub const REFERENCE_COMMIT: &str = "bb935fe24f5e794db9ec830f295c695bc39c5b18";
+
+/// The reference repository's class folders under `scene/val/`, and the
+/// project's names for them.
+pub const CLASS_FOLDERS: [(&str, SizeClass); 3] = [
+    ("easy", SizeClass::Small),
+    ("middle", SizeClass::Medium),
+    ("hard", SizeClass::Large),
+];
+
+#[derive(Debug, thiserror::Error)]
+pub enum GibsonSourceError {
+    #[error("{}: not a checkout of the reference repository ({REFERENCE_REPOSITORY}): {reason}", path.display())]
+    NotACheckout { path: PathBuf, reason: String },
+    #[error("{}: {reason}", path.display())]
+    Map { path: PathBuf, reason: String },
+    #[error("{}: the maps {missing:?} are missing (the reference repository at {REFERENCE_COMMIT} holds all 26)", folder.display())]
+    Missing {
+        folder: PathBuf,
+        missing: Vec<String>,
+    },
+    #[error("{}: cannot write: {source}", path.display())]
+    Write {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+}
+
+/// One map of a checked copy.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ImportedMap {
+    pub name: String,
+    pub class: SizeClass,
+    /// `Grid::content_hash`, equal to the embedded one.
+    pub content_hash: String,
+}
+
+/// Reads the 26 maps from a checkout of the reference repository at
+/// `checkout` and checks each against the embedded hashes and classes.
+/// Nothing is written.
+pub fn read_checkout(checkout: &Path) -> Result<Vec<(ImportedMap, PathBuf)>, GibsonSourceError> {
+    let val = checkout.join("scene").join("val");
+    if !val.is_dir() {
+        return Err(GibsonSourceError::NotACheckout {
+            path: checkout.to_path_buf(),
+            reason: "it has no scene/val/ folder".into(),
+        });
+    }
+    let expected: BTreeMap<&str, &str> = GIBSON_GRIDS.iter().copied().collect();
+    let mut found: BTreeMap<String, (ImportedMap, PathBuf)> = BTreeMap::new();
+    for (folder, class) in CLASS_FOLDERS {
+        let dir = val.join(folder);
+        let entries = std::fs::read_dir(&dir).map_err(|e| GibsonSourceError::NotACheckout {
+            path: checkout.to_path_buf(),
+            reason: format!("cannot read scene/val/{folder}/: {e}"),
+        })?;
+        let mut paths: Vec<PathBuf> = entries
+            .filter_map(|e| e.ok().map(|e| e.path()))
+            .filter(|p| p.extension().is_some_and(|x| x == "png"))
+            .collect();
+        paths.sort();
+        for path in paths {
+            let refuse = |reason: String| GibsonSourceError::Map {
+                path: path.clone(),
+                reason,
+            };
+            let name = path
+                .file_stem()
+                .and_then(|s| s.to_str())
+                .ok_or_else(|| refuse("its name is not UTF-8".into()))?
+                .to_string();
+            let Some(want_hash) = expected.get(name.as_str()) else {
+                return Err(refuse(
+                    "not one of the 26 Gibson test maps the project knows (an upstream change?)"
+                        .into(),
+                ));
+            };
+            let grid = load_png(&path).map_err(|e| refuse(e.reason))?;
+            let hash = grid.content_hash();
+            if hash != *want_hash {
+                return Err(refuse(format!(
+                    "its content (working grid SHA-256 {hash}) is not the test map's ({want_hash}): the file differs from the one the benchmark's figures were measured on"
+                )));
+            }
+            let embedded = gibson_class(&name);
+            if embedded != Some(class) {
+                return Err(refuse(format!(
+                    "it is in the {folder}/ folder ({}), but the test set lists it as {}",
+                    class.name(),
+                    embedded.map_or("unclassed", |c| c.name())
+                )));
+            }
+            if let Some((other, other_path)) = found.get(&name) {
+                return Err(refuse(format!(
+                    "listed twice: also {} ({})",
+                    other_path.display(),
+                    other.class.name()
+                )));
+            }
+            found.insert(
+                name.clone(),
+                (
+                    ImportedMap {
+                        name,
+                        class,
+                        content_hash: hash,
+                    },
+                    path,
+                ),
+            );
+        }
+    }
+    let missing: Vec<String> = expected
+        .keys()
+        .filter(|n| !found.contains_key(**n))
+        .map(|n| n.to_string())
+        .collect();
+    if !missing.is_empty() {
+        return Err(GibsonSourceError::Missing {
+            folder: val,
+            missing,
+        });
+    }
+    let mut maps: Vec<(ImportedMap, PathBuf)> = found.into_values().collect();
+    maps.sort_by(|(a, _), (b, _)| (a.class, &a.name).cmp(&(b.class, &b.name)));
+    Ok(maps)
+}
+
+/// Checks the checkout at `checkout` (`read_checkout`), then writes the 26
+/// PNGs, byte for byte, and a `splits.csv` (`map,split`, the project's
+/// class names) into `out`. The folder is filled under a temporary name and
+/// renamed into place, so an interrupted copy never looks complete; an
+/// existing `out` is refused unless it already holds this very set.
+pub fn import_checkout(checkout: &Path, out: &Path) -> Result<Vec<ImportedMap>, GibsonSourceError> {
+    let maps = read_checkout(checkout)?;
+    let write_err = |path: &Path| {
+        let path = path.to_path_buf();
+        move |source| GibsonSourceError::Write { path, source }
+    };
+    if out.exists() {
+        // Idempotent: a second fetch into a finished folder is not an error.
+        if let Ok(existing) = read_flat(out) {
+            if existing == maps.iter().map(|(m, _)| m.clone()).collect::<Vec<_>>() {
+                return Ok(existing);
+            }
+        }
+        return Err(GibsonSourceError::Write {
+            path: out.to_path_buf(),
+            source: std::io::Error::new(
+                std::io::ErrorKind::AlreadyExists,
+                "exists and is not this set of maps; choose another folder or remove it",
+            ),
+        });
+    }
+    let parent = match out.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    std::fs::create_dir_all(&parent).map_err(write_err(&parent))?;
+    let staging = parent.join(format!(
+        ".{}.partial-{}",
+        out.file_name().and_then(|s| s.to_str()).unwrap_or("gibson"),
+        std::process::id()
+    ));
+    let _ = std::fs::remove_dir_all(&staging);
+    std::fs::create_dir_all(&staging).map_err(write_err(&staging))?;
+    let mut splits = String::from("map,split\n");
+    for (map, source) in &maps {
+        let dest = staging.join(format!("{}.png", map.name));
+        std::fs::copy(source, &dest).map_err(write_err(&dest))?;
+        splits.push_str(&format!("{},{}\n", map.name, map.class.name()));
+    }
+    let splits_path = staging.join("splits.csv");
+    std::fs::write(&splits_path, splits).map_err(write_err(&splits_path))?;
+    std::fs::rename(&staging, out).map_err(write_err(out))?;
+    Ok(maps.into_iter().map(|(m, _)| m).collect())
+}
+
+/// The maps of a flat folder as `import_checkout` writes it, checked the
+/// same way (content hash and class), in the same order.
+pub fn read_flat(dir: &Path) -> Result<Vec<ImportedMap>, GibsonSourceError> {
+    let entries = super::catalog::list_dir(dir).map_err(|e| GibsonSourceError::Map {
+        path: dir.to_path_buf(),
+        reason: format!("{e:#}"),
+    })?;
+    let expected: BTreeMap<&str, &str> = GIBSON_GRIDS.iter().copied().collect();
+    let mut maps = Vec::new();
+    for entry in entries {
+        let refuse = |reason: String| GibsonSourceError::Map {
+            path: entry.path.clone(),
+            reason,
+        };
+        let grid = load_png(&entry.path).map_err(|e| refuse(e.reason))?;
+        let hash = grid.content_hash();
+        if expected.get(entry.name.as_str()) != Some(&hash.as_str()) {
+            return Err(refuse("not the test map of that name".into()));
+        }
+        let class = gibson_class(&entry.name).ok_or_else(|| refuse("unclassed".into()))?;
+        if entry.listed_class != Some(class) {
+            return Err(refuse(format!(
+                "splits.csv does not list it as {}",
+                class.name()
+            )));
+        }
+        maps.push(ImportedMap {
+            name: entry.name,
+            class,
+            content_hash: hash,
+        });
+    }
+    maps.sort_by(|a, b| (a.class, &a.name).cmp(&(b.class, &b.name)));
+    Ok(maps)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn class_folders_cover_each_class_once() {
+        let classes: Vec<SizeClass> = CLASS_FOLDERS.iter().map(|(_, c)| *c).collect();
+        assert_eq!(classes, SizeClass::ALL.to_vec());
+    }
+
+    #[test]
+    fn a_folder_without_scene_val_is_not_a_checkout() {
+        let dir = tempfile::tempdir().unwrap();
+        let err = read_checkout(dir.path()).unwrap_err();
+        assert!(
+            matches!(err, GibsonSourceError::NotACheckout { .. }),
+            "{err}"
+        );
+        assert!(err.to_string().contains("scene/val"), "{err}");
+    }
+
+    #[test]
+    fn an_unknown_png_is_refused_by_name() {
+        let dir = tempfile::tempdir().unwrap();
+        for (folder, _) in CLASS_FOLDERS {
+            std::fs::create_dir_all(dir.path().join("scene/val").join(folder)).unwrap();
+        }
+        let stray = dir
+            .path()
+            .join("scene/val/easy/Nowhere_floor_trav_0_v3.png");
+        std::fs::write(&stray, b"not a png").unwrap();
+        let err = read_checkout(dir.path()).unwrap_err().to_string();
+        assert!(err.contains("Nowhere_floor_trav_0_v3.png"), "{err}");
+        assert!(err.contains("not one of the 26"), "{err}");
+    }
+
+    #[test]
+    fn an_empty_checkout_names_the_missing_maps() {
+        let dir = tempfile::tempdir().unwrap();
+        for (folder, _) in CLASS_FOLDERS {
+            std::fs::create_dir_all(dir.path().join("scene/val").join(folder)).unwrap();
+        }
+        match read_checkout(dir.path()).unwrap_err() {
+            GibsonSourceError::Missing { missing, .. } => assert_eq!(missing.len(), 26),
+            other => panic!("{other}"),
+        }
+    }
+}

