@@ -59,6 +59,13 @@ const MAX_GENERATED_MAPS: u64 = 3_000;
 
 /// A seed: an integer in 0..2^64.
 fn seed_of(seed: &Bound<'_, PyAny>) -> PyResult<u64> {
+    if seed.is_instance_of::<pyo3::types::PyBool>() {
+        return Err(value_error(
+            "seed",
+            seed,
+            "must be an integer in 0..2**64, not a bool",
+        ));
+    }
     let wide: i128 = seed
         .extract()
         .map_err(|_| value_error("seed", seed, "must be an integer in 0..2**64"))?;
@@ -127,9 +134,10 @@ fn maps_for(spec: &str, protocol: &str) -> PyResult<Arc<Vec<Arc<PreparedMap>>>> 
             ))
         }
     };
+    let mut count = 0;
     for part in spec.split(',') {
         if let Some((seeds, classes)) = t2e_core::map::catalog::generated_set(part.trim()) {
-            let count = (seeds.end - seeds.start) * classes.len() as u64;
+            count += (seeds.end - seeds.start) * classes.len() as u64;
             if count > MAX_GENERATED_MAPS {
                 return Err(value_error(
                     "maps",
@@ -273,8 +281,11 @@ impl Env {
         seed: &Bound<'py, PyAny>,
     ) -> PyResult<Observations<'py>> {
         let seed = seed_of(seed)?;
-        self.env.reset_state(seed).map_err(|e| {
-            PyRuntimeError::new_err(format!("placing the robots of episode {seed}: {e}"))
+        let env = &mut self.env;
+        no_panic("reset", || {
+            env.reset_state(seed).map_err(|e| {
+                PyRuntimeError::new_err(format!("placing the robots of episode {seed}: {e}"))
+            })
         })?;
         self.running = true;
         self.started = true;
@@ -317,7 +328,8 @@ impl Env {
         }
         let actions = actions_of(&a)?;
         let mut rewards = vec![0f32; n];
-        let info = self.env.step_state(&actions, &mut rewards);
+        let env = &mut self.env;
+        let info = no_panic("step", || Ok(env.step_state(&actions, &mut rewards)))?;
         let terminated = self.env.captured;
         let truncated = !terminated && self.env.steps >= self.env.cfg.episode_length;
         self.running = !(terminated || truncated);
@@ -389,10 +401,18 @@ pub struct Policy {
     // A controller is Send but not Sync; Python objects may be shared
     // between threads, so it sits behind a lock.
     controller: Mutex<Box<dyn Controller>>,
+    name: String,
     side: Side,
-    /// (seed, map) of the episode the controller was last reset for.
-    episode: Option<(u64, String)>,
+    /// One controller per env it plays in, keyed by the env object, each
+    /// with the (seed, map) of the episode it was last reset for: a policy
+    /// shared by two envs would otherwise reset its one controller at
+    /// every call, and a controller with state (a random one's stream)
+    /// would replay its first move for ever.
+    per_env: Mutex<Vec<(usize, Box<dyn Controller>, Option<(u64, String)>)>>,
 }
+
+/// Envs a policy keeps a controller for; the oldest is dropped past this.
+const POLICY_ENVS: usize = 256;
 
 /// The value behind a lock; a panic while holding it left no half-done
 /// state that matters here, so a poisoned lock is taken as it is.
@@ -446,8 +466,9 @@ impl Policy {
         };
         Ok(Policy {
             controller: Mutex::new(controller_of(name)?),
+            name: name.to_string(),
             side,
-            episode: None,
+            per_env: Mutex::new(Vec::new()),
         })
     }
 
@@ -471,14 +492,30 @@ impl Policy {
         }
         let e = &env.env;
         let episode = (e.seed, e.map().grid.name.clone());
-        let mut controller = lock(&self.controller);
-        if e.steps == 0 || self.episode.as_ref() != Some(&episode) {
+        let key = env.as_ptr() as usize;
+        let mut per_env = lock(&self.per_env);
+        let slot = match per_env.iter().position(|(k, _, _)| *k == key) {
+            Some(i) => i,
+            None => {
+                if per_env.len() >= POLICY_ENVS {
+                    per_env.remove(0);
+                }
+                per_env.push((key, controller_of(&self.name)?, None));
+                per_env.len() - 1
+            }
+        };
+        let (_, controller, last) = &mut per_env[slot];
+        if e.steps == 0 || last.as_ref() != Some(&episode) {
             controller.reset(e, e.seed);
-            self.episode = Some(episode);
+            *last = Some(episode);
         }
         let k = e.num_captors();
         let mut out = vec![Action::Stop; self.side.agents(k).len()];
-        controller.act(e, self.side, &mut out);
+        let side = self.side;
+        no_panic("act", || {
+            controller.act(e, side, &mut out);
+            Ok(())
+        })?;
         Ok(PyArray1::from_vec(
             py,
             out.iter().map(|a| a.index() as i64).collect(),
@@ -532,7 +569,21 @@ impl VectorEnv {
             ));
         }
         let maps = maps_for(maps, protocol)?;
-        let seed = seed.map(seed_of).transpose()?.unwrap_or(0);
+        // None draws a seed, as `parallel_env().reset(seed=None)` does;
+        // `seed` says which, so the run can be repeated.
+        let seed = match seed.map(seed_of).transpose()? {
+            Some(s) => s,
+            None => {
+                use std::hash::{BuildHasher, Hasher};
+                let mut h = std::collections::hash_map::RandomState::new().build_hasher();
+                h.write_u128(
+                    std::time::SystemTime::now()
+                        .duration_since(std::time::UNIX_EPOCH)
+                        .map_or(0, |d| d.as_nanos()),
+                );
+                h.finish()
+            }
+        };
         let mut venv = VecEnv::new(cfg, maps, num_envs as usize, seed)
             .map_err(|e| PyValueError::new_err(e.to_string()))?;
         // A side a controller plays in Rust: its actions passed to `step`
@@ -585,8 +636,13 @@ impl VectorEnv {
     ) -> PyResult<(Bound<'py, PyArray3<f32>>, Bound<'py, PyArray4<u8>>)> {
         let mut venv = lock(&self.venv);
         let worlds: &mut VecEnv = &mut venv;
-        py.detach(|| worlds.reset())
-            .map_err(|e| PyRuntimeError::new_err(format!("placing the robots: {e}")))?;
+        py.detach(|| {
+            no_panic("reset", || {
+                worlds
+                    .reset()
+                    .map_err(|e| PyRuntimeError::new_err(format!("placing the robots: {e}")))
+            })
+        })?;
         self.started = true;
         Ok(observations(py, &venv))
     }
@@ -625,8 +681,13 @@ impl VectorEnv {
         let a: Vec<i64> = actions.as_array().iter().copied().collect();
         let actions = actions_of(&a)?;
         let worlds: &mut VecEnv = &mut venv;
-        py.detach(|| worlds.step(&actions))
-            .map_err(|e| PyRuntimeError::new_err(format!("placing the robots: {e}")))?;
+        py.detach(|| {
+            no_panic("step", || {
+                worlds
+                    .step(&actions)
+                    .map_err(|e| PyRuntimeError::new_err(format!("placing the robots: {e}")))
+            })
+        })?;
         let (vectors, patches) = observations(py, &venv);
         let rewards = PyArray1::from_slice(py, &venv.rewards)
             .reshape([n, na])
@@ -683,11 +744,26 @@ fn asz_area(
             format!("at most {MAX_CAPTORS} captors, as an env holds"),
         ));
     }
+    if !env.started {
+        return Err(PyRuntimeError::new_err(
+            "asz_area(env, ...) before env.reset(): the env has no map yet",
+        ));
+    }
     let map = env.env.map();
     let inside = |p: &(f64, f64)| {
         let (r, c) = map.grid.cell_of([p.0, p.1]);
         map.grid.is_free(r, c)
     };
+    if let Some((i, p)) = captors.iter().enumerate().find(|(_, p)| !inside(p)) {
+        return Err(value_error(
+            &format!("captors[{i}]"),
+            format!("{p:?}"),
+            format!(
+                "is not on a free cell of the map {} (a captor in a wall or off the map has no arrival field)",
+                map.grid.name
+            ),
+        ));
+    }
     if !inside(&target) {
         return Err(value_error(
             "target",

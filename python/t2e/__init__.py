@@ -51,6 +51,8 @@ def vector_env(
     for name, value in (("num_envs", num_envs), ("num_captors", num_captors), ("episode_length", episode_length)):
         if isinstance(value, bool) or not isinstance(value, numbers.Integral):
             raise TypeError(f"{name} = {value!r}: must be an integer")
+    if isinstance(speed_ratio, bool) or not isinstance(speed_ratio, numbers.Real):
+        raise TypeError(f"speed_ratio = {speed_ratio!r}: must be a number (v_e / v_p)")
     if seed is None:
         import secrets
 

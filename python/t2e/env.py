@@ -70,9 +70,13 @@ class T2EParallelEnv(ParallelEnv):
         self._rng = np.random.default_rng()
 
     def observation_space(self, agent: str) -> spaces.Space:
+        if agent not in self.observation_spaces:
+            raise ValueError(f"agent = {agent!r}: not one of {self.possible_agents}")
         return self.observation_spaces[agent]
 
     def action_space(self, agent: str) -> spaces.Space:
+        if agent not in self.action_spaces:
+            raise ValueError(f"agent = {agent!r}: not one of {self.possible_agents}")
         return self.action_spaces[agent]
 
     def reset(self, seed: Optional[int] = None, options: Optional[dict] = None):

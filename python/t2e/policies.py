@@ -22,7 +22,13 @@ class ScriptedPolicy:
         return self._policy.name
 
     def __call__(self, env) -> Dict[str, int]:
-        actions = self._policy.act(env._env).tolist()
+        core = getattr(env, "_env", None)
+        if core is None:
+            raise TypeError(
+                f"env = {type(env).__name__}: a ScriptedPolicy plays a t2e.parallel_env; "
+                "for t2e.vector_env, name the controller there (vector_env(..., target='heuristic'))"
+            )
+        actions = self._policy.act(core).tolist()
         agents = [a for a in env.possible_agents if (a == "target") == (self.side == "target")]
         return dict(zip(agents, actions))
 
@@ -40,4 +46,8 @@ def expert_captors() -> ScriptedPolicy:
 def greedy_captors(coarsening: int = 1) -> ScriptedPolicy:
     """The ASZ-greedy captors: each picks the move that leaves the smallest
     ASZ (marching on cells ``coarsening`` times the map's, 1 = exact)."""
-    return ScriptedPolicy("greedy" if coarsening == 1 else f"greedy:{coarsening}", "captors")
+    import numbers
+
+    if isinstance(coarsening, bool) or not isinstance(coarsening, numbers.Integral):
+        raise TypeError(f"coarsening = {coarsening!r}: must be an integer from 1 to 8")
+    return ScriptedPolicy("greedy" if coarsening == 1 else f"greedy:{int(coarsening)}", "captors")

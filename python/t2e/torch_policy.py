@@ -89,7 +89,14 @@ def _verify_manifest(folder: Path) -> None:
     """An exported folder's SHA256SUMS (meta.json included) against its
     files; a training checkpoint has none (meta.json's hashes cover it)."""
     manifest = folder / "SHA256SUMS"
+    if manifest.exists() and not manifest.is_file():
+        raise _refuse(manifest, "not a file: an export's manifest is a file listing `<sha256>  <file>`")
     if not manifest.is_file():
+        # An export always carries its manifest; without it, nothing would
+        # cover meta.json's side or prior.
+        marks = [m for m in ("player.json", "league-config.toml") if (folder / m).exists()]
+        if marks:
+            raise _refuse(manifest, f"missing, though the folder is an export ({', '.join(marks)}): its meta.json cannot be verified")
         return
     try:
         text = manifest.read_text()
@@ -105,8 +112,10 @@ def _verify_manifest(folder: Path) -> None:
         file = folder / name
         if not file.is_file():
             raise _refuse(file, "missing, though SHA256SUMS lists it")
+        if not file.is_file():
+            raise _refuse(file, "not a file, though SHA256SUMS lists it")
         actual = hashlib.sha256(file.read_bytes()).hexdigest()
-        if actual != want.strip():
+        if actual != want.strip().lower():
             raise _refuse(file, f"SHA-256 {actual[:12]}... is not the {want.strip()[:12]}... SHA256SUMS lists: the folder changed after it was exported")
         listed.add(name)
     if "meta.json" not in listed:
@@ -125,16 +134,23 @@ def _read_meta(folder: Path) -> dict:
         raise PolicyError(f"{folder}: not a folder (a checkpoint folder holds meta.json and actor.safetensors)")
     _verify_manifest(folder)
     path = folder / "meta.json"
+    if path.exists() and not path.is_file():
+        raise _refuse(path, "a folder, not a file: not a checkpoint folder")
     if not path.is_file():
         raise _refuse(path, "missing: not a checkpoint folder (export one with `t2e-league export`)")
+
+    def no_constant(name):
+        # NaN and Infinity are not JSON; Python's parser takes them, Rust's does not.
+        raise ValueError(f"{name} is not a JSON number")
+
     try:
-        meta = json.loads(path.read_text())
+        meta = json.loads(path.read_text(), parse_constant=no_constant)
     except (ValueError, UnicodeDecodeError) as e:
         raise _refuse(path, f"not JSON ({e})") from None
     if not isinstance(meta, dict):
         raise _refuse(path, "not a JSON object")
     if meta.get("format") != FORMAT:
-        raise _refuse(path, f"format {meta.get('format')}; this package reads format {FORMAT}")
+        raise _refuse(path, f"format {meta.get('format')!r}; this package reads format {FORMAT}")
     if meta.get("side") not in ("captors", "target"):
         raise _refuse(path, f"side {meta.get('side')!r} is neither captors nor target")
     _int_field(path, meta, "num_captors", 1, MAX_CAPTORS)

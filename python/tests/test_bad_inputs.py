@@ -78,8 +78,10 @@ def test_the_most_captors_reset_and_step_on_every_seed_tried():
 def test_sizes_past_memory_are_refused_not_aborted():
     with pytest.raises(ValueError, match="num_envs"):
         t2e.vector_env(65536, maps="shipped", num_captors=8)
-    with pytest.raises(ValueError, match="generated maps"):
+    with pytest.raises(ValueError, match="1000"):
         t2e.parallel_env(maps="generated:10000")
+    with pytest.raises(ValueError, match="generated maps"):
+        t2e.parallel_env(maps="generated:1000,generated:1000@2000")
 
 
 def test_bools_and_strings_are_not_read_as_numbers_or_flags():
@@ -105,3 +107,56 @@ def test_the_action_error_names_the_actions_there_are():
     env.reset(seed=0)
     with pytest.raises(ValueError, match="from 0 to 4"):
         env.step({a: 5 for a in env.agents})
+
+
+def test_more_inputs_that_were_misread():
+    env = t2e.Env("shipped", 3, 1.0, "held-out", 40, False)
+    with pytest.raises(RuntimeError, match="before env.reset"):
+        t2e.asz_area(env, [(0.0, 0.0)], (1.0, 1.0))
+    with pytest.raises(ValueError, match="bool"):
+        env.reset(True)
+    env.reset(3)
+    poses = env.poses
+    captors = [(x, y) for x, y, _ in poses[:3]]
+    target = poses[3][:2]
+    with pytest.raises(ValueError, match=r"captors\[1\]"):
+        t2e.asz_area(env, [captors[0], (-500.0, -500.0), captors[2]], target)
+    with pytest.raises(TypeError, match="speed_ratio"):
+        t2e.vector_env(2, maps="shipped", speed_ratio=True)
+    with pytest.raises(TypeError, match="coarsening"):
+        t2e.greedy_captors(True)
+    with pytest.raises(ValueError, match="captor_7"):
+        t2e.parallel_env(maps="shipped").observation_space("captor_7")
+    assert t2e.VectorEnv(2, "shipped").seed != t2e.VectorEnv(2, "shipped").seed
+    # A list of map sets is their union.
+    both = t2e.parallel_env(maps="shipped:small,shipped:large")
+    assert set(both._env.map_names) == set(t2e.parallel_env(maps="shipped:small")._env.map_names) | set(
+        t2e.parallel_env(maps="shipped:large")._env.map_names
+    )
+
+
+def test_one_scripted_policy_plays_two_envs_as_it_plays_each_alone():
+    def alone(seed):
+        env = t2e.parallel_env(maps="shipped", episode_length=30)
+        policy = t2e.ScriptedPolicy("random", "target")
+        env.reset(seed=seed)
+        moves = []
+        while env.agents:
+            a = policy(env)
+            moves.append(a["target"])
+            env.step({**{c: 3 for c in env.agents if c != "target"}, **a})
+        return moves
+
+    shared = t2e.ScriptedPolicy("random", "target")
+    envs = [t2e.parallel_env(maps="shipped", episode_length=30) for _ in range(2)]
+    for env, seed in zip(envs, (1, 2)):
+        env.reset(seed=seed)
+    moves = [[], []]
+    while envs[0].agents or envs[1].agents:
+        for i, env in enumerate(envs):
+            if env.agents:
+                a = shared(env)
+                moves[i].append(a["target"])
+                env.step({**{c: 3 for c in env.agents if c != "target"}, **a})
+    assert moves == [alone(1), alone(2)]
+    assert len(set(moves[0])) > 1

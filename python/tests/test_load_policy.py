@@ -30,6 +30,14 @@ def rust_episodes(tmp_path, captors, target, k):
     return [row for path in sorted(out.rglob("episodes.csv")) for row in csv.DictReader(open(path))]
 
 
+def as_training_checkpoint(folder):
+    """An export made into a training run's checkpoint folder: no manifest
+    and none of an export's own files, so meta.json's fields are checked
+    alone (its hashes cover the weights)."""
+    for name in ("SHA256SUMS", "player.json", "league-config.toml", "ratings.csv"):
+        (folder / name).unlink()
+
+
 @pytest.mark.parametrize("side, folder", [("captors", "export-captors"), ("target", "export-target")])
 def test_an_exported_player_plays_the_rust_controllers_episodes(tmp_path, side, folder):
     player = STORED / folder
@@ -59,9 +67,7 @@ def test_a_corrupted_or_mismatched_folder_is_refused_with_the_file_and_the_reaso
         d = tmp_path / name
         shutil.copytree(good, d)
         if not manifest:
-            # As a training run's checkpoint folder: meta.json's own hashes
-            # cover the weights, and meta.json's fields are checked alone.
-            (d / "SHA256SUMS").unlink()
+            as_training_checkpoint(d)
         return d
 
     changed = copy("changed")
@@ -117,7 +123,8 @@ def test_an_export_is_checked_against_its_sha256sums_before_meta_json_is_believe
         (lambda m: m["net"].update(conv_channels=[8]), "conv_channels"),
         (lambda m: m["net"].update(patch_pool=8), "patch_pool"),
         (lambda m: m["net"].update(patch_pool=0), "patch_pool"),
-        (lambda m: m["net"].update(heuristic_prior=float("nan")), "heuristic_prior"),
+        (lambda m: m["net"].update(heuristic_prior=float("nan")), "NaN"),
+        (lambda m: m["net"].update(heuristic_prior=25.0), "heuristic_prior"),
         (lambda m: m.update(num_captors=0), "num_captors"),
         (lambda m: m.update(num_captors="3"), "num_captors"),
         (lambda m: m.pop("num_captors"), "num_captors"),
@@ -129,7 +136,7 @@ def test_an_export_is_checked_against_its_sha256sums_before_meta_json_is_believe
 def test_meta_json_values_are_bounded_and_refused_as_policy_errors(tmp_path, edit, says):
     folder = tmp_path / "edited"
     shutil.copytree(STORED / "export-target", folder)
-    (folder / "SHA256SUMS").unlink()
+    as_training_checkpoint(folder)
     meta = json.loads((folder / "meta.json").read_text())
     edit(meta)
     (folder / "meta.json").write_text(json.dumps(meta))
@@ -144,3 +151,24 @@ def test_a_missing_folder_or_a_file_is_a_policy_error(tmp_path):
     file.write_text("x")
     with pytest.raises(t2e.torch_policy.PolicyError, match="not a folder"):
         t2e.load_policy(file)
+
+
+def test_an_export_without_its_manifest_or_with_a_folder_for_it_is_refused(tmp_path):
+    gone = tmp_path / "gone"
+    shutil.copytree(STORED / "export-target", gone)
+    (gone / "SHA256SUMS").unlink()
+    with pytest.raises(t2e.torch_policy.PolicyError, match="SHA256SUMS.*missing.*export"):
+        t2e.load_policy(gone)
+    folder = tmp_path / "folder"
+    shutil.copytree(STORED / "export-target", folder)
+    (folder / "SHA256SUMS").unlink()
+    (folder / "SHA256SUMS").mkdir()
+    with pytest.raises(t2e.torch_policy.PolicyError, match="SHA256SUMS.*not a file"):
+        t2e.load_policy(folder)
+    nan = tmp_path / "nan"
+    shutil.copytree(STORED / "export-target", nan)
+    as_training_checkpoint(nan)
+    meta = (nan / "meta.json").read_text()
+    (nan / "meta.json").write_text(meta.replace('"speed_ratio": 1.0', '"speed_ratio": NaN', 1))
+    with pytest.raises(t2e.torch_policy.PolicyError, match="NaN"):
+        t2e.load_policy(nan)

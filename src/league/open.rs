@@ -86,6 +86,39 @@ pub fn plan_start(dir: &LeagueDir, given: Option<&Path>) -> Result<StartPlan> {
         Ok(held) => held,
         Err(what) if !files.is_empty() => return Err(lost(what)),
         Err(_) => {
+            // A new league writes its store, players/ and learners/ here:
+            // never among a user's own files, where a later `move it aside`
+            // or cleanup would take them too.
+            if let Ok(entries) = std::fs::read_dir(&dir.root) {
+                let owned = [
+                    "league.db",
+                    "league.db-wal",
+                    "league.db-shm",
+                    "league.db-journal",
+                    "league.json",
+                    "config.toml",
+                    "league.lock",
+                    "players",
+                    "learners",
+                    "logs",
+                    "exploits",
+                ];
+                let mut foreign: Vec<String> = entries
+                    .flatten()
+                    .map(|e| e.file_name().to_string_lossy().into_owned())
+                    .filter(|n| !n.starts_with('.') && !owned.contains(&n.as_str()))
+                    .collect();
+                if !foreign.is_empty() {
+                    foreign.sort();
+                    let shown: Vec<&str> = foreign.iter().take(5).map(String::as_str).collect();
+                    bail!(
+                        "{root}: holds files that are not a league's ({}{}); a new league starts in an empty or new folder: give another --dir{}",
+                        shown.join(", "),
+                        if foreign.len() > shown.len() { ", ..." } else { "" },
+                        if matches!(db, StoreUrl::Postgres(_)) || dir.store != StoreUrl::in_dir(&dir.root) { " (or --pool)" } else { "" }
+                    );
+                }
+            }
             // No store and nothing of a league: a new league, or a start
             // that was interrupted before anything but its config existed.
             let cfg = match (given_cfg, dir.config_path().is_file()) {

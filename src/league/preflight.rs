@@ -25,6 +25,12 @@ pub fn check_new_league(
     cfg: &LeagueConfig,
     training: &[Arc<PreparedMap>],
 ) -> Result<(), ConfigError> {
+    if !cfg.evaluator.enabled && cfg.evaluator.validation_maps.is_some() {
+        tracing::warn!(
+            "[evaluator] enabled = false: its validation panel (validation_maps = \"{}\") will never be played, so `export --best` will have nothing to choose by",
+            cfg.evaluator.validation_maps.as_deref().unwrap_or("")
+        );
+    }
     if cfg.evaluator.enabled {
         let panels = super::evaluator::load_panels(cfg)?;
         check_maps_apart(
@@ -103,41 +109,68 @@ impl CheckpointIdentity {
     }
 }
 
-/// No validation team is a league member, checkpoints compared by what
-/// they are rather than by their spelling.
+/// No team is in two of the three roles a league gives the other side's
+/// teams (a member it trains against, a held-out test team, a validation
+/// team), checkpoints compared by what they are rather than by their
+/// spelling: `x/../team`, or a byte copy of it, is `team`.
 fn check_validation_teams_apart(cfg: &LeagueConfig) -> Result<(), ConfigError> {
     for member_side in [Side::Target, Side::Captors] {
-        let validation = cfg
-            .evaluator
-            .validation(member_side)
-            .map_err(|e| e.within("evaluator"))?;
-        let members = cfg
-            .members
-            .of(member_side.other())
-            .map_err(|e| e.within("members"))?;
-        let member_ids: Vec<(String, CheckpointIdentity)> = members
+        let (validation_field, held_out_field) = match member_side {
+            Side::Target => ("evaluator.validation_captors", "evaluator.held_out_captors"),
+            Side::Captors => ("evaluator.validation_targets", "evaluator.held_out_targets"),
+        };
+        let members_field = match member_side.other() {
+            Side::Captors => "members.captors",
+            Side::Target => "members.target",
+        };
+        let lists = [
+            (
+                members_field,
+                "a member of the league, which it trains against",
+                cfg.members
+                    .of(member_side.other())
+                    .map_err(|e| e.within("members"))?,
+            ),
+            (
+                held_out_field,
+                "a held-out test team",
+                cfg.evaluator
+                    .held_out(member_side)
+                    .map_err(|e| e.within("evaluator"))?,
+            ),
+            (
+                validation_field,
+                "a validation team",
+                cfg.evaluator
+                    .validation(member_side)
+                    .map_err(|e| e.within("evaluator"))?,
+            ),
+        ];
+        let checkpoints: Vec<(usize, &str, CheckpointIdentity)> = lists
             .iter()
-            .filter_map(|(name, spec)| match spec {
-                ControllerSpec::Checkpoint(c) => {
-                    Some((name.clone(), CheckpointIdentity::of(&c.path)))
-                }
-                _ => None,
+            .enumerate()
+            .flat_map(|(i, (_, _, specs))| {
+                specs.iter().filter_map(move |(name, spec)| match spec {
+                    ControllerSpec::Checkpoint(c) => {
+                        Some((i, name.as_str(), CheckpointIdentity::of(&c.path)))
+                    }
+                    _ => None,
+                })
             })
             .collect();
-        for (name, spec) in &validation {
-            let ControllerSpec::Checkpoint(c) = spec else {
-                continue;
-            };
-            let id = CheckpointIdentity::of(&c.path);
-            if let Some((member, _)) = member_ids.iter().find(|(_, m)| m.same(&id)) {
-                return Err(ConfigError::new(
-                    match member_side {
-                        Side::Target => "evaluator.validation_captors",
-                        Side::Captors => "evaluator.validation_targets",
-                    },
-                    format!("\"{name}\""),
-                    format!("the same checkpoint as the member {member} ([members], by its folder and weights), which the league trains against; validation plays teams the league never meets"),
-                ));
+        for (a, (list_a, name_a, id_a)) in checkpoints.iter().enumerate() {
+            for (list_b, name_b, id_b) in &checkpoints[a + 1..] {
+                if list_a != list_b && id_a.same(id_b) {
+                    let (field_b, role_a) = (lists[*list_b].0, lists[*list_a].1);
+                    return Err(ConfigError::new(
+                        field_b,
+                        format!("\"{name_b}\""),
+                        format!(
+                            "the same checkpoint (by its folder and weights) as \"{name_a}\", {role_a} ({}); a team plays one role: validation and test teams are ones the league never meets",
+                            lists[*list_a].0
+                        ),
+                    ));
+                }
             }
         }
     }

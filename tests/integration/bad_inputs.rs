@@ -208,3 +208,68 @@ fn workers_beyond_the_seats_and_odd_worker_arguments_are_refused() {
         );
     }
 }
+
+#[test]
+fn one_checkpoint_in_two_roles_is_refused_however_it_is_spelled() {
+    let tmp = tempfile::tempdir().unwrap();
+    let stored =
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/stored/export-captors");
+    let team = tmp.path().join("team");
+    let copy = tmp.path().join("copy");
+    for d in [&team, &copy] {
+        std::fs::create_dir_all(d).unwrap();
+        for e in std::fs::read_dir(&stored).unwrap() {
+            let e = e.unwrap();
+            std::fs::copy(e.path(), d.join(e.file_name())).unwrap();
+        }
+    }
+    std::fs::create_dir_all(tmp.path().join("x")).unwrap();
+    let member = format!("[members]\ncaptors = [\"ckpt:{}\"]", team.display());
+    // The member again as a held-out team, through `x/..`.
+    let err = refused_before_start(
+        tmp.path(),
+        &format!(
+            "held_out_captors = [\"ckpt:{}/x/../team\"]",
+            tmp.path().display()
+        ),
+        &member,
+    );
+    assert!(
+        err.contains("evaluator.held_out_captors") && err.contains("same checkpoint"),
+        "{err}"
+    );
+    // A byte copy of the member as a validation team.
+    let err = refused_before_start(
+        tmp.path(),
+        &format!(
+            "validation_maps = \"generated:2@1001\"\nvalidation_captors = [\"ckpt:{}\"]",
+            copy.display()
+        ),
+        &member,
+    );
+    assert!(
+        err.contains("evaluator.validation_captors") && err.contains("same checkpoint"),
+        "{err}"
+    );
+}
+
+#[test]
+fn a_folder_of_other_files_is_not_made_a_league() {
+    let tmp = tempfile::tempdir().unwrap();
+    let cfg = config(tmp.path(), "", "");
+    let dir = tmp.path().join("mine");
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("thesis.tex"), "x").unwrap();
+    let o = t2e(&[
+        "run",
+        "--config",
+        cfg.to_str().unwrap(),
+        "--dir",
+        dir.to_str().unwrap(),
+        "--for",
+        "10s",
+    ]);
+    let err = stderr(&o);
+    assert!(!o.status.success() && err.contains("thesis.tex"), "{err}");
+    assert!(!dir.join("league.db").exists());
+}

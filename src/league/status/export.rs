@@ -110,12 +110,6 @@ pub struct BestValidated {
 /// panel (`selection::rank_validated`), for `export --best`.
 pub fn best_validated(dir: &LeagueDir, side: Side) -> Result<BestValidated> {
     let (cfg, store) = open(dir)?;
-    if !cfg.evaluator.enabled {
-        bail!(
-            "{}: the league's evaluator is off ([evaluator] enabled = false), so no snapshot plays a validation panel; export a player by name",
-            dir.config_path().display()
-        );
-    }
     let opponents: Vec<String> = cfg
         .evaluator
         .validation(side)
@@ -130,7 +124,16 @@ pub fn best_validated(dir: &LeagueDir, side: Side) -> Result<BestValidated> {
         &opponents,
         cfg.evaluator.episodes as u64,
     )
-    .map_err(|e| anyhow::anyhow!("{}: {e}", dir.root.display()))?;
+    .map_err(|e| match e {
+        // "Wait for the evaluator" would wait for ever.
+        crate::league::selection::NoChoice::NoneComplete { .. } if !cfg.evaluator.enabled => {
+            anyhow::anyhow!(
+                "{}: no snapshot has a complete validation, and the league's evaluator is off ([evaluator] enabled = false), so none will; export a player by name",
+                dir.root.display()
+            )
+        }
+        e => anyhow::anyhow!("{}: {e}", dir.root.display()),
+    })?;
     let best = ranked
         .into_iter()
         .next()

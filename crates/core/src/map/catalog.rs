@@ -259,6 +259,33 @@ pub fn resolve(spec: &str) -> Result<Vec<MapEntry>> {
 /// maps of the same generator, e.g. a validation set) and either with
 /// `:CLASS`.
 pub fn load_prepared(spec: &str) -> Result<Arc<Vec<Arc<PreparedMap>>>> {
+    let spec = spec.trim();
+    if spec.contains(',') {
+        // A list of sets is their union, in order; a map named twice (by
+        // content) is one map, so a list never weights a map twice.
+        let generated: u64 = spec
+            .split(',')
+            .filter_map(|part| generated_set(part.trim()))
+            .map(|(seeds, classes)| (seeds.end - seeds.start) * classes.len() as u64)
+            .sum();
+        let most = MAX_GENERATED_PER_CLASS * SizeClass::ALL.len() as u64;
+        if generated > most {
+            bail!("--maps '{spec}': {generated} generated maps; a map set holds at most {most} (each is prepared in memory)");
+        }
+        let mut seen = std::collections::HashSet::new();
+        let mut all = Vec::new();
+        for part in spec.split(',').map(str::trim) {
+            if part.is_empty() {
+                bail!("--maps '{spec}': an empty entry in the list");
+            }
+            for map in load_prepared(part)?.iter() {
+                if seen.insert(map.grid.content_hash()) {
+                    all.push(map.clone());
+                }
+            }
+        }
+        return Ok(Arc::new(all));
+    }
     if let Some(rest) = spec.strip_prefix("generated:") {
         return generated(spec, rest);
     }
@@ -270,13 +297,21 @@ pub fn load_prepared(spec: &str) -> Result<Arc<Vec<Arc<PreparedMap>>>> {
     Ok(Arc::new(maps))
 }
 
+/// The most maps `generated:N` makes per class. Each prepared map holds
+/// about 1 MB; past a few thousand, a set would fill memory (30,000 maps
+/// took 26 GB) before anything was trained or written.
+pub const MAX_GENERATED_PER_CLASS: u64 = 1_000;
+
 /// The generator seeds of `N` or `N@S`.
 fn generated_seeds(count: &str) -> Option<std::ops::Range<u64>> {
     let (n, first) = match count.split_once('@') {
         Some((n, s)) => (n, s.parse::<u64>().ok().filter(|&s| s >= 1)?),
         None => (count, 1),
     };
-    let n: u64 = n.parse().ok().filter(|&n| (1..=10_000).contains(&n))?;
+    let n: u64 = n
+        .parse()
+        .ok()
+        .filter(|&n| (1..=MAX_GENERATED_PER_CLASS).contains(&n))?;
     Some(first..first.checked_add(n)?)
 }
 
@@ -303,7 +338,7 @@ fn generated(spec: &str, rest: &str) -> Result<Arc<Vec<Arc<PreparedMap>>>> {
         None => (rest, SizeClass::ALL.to_vec()),
     };
     let seeds = generated_seeds(count)
-        .with_context(|| format!("--maps '{spec}': expected generated:N (seeds 1..=N) or generated:N@S (seeds S..S+N), N in 1..=10000, S >= 1, optionally :small|medium|large"))?;
+        .with_context(|| format!("--maps '{spec}': expected generated:N (seeds 1..=N) or generated:N@S (seeds S..S+N), N in 1..={MAX_GENERATED_PER_CLASS}, S >= 1, optionally :small|medium|large"))?;
     let cfg = GeneratorConfig::default();
     let jobs: Vec<(u64, SizeClass)> = classes
         .iter()

@@ -175,7 +175,7 @@ pub enum CheckpointError {
     #[error("{}: no such checkpoint", .0.display())]
     NoSuchCheckpoint(PathBuf),
     /// An exported folder's `SHA256SUMS` disagrees with a file it lists.
-    #[error("{}: {what} (SHA256SUMS of {}): the folder changed after it was exported", .path.display(), .manifest.display())]
+    #[error("{}: {what} ({})", .path.display(), .manifest.display())]
     Manifest {
         path: PathBuf,
         manifest: PathBuf,
@@ -499,7 +499,26 @@ pub struct PolicySnapshot {
 /// checkpoint folder has none; meta.json's own hashes cover its weights.
 pub fn verify_manifest(dir: &Path) -> Result<(), CheckpointError> {
     let manifest = dir.join("SHA256SUMS");
+    if manifest.exists() && !manifest.is_file() {
+        return Err(CheckpointError::Manifest {
+            path: manifest.clone(),
+            manifest,
+            what: "not a file: an export's manifest lists `<sha256>  <file>`".into(),
+        });
+    }
     if !manifest.is_file() {
+        // An export always carries its manifest; without it nothing covers
+        // meta.json (its side, its prior).
+        if let Some(mark) = ["player.json", "league-config.toml"]
+            .into_iter()
+            .find(|m| dir.join(m).exists())
+        {
+            return Err(CheckpointError::Manifest {
+                path: manifest.clone(),
+                manifest,
+                what: format!("missing, though the folder is an export (it holds {mark}): its meta.json cannot be verified"),
+            });
+        }
         return Ok(());
     }
     let refuse = |path: PathBuf, what: String| CheckpointError::Manifest {
@@ -530,12 +549,18 @@ pub fn verify_manifest(dir: &Path) -> Result<(), CheckpointError> {
             ));
         }
         let path = dir.join(name);
+        if !path.is_file() {
+            return Err(refuse(path, "listed, but not a file".into()));
+        }
         let got = crate::util::sha256_file(&path)
             .map_err(|e| refuse(path.clone(), format!("listed but unreadable ({e})")))?;
-        if got != want.trim() {
+        if got != want.trim().to_ascii_lowercase() {
             return Err(refuse(
                 path,
-                format!("SHA-256 {got} is not the {} listed", want.trim()),
+                format!(
+                    "SHA-256 {got} is not the {} listed: the folder changed after it was exported",
+                    want.trim()
+                ),
             ));
         }
         listed_meta |= name == "meta.json";

@@ -621,6 +621,25 @@ mod tests {
     use super::*;
 
     #[test]
+    fn a_nan_or_out_of_range_prior_is_refused_not_read_as_off() {
+        for bad in [f64::NAN, f64::INFINITY, -1.0, prior::MAX_WEIGHT + 1.0] {
+            let net = NetConfig {
+                heuristic_prior: bad,
+                ..NetConfig::default()
+            };
+            let err = net.validate().unwrap_err().to_string();
+            assert!(err.contains("heuristic_prior"), "{bad}: {err}");
+        }
+        for good in [0.0, 2.0, prior::MAX_WEIGHT] {
+            let net = NetConfig {
+                heuristic_prior: good,
+                ..NetConfig::default()
+            };
+            assert!(net.validate().is_ok(), "{good}");
+        }
+    }
+
+    #[test]
     fn shapes_and_masked_unroll_match_stepping() {
         let _seed = seed_torch(0);
         let vs = nn::VarStore::new(Device::Cpu);
