@@ -29,6 +29,36 @@ fn value_error(
     PyValueError::new_err(format!("{argument} = {value}: {rule}"))
 }
 
+/// The thread pool this process's parallel work runs on. rayon's global
+/// pool does not survive fork: its threads are gone in the child, and the
+/// first parallel call there (loading the maps of a new env, stepping a
+/// vector env) waited for them for ever. A child gets a pool of its own,
+/// made at its first call; the global pool is never used. Its size is
+/// `RAYON_NUM_THREADS`, else the machine's cores.
+fn pool() -> PyResult<Arc<rayon::ThreadPool>> {
+    static POOL: Mutex<Option<(u32, Arc<rayon::ThreadPool>)>> = Mutex::new(None);
+    let pid = std::process::id();
+    let mut held = lock(&POOL);
+    if let Some((owner, pool)) = held.as_ref() {
+        if *owner == pid {
+            return Ok(pool.clone());
+        }
+    }
+    let threads = std::env::var("RAYON_NUM_THREADS")
+        .ok()
+        .and_then(|n| n.trim().parse::<usize>().ok())
+        .filter(|&n| n > 0)
+        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    let pool = Arc::new(
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .map_err(|e| PyRuntimeError::new_err(format!("cannot start {threads} threads: {e}")))?,
+    );
+    *held = Some((pid, pool.clone()));
+    Ok(pool)
+}
+
 /// Runs `f`, turning a panic into a RuntimeError: PyO3's PanicException
 /// derives from BaseException, which `except Exception` does not catch.
 fn no_panic<T>(what: &str, f: impl FnOnce() -> PyResult<T>) -> PyResult<T> {
@@ -172,12 +202,25 @@ fn maps_for(spec: &str, protocol: &str) -> PyResult<Arc<Vec<Arc<PreparedMap>>>> 
     Ok(maps)
 }
 
+/// What an env was made from: pickling and copying make it again from
+/// these, so a copy in another process has no state to carry.
+#[derive(Clone, Debug)]
+struct EnvArgs {
+    maps: String,
+    num_captors: i64,
+    speed_ratio: f64,
+    protocol: String,
+    episode_length: i64,
+}
+
 type Observations<'py> = (Bound<'py, PyArray2<f32>>, Bound<'py, PyArray3<u8>>);
 
 /// One T2E world: K captors and a target on maps chosen per episode.
 #[pyclass(module = "t2e._core")]
 pub struct Env {
     env: TrapEnv,
+    /// The constructor's arguments, to rebuild it (pickle, copy).
+    args: EnvArgs,
     /// Whether `reset` has been called and the episode has not ended.
     running: bool,
     /// Whether `reset` has been called at all (a state exists).
@@ -200,15 +243,41 @@ impl Env {
         render: bool,
     ) -> PyResult<Env> {
         let cfg = env_config(num_captors, speed_ratio, episode_length)?;
-        let maps = maps_for(maps, protocol)?;
+        let args = EnvArgs {
+            maps: maps.to_string(),
+            num_captors,
+            speed_ratio,
+            protocol: protocol.to_string(),
+            episode_length,
+        };
+        let maps = pool()?.install(|| maps_for(maps, protocol))?;
         let env = TrapEnv::new(cfg, maps).map_err(|e| PyValueError::new_err(e.to_string()))?;
         Ok(Env {
             env,
+            args,
             running: false,
             started: false,
             render: render.then(RenderOptions::default),
             live: None,
         })
+    }
+
+    /// Pickling and copying make a new env from the same arguments; it
+    /// starts without an episode (call reset, with a seed to replay one).
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+        let me = slf.borrow();
+        let a = &me.args;
+        let args = (
+            a.maps.clone(),
+            a.num_captors,
+            a.speed_ratio,
+            a.protocol.clone(),
+            a.episode_length,
+            me.render.is_some(),
+        )
+            .into_pyobject(slf.py())?
+            .into_any();
+        Ok((slf.get_type().into_any(), args))
     }
 
     /// Agent names, captors first: captor_0 .. captor_{K-1}, target.
@@ -252,6 +321,17 @@ impl Env {
         self.env.map().grid.name.clone()
     }
 
+    /// The index of this episode's map in `map_names`.
+    #[getter]
+    fn map_index(&self) -> usize {
+        let current = self.env.map();
+        self.env
+            .maps()
+            .iter()
+            .position(|m| Arc::ptr_eq(m, current))
+            .unwrap_or(0)
+    }
+
     /// The names of the maps episodes are drawn from.
     #[getter]
     fn map_names(&self) -> Vec<String> {
@@ -270,6 +350,22 @@ impl Env {
             .iter()
             .map(|r| (r.pos[0], r.pos[1], r.theta))
             .collect()
+    }
+
+    /// The global state a centralised critic reads: every robot's x, y
+    /// (m, world frame), vx, vy (m/s) and heading (rad), captors first,
+    /// then the time left as a share of the episode: 5 (K + 1) + 1 float32.
+    fn state<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f32>> {
+        let mut out: Vec<f32> = self
+            .env
+            .robots
+            .iter()
+            .flat_map(|r| [r.pos[0], r.pos[1], r.vel[0], r.vel[1], r.theta])
+            .map(|v| v as f32)
+            .collect();
+        let length = self.env.cfg.episode_length.max(1) as f32;
+        out.push(1.0 - self.env.steps as f32 / length);
+        PyArray1::from_vec(py, out)
     }
 
     /// Starts the episode of `seed` (same seed, same episode): the
@@ -532,6 +628,9 @@ pub struct VectorEnv {
     started: bool,
     /// The seed every world's episodes are drawn from.
     seed: u64,
+    /// The constructor's arguments (with the seed drawn), to rebuild it.
+    args: EnvArgs,
+    controllers: (Option<String>, Option<String>),
 }
 
 #[pymethods]
@@ -568,7 +667,14 @@ impl VectorEnv {
                 ),
             ));
         }
-        let maps = maps_for(maps, protocol)?;
+        let args = EnvArgs {
+            maps: maps.to_string(),
+            num_captors,
+            speed_ratio,
+            protocol: protocol.to_string(),
+            episode_length,
+        };
+        let maps = pool()?.install(|| maps_for(maps, protocol))?;
         // None draws a seed, as `parallel_env().reset(seed=None)` does;
         // `seed` says which, so the run can be repeated.
         let seed = match seed.map(seed_of).transpose()? {
@@ -584,7 +690,8 @@ impl VectorEnv {
                 h.finish()
             }
         };
-        let mut venv = VecEnv::new(cfg, maps, num_envs as usize, seed)
+        let mut venv = pool()?
+            .install(|| VecEnv::new(cfg, maps, num_envs as usize, seed))
             .map_err(|e| PyValueError::new_err(e.to_string()))?;
         // A side a controller plays in Rust: its actions passed to `step`
         // are ignored, and no Python code runs for it.
@@ -604,6 +711,8 @@ impl VectorEnv {
             venv: Mutex::new(venv),
             started: false,
             seed,
+            args,
+            controllers: (captors.map(str::to_string), target.map(str::to_string)),
         })
     }
 
@@ -611,6 +720,28 @@ impl VectorEnv {
     #[getter]
     fn seed(&self) -> u64 {
         self.seed
+    }
+
+    /// Pickling and copying make new worlds from the same arguments and
+    /// seed; they start before `reset()`.
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+        let me = slf.borrow();
+        let a = &me.args;
+        let num_envs = lock(&me.venv).num_envs();
+        let args = (
+            num_envs,
+            a.maps.clone(),
+            a.num_captors,
+            a.speed_ratio,
+            a.protocol.clone(),
+            a.episode_length,
+            me.seed,
+            me.controllers.0.clone(),
+            me.controllers.1.clone(),
+        )
+            .into_pyobject(slf.py())?
+            .into_any();
+        Ok((slf.get_type().into_any(), args))
     }
 
     #[getter]
@@ -636,10 +767,10 @@ impl VectorEnv {
     ) -> PyResult<(Bound<'py, PyArray3<f32>>, Bound<'py, PyArray4<u8>>)> {
         let mut venv = lock(&self.venv);
         let worlds: &mut VecEnv = &mut venv;
+        let pool = pool()?;
         py.detach(|| {
             no_panic("reset", || {
-                worlds
-                    .reset()
+                pool.install(|| worlds.reset())
                     .map_err(|e| PyRuntimeError::new_err(format!("placing the robots: {e}")))
             })
         })?;
@@ -681,10 +812,10 @@ impl VectorEnv {
         let a: Vec<i64> = actions.as_array().iter().copied().collect();
         let actions = actions_of(&a)?;
         let worlds: &mut VecEnv = &mut venv;
+        let pool = pool()?;
         py.detach(|| {
             no_panic("step", || {
-                worlds
-                    .step(&actions)
+                pool.install(|| worlds.step(&actions))
                     .map_err(|e| PyRuntimeError::new_err(format!("placing the robots: {e}")))
             })
         })?;

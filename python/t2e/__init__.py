@@ -10,7 +10,7 @@ docs/guide/python.md.
 """
 
 from ._core import ACTIONS, Env, Policy, VectorEnv, asz_area
-from .env import T2EParallelEnv, parallel_env
+from .parallel import T2EParallelEnv, env, parallel_env
 from . import torch_policy  # noqa: F401  (torch is imported when a policy loads)
 from .policies import ScriptedPolicy, expert_captors, greedy_captors, rule_based_target
 
@@ -70,6 +70,7 @@ __all__ = [
     "T2EParallelEnv",
     "VectorEnv",
     "asz_area",
+    "env",
     "expert_captors",
     "greedy_captors",
     "load_policy",

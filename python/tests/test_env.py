@@ -16,7 +16,7 @@ def make(**kw):
 def rollout(env, seed, steps):
     obs, infos = env.reset(seed=seed)
     rng = np.random.default_rng(seed)
-    trace = [(infos["target"]["map"], {a: o["vector"].copy() for a, o in obs.items()})]
+    trace = [(env.map_name, {a: o["vector"].copy() for a, o in obs.items()})]
     for _ in range(steps):
         if not env.agents:
             break
@@ -34,9 +34,8 @@ def test_agents_spaces_and_observations():
         assert env.observation_space(agent).contains(obs[agent])
         assert obs[agent]["vector"].shape == (5 + 5 * 3,)
         assert obs[agent]["patch"].shape == (48, 48)
-        assert set(infos[agent]) == {"captured", "asz_area", "map"}
-        assert infos[agent]["asz_area"] > 0 and not infos[agent]["captured"]
-    assert infos["target"]["map"] in env._env.map_names
+        assert set(infos[agent]) == {"map_index"}
+    assert env.map_names[infos["target"]["map_index"]] == env.map_name
 
 
 def test_same_seed_same_episode_and_other_seeds_differ():

@@ -37,7 +37,7 @@ def test_the_rust_evaluations_episodes_replay_in_python(tmp_path, captors, targe
     play_target = t2e.ScriptedPolicy(target, "target")
     for row in rows:
         _, infos = env.reset(seed=int(row["seed"]))
-        assert infos["target"]["map"] == row["map"]
+        assert env.map_name == row["map"]
         steps, captured = 0, False
         while env.agents:
             actions = {**play_captors(env), **play_target(env)}

@@ -38,7 +38,7 @@ pub struct RunArgs {
     pub pool: Option<PathBuf>,
     /// Workers this manager starts on its own host (with --store; default:
     /// one per seat; 0 leaves every seat to workers on other hosts).
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", allow_negative_numbers = true, value_parser = workers_in_range)]
     pub workers: Option<usize>,
 }
 
@@ -64,7 +64,12 @@ pub struct WorkerArgs {
     pub run_for: Option<String>,
     /// How long a seat stays this worker's without a renewal; after that,
     /// another worker may take it (renewed every third of it).
-    #[arg(long, value_name = "DURATION", default_value = "60s")]
+    #[arg(
+        long,
+        value_name = "DURATION",
+        default_value = "60s",
+        allow_hyphen_values = true
+    )]
     pub lease: String,
 }
 
@@ -368,6 +373,17 @@ fn locate_league(
 }
 
 /// `--seats`: a whole number of seats a host can run.
+/// `--workers`: a whole number of local workers, 0 or more.
+fn workers_in_range(text: &str) -> Result<usize, String> {
+    match text.parse::<i64>() {
+        Ok(n) if n >= 0 => Ok(n as usize),
+        Ok(n) => Err(format!(
+            "--workers {n}: the local workers to start, 0 (every seat on other hosts) or more"
+        )),
+        Err(_) => Err(format!("--workers {text}: not a whole number of workers")),
+    }
+}
+
 fn seats_in_range(text: &str) -> Result<usize, String> {
     match text.parse::<i64>() {
         Ok(n) if (1..=256).contains(&n) => Ok(n as usize),

@@ -1,0 +1,325 @@
+"""The PettingZoo parallel API over ``t2e._core.Env``."""
+
+from __future__ import annotations
+
+import numbers
+from typing import Any, Dict, Optional
+
+import numpy as np
+from gymnasium import spaces
+from pettingzoo import ParallelEnv
+
+from ._core import ACTIONS, Env, Policy
+
+# Episode seeds are those of the Rust side: integers in 0..2**64.
+_SEED_LIMIT = 2**64
+
+
+class T2EParallelEnv(ParallelEnv):
+    """K captors and one target on the maps ``maps`` names.
+
+    Agents are ``captor_0`` .. ``captor_{K-1}`` and ``target``. Each episode
+    ends for all agents at once: ``terminations`` when the captors trap the
+    target (the fast capture rule: every probe around the target is
+    blocked; docs/reference/env.md), ``truncations`` at
+    ``episode_length`` steps (``max_cycles`` is the same number, by
+    PettingZoo's name). Infos are numbers only: ``map_index`` (into
+    ``map_names``; ``map_name`` is this episode's), ``captured`` after each
+    step (not after ``reset``, so wrappers that merge reset infos over the
+    last step's keep it), and ``asz_area`` (m^2) when ``asz_info`` is on.
+
+    Arguments: ``maps`` a map selection (``shipped``, ``generated:N``,
+    ``small,medium,large``, a folder, or a comma list); ``num_captors`` K,
+    1 to 8; ``speed_ratio`` the target's top speed over the captors'
+    (1.0 to 1.4 in the paper); ``protocol`` ``held-out`` (training maps
+    that are not the Gibson test set), ``paper`` (the 26 Gibson maps) or
+    ``test`` (the Gibson maps, to evaluate); ``episode_length`` steps
+    before truncation; ``render_mode`` None or ``rgb_array``; ``asz_info``
+    whether every step computes the exact ASZ (about 1 ms on a large map;
+    off by default); ``captors`` or ``target`` a built-in opponent that
+    plays that side inside the env (``heuristic``, ``greedy``,
+    ``greedy:K``, ``random``, ``still``, ``ckpt:FOLDER`` for an exported
+    player, or a policy from ``t2e.load_policy``), so only the other side's
+    agents remain. Pickling or copying the env makes a new one from the
+    same arguments and random state; it starts without an episode.
+    ``state()`` is the global state a centralised critic reads.
+    """
+
+    metadata = {"name": "t2e_v0", "render_modes": ["rgb_array"], "is_parallelizable": True, "render_fps": 10}
+
+    def __init__(
+        self,
+        maps: str = "shipped",
+        num_captors: int = 3,
+        speed_ratio: float = 1.0,
+        protocol: str = "held-out",
+        episode_length: int = 500,
+        render_mode: Optional[str] = None,
+        asz_info: bool = False,
+        max_cycles: Optional[int] = None,
+        captors: Any = None,
+        target: Any = None,
+    ):
+        if max_cycles is not None:
+            _check_int("max_cycles", max_cycles)
+            if episode_length not in (500, max_cycles):
+                raise ValueError(
+                    f"max_cycles = {max_cycles} and episode_length = {episode_length}: the same number by two names; give one"
+                )
+            episode_length = max_cycles
+        self._kwargs = dict(
+            maps=maps,
+            num_captors=num_captors,
+            speed_ratio=speed_ratio,
+            protocol=protocol,
+            episode_length=episode_length,
+            render_mode=render_mode,
+            asz_info=asz_info,
+            captors=_picklable(captors),
+            target=_picklable(target),
+        )
+        _check_int("num_captors", num_captors)
+        _check_int("episode_length", episode_length)
+        if not isinstance(speed_ratio, numbers.Real) or isinstance(speed_ratio, bool):
+            raise TypeError(f"speed_ratio = {speed_ratio!r}: must be a number (v_e / v_p)")
+        if not isinstance(maps, str):
+            raise TypeError(f"maps = {maps!r}: must be a string such as 'shipped', 'generated:20' or 'small,medium,large'")
+        if not isinstance(protocol, str):
+            raise TypeError(f"protocol = {protocol!r}: must be 'held-out', 'paper' or 'test'")
+        if not isinstance(asz_info, (bool, np.bool_)):
+            # bool("no") is True: a string here would silently turn it on.
+            raise TypeError(f"asz_info = {asz_info!r}: must be True or False")
+        if render_mode not in (None, "rgb_array"):
+            raise ValueError(f"render_mode = {render_mode!r}: must be None or 'rgb_array'")
+        self._env = Env(
+            maps, int(num_captors), float(speed_ratio), protocol, int(episode_length), render_mode == "rgb_array"
+        )
+        self.render_mode = render_mode
+        self.asz_info = bool(asz_info)
+        self.max_cycles = int(episode_length)
+        self.map_names = list(self._env.map_names)
+        self._all_agents = list(self._env.agent_names)
+        self._opponents = {}
+        for name, spec in (("captors", captors), ("target", target)):
+            if spec is not None:
+                self._opponents[name] = _opponent(name, spec)
+        if len(self._opponents) == 2:
+            raise ValueError("captors and target: both sides played by built-in opponents leaves no agent to act")
+        self.possible_agents = [a for a in self._all_agents if _side(a) not in self._opponents]
+        self.agents: list[str] = []
+        self._last = None
+        side = self._env.patch_side
+        observation = spaces.Dict(
+            {
+                "patch": spaces.Box(0, 1, shape=(side, side), dtype=np.uint8),
+                "vector": spaces.Box(-np.inf, np.inf, shape=(self._env.vector_len,), dtype=np.float32),
+            }
+        )
+        self.observation_spaces = {a: observation for a in self.possible_agents}
+        self.action_spaces = {a: spaces.Discrete(ACTIONS) for a in self.possible_agents}
+        self.state_space = spaces.Box(-np.inf, np.inf, shape=(5 * len(self._all_agents) + 1,), dtype=np.float32)
+        self._rng = np.random.default_rng()
+
+    def __reduce__(self):
+        return (_rebuild, (self._kwargs, self._rng.bit_generator.state))
+
+    def state(self) -> np.ndarray:
+        """Every robot's x, y (m, world frame), vx, vy (m/s) and heading
+        (rad), captors first, then the share of the episode left: what a
+        centralised critic reads (``state_space``)."""
+        return self._env.state()
+
+    @property
+    def map_name(self) -> str:
+        """The name of this episode's map (``map_names[infos[a]["map_index"]]``)."""
+        return self._env.map_name
+
+    def observation_space(self, agent: str) -> spaces.Space:
+        if agent not in self.observation_spaces:
+            raise ValueError(f"agent = {agent!r}: not one of {self.possible_agents}")
+        return self.observation_spaces[agent]
+
+    def action_space(self, agent: str) -> spaces.Space:
+        if agent not in self.action_spaces:
+            raise ValueError(f"agent = {agent!r}: not one of {self.possible_agents}")
+        return self.action_spaces[agent]
+
+    def reset(self, seed: Optional[int] = None, options: Optional[dict] = None):
+        """Starts an episode: the one of ``seed`` (same seed, same episode),
+        or the next of this env's own sequence when ``seed`` is None.
+        ``options`` is accepted as PettingZoo passes it, and read for
+        nothing: an episode is its seed."""
+        if seed is None:
+            episode = int(self._rng.integers(_SEED_LIMIT, dtype=np.uint64))
+        else:
+            _check_int("seed", seed)
+            if seed < 0:
+                raise ValueError(f"seed = {seed}: must be a non-negative integer")
+            if seed >= _SEED_LIMIT:
+                raise ValueError(f"seed = {seed}: must be below 2**64")
+            episode = int(seed)
+            self._rng = np.random.default_rng(episode)
+        vectors, patches = self._env.reset(episode)
+        self.agents = list(self.possible_agents)
+        for opponent in self._opponents.values():
+            if hasattr(opponent, "reset") and not isinstance(opponent, Policy):
+                opponent.reset()
+        observations = self._observations(vectors, patches)
+        return observations, self._infos(captured=None)
+
+    def step(self, actions: Dict[str, Any]):
+        if not self.agents:
+            raise RuntimeError("step() after the episode ended (or before reset()): call reset() first")
+        if not isinstance(actions, dict):
+            raise TypeError(f"actions = {actions!r}: must be a dict from agent name to action")
+        missing = [a for a in self.agents if a not in actions]
+        unknown = [a for a in actions if a not in self.agents]
+        if missing or unknown:
+            raise ValueError(
+                f"actions: must name every live agent once ({', '.join(self.agents)}); "
+                + (f"missing {missing}" if missing else f"unknown {unknown}")
+            )
+        index = {a: i for i, a in enumerate(self._all_agents)}
+        chosen = np.empty(len(self._all_agents), dtype=np.int64)
+        for agent in self.agents:
+            chosen[index[agent]] = _action(agent, actions[agent])
+        for side, opponent in self._opponents.items():
+            for agent, action in self._opponent_actions(side, opponent).items():
+                chosen[index[agent]] = action
+        vectors, patches, rewards, terminated, truncated, captured = self._env.step(chosen)
+        observations = self._observations(vectors, patches)
+        agents = self.agents
+        reward = {a: float(rewards[index[a]]) for a in agents}
+        terminations = {a: bool(terminated) for a in agents}
+        truncations = {a: bool(truncated) for a in agents}
+        infos = self._infos(captured=bool(captured))
+        if terminated or truncated:
+            self.agents = []
+        return observations, reward, terminations, truncations, infos
+
+    def render(self):
+        """The current state as an RGB frame [H, W, 3] uint8 (``render_mode
+        = "rgb_array"``): the map, the ASZ shaded, the robots and their
+        trails, as ``t2e-league render`` draws them. None without a render
+        mode."""
+        if self.render_mode is None:
+            return None
+        return self._env.render()
+
+    def asz_area(self) -> float:
+        """|ASZ| of the current state in m^2."""
+        return self._env.asz_area()
+
+    def close(self):
+        pass
+
+    def _observations(self, vectors: np.ndarray, patches: np.ndarray):
+        every = {a: {"patch": patches[i], "vector": vectors[i]} for i, a in enumerate(self._all_agents)}
+        self._last = every
+        return {a: every[a] for a in self.possible_agents}
+
+    def _opponent_actions(self, side: str, opponent) -> Dict[str, int]:
+        mine = [a for a in self._all_agents if _side(a) == side]
+        if isinstance(opponent, Policy):
+            return dict(zip(mine, opponent.act(self._env).tolist()))
+        # A loaded policy reads its side's observations, as it would outside.
+        return opponent({a: self._last[a] for a in mine}, self)
+
+    def _infos(self, captured: Optional[bool]):
+        info = {"map_index": self._env.map_index}
+        if captured is not None:
+            info["captured"] = captured
+        if self.asz_info:
+            info["asz_area"] = self._env.asz_area()
+        return {a: dict(info) for a in self.possible_agents}
+
+
+
+def _side(agent: str) -> str:
+    return "target" if agent == "target" else "captors"
+
+
+def _opponent(side: str, spec: Any):
+    """A built-in opponent for ``side``: a controller by name, ``ckpt:FOLDER``
+    (an exported player), or a policy from ``t2e.load_policy``."""
+    if isinstance(spec, str):
+        if spec.startswith("ckpt:"):
+            from .torch_policy import load_policy
+
+            spec = load_policy(spec[len("ckpt:") :])
+        else:
+            return Policy(spec, side)
+    if callable(spec) and getattr(spec, "side", None) is not None:
+        if spec.side != side:
+            raise ValueError(f"{side} = {spec!r}: a policy of the {spec.side} side")
+        return spec
+    raise TypeError(
+        f"{side} = {spec!r}: a controller name (heuristic, greedy, greedy:K, random, still), "
+        "'ckpt:FOLDER', or a policy from t2e.load_policy"
+    )
+
+
+def _picklable(spec: Any) -> Any:
+    """A loaded policy is pickled as the folder it came from."""
+    folder = getattr(spec, "folder", None)
+    return f"ckpt:{folder}" if folder is not None and not isinstance(spec, str) else spec
+
+
+def _rebuild(kwargs: dict, rng_state: dict) -> "T2EParallelEnv":
+    env = T2EParallelEnv(**kwargs)
+    env._rng.bit_generator.state = rng_state
+    return env
+
+
+def _check_int(name: str, value: Any) -> None:
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+        raise TypeError(f"{name} = {value!r}: must be an integer")
+
+
+def _action(agent: str, value: Any) -> int:
+    """An action as an int in 0..ACTIONS, or a ValueError naming the agent."""
+    if isinstance(value, np.ndarray):
+        if value.shape not in ((), (1,)):
+            raise ValueError(f"actions[{agent!r}]: an array of shape {value.shape}; one action is a scalar")
+        value = value.reshape(()).item()
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+        raise ValueError(f"actions[{agent!r}] = {value!r}: an action is an integer from 0 to {ACTIONS - 1}")
+    if not 0 <= value < ACTIONS:
+        raise ValueError(f"actions[{agent!r}] = {value}: an action is an integer from 0 to {ACTIONS - 1}")
+    return int(value)
+
+
+def parallel_env(
+    maps: str = "shipped",
+    num_captors: int = 3,
+    speed_ratio: float = 1.0,
+    protocol: str = "held-out",
+    episode_length: int = 500,
+    render_mode: Optional[str] = None,
+    asz_info: bool = False,
+    max_cycles: Optional[int] = None,
+    captors: Any = None,
+    target: Any = None,
+) -> T2EParallelEnv:
+    """A T2E env with PettingZoo's parallel API (``t2e_v0``); every argument
+    is described on ``T2EParallelEnv`` and in docs/reference/env.md."""
+    return T2EParallelEnv(
+        maps=maps,
+        num_captors=num_captors,
+        speed_ratio=speed_ratio,
+        protocol=protocol,
+        episode_length=episode_length,
+        render_mode=render_mode,
+        asz_info=asz_info,
+        max_cycles=max_cycles,
+        captors=captors,
+        target=target,
+    )
+
+
+def env(**kwargs):
+    """The same env with PettingZoo's AEC API (agents act in turn, the
+    step resolved once all have); arguments as ``parallel_env``."""
+    from pettingzoo.utils.conversions import parallel_to_aec
+
+    return parallel_to_aec(parallel_env(**kwargs))
