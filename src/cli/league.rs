@@ -255,8 +255,11 @@ pub fn run(args: RunArgs) -> Result<()> {
             + usize::from(cfg.evaluator.enabled)
     };
     match args.workers {
-        Some(n) if n > seats => bail!(
-            "--workers {n}: this league has {seats} seats, and a local worker runs one; the other {} would sit idle (give at most {seats})",
+        Some(n) if n > MAX_LOCAL_WORKERS => bail!(
+            "--workers {n}: at most {MAX_LOCAL_WORKERS} on one host (this league has {seats} seats; a local worker runs one)"
+        ),
+        Some(n) if n > seats => tracing::warn!(
+            "--workers {n} for {seats} seats: {} stand by, each a process of its own (about 190 MB), to take a seat whose worker dies",
             n - seats
         ),
         Some(n) if n > 0 && n < seats => tracing::warn!(
@@ -373,6 +376,9 @@ fn locate_league(
 }
 
 /// `--seats`: a whole number of seats a host can run.
+/// The most local workers `run --workers` starts (as a worker's `--seats`).
+const MAX_LOCAL_WORKERS: usize = 256;
+
 /// `--workers`: a whole number of local workers, 0 or more.
 fn workers_in_range(text: &str) -> Result<usize, String> {
     match text.parse::<i64>() {

@@ -153,7 +153,7 @@ fn validation_settings_that_need_loading_are_refused_before_training() {
 }
 
 #[test]
-fn workers_beyond_the_seats_and_odd_worker_arguments_are_refused() {
+fn too_many_workers_and_odd_worker_arguments_are_refused() {
     let tmp = tempfile::tempdir().unwrap();
     let cfg = config(tmp.path(), "", "");
     let store = tmp.path().join("store.db");
@@ -168,13 +168,13 @@ fn workers_beyond_the_seats_and_odd_worker_arguments_are_refused() {
         "--pool",
         tmp.path().join("pool").to_str().unwrap(),
         "--workers",
-        "12",
+        "300",
         "--for",
         "10s",
     ]);
     let err = stderr(&o);
     assert!(
-        !o.status.success() && err.contains("--workers 12") && err.contains("idle"),
+        !o.status.success() && err.contains("--workers 300") && err.contains("at most 256"),
         "{err}"
     );
     assert!(!store.exists(), "the store was written before the refusal");
