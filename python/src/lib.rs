@@ -213,6 +213,29 @@ struct EnvArgs {
     episode_length: i64,
 }
 
+impl EnvArgs {
+    fn new(
+        maps: &str,
+        num_captors: i64,
+        speed_ratio: f64,
+        protocol: &str,
+        episode_length: i64,
+    ) -> EnvArgs {
+        EnvArgs {
+            maps: maps.to_string(),
+            num_captors,
+            speed_ratio,
+            protocol: protocol.to_string(),
+            episode_length,
+        }
+    }
+
+    /// The maps, loaded on this process's pool and checked for the protocol.
+    fn load_maps(&self) -> PyResult<Arc<Vec<Arc<PreparedMap>>>> {
+        pool()?.install(|| maps_for(&self.maps, &self.protocol))
+    }
+}
+
 type Observations<'py> = (Bound<'py, PyArray2<f32>>, Bound<'py, PyArray3<u8>>);
 
 /// One T2E world: K captors and a target on maps chosen per episode.
@@ -243,14 +266,8 @@ impl Env {
         render: bool,
     ) -> PyResult<Env> {
         let cfg = env_config(num_captors, speed_ratio, episode_length)?;
-        let args = EnvArgs {
-            maps: maps.to_string(),
-            num_captors,
-            speed_ratio,
-            protocol: protocol.to_string(),
-            episode_length,
-        };
-        let maps = pool()?.install(|| maps_for(maps, protocol))?;
+        let args = EnvArgs::new(maps, num_captors, speed_ratio, protocol, episode_length);
+        let maps = args.load_maps()?;
         let env = TrapEnv::new(cfg, maps).map_err(|e| PyValueError::new_err(e.to_string()))?;
         Ok(Env {
             env,
@@ -667,14 +684,8 @@ impl VectorEnv {
                 ),
             ));
         }
-        let args = EnvArgs {
-            maps: maps.to_string(),
-            num_captors,
-            speed_ratio,
-            protocol: protocol.to_string(),
-            episode_length,
-        };
-        let maps = pool()?.install(|| maps_for(maps, protocol))?;
+        let args = EnvArgs::new(maps, num_captors, speed_ratio, protocol, episode_length);
+        let maps = args.load_maps()?;
         // None draws a seed, as `parallel_env().reset(seed=None)` does;
         // `seed` says which, so the run can be repeated.
         let seed = match seed.map(seed_of).transpose()? {
@@ -885,32 +896,29 @@ fn asz_area(
         let (r, c) = map.grid.cell_of([p.0, p.1]);
         map.grid.is_free(r, c)
     };
-    if let Some((i, p)) = captors.iter().enumerate().find(|(_, p)| !inside(p)) {
-        return Err(value_error(
-            &format!("captors[{i}]"),
-            format!("{p:?}"),
-            format!(
-                "is not on a free cell of the map {} (a captor in a wall or off the map has no arrival field)",
-                map.grid.name
-            ),
-        ));
-    }
-    if !inside(&target) {
-        return Err(value_error(
-            "target",
-            format!("{target:?}"),
-            format!(
-                "is not on a free cell of the map {} (the ASZ of a target in a wall or off the map is not defined)",
-                map.grid.name
-            ),
-        ));
-    }
     if !finite(&target) {
         return Err(value_error(
             "target",
             format!("{target:?}"),
             "must be a finite (x, y) position in metres",
         ));
+    }
+    let robots = captors
+        .iter()
+        .enumerate()
+        .map(|(i, p)| (format!("captors[{i}]"), p))
+        .chain(std::iter::once(("target".to_string(), &target)));
+    for (name, p) in robots {
+        if !inside(p) {
+            return Err(value_error(
+                &name,
+                format!("{p:?}"),
+                format!(
+                    "is not on a free cell of the map {} (a robot in a wall or off the map has no arrival field)",
+                    map.grid.name
+                ),
+            ));
+        }
     }
     if !(target_speed.is_finite() && target_speed > 0.0) {
         return Err(value_error(

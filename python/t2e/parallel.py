@@ -289,32 +289,9 @@ def _action(agent: str, value: Any) -> int:
     return int(value)
 
 
-def parallel_env(
-    maps: str = "shipped",
-    num_captors: int = 3,
-    speed_ratio: float = 1.0,
-    protocol: str = "held-out",
-    episode_length: int = 500,
-    render_mode: Optional[str] = None,
-    asz_info: bool = False,
-    max_cycles: Optional[int] = None,
-    captors: Any = None,
-    target: Any = None,
-) -> T2EParallelEnv:
-    """A T2E env with PettingZoo's parallel API (``t2e_v0``); every argument
-    is described on ``T2EParallelEnv`` and in docs/reference/env.md."""
-    return T2EParallelEnv(
-        maps=maps,
-        num_captors=num_captors,
-        speed_ratio=speed_ratio,
-        protocol=protocol,
-        episode_length=episode_length,
-        render_mode=render_mode,
-        asz_info=asz_info,
-        max_cycles=max_cycles,
-        captors=captors,
-        target=target,
-    )
+# The class itself, so `parallel_env` has the class's explicit signature
+# and docstring (PettingZoo's tools call `mod.parallel_env(**kwargs)`).
+parallel_env = T2EParallelEnv
 
 
 def env(**kwargs):

@@ -37,6 +37,11 @@ fn refused_before_start(root: &Path, evaluator: &str, extra: &str) -> String {
     let cfg = config(root, evaluator, extra);
     let dir = root.join("league");
     let _ = std::fs::remove_dir_all(&dir);
+    refused_config(&cfg, &dir, &format!("{evaluator} / {extra}"))
+}
+
+/// `run --config CFG --dir DIR` fails, and nothing of a league was written.
+fn refused_config(cfg: &Path, dir: &Path, what: &str) -> String {
     let o = t2e(&[
         "run",
         "--config",
@@ -47,13 +52,10 @@ fn refused_before_start(root: &Path, evaluator: &str, extra: &str) -> String {
         "60s",
     ]);
     let err = stderr(&o);
-    assert!(
-        !o.status.success(),
-        "accepted: {evaluator} / {extra}\n{err}"
-    );
+    assert!(!o.status.success(), "accepted: {what}\n{err}");
     assert!(
         !dir.join("league.db").exists() && !dir.join("config.toml").exists(),
-        "{evaluator}: refused only after the league was written\n{err}"
+        "{what}: refused only after the league was written\n{err}"
     );
     err
 }
@@ -100,31 +102,23 @@ fn validation_maps_are_compared_with_the_training_maps_by_content() {
         ]);
         assert!(o.status.success(), "{}", stderr(&o));
     }
-    let cfg_text = format!("validation_maps = \"{}\"\n{panel}", generated.display());
-    let training =
-        common::league::TINY_LEAGUE.replace("maps = \"shipped\"", "maps = \"generated:2\"");
-    let path = tmp.path().join("league.toml");
-    std::fs::write(
+    let training = common::league::TINY_LEAGUE
+        .replace("maps = \"shipped\"", "maps = \"generated:2\"")
+        .replace(
+            "[evaluator]\n",
+            &format!(
+                "[evaluator]\nvalidation_maps = \"{}\"\n{panel}\n",
+                generated.display()
+            ),
+        );
+    let path = tmp.path().join("league-generated.toml");
+    std::fs::write(&path, training).unwrap();
+    let err = refused_config(
         &path,
-        training.replace("[evaluator]\n", &format!("[evaluator]\n{cfg_text}\n")),
-    )
-    .unwrap();
-    let dir = tmp.path().join("league-generated");
-    let o = t2e(&[
-        "run",
-        "--config",
-        path.to_str().unwrap(),
-        "--dir",
-        dir.to_str().unwrap(),
-        "--for",
-        "60s",
-    ]);
-    let err = stderr(&o);
-    assert!(
-        !o.status.success() && err.contains("by content") && err.contains("gen-"),
-        "{err}"
+        &tmp.path().join("league-generated"),
+        "a folder of the training seeds",
     );
-    assert!(!dir.join("league.db").exists());
+    assert!(err.contains("by content") && err.contains("gen-"), "{err}");
 }
 
 #[test]
@@ -260,16 +254,6 @@ fn a_folder_of_other_files_is_not_made_a_league() {
     let dir = tmp.path().join("mine");
     std::fs::create_dir_all(&dir).unwrap();
     std::fs::write(dir.join("thesis.tex"), "x").unwrap();
-    let o = t2e(&[
-        "run",
-        "--config",
-        cfg.to_str().unwrap(),
-        "--dir",
-        dir.to_str().unwrap(),
-        "--for",
-        "10s",
-    ]);
-    let err = stderr(&o);
-    assert!(!o.status.success() && err.contains("thesis.tex"), "{err}");
-    assert!(!dir.join("league.db").exists());
+    let err = refused_config(&cfg, &dir, "a folder of the user's files");
+    assert!(err.contains("thesis.tex"), "{err}");
 }
