@@ -99,6 +99,7 @@ class T2EParallelEnv(ParallelEnv):
         self.max_cycles = int(episode_length)
         self.map_names = list(self._env.map_names)
         self._all_agents = list(self._env.agent_names)
+        self._index = {a: i for i, a in enumerate(self._all_agents)}
         self._opponents = {}
         for name, spec in (("captors", captors), ("target", target)):
             if spec is not None:
@@ -179,7 +180,7 @@ class T2EParallelEnv(ParallelEnv):
                 f"actions: must name every live agent once ({', '.join(self.agents)}); "
                 + (f"missing {missing}" if missing else f"unknown {unknown}")
             )
-        index = {a: i for i, a in enumerate(self._all_agents)}
+        index = self._index
         chosen = np.empty(len(self._all_agents), dtype=np.int64)
         for agent in self.agents:
             chosen[index[agent]] = _action(agent, actions[agent])
