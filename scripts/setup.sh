@@ -3,7 +3,7 @@
 # PyPI (the libtorch that tch 0.24 expects), a ./libtorch link to its torch
 # folder (read by .cargo/config.toml), a release build of t2e-league, and the
 # Python package (`import t2e`, built from python/ with maturin) with what its
-# tests use. Idempotent: a second run only rebuilds what changed.
+# tests use, the trainers they run it with included. Idempotent: a second run only rebuilds what changed.
 # --no-build: the virtualenv and its packages only.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -12,6 +12,9 @@ TORCH_VERSION=2.11.0
 PYTHON=${PYTHON:-python3}
 # The Python side: the build backend, the env's dependencies, the test runner.
 PY_PACKAGES="maturin==1.16.0 numpy==2.4.6 gymnasium==1.4.0 pettingzoo==1.27.0 pytest==9.2.0"
+# The trainers the Python tests run the env with (python/pyproject.toml's
+# `trainers` group), pinned with what they pull in.
+TRAINER_PACKAGES="supersuit==3.11.0 tinyscaler==1.2.8 stable-baselines3==2.9.2 torchrl==0.14.1 tensordict==0.14.3 matplotlib==3.11.2 cloudpickle==3.1.3"
 
 if [ ! -x .venv/bin/python ]; then
   echo "== creating .venv"
@@ -29,7 +32,7 @@ if [ -z "${LIBTORCH:-}" ]; then
 fi
 # Pinned: a second run finds them installed and reaches no index.
 # shellcheck disable=SC2086
-.venv/bin/python -m pip install --quiet $PY_PACKAGES
+.venv/bin/python -m pip install --quiet $PY_PACKAGES $TRAINER_PACKAGES
 
 if [ "${1:-}" != "--no-build" ]; then
   echo "== cargo build --release"

@@ -9,6 +9,7 @@ import numpy as np
 from gymnasium import spaces
 from pettingzoo import ParallelEnv
 
+from . import observations as obs
 from ._core import ACTIONS, Env, Policy
 
 # Episode seeds are those of the Rust side: integers in 0..2**64.
@@ -24,9 +25,12 @@ class T2EParallelEnv(ParallelEnv):
     blocked; docs/reference/env.md), ``truncations`` at
     ``episode_length`` steps (``max_cycles`` is the same number, by
     PettingZoo's name). Infos are numbers only: ``map_index`` (into
-    ``map_names``; ``map_name`` is this episode's), ``captured`` after each
-    step (not after ``reset``, so wrappers that merge reset infos over the
-    last step's keep it), and ``asz_area`` (m^2) when ``asz_info`` is on.
+    ``map_names``; ``map_name`` is this episode's), ``captured`` (whether
+    this env's most recent step trapped the target: after ``reset``, the
+    previous episode's last step, False for the first; so wrappers that
+    merge reset infos over the last step's, as SuperSuit does, keep it, and
+    those that take the info keys from ``reset``, as TorchRL does, find
+    it), and ``asz_area`` (m^2) when ``asz_info`` is on.
 
     Arguments: ``maps`` a map selection (``shipped``, ``generated:N``,
     ``small,medium,large``, a folder, or a comma list); ``num_captors`` K,
@@ -34,7 +38,13 @@ class T2EParallelEnv(ParallelEnv):
     (1.0 to 1.4 in the paper); ``protocol`` ``held-out`` (training maps
     that are not the Gibson test set), ``paper`` (the 26 Gibson maps) or
     ``test`` (the Gibson maps, to evaluate); ``episode_length`` steps
-    before truncation; ``render_mode`` None or ``rgb_array``; ``asz_info``
+    before truncation; ``render_mode`` None, ``rgb_array`` (``render()``
+    returns the frame) or ``human`` (``render()`` shows it in a matplotlib
+    window and returns None); ``observation`` ``spec`` (the paper's patch
+    and vector), ``egocentric`` (the Rust learners' inputs: the vector in
+    the robot's frame and the patch max-pooled by ``patch_pool``) or
+    ``flat`` (those two in one float32 vector, for MLP policies;
+    t2e/observations.py); ``asz_info``
     whether every step computes the exact ASZ (about 1 ms on a large map;
     off by default); ``captors`` or ``target`` a built-in opponent that
     plays that side inside the env (``heuristic``, ``greedy``,
@@ -45,7 +55,7 @@ class T2EParallelEnv(ParallelEnv):
     ``state()`` is the global state a centralised critic reads.
     """
 
-    metadata = {"name": "t2e_v0", "render_modes": ["rgb_array"], "is_parallelizable": True, "render_fps": 10}
+    metadata = {"name": "t2e_v0", "render_modes": ["rgb_array", "human"], "is_parallelizable": True, "render_fps": 10}
 
     def __init__(
         self,
@@ -59,6 +69,8 @@ class T2EParallelEnv(ParallelEnv):
         max_cycles: Optional[int] = None,
         captors: Any = None,
         target: Any = None,
+        observation: str = "spec",
+        patch_pool: int = 4,
     ):
         if max_cycles is not None:
             _check_int("max_cycles", max_cycles)
@@ -77,6 +89,8 @@ class T2EParallelEnv(ParallelEnv):
             asz_info=asz_info,
             captors=_picklable(captors),
             target=_picklable(target),
+            observation=observation,
+            patch_pool=patch_pool,
         )
         _check_int("num_captors", num_captors)
         _check_int("episode_length", episode_length)
@@ -89,11 +103,13 @@ class T2EParallelEnv(ParallelEnv):
         if not isinstance(asz_info, (bool, np.bool_)):
             # bool("no") is True: a string here would silently turn it on.
             raise TypeError(f"asz_info = {asz_info!r}: must be True or False")
-        if render_mode not in (None, "rgb_array"):
-            raise ValueError(f"render_mode = {render_mode!r}: must be None or 'rgb_array'")
-        self._env = Env(
-            maps, int(num_captors), float(speed_ratio), protocol, int(episode_length), render_mode == "rgb_array"
-        )
+        if render_mode not in (None, "rgb_array", "human"):
+            raise ValueError(f"render_mode = {render_mode!r}: must be None, 'rgb_array' or 'human'")
+        obs.check(observation, patch_pool)
+        self.observation = observation
+        self.patch_pool = int(patch_pool)
+        self._window = _Window() if render_mode == "human" else None
+        self._env = Env(maps, int(num_captors), float(speed_ratio), protocol, int(episode_length), render_mode is not None)
         self.render_mode = render_mode
         self.asz_info = bool(asz_info)
         self.max_cycles = int(episode_length)
@@ -109,14 +125,9 @@ class T2EParallelEnv(ParallelEnv):
         self.possible_agents = [a for a in self._all_agents if _side(a) not in self._opponents]
         self.agents: list[str] = []
         self._last = None
-        side = self._env.patch_side
-        observation = spaces.Dict(
-            {
-                "patch": spaces.Box(0, 1, shape=(side, side), dtype=np.uint8),
-                "vector": spaces.Box(-np.inf, np.inf, shape=(self._env.vector_len,), dtype=np.float32),
-            }
-        )
-        self.observation_spaces = {a: observation for a in self.possible_agents}
+        self._captured = False
+        space = obs.space(observation, self.patch_pool, self._env.vector_len)
+        self.observation_spaces = {a: space for a in self.possible_agents}
         self.action_spaces = {a: spaces.Discrete(ACTIONS) for a in self.possible_agents}
         self.state_space = spaces.Box(-np.inf, np.inf, shape=(5 * len(self._all_agents) + 1,), dtype=np.float32)
         self._rng = np.random.default_rng()
@@ -166,7 +177,7 @@ class T2EParallelEnv(ParallelEnv):
             if hasattr(opponent, "reset") and not isinstance(opponent, Policy):
                 opponent.reset()
         observations = self._observations(vectors, patches)
-        return observations, self._infos(captured=None)
+        return observations, self._infos()
 
     def step(self, actions: Dict[str, Any]):
         if not self.agents:
@@ -193,7 +204,8 @@ class T2EParallelEnv(ParallelEnv):
         reward = {a: float(rewards[index[a]]) for a in agents}
         terminations = {a: bool(terminated) for a in agents}
         truncations = {a: bool(truncated) for a in agents}
-        infos = self._infos(captured=bool(captured))
+        self._captured = bool(captured)
+        infos = self._infos()
         if terminated or truncated:
             self.agents = []
         return observations, reward, terminations, truncations, infos
@@ -201,23 +213,31 @@ class T2EParallelEnv(ParallelEnv):
     def render(self):
         """The current state as an RGB frame [H, W, 3] uint8 (``render_mode
         = "rgb_array"``): the map, the ASZ shaded, the robots and their
-        trails, as ``t2e-league render`` draws them. None without a render
+        trails, as ``t2e-league render`` draws them. With ``"human"`` the
+        frame is shown in a window and None returned; None without a render
         mode."""
         if self.render_mode is None:
             return None
-        return self._env.render()
+        frame = self._env.render()
+        if self._window is not None:
+            self._window.show(frame, self.metadata["render_fps"])
+            return None
+        return frame
 
     def asz_area(self) -> float:
         """|ASZ| of the current state in m^2."""
         return self._env.asz_area()
 
     def close(self):
-        pass
+        if self._window is not None:
+            self._window.close()
 
     def _observations(self, vectors: np.ndarray, patches: np.ndarray):
-        every = {a: {"patch": patches[i], "vector": vectors[i]} for i, a in enumerate(self._all_agents)}
-        self._last = every
-        return {a: every[a] for a in self.possible_agents}
+        # Opponents read the spec's observations whatever this env hands out.
+        self._last = {a: {"patch": patches[i], "vector": vectors[i]} for i, a in enumerate(self._all_agents)}
+        mine = [self._index[a] for a in self.possible_agents]
+        shaped = obs.build(self.observation, self.patch_pool, vectors[mine], patches[mine])
+        return dict(zip(self.possible_agents, shaped))
 
     def _opponent_actions(self, side: str, opponent) -> Dict[str, int]:
         mine = [a for a in self._all_agents if _side(a) == side]
@@ -226,14 +246,44 @@ class T2EParallelEnv(ParallelEnv):
         # A loaded policy reads its side's observations, as it would outside.
         return opponent({a: self._last[a] for a in mine}, self)
 
-    def _infos(self, captured: Optional[bool]):
-        info = {"map_index": self._env.map_index}
-        if captured is not None:
-            info["captured"] = captured
+    def _infos(self):
+        info = {"map_index": self._env.map_index, "captured": self._captured}
         if self.asz_info:
             info["asz_area"] = self._env.asz_area()
         return {a: dict(info) for a in self.possible_agents}
 
+
+
+class _Window:
+    """A matplotlib window for ``render_mode="human"``, opened on the first
+    frame. Where no display is available, matplotlib's non-interactive
+    backend draws into nothing, and the frame is simply not seen."""
+
+    def __init__(self):
+        try:
+            import matplotlib  # noqa: F401
+        except ImportError:
+            raise ImportError("render_mode = 'human' shows frames with matplotlib: pip install matplotlib") from None
+        self._figure = None
+        self._image = None
+
+    def show(self, frame: np.ndarray, fps: int) -> None:
+        import matplotlib.pyplot as plt
+
+        if self._figure is None:
+            self._figure = plt.figure("t2e")
+            self._image = plt.imshow(frame)
+            plt.axis("off")
+        else:
+            self._image.set_data(frame)
+        plt.pause(1.0 / fps)
+
+    def close(self) -> None:
+        if self._figure is not None:
+            import matplotlib.pyplot as plt
+
+            plt.close(self._figure)
+            self._figure = None
 
 
 def _side(agent: str) -> str:

@@ -87,12 +87,23 @@ def test_a_forked_child_builds_and_steps_envs():
 def test_infos_are_numbers_and_the_map_is_named_by_index():
     env = t2e.parallel_env(maps="shipped", episode_length=5)
     _, infos = env.reset(seed=2)
-    assert set(infos["target"]) == {"map_index"}
+    assert infos["target"] == {"map_index": infos["target"]["map_index"], "captured": False}
     assert env.map_names[infos["target"]["map_index"]] == env.map_name
     while env.agents:
-        _, _, _, _, infos = env.step({a: 0 for a in env.agents})
+        _, _, terminations, _, infos = env.step({a: 0 for a in env.agents})
         assert set(infos["captor_0"]) == {"map_index", "captured"}
         assert all(isinstance(v, (bool, int, float)) for v in infos["captor_0"].values())
+        assert infos["captor_0"]["captured"] == terminations["captor_0"]
+    # A reset's `captured` repeats the last step's, so a merge of the two keeps it.
+    trapped = t2e.parallel_env(maps="shipped", target="still", episode_length=500)
+    trapped.reset(seed=4)
+    while trapped.agents:
+        *_, infos = trapped.step({a: 0 for a in trapped.agents})
+    last = infos["captor_0"]["captured"]
+    _, infos = trapped.reset()
+    assert infos["captor_0"]["captured"] == last
+    *_, infos = trapped.step({a: 0 for a in trapped.agents})
+    assert infos["captor_0"]["captured"] is False
     with_asz = t2e.parallel_env(maps="shipped", asz_info=True)
     _, infos = with_asz.reset(seed=2)
     assert infos["target"]["asz_area"] > 0
