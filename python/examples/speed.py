@@ -1,6 +1,9 @@
 """Steps per second of the environment from Python: one PettingZoo env
-(dict in, dict out), the raw single env (numpy in, numpy out) and the
-batched vector env, on one thread (RAYON_NUM_THREADS=1 unless set).
+(dict in, dict out) with its defaults and with each option that costs
+time, the raw single env (numpy in, numpy out) and the batched vector
+env, on one thread (RAYON_NUM_THREADS=1 unless set). An agent-step is one
+agent's observation, action and reward: a step of the env with K captors
+and the target is K + 1 of them.
 
     RAYON_NUM_THREADS=1 python python/examples/speed.py [--seconds 5]
 """
@@ -31,9 +34,17 @@ def main():
     args = parser.parse_args()
     rng = np.random.default_rng(0)
 
-    for asz_info in (False, True):
-        env = t2e.parallel_env(maps=args.maps, episode_length=500, asz_info=asz_info)
+    settings = [
+        ("defaults", {}),
+        ("with the ASZ in infos", {"asz_info": True}),
+        ('observation="egocentric"', {"observation": "egocentric"}),
+        ('observation="flat"', {"observation": "flat"}),
+        ('target="heuristic", observation="flat"', {"target": "heuristic", "observation": "flat"}),
+    ]
+    for label, kwargs in settings:
+        env = t2e.parallel_env(maps=args.maps, episode_length=500, **kwargs)
         env.reset(seed=0)
+        agents = len(env.possible_agents)
 
         def pz_step():
             if not env.agents:
@@ -41,8 +52,8 @@ def main():
             env.step({a: int(rng.integers(5)) for a in env.agents})
             return 1
 
-        label = "with" if asz_info else "without"
-        print(f"parallel_env, {label} the ASZ in infos: {rate(pz_step, args.seconds):,.0f} steps/s")
+        steps = rate(pz_step, args.seconds)
+        print(f"parallel_env, {label}: {steps:,.0f} steps/s, {agents * steps:,.0f} agent-steps/s")
 
     raw = t2e.Env(args.maps, 3, 1.0, "held-out", 500)
     raw.reset(0)

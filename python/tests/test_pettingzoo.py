@@ -1,7 +1,6 @@
 """PettingZoo's own tests of a parallel env, run as they are."""
 
-from pettingzoo.test import parallel_api_test, parallel_seed_test, render_test
-from pettingzoo.utils.conversions import parallel_to_aec
+from pettingzoo.test import parallel_api_test, parallel_seed_test
 
 import t2e
 
@@ -14,17 +13,11 @@ def test_parallel_api():
     parallel_api_test(make(), num_cycles=300)
 
 
+def test_parallel_api_with_every_observation_option():
+    for observation in ("egocentric", "flat"):
+        parallel_api_test(t2e.parallel_env(maps="shipped", episode_length=60, observation=observation), num_cycles=100)
+    parallel_api_test(t2e.parallel_env(maps="shipped", episode_length=60, target="heuristic", observation="flat"), num_cycles=100)
+
+
 def test_parallel_seed():
     parallel_seed_test(make)
-
-
-def test_render():
-    # render_test plays an AEC env, so the parallel env goes through
-    # PettingZoo's own conversion. It builds one env with "human" only to
-    # read the metadata's render modes ("rgb_array" here); that one is
-    # made without rendering.
-    def make_rendered(render_mode=None):
-        mode = None if render_mode == "human" else render_mode
-        return parallel_to_aec(t2e.parallel_env(maps="shipped", episode_length=60, render_mode=mode))
-
-    render_test(make_rendered)

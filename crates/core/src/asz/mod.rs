@@ -11,8 +11,10 @@
 //! closed in, so a nearly trapped target costs almost nothing.
 
 mod coarse;
+mod fields;
 
 pub use coarse::CoarseLattice;
+pub use fields::{AszFields, DistanceField};
 
 use crate::map::{PreparedMap, CELL_AREA, CELL_SIZE};
 
