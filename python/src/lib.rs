@@ -13,7 +13,8 @@ use numpy::{
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use std::sync::{Arc, Mutex, MutexGuard};
-use t2e_core::asz::{cells_to_m2, FastMarching, Source};
+use t2e_core::asz::{cells_to_m2, AszFields, Source};
+use t2e_core::env::features::{egocentric_vector, egocentric_width, pool_patch};
 use t2e_core::env::{Action, Controller, EnvConfig, Side, TrapEnv, VecEnv, PATCH};
 use t2e_core::heuristics::{AszGreedy, Heuristic, RandomActions, Still};
 use t2e_core::map::catalog::load_prepared;
@@ -939,7 +940,7 @@ fn asz_area(
         speed: target_speed,
     };
     no_panic("asz_area", || {
-        Ok(cells_to_m2(FastMarching::new().asz_cells(
+        Ok(cells_to_m2(AszFields::new().asz_cells(
             &**env.env.map(),
             target,
             &sources,
@@ -947,8 +948,82 @@ fn asz_area(
     })
 }
 
+/// The arrays of `parallel_env`'s observation options (t2e/observations.py):
+/// for each row of spec vectors [A, 5 + 5N] and patches [A, 48, 48], the
+/// egocentric vector [A, 6 + 9N] and the patch max-pooled by `pool`
+/// [A, 48 / pool, 48 / pool]; with `flat`, the two in one float32 row
+/// [A, 6 + 9N + (48 / pool)^2] and no patch array.
+#[pyfunction]
+#[allow(clippy::type_complexity)]
+fn shaped_observations<'py>(
+    py: Python<'py>,
+    vectors: PyReadonlyArray2<'py, f32>,
+    patches: numpy::PyReadonlyArray3<'py, u8>,
+    pool: usize,
+    flat: bool,
+) -> PyResult<(Bound<'py, PyArray2<f32>>, Option<Bound<'py, PyArray3<u8>>>)> {
+    if ![1, 2, 3, 4, 6].contains(&pool) {
+        return Err(value_error("patch_pool", pool, "must be 1, 2, 3, 4 or 6"));
+    }
+    let (rows, len) = (vectors.shape()[0], vectors.shape()[1]);
+    if len < 5 || (len - 5) % 5 != 0 {
+        return Err(value_error(
+            "vectors",
+            format!("{len} numbers"),
+            "a spec vector has 5 + 5N numbers",
+        ));
+    }
+    if patches.shape() != [rows, PATCH, PATCH] {
+        return Err(value_error(
+            "patches",
+            format!("shape {:?}", patches.shape()),
+            format!("must be [{rows}, 48, 48]"),
+        ));
+    }
+    let (vectors, patches) = (vectors.as_array(), patches.as_array());
+    let width = egocentric_width((len - 5) / 5);
+    let side = PATCH / pool;
+    let row_len = if flat { width + side * side } else { width };
+    let mut out = vec![0f32; rows * row_len];
+    let mut pooled = vec![0u8; rows * side * side];
+    let mut vector = vec![0f32; len];
+    let mut patch = vec![0u8; PATCH * PATCH];
+    for r in 0..rows {
+        // Read in index order, whatever the arrays' memory layout.
+        vector
+            .iter_mut()
+            .zip(vectors.row(r))
+            .for_each(|(v, &x)| *v = x);
+        patch
+            .iter_mut()
+            .zip(patches.index_axis(numpy::ndarray::Axis(0), r).iter())
+            .for_each(|(p, &x)| *p = x);
+        egocentric_vector(&vector, &mut out[r * row_len..r * row_len + width]);
+        let cells = &mut pooled[r * side * side..(r + 1) * side * side];
+        pool_patch(&patch, pool, cells);
+        if flat {
+            for (o, &c) in out[r * row_len + width..(r + 1) * row_len]
+                .iter_mut()
+                .zip(cells.iter())
+            {
+                *o = c as f32;
+            }
+        }
+    }
+    let out = PyArray1::from_vec(py, out)
+        .reshape([rows, row_len])
+        .expect("rows x width values");
+    let pooled = (!flat).then(|| {
+        PyArray1::from_vec(py, pooled)
+            .reshape([rows, side, side])
+            .expect("rows x side x side values")
+    });
+    Ok((out, pooled))
+}
+
 #[pymodule]
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(shaped_observations, m)?)?;
     m.add_class::<Env>()?;
     m.add_class::<VectorEnv>()?;
     m.add_class::<Policy>()?;

@@ -105,3 +105,10 @@ def asz_area(
     target: Tuple[float, float],
     target_speed: float = 1.0,
 ) -> float: ...
+
+def shaped_observations(
+    vectors: npt.NDArray[np.float32],
+    patches: npt.NDArray[np.uint8],
+    pool: int,
+    flat: bool,
+) -> Tuple[npt.NDArray[np.float32], Optional[npt.NDArray[np.uint8]]]: ...

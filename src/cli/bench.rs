@@ -1,7 +1,7 @@
 //! `t2e-league bench`: speed of the environment, the ASZ and observations,
 //! printed as a table beside the reference implementation's figures.
 
-use crate::asz::FastMarching;
+use crate::asz::{AszFields, FastMarching};
 use crate::env::{Action, Controller, EnvConfig, Side, TrapEnv, VecEnv, PATCH_LEN};
 use crate::heuristics::{target_action, Heuristic};
 use crate::map::{self, PreparedMap};
@@ -426,6 +426,39 @@ pub fn run(args: BenchArgs) -> Result<()> {
                 unit: "ASZ/s",
                 reference: reference_ms.map(|ms: f64| 1000.0 / ms),
                 before_us: Some(before_us),
+            });
+            let mut fields = AszFields::new();
+            let per = measure(secs, || {
+                let (c, t) = &starts[i % starts.len()];
+                i += 1;
+                std::hint::black_box(fields.asz_cells(&*m, *t, c));
+                1
+            });
+            rows.push(Row {
+                what: format!("ASZ by per-robot fields (3 captors, random starts, every field marched) on {name}"),
+                per_op: per,
+                unit: "ASZ/s",
+                reference: reference_ms.map(|ms: f64| 1000.0 / ms),
+                before_us: None,
+            });
+            // The planner's case: the other robots' fields kept, one captor moved.
+            let (c, t) = &starts[0];
+            fields.asz_cells(&*m, *t, c);
+            let per = measure(secs, || {
+                // Alternate between two cells, so that the field is marched every time.
+                i += 1;
+                let moved = [c[0].pos[0] + 0.1 * (i % 2) as f64, c[0].pos[1]];
+                std::hint::black_box(fields.with_moved_captor(&*m, *t, c, 0, moved));
+                1
+            });
+            rows.push(Row {
+                what: format!(
+                    "ASZ by per-robot fields, one captor moved, the others' fields kept, on {name}"
+                ),
+                per_op: per,
+                unit: "ASZ/s",
+                reference: reference_ms.map(|ms: f64| 1000.0 / ms),
+                before_us: None,
             });
             let per = measure(secs, || {
                 let (c, t) = &starts[i % starts.len()];

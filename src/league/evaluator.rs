@@ -118,7 +118,7 @@ fn evaluate_pending(
                 capture_rule: CaptureRule::Fast,
                 soa_every: 0,
             };
-            let mut marching = crate::asz::FastMarching::new();
+            let mut asz_fields = crate::asz::AszFields::new();
             for episode in 0..cfg.evaluator.episodes {
                 if stop.load(Ordering::SeqCst) {
                     return Ok(played);
@@ -135,7 +135,7 @@ fn evaluate_pending(
                     continue;
                 }
                 let started = Instant::now();
-                let record = match play_episode(&setting, panel_maps, episode, &mut marching) {
+                let record = match play_episode(&setting, panel_maps, episode, &mut asz_fields) {
                     Ok(r) => r,
                     Err(e) => {
                         store.quarantine(

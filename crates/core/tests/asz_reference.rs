@@ -30,8 +30,12 @@ struct State {
 
 fn states_path() -> Option<PathBuf> {
     let from_gibson = gibson_dir().map(|g| g.join("../../reference-asz/asz-states.csv"));
-    let beside = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/reference-asz/asz-states.csv");
-    [from_gibson, Some(beside)].into_iter().flatten().find(|p| p.is_file())
+    let beside = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared/reference-asz/asz-states.csv");
+    [from_gibson, Some(beside)]
+        .into_iter()
+        .flatten()
+        .find(|p| p.is_file())
 }
 
 fn load() -> Option<(Vec<State>, BTreeMap<String, Arc<PreparedMap>>)> {
@@ -56,16 +60,31 @@ fn load() -> Option<(Vec<State>, BTreeMap<String, Arc<PreparedMap>>)> {
         ["c0_x", "c0_y", "c1_x", "c1_y", "c2_x", "c2_y", "t_x", "t_y"].map(col),
         col("asz_cells_reference"),
         col("mover"),
-        ["m0_x", "m0_y", "m1_x", "m1_y", "m2_x", "m2_y", "m3_x", "m3_y"].map(col),
-        ["asz_after_m0", "asz_after_m1", "asz_after_m2", "asz_after_m3"].map(col),
+        [
+            "m0_x", "m0_y", "m1_x", "m1_y", "m2_x", "m2_y", "m3_x", "m3_y",
+        ]
+        .map(col),
+        [
+            "asz_after_m0",
+            "asz_after_m1",
+            "asz_after_m2",
+            "asz_after_m3",
+        ]
+        .map(col),
     );
     let mut states = Vec::new();
     let mut maps = BTreeMap::new();
     for (line, record) in reader.records().enumerate() {
         let r = record.unwrap();
         let num = |i: usize| -> f64 {
-            r[i].parse()
-                .unwrap_or_else(|_| panic!("{} line {}: {:?} is not a number", path.display(), line + 2, &r[i]))
+            r[i].parse().unwrap_or_else(|_| {
+                panic!(
+                    "{} line {}: {:?} is not a number",
+                    path.display(),
+                    line + 2,
+                    &r[i]
+                )
+            })
         };
         let p = cols.2.map(num);
         let m = cols.5.map(num);
@@ -80,7 +99,9 @@ fn load() -> Option<(Vec<State>, BTreeMap<String, Arc<PreparedMap>>)> {
             reference_after: cols.6.map(num),
         };
         maps.entry(state.map.clone()).or_insert_with(|| {
-            Arc::new(PreparedMap::new(load_png(&gibson.join(&state.map)).unwrap()))
+            Arc::new(PreparedMap::new(
+                load_png(&gibson.join(&state.map)).unwrap(),
+            ))
         });
         states.push(state);
     }
@@ -98,10 +119,15 @@ fn measure(
         .iter()
         .map(|s| {
             let map = &maps[&s.map];
-            let target = Source { pos: s.target, speed: s.speed_ratio };
+            let target = Source {
+                pos: s.target,
+                speed: s.speed_ratio,
+            };
             let captors = s.captors.map(|pos| Source { pos, speed: 1.0 });
             let now = asz(map, target, &captors, None);
-            let after = s.moves.map(|pos| asz(map, target, &captors, Some((s.mover, pos))));
+            let after = s
+                .moves
+                .map(|pos| asz(map, target, &captors, Some((s.mover, pos))));
             (now, after)
         })
         .collect()
@@ -125,7 +151,12 @@ fn agreement(states: &[State], ours: &[(f64, [f64; 4])]) -> Agreement {
     rel.sort_by(f64::total_cmp);
     let pick = |v: &[f64; 4]| (0..4).min_by(|&a, &b| v[a].total_cmp(&v[b])).unwrap();
     let told_apart: Vec<usize> = (0..states.len())
-        .filter(|&i| states[i].reference_after.iter().any(|&v| v != states[i].reference_after[0]))
+        .filter(|&i| {
+            states[i]
+                .reference_after
+                .iter()
+                .any(|&v| v != states[i].reference_after[0])
+        })
         .collect();
     let picks_agree = told_apart
         .iter()
@@ -178,7 +209,11 @@ fn per_robot_fields_agree_with_the_reference_asz() {
         }
         march.asz_cells(map, target, &captors) as f64
     });
-    let exact = states.iter().zip(&ours).filter(|(s, (now, _))| *now == s.reference).count();
+    let exact = states
+        .iter()
+        .zip(&ours)
+        .filter(|(s, (now, _))| *now == s.reference)
+        .count();
     let exact_moves = states
         .iter()
         .zip(&ours)
@@ -189,9 +224,22 @@ fn per_robot_fields_agree_with_the_reference_asz() {
     report("per-robot fields", &fields_agreement);
     report("one-pass march", &agreement(&states, &one_pass));
     let a = fields_agreement;
-    assert!(a.median <= 0.003, "median relative difference {:.3}%", 100.0 * a.median);
-    assert!(a.p95 <= 0.02, "p95 relative difference {:.3}%", 100.0 * a.p95);
-    assert!(a.above_10 == 0, "{} states differ by more than 10% (worst {:.1}%)", a.above_10, 100.0 * a.worst);
+    assert!(
+        a.median <= 0.003,
+        "median relative difference {:.3}%",
+        100.0 * a.median
+    );
+    assert!(
+        a.p95 <= 0.02,
+        "p95 relative difference {:.3}%",
+        100.0 * a.p95
+    );
+    assert!(
+        a.above_10 == 0,
+        "{} states differ by more than 10% (worst {:.1}%)",
+        a.above_10,
+        100.0 * a.worst
+    );
     assert!(
         a.picks_agree as f64 >= 0.95 * a.picks_told_apart as f64,
         "picks agree in {} of {}",

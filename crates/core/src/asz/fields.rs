@@ -20,9 +20,8 @@
 //! reference starts its march at zero), and a robot's arrival time is its
 //! distance over its speed.
 
+use super::field_queue::FieldQueue;
 use super::{Lattice, Source};
-use std::cmp::Ordering;
-use std::collections::BinaryHeap;
 
 const FAR: u8 = 0;
 const TRIAL: u8 = 1;
@@ -40,32 +39,8 @@ pub struct DistanceField {
     distance: Vec<f64>,
     state: Vec<u8>,
     touched: Vec<u32>,
-    heap: BinaryHeap<Entry>,
-}
-
-/// A heap entry: smaller distance first, then smaller cell, so the march
-/// is the same whatever the heap's internal order.
-#[derive(Clone, Copy, PartialEq)]
-struct Entry {
-    distance: f64,
-    cell: u32,
-}
-
-impl Eq for Entry {}
-
-impl Ord for Entry {
-    fn cmp(&self, other: &Self) -> Ordering {
-        other
-            .distance
-            .total_cmp(&self.distance)
-            .then(other.cell.cmp(&self.cell))
-    }
-}
-
-impl PartialOrd for Entry {
-    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
-        Some(self.cmp(other))
-    }
+    queue: FieldQueue,
+    cell_size: f64,
 }
 
 /// 9/4: the weight of a two-point (second-order) difference.
@@ -106,10 +81,15 @@ impl DistanceField {
             self.lattice_id = lattice.lattice_id();
             self.stride = lattice.stride();
             self.distance.clear();
-            self.distance.resize(lattice.obstacle().len(), f64::INFINITY);
+            self.distance
+                .resize(lattice.obstacle().len(), f64::INFINITY);
             self.state.clear();
-            self.state
-                .extend(lattice.obstacle().iter().map(|&o| if o == 0 { FAR } else { WALL }));
+            self.state.extend(
+                lattice
+                    .obstacle()
+                    .iter()
+                    .map(|&o| if o == 0 { FAR } else { WALL }),
+            );
         } else {
             for &c in &self.touched {
                 self.distance[c as usize] = f64::INFINITY;
@@ -117,29 +97,60 @@ impl DistanceField {
             }
         }
         self.touched.clear();
-        self.heap.clear();
+        self.queue.reset(lattice.cell_size());
         self.origin = None;
     }
 
     /// Marches from the free cell `start` (padded index) over every free
     /// cell, or over the cells `allowed` marks (indexed like the lattice's
     /// padded cells; `start` must be one of them).
-    pub fn march<L: Lattice + ?Sized>(&mut self, lattice: &L, start: usize, allowed: Option<&[bool]>) {
+    pub fn march<L: Lattice + ?Sized>(
+        &mut self,
+        lattice: &L,
+        start: usize,
+        allowed: Option<&[bool]>,
+    ) {
+        self.start(lattice, start, allowed);
+        while self.step(f64::INFINITY, allowed).is_some() {}
+    }
+
+    /// Starts a march from `start` and settles that cell alone; `step`
+    /// settles the next ones. A march stopped part way has settled exactly
+    /// the cells a whole march settles first, with the same distances.
+    pub fn start<L: Lattice + ?Sized>(
+        &mut self,
+        lattice: &L,
+        start: usize,
+        allowed: Option<&[bool]>,
+    ) {
         self.prepare(lattice);
         if self.state[start] == WALL || allowed.is_some_and(|a| !a[start]) {
             return;
         }
         self.origin = allowed.is_none().then_some(start);
-        let h = lattice.cell_size();
-        let s = self.stride;
+        self.cell_size = lattice.cell_size();
         self.distance[start] = 0.0;
         self.state[start] = FROZEN;
         self.touched.push(start as u32);
-        self.relax_around(start, h, allowed);
-        while let Some(Entry { distance, cell }) = self.heap.pop() {
+        self.relax_around(start, self.cell_size, allowed);
+    }
+
+    /// Settles the next cell if its distance is at most `limit`; returns it.
+    pub fn step(&mut self, limit: f64, allowed: Option<&[bool]>) -> Option<usize> {
+        let h = self.cell_size;
+        let s = self.stride;
+        loop {
+            let (state, field) = (&self.state, &self.distance);
+            let (distance, cell) = self
+                .queue
+                .pop(|c| (state[c as usize] == TRIAL).then(|| field[c as usize]))?;
             let cell = cell as usize;
             if self.state[cell] != TRIAL || self.distance[cell] != distance {
                 continue; // superseded by a later update
+            }
+            if distance > limit {
+                self.queue.push(cell as u32, distance);
+                return None;
             }
             self.state[cell] = FROZEN;
             self.relax_around(cell, h, allowed);
@@ -155,7 +166,13 @@ impl DistanceField {
                     self.update(far, h);
                 }
             }
+            return Some(cell);
         }
+    }
+
+    /// Settles every cell of distance at most `limit`.
+    pub fn advance(&mut self, limit: f64) {
+        while self.step(limit, None).is_some() {}
     }
 
     /// Offers the not-yet-settled neighbours of `cell` a new distance.
@@ -169,7 +186,7 @@ impl DistanceField {
                         self.state[nb] = TRIAL;
                         self.touched.push(nb as u32);
                         self.distance[nb] = d;
-                        self.heap.push(Entry { distance: d, cell: nb as u32 });
+                        self.queue.push(nb as u32, d);
                     }
                 }
                 TRIAL => self.update(nb, h),
@@ -186,7 +203,7 @@ impl DistanceField {
         if let Some(d) = self.solve(cell, h) {
             if d != self.distance[cell] {
                 self.distance[cell] = d;
-                self.heap.push(Entry { distance: d, cell: cell as u32 });
+                self.queue.push(cell as u32, d);
             }
         }
     }
@@ -203,7 +220,10 @@ impl DistanceField {
             // The two sides in the reference's order: backward, then forward.
             // v2 is kept from the backward side when the forward side wins
             // without a far point of its own, as the reference's loop does.
-            for (near, far) in [(cell - step, cell - 2 * step), (cell + step, cell + 2 * step)] {
+            for (near, far) in [
+                (cell - step, cell - 2 * step),
+                (cell + step, cell + 2 * step),
+            ] {
                 if self.state[near] == FROZEN && self.distance[near] < v1 {
                     v1 = self.distance[near];
                     if self.state[far] == FROZEN && self.distance[far] <= v1 {
@@ -231,6 +251,13 @@ impl DistanceField {
 
 /// Per-robot arrival fields and the ASZ they give, with their buffers. A
 /// robot's field is kept while it stays in the same cell of the same map.
+///
+/// Each field is marched only as far as the answer needs: the target's
+/// cells are found in the order of its arrival time, each settled against
+/// the captors' fields marched up to that time, and a march stopped part
+/// way holds exactly the first cells of the whole march, with the same
+/// distances. So the count is that of whole fields, at the cost of the
+/// fields up to the time the target's region closes.
 #[derive(Default)]
 pub struct AszFields {
     /// Captor fields first, then the target's.
@@ -239,8 +266,50 @@ pub struct AszFields {
     candidate: DistanceField,
     /// The target's second march, confined to its cells.
     confined: DistanceField,
+    search: RegionSearch,
+    /// The captors' speeds of the last call.
+    captor_speeds: Vec<f64>,
+}
+
+/// The buffers of the search for the target's region.
+#[derive(Default)]
+struct RegionSearch {
+    /// Per padded cell: in the target's region.
     region: Vec<bool>,
     region_cells: Vec<u32>,
+    /// Per padded cell: offered to the search already.
+    seen: Vec<bool>,
+    seen_cells: Vec<u32>,
+    /// Cells offered before the target's field settled them.
+    waiting: Vec<bool>,
+    waiting_count: usize,
+    candidates: std::collections::BinaryHeap<Candidate>,
+    /// The ASZ's cells of the last call.
+    asz: Vec<u32>,
+}
+
+/// A cell to settle, smallest target time first, then smallest index.
+#[derive(Clone, Copy, PartialEq)]
+struct Candidate {
+    distance: f64,
+    cell: u32,
+}
+
+impl Eq for Candidate {}
+
+impl Ord for Candidate {
+    fn cmp(&self, other: &Self) -> std::cmp::Ordering {
+        other
+            .distance
+            .total_cmp(&self.distance)
+            .then(other.cell.cmp(&self.cell))
+    }
+}
+
+impl PartialOrd for Candidate {
+    fn partial_cmp(&self, other: &Self) -> Option<std::cmp::Ordering> {
+        Some(self.cmp(other))
+    }
 }
 
 impl AszFields {
@@ -249,29 +318,69 @@ impl AszFields {
     }
 
     /// |ASZ| in cells: the target's connected part of the free cells it
-    /// reaches strictly before every captor. 0 when the target stands on no
-    /// free cell; captors on no free cell reach nothing.
-    pub fn asz_cells<L: Lattice + ?Sized>(&mut self, lattice: &L, target: Source, captors: &[Source]) -> usize {
+    /// reaches strictly before every captor, then only those its march
+    /// inside that part still reaches first (the reference's second pass).
+    /// 0 when the target stands on no free cell; a captor on no free cell
+    /// reaches nothing.
+    pub fn asz_cells<L: Lattice + ?Sized>(
+        &mut self,
+        lattice: &L,
+        target: Source,
+        captors: &[Source],
+    ) -> usize {
         let k = captors.len();
         self.fields.resize_with(k + 1, DistanceField::new);
+        self.captor_speeds.clear();
+        self.captor_speeds.extend(captors.iter().map(|c| c.speed));
+        self.search.asz.clear();
         let Some((target_cell, _)) = lattice.locate(target.pos) else {
             return 0;
         };
         for (i, src) in captors.iter().chain(std::iter::once(&target)).enumerate() {
             refresh(&mut self.fields[i], lattice, src.pos);
         }
-        let (captor_fields, target_field) = self.fields.split_at(k);
-        let speeds: Vec<f64> = captors.iter().map(|c| c.speed).collect();
-        count(
+        let (captor_fields, target_field) = self.fields.split_at_mut(k);
+        let mut captor_fields: Vec<&mut DistanceField> = captor_fields.iter_mut().collect();
+        self.search.run(
             lattice,
-            &target_field[0],
+            &mut target_field[0],
             target.speed,
             target_cell,
-            |cell| earliest(captor_fields.iter().zip(&speeds), cell),
-            &mut self.region,
-            &mut self.region_cells,
+            &mut captor_fields,
+            &self.captor_speeds,
             &mut self.confined,
         )
+    }
+
+    /// After `asz_cells`: every cell some robot's field settled, with the
+    /// robot it belongs to: the target (label K) on the ASZ's cells,
+    /// elsewhere the captor that arrives first (ties to the lower index).
+    /// For drawing: the whole fields are marched first.
+    pub fn regions(&mut self) -> Vec<(usize, u8)> {
+        let k = self.captor_speeds.len();
+        for field in &mut self.fields[..k] {
+            field.advance(f64::INFINITY);
+        }
+        let asz = &self.search.asz;
+        let mut out: Vec<(usize, u8)> = asz.iter().map(|&c| (c as usize, k as u8)).collect();
+        let in_asz: std::collections::HashSet<u32> = asz.iter().copied().collect();
+        let mut seen = std::collections::HashSet::new();
+        for field in &self.fields[..k] {
+            for cell in field.settled() {
+                if in_asz.contains(&(cell as u32)) || !seen.insert(cell) {
+                    continue;
+                }
+                let (mut best, mut label) = (f64::INFINITY, 0u8);
+                for (i, (f, &v)) in self.fields[..k].iter().zip(&self.captor_speeds).enumerate() {
+                    let t = f.at(cell) / v;
+                    if t < best {
+                        (best, label) = (t, i as u8);
+                    }
+                }
+                out.push((cell, label));
+            }
+        }
+        out
     }
 
     /// |ASZ| in cells with captor `moved` at `pos` instead: the other
@@ -286,80 +395,162 @@ impl AszFields {
         pos: [f64; 2],
     ) -> usize {
         let k = captors.len();
-        debug_assert_eq!(self.fields.len(), k + 1, "call asz_cells first");
+        assert_eq!(
+            self.fields.len(),
+            k + 1,
+            "with_moved_captor: call asz_cells with these robots first"
+        );
+        self.search.asz.clear();
         let Some((target_cell, _)) = lattice.locate(target.pos) else {
             return 0;
         };
         refresh(&mut self.candidate, lattice, pos);
-        let candidate = &self.candidate;
-        let (captor_fields, target_field) = self.fields.split_at(k);
-        count(
+        let (kept, target_field) = self.fields.split_at_mut(k);
+        let mut candidate = Some(&mut self.candidate);
+        let mut captor_fields: Vec<&mut DistanceField> = Vec::with_capacity(k);
+        for (i, field) in kept.iter_mut().enumerate() {
+            captor_fields.push(if i == moved {
+                candidate.take().expect("one moved captor")
+            } else {
+                field
+            });
+        }
+        self.search.run(
             lattice,
-            &target_field[0],
+            &mut target_field[0],
             target.speed,
             target_cell,
-            |cell| {
-                let mut best = f64::INFINITY;
-                for (i, (field, src)) in captor_fields.iter().zip(captors).enumerate() {
-                    let field = if i == moved { candidate } else { field };
-                    best = best.min(field.at(cell) / src.speed);
-                }
-                best
-            },
-            &mut self.region,
-            &mut self.region_cells,
+            &mut captor_fields,
+            &self.captor_speeds,
             &mut self.confined,
         )
     }
 }
 
-/// Re-marches `field` unless it already starts from `pos`'s cell.
+/// Keeps `field` if it already starts from `pos`'s cell (marched as far as
+/// it was), else starts it there.
 fn refresh<L: Lattice + ?Sized>(field: &mut DistanceField, lattice: &L, pos: [f64; 2]) {
     match lattice.locate(pos) {
         Some((cell, _)) if field.is_from(lattice, cell) => {}
-        Some((cell, _)) => field.march(lattice, cell, None),
+        Some((cell, _)) => field.start(lattice, cell, None),
         // A robot on no free cell reaches nothing: an empty field.
         None => field.prepare(lattice),
     }
 }
 
-fn earliest<'a>(fields: impl Iterator<Item = (&'a DistanceField, &'a f64)>, cell: usize) -> f64 {
-    fields.fold(f64::INFINITY, |best, (f, &speed)| best.min(f.at(cell) / speed))
-}
-
-/// The target's cells (its time strictly below `captor_time`), then its
-/// second march confined to them, counting the cells it still reaches
-/// strictly first.
-#[allow(clippy::too_many_arguments)]
-fn count<L: Lattice + ?Sized>(
-    lattice: &L,
-    target_field: &DistanceField,
-    target_speed: f64,
-    target_cell: usize,
-    captor_time: impl Fn(usize) -> f64,
-    region: &mut Vec<bool>,
-    region_cells: &mut Vec<u32>,
-    confined: &mut DistanceField,
-) -> usize {
-    let n = lattice.stride() * lattice.stride();
-    region.resize(n, false);
-    for &c in region_cells.iter() {
-        region[c as usize] = false;
-    }
-    region_cells.clear();
-    for cell in target_field.settled() {
-        if target_field.at(cell) / target_speed < captor_time(cell) {
-            region[cell] = true;
-            region_cells.push(cell as u32);
+impl RegionSearch {
+    fn reset(&mut self, n: usize) {
+        for buffer in [&mut self.region, &mut self.seen, &mut self.waiting] {
+            buffer.resize(n, false);
         }
+        for &c in &self.region_cells {
+            self.region[c as usize] = false;
+        }
+        for &c in &self.seen_cells {
+            self.seen[c as usize] = false;
+            self.waiting[c as usize] = false;
+        }
+        self.region_cells.clear();
+        self.seen_cells.clear();
+        self.waiting_count = 0;
+        self.candidates.clear();
+        self.asz.clear();
     }
-    if !region[target_cell] {
-        return 0;
+
+    /// Whether some captor reaches `cell` no later than `time`, its field
+    /// marched that far first (ties go to the captors).
+    fn captor_first(
+        captors: &mut [&mut DistanceField],
+        speeds: &[f64],
+        cell: usize,
+        time: f64,
+    ) -> bool {
+        captors.iter_mut().zip(speeds).any(|(field, &speed)| {
+            field.advance(time * speed);
+            field.at(cell) / speed <= time
+        })
     }
-    confined.march(lattice, target_cell, Some(region));
-    region_cells
-        .iter()
-        .map(|&c| c as usize)
-        .filter(|&c| confined.at(c) / target_speed < captor_time(c))
-        .count()
+
+    /// The target's region (its connected part of the cells it reaches
+    /// strictly first), searched in the order of its arrival time; then the
+    /// second march inside it. Fills `asz`; returns its size.
+    #[allow(clippy::too_many_arguments)]
+    fn run<L: Lattice + ?Sized>(
+        &mut self,
+        lattice: &L,
+        target: &mut DistanceField,
+        target_speed: f64,
+        target_cell: usize,
+        captors: &mut [&mut DistanceField],
+        speeds: &[f64],
+        confined: &mut DistanceField,
+    ) -> usize {
+        let stride = lattice.stride();
+        let free = lattice.obstacle();
+        self.reset(free.len());
+        if target.at(target_cell) != 0.0 {
+            return 0;
+        }
+        self.seen[target_cell] = true;
+        self.seen_cells.push(target_cell as u32);
+        self.candidates.push(Candidate {
+            distance: 0.0,
+            cell: target_cell as u32,
+        });
+        loop {
+            // Cells offered before the target's field reached them join the
+            // candidates once it settles them, before any later candidate.
+            let bound = self.candidates.peek().map_or(f64::INFINITY, |c| c.distance);
+            while self.waiting_count > 0 {
+                let Some(cell) = target.step(bound, None) else {
+                    break;
+                };
+                if self.waiting[cell] {
+                    self.waiting[cell] = false;
+                    self.waiting_count -= 1;
+                    self.candidates.push(Candidate {
+                        distance: target.at(cell),
+                        cell: cell as u32,
+                    });
+                }
+            }
+            let Some(Candidate { distance, cell }) = self.candidates.pop() else {
+                break;
+            };
+            let cell = cell as usize;
+            if Self::captor_first(captors, speeds, cell, distance / target_speed) {
+                continue;
+            }
+            self.region[cell] = true;
+            self.region_cells.push(cell as u32);
+            for nb in [cell - 1, cell + 1, cell - stride, cell + stride] {
+                if free[nb] != 0 || self.seen[nb] {
+                    continue;
+                }
+                self.seen[nb] = true;
+                self.seen_cells.push(nb as u32);
+                let d = target.at(nb);
+                if d.is_finite() {
+                    self.candidates.push(Candidate {
+                        distance: d,
+                        cell: nb as u32,
+                    });
+                } else {
+                    self.waiting[nb] = true;
+                    self.waiting_count += 1;
+                }
+            }
+        }
+        if !self.region[target_cell] {
+            return 0;
+        }
+        confined.march(lattice, target_cell, Some(&self.region));
+        for &c in &self.region_cells {
+            let c = c as usize;
+            if !Self::captor_first(captors, speeds, c, confined.at(c) / target_speed) {
+                self.asz.push(c as u32);
+            }
+        }
+        self.asz.len()
+    }
 }

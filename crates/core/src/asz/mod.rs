@@ -11,6 +11,7 @@
 //! closed in, so a nearly trapped target costs almost nothing.
 
 mod coarse;
+mod field_queue;
 mod fields;
 
 pub use coarse::CoarseLattice;

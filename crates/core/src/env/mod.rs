@@ -6,6 +6,7 @@
 pub mod action;
 pub mod config;
 pub mod controller;
+pub mod features;
 pub mod observe;
 pub mod physics;
 pub mod placement;
@@ -20,7 +21,7 @@ pub use physics::Robot;
 pub use placement::PlacementError;
 pub use vec_env::VecEnv;
 
-use crate::asz::{strict_capture_cells, FastMarching, Source};
+use crate::asz::{strict_capture_cells, AszFields, Source};
 use crate::error::{ConfigError, EnvError};
 use crate::map::PreparedMap;
 use physics::dist;
@@ -114,7 +115,7 @@ pub struct TrapEnv {
     dist_change: Vec<f64>,
     contact: Vec<bool>,
     collided: Vec<bool>,
-    marching: Option<FastMarching>,
+    asz_fields: Option<AszFields>,
 }
 
 impl TrapEnv {
@@ -141,7 +142,7 @@ impl TrapEnv {
             dist_change: vec![0.0; cfg.num_captors],
             contact: vec![false; cfg.num_captors],
             collided: vec![false; n],
-            marching: None,
+            asz_fields: None,
             cfg,
         })
     }
@@ -349,7 +350,7 @@ impl TrapEnv {
     /// |ASZ| (cells) of the current state.
     pub fn asz_cells(&mut self) -> usize {
         let (captors, target) = self.asz_sources();
-        let fm = self.marching.get_or_insert_with(FastMarching::new);
-        fm.asz_cells(&*self.map, target, &captors)
+        let fields = self.asz_fields.get_or_insert_with(AszFields::new);
+        fields.asz_cells(&*self.map, target, &captors)
     }
 }

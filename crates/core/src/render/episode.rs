@@ -13,7 +13,7 @@
 use super::font::{draw_text, text_size};
 use super::map_image::{FREE_COLOR, OBSTACLE_COLOR};
 use super::raster::{draw_circle, draw_line, fill_disc, fill_rect, mix};
-use crate::asz::{cells_to_m2, FastMarching};
+use crate::asz::{cells_to_m2, AszFields};
 use crate::env::config::{PROBE_DIST, RADIUS};
 use crate::env::{Action, Controller, Side, TrapEnv};
 use crate::map::prepared::PAD;
@@ -262,18 +262,13 @@ fn base_image(grid: &Grid, l: &FrameLayout) -> RgbImage {
     img
 }
 
-/// Labels every free cell with the robot that reaches it first (a full
-/// multi-label march: captors 0..K, the target K) and returns |ASZ| in cells.
-/// The target's region of a full march is the same as the stopped march of
-/// `FastMarching::asz_cells` (a target-labelled cell is only ever proposed
-/// from a settled target cell), so the count matches `TrapEnv::asz_cells`.
-fn march_regions(fm: &mut FastMarching, env: &TrapEnv) -> usize {
+/// |ASZ| in cells of the current state, and every reached cell labelled
+/// with its robot (captors 0..K, the target K on the ASZ's cells): the
+/// per-robot fields of `TrapEnv::asz_cells`, so the count is the env's.
+fn asz_regions(fields: &mut AszFields, env: &TrapEnv) -> (usize, Vec<(usize, u8)>) {
     let (captors, target) = env.asz_sources();
-    let k = captors.len() as u8;
-    let mut sources = captors;
-    sources.push(target);
-    fm.march(&**env.map(), &sources, None);
-    fm.settled().filter(|&(_, label)| label == k).count()
+    let cells = fields.asz_cells(&**env.map(), target, &captors);
+    (cells, fields.regions())
 }
 
 /// Per-step state kept for drawing.
@@ -281,7 +276,7 @@ struct Painter {
     layout: FrameLayout,
     base: RgbImage,
     map: Arc<PreparedMap>,
-    fm: FastMarching,
+    fields: AszFields,
     trails: Vec<VecDeque<[f64; 2]>>,
     footer: String,
     show_asz: bool,
@@ -301,7 +296,7 @@ impl Painter {
             base: base_image(&map.grid, &layout),
             layout,
             map,
-            fm: FastMarching::new(),
+            fields: AszFields::new(),
             trails: vec![VecDeque::with_capacity(TRAIL_STEPS + 1); env.num_agents()],
             footer,
             show_asz: opts.show_asz,
@@ -321,14 +316,14 @@ impl Painter {
 
     /// Draws the current state; returns the frame and |ASZ| in cells.
     fn frame(&mut self, env: &TrapEnv) -> (RgbImage, usize) {
-        let asz = march_regions(&mut self.fm, env);
+        let (asz, regions) = asz_regions(&mut self.fields, env);
         let l = &self.layout;
         let mut img = self.base.clone();
         let k = env.num_captors();
         let s = l.scale as i64;
         if self.show_asz {
             let stride = self.map.stride;
-            for (cell, label) in self.fm.settled() {
+            for (cell, label) in regions {
                 let (color, alpha) = if label as usize == k {
                     (ASZ_COLOR, ASZ_ALPHA)
                 } else {
@@ -859,12 +854,21 @@ mod tests {
     }
 
     #[test]
-    fn full_march_count_matches_env_asz() {
+    fn drawn_regions_count_the_env_asz() {
         let mut env = env(10);
-        let mut fm = FastMarching::new();
+        let mut fields = AszFields::new();
+        let drawn = |fields: &mut AszFields, env: &TrapEnv| {
+            let (cells, regions) = asz_regions(fields, env);
+            let target_label = env.num_captors() as u8;
+            assert_eq!(
+                regions.iter().filter(|&&(_, l)| l == target_label).count(),
+                cells
+            );
+            cells
+        };
         for seed in 0..5 {
             env.reset_state(seed).unwrap();
-            assert_eq!(march_regions(&mut fm, &env), env.asz_cells(), "seed {seed}");
+            assert_eq!(drawn(&mut fields, &env), env.asz_cells(), "seed {seed}");
         }
         // A target boxed in by captors: small ASZ.
         let t = [0.5, 0.0];
@@ -887,7 +891,7 @@ mod tests {
             },
         ];
         env.set_robots(0, robots);
-        assert_eq!(march_regions(&mut fm, &env), env.asz_cells());
+        assert_eq!(drawn(&mut fields, &env), env.asz_cells());
     }
 
     #[test]

@@ -2,7 +2,7 @@
 //! setting, in parallel, summarised as Time, SR (with a 95% Wilson interval),
 //! Path Len and the size of the Absolutely Safe Zone over time (SoA).
 
-use crate::asz::{cells_to_m2, FastMarching};
+use crate::asz::{cells_to_m2, AszFields};
 use crate::controllers::ControllerError;
 use crate::controllers::ControllerSpec;
 use crate::env::vec_env::episode_seed;
@@ -268,7 +268,7 @@ pub fn play_episode(
     setting: &EvalSetting,
     maps: &Arc<Vec<Arc<PreparedMap>>>,
     episode: usize,
-    marching: &mut FastMarching,
+    asz_fields: &mut AszFields,
 ) -> anyhow::Result<EpisodeRecord> {
     let mut env = TrapEnv::new(setting.env_config(), maps.clone()).map_err(anyhow::Error::msg)?;
     let mut captors = setting
@@ -287,12 +287,12 @@ pub fn play_episode(
     let mut actions = vec![Action::Stop; k + 1];
     let mut rewards = vec![0f32; k + 1];
     let mut soa = Vec::new();
-    let measure = |env: &TrapEnv, marching: &mut FastMarching| {
+    let measure = |env: &TrapEnv, asz_fields: &mut AszFields| {
         let (c, t) = env.asz_sources();
-        cells_to_m2(marching.asz_cells(&**env.map(), t, &c))
+        cells_to_m2(asz_fields.asz_cells(&**env.map(), t, &c))
     };
     if setting.soa_every > 0 {
-        soa.push(measure(&env, marching));
+        soa.push(measure(&env, asz_fields));
     }
     while !env.is_done() {
         captors.act(&env, Side::Captors, &mut actions[..k]);
@@ -301,7 +301,7 @@ pub fn play_episode(
         if setting.soa_every > 0 && env.steps % setting.soa_every == 0 {
             soa.push(match info.asz_cells {
                 Some(c) => cells_to_m2(c),
-                None => measure(&env, marching),
+                None => measure(&env, asz_fields),
             });
         }
     }
@@ -360,7 +360,7 @@ pub fn run(
     };
     let records = (0..setting.episodes)
         .into_par_iter()
-        .map_init(FastMarching::new, |fm, i| {
+        .map_init(AszFields::new, |fm, i| {
             let r = play_episode(setting, maps, i, fm);
             bar.inc(1);
             r

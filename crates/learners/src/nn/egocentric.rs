@@ -179,6 +179,33 @@ mod tests {
         }
     }
 
+    /// The core's one-robot version (Python's observation options) gives
+    /// the same numbers as the network's batched one.
+    #[test]
+    fn the_core_egocentric_vector_is_the_networks() {
+        use crate::env::features::{egocentric_vector, egocentric_width};
+        let robots = [
+            robot([2.0, 3.0], [0.4, -0.2], 0.3),
+            robot([4.0, 1.0], [-0.1, 0.7], 2.0),
+            robot([2.5, 5.0], [0.0, 0.0], -1.0),
+            robot([2.5, 5.0], [0.6, 0.6], 1.1),
+        ];
+        let ego = EgocentricVector::new(20, 1);
+        for i in 0..4 {
+            let mut v = vec![0f32; 20];
+            write_vector(&robots, i, 3, &mut v);
+            let batched =
+                Vec::<f32>::try_from(ego.apply(&Tensor::from_slice(&v).unsqueeze(0)).view([-1]))
+                    .unwrap();
+            let mut one = vec![0f32; egocentric_width(3)];
+            egocentric_vector(&v, &mut one);
+            assert_eq!(one.len(), batched.len());
+            for (k, (a, b)) in one.iter().zip(&batched).enumerate() {
+                assert!((a - b).abs() < 1e-6, "robot {i}, feature {k}: {a} != {b}");
+            }
+        }
+    }
+
     /// Turning the whole scene about the origin changes the robot's own
     /// position and heading but none of the other features.
     #[test]

@@ -13,6 +13,8 @@ pub mod prior;
 pub mod run_dir;
 pub mod stacked;
 
+/// Pooling happens once per observation, outside the network.
+pub use crate::env::features::pool_patch;
 pub use checkpoint::{CheckpointController, CheckpointMeta, PolicySnapshot};
 pub(crate) use egocentric::EgocentricVector;
 
@@ -572,28 +574,6 @@ pub fn sample(p: &[f32], rng: &mut rand_chacha::ChaCha8Rng) -> usize {
         u -= x;
     }
     p.len() - 1
-}
-
-/// Max-pools a 48x48 patch by `pool` into `out` ((48 / pool)^2 bytes): a
-/// pooled pixel is obstacle if any cell under it is. Done once per
-/// observation, outside the network, so training never re-pools.
-pub fn pool_patch(patch: &[u8], pool: usize, out: &mut [u8]) {
-    if pool == 1 {
-        out.copy_from_slice(patch);
-        return;
-    }
-    let side = PATCH / pool;
-    for (r, row) in out.chunks_exact_mut(side).enumerate() {
-        row.fill(0);
-        for dr in 0..pool {
-            let src = &patch[(r * pool + dr) * PATCH..(r * pool + dr + 1) * PATCH];
-            for (c, o) in row.iter_mut().enumerate() {
-                for &x in &src[c * pool..(c + 1) * pool] {
-                    *o |= x;
-                }
-            }
-        }
-    }
 }
 
 /// Observations of `rows` robots as network inputs on `device`: pooled

@@ -1,0 +1,96 @@
+//! The priority queue of a per-robot field's march (`fields.rs`): pops
+//! (distance, cell) in the order a binary heap would, smallest distance
+//! first and then smallest cell, at a fraction of its cost.
+//!
+//! Every distance offered lies within one cell size of the last one
+//! settled (an upwind update adds at most h to a settled neighbour), so a
+//! ring of buckets, each 1/32 of a cell wide, holds the whole front. Ring
+//! buckets hold cell indices only; when a bucket comes up, the cells whose
+//! current distance falls in it are sorted, so the order within it is
+//! exact. An offer that lands in the bucket being settled (or below it, as
+//! a second-order update can) is inserted in that sorted list. Entries
+//! whose cell has since changed are skipped by the caller's check.
+
+const RING: usize = 64;
+const BUCKETS_PER_CELL: f64 = 32.0;
+
+#[derive(Default)]
+pub(super) struct FieldQueue {
+    inv_width: f64,
+    /// Absolute index of the bucket in `current`.
+    cur: usize,
+    ring: Vec<Vec<u32>>,
+    ring_len: usize,
+    /// The bucket being settled, sorted with the smallest entry last.
+    current: Vec<(f64, u32)>,
+}
+
+impl FieldQueue {
+    pub(super) fn reset(&mut self, cell_size: f64) {
+        self.inv_width = BUCKETS_PER_CELL / cell_size;
+        self.cur = 0;
+        self.ring_len = 0;
+        self.current.clear();
+        self.ring.resize_with(RING, Vec::new);
+        for b in &mut self.ring {
+            b.clear();
+        }
+    }
+
+    #[inline]
+    fn bucket(&self, distance: f64) -> usize {
+        // Distances are finite and non-negative; the cast saturates.
+        ((distance * self.inv_width) as usize).min(self.cur + RING - 1)
+    }
+
+    #[inline]
+    pub(super) fn push(&mut self, cell: u32, distance: f64) {
+        let b = self.bucket(distance);
+        if b <= self.cur {
+            let entry = (distance, cell);
+            let at = self.current.partition_point(|&e| later(e, entry));
+            self.current.insert(at, entry);
+        } else {
+            self.ring[b % RING].push(cell);
+            self.ring_len += 1;
+        }
+    }
+
+    /// The next (distance, cell); `distance_of` gives a cell's current
+    /// trial distance (None when it is no longer a trial cell), so a
+    /// bucket takes only the cells whose distance still falls in it.
+    #[inline]
+    pub(super) fn pop(&mut self, distance_of: impl Fn(u32) -> Option<f64>) -> Option<(f64, u32)> {
+        loop {
+            if let Some(entry) = self.current.pop() {
+                return Some(entry);
+            }
+            if self.ring_len == 0 {
+                return None;
+            }
+            self.cur += 1;
+            let slot = self.cur % RING;
+            let mut bucket = std::mem::take(&mut self.ring[slot]);
+            self.ring_len -= bucket.len();
+            for &cell in &bucket {
+                if let Some(d) = distance_of(cell) {
+                    if self.bucket(d) == self.cur {
+                        self.current.push((d, cell));
+                    }
+                }
+            }
+            self.current
+                .sort_unstable_by(|&a, &b| b.0.total_cmp(&a.0).then(b.1.cmp(&a.1)));
+            // A cell offered twice into this bucket appears twice.
+            self.current.dedup();
+            bucket.clear();
+            self.ring[slot] = bucket;
+        }
+    }
+}
+
+/// Whether `a` pops after `b`.
+#[inline]
+fn later(a: (f64, u32), b: (f64, u32)) -> bool {
+    a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)).is_gt()
+}
