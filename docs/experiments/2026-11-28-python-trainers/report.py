@@ -104,7 +104,8 @@ def main():
 
     text = "\n".join(lines) + "\n"
     print(text)
-    (cli.out / "tables.md").write_text(text)
+    title = "# Stable-Baselines3 and the project's example: the tables report.py writes\n\n"
+    (cli.out / "tables.md").write_text(title + text)
 
     import matplotlib
 
