@@ -18,7 +18,8 @@ bin=./target/release/t2e-league
 out=runs/default
 rm -rf "$out"
 $bin maps list --maps shipped
-$bin eval --maps shipped --k 3 --speed-ratio 1.0 --episodes 200 --episode-length 500 --seed 0 --out $out/heuristics
+# SoA every 10th step: the per-robot fields cost several ms a step.
+$bin eval --maps shipped --k 3 --speed-ratio 1.0 --episodes 200 --episode-length 500 --seed 0 --soa-every 10 --out $out/heuristics
 $bin render --maps shipped --seed 3 --every 2 --out $out/episode.gif
 $bin run --config configs/league-default.toml --dir $out/league
 $bin status --dir $out/league --plot $out/league.png | tee $out/status.txt
