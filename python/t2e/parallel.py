@@ -124,6 +124,8 @@ class T2EParallelEnv(ParallelEnv):
         if len(self._opponents) == 2:
             raise ValueError("captors and target: both sides played by built-in opponents leaves no agent to act")
         self.possible_agents = [a for a in self._all_agents if _side(a) not in self._opponents]
+        # The rows of the env's arrays that are this env's agents.
+        self._rows = [self._index[a] for a in self.possible_agents]
         self.agents: list[str] = []
         self._last = None
         self._captured = False
@@ -234,9 +236,11 @@ class T2EParallelEnv(ParallelEnv):
             self._window.close()
 
     def _observations(self, vectors: np.ndarray, patches: np.ndarray):
-        # Opponents read the spec's observations whatever this env hands out.
-        self._last = {a: {"patch": patches[i], "vector": vectors[i]} for i, a in enumerate(self._all_agents)}
-        mine = [self._index[a] for a in self.possible_agents]
+        # A loaded policy playing a side reads the spec's observations,
+        # whatever this env hands out; controllers read the env itself.
+        if any(not isinstance(o, Policy) for o in self._opponents.values()):
+            self._last = {a: {"patch": patches[i], "vector": vectors[i]} for i, a in enumerate(self._all_agents)}
+        mine = self._rows
         shaped = obs.build(self.observation, self.patch_pool, vectors[mine], patches[mine])
         return dict(zip(self.possible_agents, shaped))
 

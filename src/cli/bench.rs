@@ -435,7 +435,9 @@ pub fn run(args: BenchArgs) -> Result<()> {
                 1
             });
             rows.push(Row {
-                what: format!("ASZ by per-robot fields (3 captors, random starts, no field kept) on {name}"),
+                what: format!(
+                    "ASZ by per-robot fields (3 captors, random starts, no field kept) on {name}"
+                ),
                 per_op: per,
                 unit: "ASZ/s",
                 reference: reference_ms.map(|ms: f64| 1000.0 / ms),

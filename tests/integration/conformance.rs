@@ -13,12 +13,11 @@
 
 use flate2::read::GzDecoder;
 use std::collections::BTreeMap;
-use std::path::PathBuf;
 use std::sync::{Arc, OnceLock};
 use t2e::env::physics::{target_is_trapped, Robot};
 use t2e::env::{Action, EnvConfig, TrapEnv};
 use t2e::heuristics::{expert_captor_action, target_action};
-use t2e::map::catalog::gibson_dir;
+use t2e::map::catalog::{gibson_dir, shared_file};
 use t2e::map::{load_png, PreparedMap};
 
 const K: usize = 3;
@@ -40,16 +39,6 @@ struct Traces {
     maps: BTreeMap<String, Arc<PreparedMap>>,
 }
 
-fn traces_path() -> Option<PathBuf> {
-    let from_gibson = gibson_dir().map(|g| g.join("../../reference-traces/reference-steps.csv.gz"));
-    let beside = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../shared/reference-traces/reference-steps.csv.gz");
-    [from_gibson, Some(beside)]
-        .into_iter()
-        .flatten()
-        .find(|p| p.is_file())
-}
-
 /// The traces and their maps, read once per test binary; None (after a
 /// note) outside CI when ../shared is absent.
 fn traces() -> Option<&'static Traces> {
@@ -58,7 +47,10 @@ fn traces() -> Option<&'static Traces> {
 }
 
 fn load_traces() -> Option<Traces> {
-    let (Some(path), Some(gibson)) = (traces_path(), gibson_dir()) else {
+    let (Some(path), Some(gibson)) = (
+        shared_file("reference-traces/reference-steps.csv.gz"),
+        gibson_dir(),
+    ) else {
         if std::env::var_os("CI").is_some() {
             panic!("reference traces or Gibson maps not found (../shared) and CI is set");
         }

@@ -11,10 +11,9 @@
 //!   are not all equal.
 
 use std::collections::BTreeMap;
-use std::path::PathBuf;
 use std::sync::Arc;
 use t2e_core::asz::{AszFields, FastMarching, Source};
-use t2e_core::map::catalog::gibson_dir;
+use t2e_core::map::catalog::{gibson_dir, shared_file};
 use t2e_core::map::{load_png, PreparedMap};
 
 struct State {
@@ -28,18 +27,9 @@ struct State {
     reference_after: [f64; 4],
 }
 
-fn states_path() -> Option<PathBuf> {
-    let from_gibson = gibson_dir().map(|g| g.join("../../reference-asz/asz-states.csv"));
-    let beside = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/reference-asz/asz-states.csv");
-    [from_gibson, Some(beside)]
-        .into_iter()
-        .flatten()
-        .find(|p| p.is_file())
-}
-
 fn load() -> Option<(Vec<State>, BTreeMap<String, Arc<PreparedMap>>)> {
-    let (Some(path), Some(gibson)) = (states_path(), gibson_dir()) else {
+    let (Some(path), Some(gibson)) = (shared_file("reference-asz/asz-states.csv"), gibson_dir())
+    else {
         if std::env::var_os("CI").is_some() {
             panic!("../shared/reference-asz or the Gibson maps not found and CI is set");
         }

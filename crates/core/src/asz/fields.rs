@@ -262,7 +262,8 @@ impl DistanceField {
 pub struct AszFields {
     /// Captor fields first, then the target's.
     fields: Vec<DistanceField>,
-    /// A moved captor's field, for the planner's candidate moves.
+    /// A moved captor's field (`with_moved_captor`), apart from the one of
+    /// its own cell.
     candidate: DistanceField,
     /// The target's second march, confined to its cells.
     confined: DistanceField,
@@ -328,28 +329,7 @@ impl AszFields {
         target: Source,
         captors: &[Source],
     ) -> usize {
-        let k = captors.len();
-        self.fields.resize_with(k + 1, DistanceField::new);
-        self.captor_speeds.clear();
-        self.captor_speeds.extend(captors.iter().map(|c| c.speed));
-        self.search.asz.clear();
-        let Some((target_cell, _)) = lattice.locate(target.pos) else {
-            return 0;
-        };
-        for (i, src) in captors.iter().chain(std::iter::once(&target)).enumerate() {
-            refresh(&mut self.fields[i], lattice, src.pos);
-        }
-        let (captor_fields, target_field) = self.fields.split_at_mut(k);
-        let mut captor_fields: Vec<&mut DistanceField> = captor_fields.iter_mut().collect();
-        self.search.run(
-            lattice,
-            &mut target_field[0],
-            target.speed,
-            target_cell,
-            &mut captor_fields,
-            &self.captor_speeds,
-            &mut self.confined,
-        )
+        self.count(lattice, target, captors, None)
     }
 
     /// After `asz_cells`: every cell some robot's field settled, with the
@@ -383,9 +363,10 @@ impl AszFields {
         out
     }
 
-    /// |ASZ| in cells with captor `moved` at `pos` instead: the other
-    /// robots' fields are those of the last `asz_cells` call with the same
-    /// robots (call it first), only the moved captor's is marched.
+    /// |ASZ| in cells with captor `moved` at `pos` instead. Its field is
+    /// marched apart, so the fields of the robots' own cells are kept for
+    /// the next call: the planner's four moves of one captor march one
+    /// field each.
     pub fn with_moved_captor<L: Lattice + ?Sized>(
         &mut self,
         lattice: &L,
@@ -394,25 +375,46 @@ impl AszFields {
         moved: usize,
         pos: [f64; 2],
     ) -> usize {
-        let k = captors.len();
-        assert_eq!(
-            self.fields.len(),
-            k + 1,
-            "with_moved_captor: call asz_cells with these robots first"
+        assert!(
+            moved < captors.len(),
+            "with_moved_captor: captor {moved} of {}",
+            captors.len()
         );
+        self.count(lattice, target, captors, Some((moved, pos)))
+    }
+
+    /// Brings every field to its robot's cell (kept where the robot stayed
+    /// in it), the moved captor's into `candidate`, then searches.
+    fn count<L: Lattice + ?Sized>(
+        &mut self,
+        lattice: &L,
+        target: Source,
+        captors: &[Source],
+        moved: Option<(usize, [f64; 2])>,
+    ) -> usize {
+        let k = captors.len();
+        self.fields.resize_with(k + 1, DistanceField::new);
+        self.captor_speeds.clear();
+        self.captor_speeds.extend(captors.iter().map(|c| c.speed));
         self.search.asz.clear();
         let Some((target_cell, _)) = lattice.locate(target.pos) else {
             return 0;
         };
-        refresh(&mut self.candidate, lattice, pos);
+        for (i, src) in captors.iter().chain(std::iter::once(&target)).enumerate() {
+            if moved.is_none_or(|(m, _)| m != i) {
+                refresh(&mut self.fields[i], lattice, src.pos);
+            }
+        }
+        if let Some((_, pos)) = moved {
+            refresh(&mut self.candidate, lattice, pos);
+        }
         let (kept, target_field) = self.fields.split_at_mut(k);
         let mut candidate = Some(&mut self.candidate);
         let mut captor_fields: Vec<&mut DistanceField> = Vec::with_capacity(k);
         for (i, field) in kept.iter_mut().enumerate() {
-            captor_fields.push(if i == moved {
-                candidate.take().expect("one moved captor")
-            } else {
-                field
+            captor_fields.push(match moved {
+                Some((m, _)) if m == i => candidate.take().expect("one moved captor"),
+                _ => field,
             });
         }
         self.search.run(

@@ -38,6 +38,20 @@ pub fn gibson_dir() -> Option<PathBuf> {
     candidates.into_iter().find(|p| p.is_dir())
 }
 
+/// A file of the shared reference data (`../shared`: the reference traces,
+/// the reference ASZ values), found two folders above the Gibson maps'
+/// folder, else beside the project's root.
+pub fn shared_file(relative: &str) -> Option<PathBuf> {
+    let from_gibson = gibson_dir().map(|g| g.join("../..").join(relative));
+    let beside = Path::new(crate::PROJECT_ROOT)
+        .join("../shared")
+        .join(relative);
+    [from_gibson, Some(beside)]
+        .into_iter()
+        .flatten()
+        .find(|p| p.is_file())
+}
+
 /// The maps the project ships (its embedded default).
 pub fn shipped_dir() -> PathBuf {
     let local = PathBuf::from("maps");
