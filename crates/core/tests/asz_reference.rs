@@ -27,7 +27,9 @@ struct State {
     reference_after: [f64; 4],
 }
 
-fn load() -> Option<(Vec<State>, BTreeMap<String, Arc<PreparedMap>>)> {
+type Maps = BTreeMap<String, Arc<PreparedMap>>;
+
+fn load() -> Option<(Vec<State>, Maps)> {
     let (Some(path), Some(gibson)) = (shared_file("reference-asz/asz-states.csv"), gibson_dir())
     else {
         if std::env::var_os("CI").is_some() {
