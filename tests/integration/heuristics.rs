@@ -129,17 +129,16 @@ fn greedy_captor_picks_the_action_that_shrinks_the_asz_most() {
     let env = env_in(3, g, robots);
     let mut greedy = AszGreedy::default();
     let (captors, target) = env.asz_sources();
-    let mut fm = t2e::asz::FastMarching::new();
     for i in 0..3 {
         let chosen = greedy.captor_action(&env, i);
-        let asz_after = |a: Action, fm: &mut t2e::asz::FastMarching| {
+        let asz_after = |a: Action| {
             let alone = [moved_alone(&env, i, a)];
             let mut c = captors.clone();
             c[i] = Source {
                 pos: alone[0].pos,
                 speed: 1.0,
             };
-            fm.asz_cells(&**env.map(), target, &c)
+            t2e::asz::AszFields::new().asz_cells(&**env.map(), target, &c)
         };
         let sizes: Vec<usize> = [
             Action::Forward,
@@ -148,7 +147,7 @@ fn greedy_captor_picks_the_action_that_shrinks_the_asz_most() {
             Action::TurnLeft,
         ]
         .iter()
-        .map(|&a| asz_after(a, &mut fm))
+        .map(|&a| asz_after(a))
         .collect();
         let best = *sizes.iter().min().unwrap();
         assert!(
@@ -156,7 +155,7 @@ fn greedy_captor_picks_the_action_that_shrinks_the_asz_most() {
             "the actions must differ here: {sizes:?}"
         );
         assert_eq!(
-            asz_after(chosen, &mut fm),
+            asz_after(chosen),
             best,
             "captor {i} chose {chosen:?} among {sizes:?}"
         );
@@ -177,7 +176,6 @@ fn greedy_target_picks_the_action_that_keeps_the_largest_asz() {
     let env = env_in(3, g, robots);
     let t = env.target_index();
     let (captors, target) = env.asz_sources();
-    let mut fm = t2e::asz::FastMarching::new();
     let actions = [
         Action::Forward,
         Action::Backward,
@@ -191,7 +189,7 @@ fn greedy_target_picks_the_action_that_keeps_the_largest_asz() {
                 pos: moved_alone(&env, t, a).pos,
                 speed: target.speed,
             };
-            fm.asz_cells(&**env.map(), moved, &captors)
+            t2e::asz::AszFields::new().asz_cells(&**env.map(), moved, &captors)
         })
         .collect();
     let best = *sizes.iter().max().unwrap();
@@ -347,8 +345,9 @@ fn randomised_experts_draw_their_constants_per_episode_and_replay_with_the_seed(
         .contains("expert:SEED"));
 }
 
-/// The ASZ-greedy rule as the spec states it, one full march per move,
-/// written apart from `AszGreedy`: whatever shortcut the planner takes, it
+/// The ASZ-greedy rule as the spec states it, every robot's field marched
+/// afresh for each move, written apart from `AszGreedy`: whatever field the
+/// planner keeps, it
 /// must pick the same action on every state. Also says whether the sizes
 /// decided (not the geodesic fallback).
 fn greedy_by_definition(
@@ -370,7 +369,7 @@ fn greedy_by_definition(
                 pos: moved_alone(env, i, a).pos,
                 speed: env.spec(i).max_speed,
             };
-            fm.asz_cells(&**env.map(), target, &captors)
+            t2e::asz::AszFields::new().asz_cells(&**env.map(), target, &captors)
         })
         .collect();
     if sizes.iter().any(|&s| s != sizes[0]) {
@@ -438,4 +437,169 @@ fn greedy_captors_pick_the_definitions_action_on_real_states() {
         decisions >= 100 && by_size * 2 > decisions,
         "{decisions} decisions, {by_size} by size"
     );
+}
+
+#[test]
+fn lookahead_targets_are_named_and_play_the_target_only() {
+    for (name, horizon, model) in [
+        ("lookahead:10", 10, ControllerSpec::Heuristic),
+        (
+            "lookahead:3:greedy:2",
+            3,
+            ControllerSpec::Greedy { coarsening: 2 },
+        ),
+        (
+            "lookahead:1:expert:7",
+            1,
+            ControllerSpec::RandomisedExpert { seed: 7 },
+        ),
+    ] {
+        let spec: ControllerSpec = name.parse().unwrap();
+        assert_eq!(
+            spec,
+            ControllerSpec::Lookahead {
+                horizon,
+                captors: Box::new(model)
+            }
+        );
+        assert_eq!(spec.to_string(), name);
+        assert!(spec.build(Side::Target).is_ok());
+        let refused = spec.build(Side::Captors).err().unwrap().to_string();
+        assert!(refused.contains("target only"), "{refused}");
+    }
+    for bad in [
+        "lookahead:",
+        "lookahead:0",
+        "lookahead:101",
+        "lookahead:x",
+        "lookahead:5:lookahead:5",
+    ] {
+        let why = bad.parse::<ControllerSpec>().unwrap_err().to_string();
+        assert!(why.contains("horizon"), "{bad}: {why}");
+    }
+    // The model must be a captor team that parses.
+    let why = "lookahead:5:magic"
+        .parse::<ControllerSpec>()
+        .unwrap_err()
+        .to_string();
+    assert!(why.contains("unknown controller 'magic'"), "{why}");
+}
+
+/// Where `first`, then the rule-based target, leads in `horizon` steps
+/// against the expert captors, written apart from `Lookahead`: caught (and
+/// when), or |ASZ| on 0.2 m cells at the end.
+fn future_by_definition(env: &TrapEnv, first: Action, horizon: usize) -> (bool, usize) {
+    let mut sim = env.clone();
+    let k = sim.num_captors();
+    let mut rewards = vec![0f32; k + 1];
+    for step in 0..horizon {
+        if sim.is_done() {
+            break;
+        }
+        let mut acts = vec![Action::Stop; k + 1];
+        Heuristic.act(&sim, Side::Captors, &mut acts[..k]);
+        acts[k] = if step == 0 {
+            first
+        } else {
+            target_action(&sim)
+        };
+        sim.step_state(&acts, &mut rewards);
+        if sim.captured {
+            return (false, step);
+        }
+    }
+    let lattice = t2e::asz::CoarseLattice::new(sim.map(), 4);
+    let (captors, target) = sim.asz_sources();
+    (
+        true,
+        t2e::asz::AszFields::new().asz_cells(&lattice, target, &captors),
+    )
+}
+
+#[test]
+fn the_lookahead_target_plays_the_best_simulated_future() {
+    let maps = t2e::map::catalog::load_prepared("gibson").unwrap();
+    let cfg = EnvConfig {
+        num_captors: 3,
+        episode_length: 500,
+        ..EnvConfig::default()
+    };
+    let mut env = TrapEnv::new(cfg, maps).unwrap();
+    let horizon = 6;
+    let mut lookahead = Lookahead::new(horizon, Box::new(Heuristic));
+    let mut rewards = vec![0f32; 4];
+    let (mut decisions, mut departures, mut escapes) = (0, 0, 0);
+    for seed in 0..12u64 {
+        env.reset_state(seed).unwrap();
+        for step in 0..120 {
+            let mut acts = [Action::Stop; 4];
+            Heuristic.act(&env, Side::Captors, &mut acts[..3]);
+            let chosen = lookahead.target_action(&env);
+            if step % 10 == 9 {
+                let rule = target_action(&env);
+                let futures: Vec<(bool, usize)> = Action::ALL
+                    .iter()
+                    .map(|&a| future_by_definition(&env, a, horizon))
+                    .collect();
+                let best = *futures.iter().max().unwrap();
+                let of = |a: Action| futures[Action::ALL.iter().position(|&b| b == a).unwrap()];
+                assert_eq!(of(chosen), best, "seed {seed}, step {step}: {futures:?}");
+                // Equal futures keep the rule-based action.
+                if of(rule) == best {
+                    assert_eq!(chosen, rule, "seed {seed}, step {step}");
+                }
+                decisions += 1;
+                departures += usize::from(chosen != rule);
+                escapes += usize::from(!of(rule).0 && best.0);
+            }
+            acts[3] = chosen;
+            env.step_state(&acts, &mut rewards);
+            if env.is_done() {
+                break;
+            }
+        }
+    }
+    assert!(
+        decisions >= 60 && departures > 0,
+        "{decisions} decisions, {departures} departures, {escapes} escapes"
+    );
+}
+
+#[test]
+fn a_copied_world_plays_on_as_the_original() {
+    let maps = t2e::map::catalog::load_prepared("shipped").unwrap();
+    let cfg = EnvConfig {
+        num_captors: 3,
+        ..EnvConfig::default()
+    };
+    let mut env = TrapEnv::new(cfg.clone(), maps.clone()).unwrap();
+    env.reset_state(4).unwrap();
+    let mut rewards = vec![0f32; 4];
+    let mut step_both = |env: &mut TrapEnv| {
+        let mut acts = [Action::Stop; 4];
+        Heuristic.act(env, Side::Captors, &mut acts[..3]);
+        Heuristic.act(env, Side::Target, &mut acts[3..]);
+        env.step_state(&acts, &mut rewards);
+        rewards.clone()
+    };
+    for _ in 0..30 {
+        step_both(&mut env);
+    }
+    let mut copy = env.clone();
+    // clone_from into a world of another episode overwrites all of it.
+    let mut other = TrapEnv::new(cfg, maps).unwrap();
+    other.reset_state(9).unwrap();
+    other.clone_from(&env);
+    for _ in 0..200 {
+        let want = step_both(&mut env);
+        assert_eq!(step_both(&mut copy), want);
+        assert_eq!(step_both(&mut other), want);
+        assert_eq!(copy.robots, env.robots);
+        assert_eq!(other.robots, env.robots);
+        assert_eq!((copy.steps, copy.captured), (env.steps, env.captured));
+        assert_eq!(copy.path_len, env.path_len);
+        if env.is_done() {
+            break;
+        }
+    }
 }

@@ -2,7 +2,8 @@
 //! `../shared/reference-asz/asz-states.csv` (its README says how they were
 //! made): |ASZ| of each state, and of each of one captor's four one-step
 //! moves, with the per-robot arrival fields (`AszFields`), beside today's
-//! one-pass labelled march (`FastMarching::asz_cells`) for comparison.
+//! one-pass labelled march (`FastMarching::asz_cells`) for comparison, and
+//! the coarse ASZ (the fields on cells of 2 x 2 and 4 x 4 map cells).
 //!
 //! Held here (the goals of the per-robot fields, measured on these states):
 //! - relative difference of |ASZ|: median <= 0.3%, p95 <= 2%, none above 10%;
@@ -12,7 +13,7 @@
 
 use std::collections::BTreeMap;
 use std::sync::Arc;
-use t2e_core::asz::{AszFields, FastMarching, Source};
+use t2e_core::asz::{AszFields, CoarseLattice, FastMarching, Source};
 use t2e_core::map::catalog::{gibson_dir, shared_file};
 use t2e_core::map::{load_png, PreparedMap};
 
@@ -215,6 +216,50 @@ fn per_robot_fields_agree_with_the_reference_asz() {
     let fields_agreement = agreement(&states, &ours);
     report("per-robot fields", &fields_agreement);
     report("one-pass march", &agreement(&states, &one_pass));
+    // The coarse ASZ (the same fields on cells of K x K map cells, as
+    // `greedy:K`, the shaping potential and the lookahead target use it),
+    // its cells counted in map cells.
+    let mut coarse_agreement = Vec::new();
+    for k in [2usize, 4] {
+        let lattices: BTreeMap<&String, CoarseLattice> = maps
+            .iter()
+            .map(|(n, m)| (n, CoarseLattice::new(m, k)))
+            .collect();
+        let mut by_map: BTreeMap<*const PreparedMap, &CoarseLattice> = BTreeMap::new();
+        for (n, m) in &maps {
+            by_map.insert(Arc::as_ptr(m), &lattices[n]);
+        }
+        let mut coarse = AszFields::new();
+        let ours = measure(&states, &maps, |map, target, captors, moved| {
+            let lattice = by_map[&(map as *const PreparedMap)];
+            let cells = match moved {
+                None => coarse.asz_cells(lattice, target, captors),
+                Some((i, pos)) => coarse.with_moved_captor(lattice, target, captors, i, pos),
+            };
+            (cells * k * k) as f64
+        });
+        let a = agreement(&states, &ours);
+        report(&format!("coarse fields, {k}x{k} map cells"), &a);
+        coarse_agreement.push(a);
+    }
+    // Coarse cells close gaps narrower than a cell and count only cells
+    // free all through (so they undercount): they are a controller's score,
+    // not the spec's |ASZ|. Held at what they measured (2026-11-28: median
+    // 3.1% and 8.7%, picks 80% and 66%), so that a change that makes them
+    // worse is seen.
+    for ((k, max_median, min_picks), a) in [(2, 0.04, 0.75), (4, 0.10, 0.60)]
+        .iter()
+        .zip(&coarse_agreement)
+    {
+        assert!(
+            a.median <= *max_median
+                && a.picks_agree as f64 >= min_picks * a.picks_told_apart as f64,
+            "coarse {k}: median {:.1}%, picks {} of {}",
+            100.0 * a.median,
+            a.picks_agree,
+            a.picks_told_apart
+        );
+    }
     let a = fields_agreement;
     assert!(
         a.median <= 0.003,

@@ -1,11 +1,11 @@
 //! The controller catalogue: every controller a user can name on the command
-//! line or in a config (`heuristic`, `greedy`, `expert:SEED`, `random`, `still`,
-//! `ckpt:PATH`, `sample:PATH`), parsed and built behind the one `env::Controller` trait. It
+//! line or in a config (`heuristic`, `greedy`, `expert:SEED`, `lookahead:H`,
+//! `random`, `still`, `ckpt:PATH`, `sample:PATH`), parsed and built behind the one `env::Controller` trait. It
 //! sits above `heuristics` and `nn` because it names controllers of both.
 
 use crate::env::{Controller, EnvConfig, Side};
 use crate::error::ConfigError;
-use crate::heuristics::{AszGreedy, Heuristic, RandomActions, RandomisedExpert, Still};
+use crate::heuristics::{AszGreedy, Heuristic, Lookahead, RandomActions, RandomisedExpert, Still};
 use crate::nn::{CheckpointController, PolicySnapshot};
 use std::fmt;
 use std::path::PathBuf;
@@ -23,7 +23,11 @@ pub enum ControllerError {
     ExpertSeed(String),
     #[error("'{0}:' needs a path: {0}:runs/NAME (newest checkpoint) or {0}:runs/NAME/checkpoints/SIDE-STEPS")]
     MissingPath(&'static str),
-    #[error("unknown controller '{0}' (expected heuristic, greedy, greedy:K, expert:SEED, random, still, ckpt:PATH or sample:PATH)")]
+    #[error("'{0}': lookahead:H[:CAPTORS] needs a horizon H of 1 to {max} steps, and CAPTORS a captor team (lookahead:10 plays against the expert captors, lookahead:10:greedy:2 against greedy:2)", max = Lookahead::MAX_HORIZON)]
+    Lookahead(String),
+    #[error("'{0}' plays the target only (it looks ahead against a model of the captors)")]
+    LookaheadAsCaptors(String),
+    #[error("unknown controller '{0}' (expected heuristic, greedy, greedy:K, expert:SEED, lookahead:H[:CAPTORS], random, still, ckpt:PATH or sample:PATH)")]
     Unknown(String),
     #[error("expert:{0} is a captor team (the expert captors with randomised constants); it cannot play the target")]
     ExpertAsTarget(u64),
@@ -45,6 +49,13 @@ pub enum ControllerSpec {
     /// episode (`heuristics::RandomisedExpert`); captors only.
     RandomisedExpert {
         seed: u64,
+    },
+    /// `lookahead:H` or `lookahead:H:CAPTORS`: the lookahead target
+    /// (`heuristics::Lookahead`), simulating H steps of each action against
+    /// CAPTORS (the expert captors when not given); target only.
+    Lookahead {
+        horizon: usize,
+        captors: Box<ControllerSpec>,
     },
     Random,
     Still,
@@ -120,6 +131,25 @@ impl FromStr for ControllerSpec {
                     Err(_) => Err(ControllerError::ExpertSeed(other.to_string())),
                 }
             }
+            other if other.starts_with("lookahead:") => {
+                let rest = &other["lookahead:".len()..];
+                let (horizon, captors) = match rest.split_once(':') {
+                    Some((h, model)) => (h, model.parse::<ControllerSpec>()?),
+                    None => (rest, ControllerSpec::Heuristic),
+                };
+                match horizon.parse::<usize>() {
+                    Ok(h)
+                        if (1..=Lookahead::MAX_HORIZON).contains(&h)
+                            && !matches!(captors, ControllerSpec::Lookahead { .. }) =>
+                    {
+                        Ok(ControllerSpec::Lookahead {
+                            horizon: h,
+                            captors: Box::new(captors),
+                        })
+                    }
+                    _ => Err(ControllerError::Lookahead(other.to_string())),
+                }
+            }
             "random" => Ok(ControllerSpec::Random),
             "still" => Ok(ControllerSpec::Still),
             other if other.starts_with("ckpt:") => {
@@ -148,6 +178,10 @@ impl fmt::Display for ControllerSpec {
             ControllerSpec::Greedy { coarsening: 1 } => f.write_str("greedy"),
             ControllerSpec::Greedy { coarsening } => write!(f, "greedy:{coarsening}"),
             ControllerSpec::RandomisedExpert { seed } => write!(f, "expert:{seed}"),
+            ControllerSpec::Lookahead { horizon, captors } => match **captors {
+                ControllerSpec::Heuristic => write!(f, "lookahead:{horizon}"),
+                ref model => write!(f, "lookahead:{horizon}:{model}"),
+            },
             ControllerSpec::Random => f.write_str("random"),
             ControllerSpec::Still => f.write_str("still"),
             ControllerSpec::Checkpoint(c) if c.sampled => write!(f, "sample:{}", c.path.display()),
@@ -166,6 +200,10 @@ impl ControllerSpec {
                 Side::Captors => Box::new(RandomisedExpert::new(*seed)),
                 Side::Target => return Err(ControllerError::ExpertAsTarget(*seed)),
             },
+            ControllerSpec::Lookahead { horizon, captors } => match side {
+                Side::Target => Box::new(Lookahead::new(*horizon, captors.build(Side::Captors)?)),
+                Side::Captors => return Err(ControllerError::LookaheadAsCaptors(self.to_string())),
+            },
             ControllerSpec::Random => Box::new(RandomActions::new()),
             ControllerSpec::Still => Box::new(Still),
             ControllerSpec::Checkpoint(c) => {
@@ -180,17 +218,27 @@ impl ControllerSpec {
     /// `cfg` (a checkpoint's K and side), building one to be sure.
     pub fn check(&self, side: Side, cfg: &EnvConfig) -> Result<(), ControllerError> {
         self.build(side)?;
-        if let ControllerSpec::Checkpoint(c) = self {
-            let snap = c.snapshot(side)?;
-            snap.meta
-                .check_fits(side, cfg)
-                .map_err(|e| ControllerError::Checkpoint(format!("{}: {e}", snap.dir.display())))?;
+        match self {
+            ControllerSpec::Checkpoint(c) => {
+                let snap = c.snapshot(side)?;
+                snap.meta.check_fits(side, cfg).map_err(|e| {
+                    ControllerError::Checkpoint(format!("{}: {e}", snap.dir.display()))
+                })?;
+            }
+            // The model plays the same world's captors.
+            ControllerSpec::Lookahead { captors, .. } => captors.check(Side::Captors, cfg)?,
+            _ => {}
         }
         Ok(())
     }
 
+    /// Whether it reads a checkpoint (itself, or a lookahead's model).
     pub fn is_checkpoint(&self) -> bool {
-        matches!(self, ControllerSpec::Checkpoint(_))
+        match self {
+            ControllerSpec::Checkpoint(_) => true,
+            ControllerSpec::Lookahead { captors, .. } => captors.is_checkpoint(),
+            _ => false,
+        }
     }
 
     /// A config's list of controllers for `side` (`field = ["greedy:2",

@@ -383,8 +383,22 @@ impl AszFields {
         self.count(lattice, target, captors, Some((moved, pos)))
     }
 
+    /// |ASZ| in cells with the target at `pos` instead (the mirror of
+    /// `with_moved_captor`): the captors' fields and the target's own are
+    /// kept, the moved target's is marched apart.
+    pub fn with_moved_target<L: Lattice + ?Sized>(
+        &mut self,
+        lattice: &L,
+        target: Source,
+        captors: &[Source],
+        pos: [f64; 2],
+    ) -> usize {
+        self.count(lattice, target, captors, Some((captors.len(), pos)))
+    }
+
     /// Brings every field to its robot's cell (kept where the robot stayed
-    /// in it), the moved captor's into `candidate`, then searches.
+    /// in it), the moved robot's (index K for the target) into `candidate`,
+    /// then searches.
     fn count<L: Lattice + ?Sized>(
         &mut self,
         lattice: &L,
@@ -397,7 +411,11 @@ impl AszFields {
         self.captor_speeds.clear();
         self.captor_speeds.extend(captors.iter().map(|c| c.speed));
         self.search.asz.clear();
-        let Some((target_cell, _)) = lattice.locate(target.pos) else {
+        let target_pos = match moved {
+            Some((m, pos)) if m == k => pos,
+            _ => target.pos,
+        };
+        let Some((target_cell, _)) = lattice.locate(target_pos) else {
             return 0;
         };
         for (i, src) in captors.iter().chain(std::iter::once(&target)).enumerate() {
@@ -408,21 +426,21 @@ impl AszFields {
         if let Some((_, pos)) = moved {
             refresh(&mut self.candidate, lattice, pos);
         }
-        let (kept, target_field) = self.fields.split_at_mut(k);
         let mut candidate = Some(&mut self.candidate);
-        let mut captor_fields: Vec<&mut DistanceField> = Vec::with_capacity(k);
-        for (i, field) in kept.iter_mut().enumerate() {
-            captor_fields.push(match moved {
-                Some((m, _)) if m == i => candidate.take().expect("one moved captor"),
+        let mut fields: Vec<&mut DistanceField> = Vec::with_capacity(k + 1);
+        for (i, field) in self.fields.iter_mut().enumerate() {
+            fields.push(match moved {
+                Some((m, _)) if m == i => candidate.take().expect("one moved robot"),
                 _ => field,
             });
         }
+        let target_field = fields.pop().expect("the target's field");
         self.search.run(
             lattice,
-            &mut target_field[0],
+            target_field,
             target.speed,
             target_cell,
-            &mut captor_fields,
+            &mut fields,
             &self.captor_speeds,
             &mut self.confined,
         )
@@ -554,5 +572,101 @@ impl RegionSearch {
             }
         }
         self.asz.len()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::asz::CoarseLattice;
+    use crate::map::{Grid, PreparedMap};
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    /// Two rooms joined by a door, on a 320-cell grid (16 m).
+    fn two_rooms() -> PreparedMap {
+        PreparedMap::new(Grid::with_free_rects(
+            "two rooms",
+            320,
+            &[
+                (40..280, 40..150),
+                (40..280, 170..280),
+                (150..175, 150..170),
+            ],
+        ))
+    }
+
+    /// Kept fields, a moved captor's and a moved target's, give every count a
+    /// fresh set of fields gives, whatever the order of the calls.
+    fn kept_fields_count_as_fresh_ones<L: Lattice + ?Sized>(lattice: &L, map: &PreparedMap) {
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        let free: Vec<[f64; 2]> = (0..map.grid.side())
+            .flat_map(|r| (0..map.grid.side()).map(move |c| (r, c)))
+            .filter(|&(r, c)| map.grid.is_free(r as isize, c as isize))
+            .map(|(r, c)| map.grid.cell_center(r, c))
+            .collect();
+        let pick = |rng: &mut ChaCha8Rng| free[rng.gen_range(0..free.len())];
+        let mut kept = AszFields::new();
+        let mut told_apart = 0;
+        for round in 0..24 {
+            let captors: Vec<Source> = (0..3)
+                .map(|_| Source {
+                    pos: pick(&mut rng),
+                    speed: 1.0,
+                })
+                .collect();
+            let target = Source {
+                pos: pick(&mut rng),
+                speed: [1.0, 1.2][round % 2],
+            };
+            let fresh = |target: Source, captors: &[Source]| {
+                AszFields::new().asz_cells(lattice, target, captors)
+            };
+            let now = fresh(target, &captors);
+            // A call after a moved robot's counts the state itself again.
+            let order = rng.gen_range(0..3);
+            if order == 0 {
+                assert_eq!(kept.asz_cells(lattice, target, &captors), now);
+            }
+            for step in [[0.1, 0.0], [0.0, -0.15], [-0.1, 0.05]] {
+                let i = rng.gen_range(0..3);
+                let pos = [captors[i].pos[0] + step[0], captors[i].pos[1] + step[1]];
+                let mut moved = captors.clone();
+                moved[i].pos = pos;
+                let want = fresh(target, &moved);
+                told_apart += usize::from(want != now);
+                assert_eq!(
+                    kept.with_moved_captor(lattice, target, &captors, i, pos),
+                    want,
+                    "round {round}: captor {i} moved to {pos:?}"
+                );
+                let pos = [target.pos[0] - step[1], target.pos[1] + step[0]];
+                let want = fresh(Source { pos, ..target }, &captors);
+                assert_eq!(
+                    kept.with_moved_target(lattice, target, &captors, pos),
+                    want,
+                    "round {round}: target moved to {pos:?}"
+                );
+            }
+            assert_eq!(
+                kept.asz_cells(lattice, target, &captors),
+                now,
+                "round {round}"
+            );
+        }
+        assert!(told_apart > 12, "the moves must change |ASZ|: {told_apart}");
+    }
+
+    #[test]
+    fn kept_fields_count_as_fresh_ones_on_map_cells() {
+        let map = two_rooms();
+        kept_fields_count_as_fresh_ones(&map, &map);
+    }
+
+    #[test]
+    fn kept_fields_count_as_fresh_ones_on_coarse_cells() {
+        let map = two_rooms();
+        let coarse = CoarseLattice::new(&map, 4);
+        kept_fields_count_as_fresh_ones(&coarse, &map);
     }
 }

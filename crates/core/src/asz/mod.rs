@@ -1,14 +1,18 @@
 //! Arrival times and the Absolutely Safe Zone (spec §3).
 //!
-//! One first-order Fast Marching pass (Sethian) with many labelled fronts:
-//! every robot starts a front at its own speed and each cell is claimed by the
-//! front that arrives first. Because the region a robot reaches first is
-//! star-shaped around that robot (every point of a shortest path to a cell it
-//! wins is also won by it), a front only ever needs the cells it claims, so
-//! one pass replaces the reference's K+2 separate passes, and the target's
-//! region it builds is already "the part the target reaches without crossing
-//! captor-first cells". The march stops as soon as the target's front is
-//! closed in, so a nearly trapped target costs almost nothing.
+//! The ASZ itself is `AszFields` (fields.rs): one arrival field per robot,
+//! as the spec defines it and the paper's code computes it. Everything that
+//! reads |ASZ| uses it: the environment (SoA, the strict capture rule, the
+//! Python `asz_area` and infos), the ASZ-greedy planner (`greedy[:K]`), the
+//! shaping potential and the renders.
+//!
+//! What stays here is one first-order Fast Marching pass (Sethian) with
+//! labelled fronts, each cell claimed by the front that arrives first. With
+//! one front it is the geodesic distance the planner falls back on
+//! (`distance_field`). With every robot's front it is a one-pass |ASZ|
+//! (`asz_cells`) that closes the narrow gaps between captor regions which
+//! per-robot fields keep open; it is kept only as the baseline the fields
+//! are measured against (the reference conformance test, `bench`).
 
 mod coarse;
 mod field_queue;
@@ -439,9 +443,11 @@ impl FastMarching {
         );
     }
 
-    /// |ASZ| in cells: the free cells the target reaches strictly before every
-    /// captor, restricted to the part it reaches without crossing captor-first
-    /// cells. Ties go to the captors; cells nobody reaches belong to nobody.
+    /// The one-pass |ASZ| in cells (the baseline `AszFields` is measured
+    /// against): the free cells the target's front claims before every
+    /// captor's, restricted to the part it reaches without crossing
+    /// captor-first cells. Ties go to the captors; cells nobody reaches
+    /// belong to nobody.
     pub fn asz_cells<L: Lattice + ?Sized>(
         &mut self,
         map: &L,

@@ -118,6 +118,82 @@ pub struct TrapEnv {
     asz_fields: Option<AszFields>,
 }
 
+/// A copy of the world's state (a controller's lookahead plays on one);
+/// the ASZ's buffers are not copied. Both methods name every field, so a
+/// field added to `TrapEnv` cannot be left out of the copy.
+impl Clone for TrapEnv {
+    fn clone(&self) -> TrapEnv {
+        let TrapEnv {
+            cfg,
+            maps,
+            map,
+            robots,
+            specs,
+            steps,
+            path_len,
+            prev_dist,
+            captured,
+            seed,
+            travelled,
+            dist_change,
+            contact,
+            collided,
+            asz_fields: _,
+        } = self;
+        TrapEnv {
+            cfg: cfg.clone(),
+            maps: maps.clone(),
+            map: map.clone(),
+            robots: robots.clone(),
+            specs: specs.clone(),
+            steps: *steps,
+            path_len: path_len.clone(),
+            prev_dist: prev_dist.clone(),
+            captured: *captured,
+            seed: *seed,
+            travelled: travelled.clone(),
+            dist_change: dist_change.clone(),
+            contact: contact.clone(),
+            collided: collided.clone(),
+            asz_fields: None,
+        }
+    }
+
+    fn clone_from(&mut self, source: &TrapEnv) {
+        let TrapEnv {
+            cfg,
+            maps,
+            map,
+            robots,
+            specs,
+            steps,
+            path_len,
+            prev_dist,
+            captured,
+            seed,
+            travelled,
+            dist_change,
+            contact,
+            collided,
+            asz_fields: _,
+        } = source;
+        self.cfg.clone_from(cfg);
+        self.maps.clone_from(maps);
+        self.map.clone_from(map);
+        self.robots.clone_from(robots);
+        self.specs.clone_from(specs);
+        self.steps = *steps;
+        self.path_len.clone_from(path_len);
+        self.prev_dist.clone_from(prev_dist);
+        self.captured = *captured;
+        self.seed = *seed;
+        self.travelled.clone_from(travelled);
+        self.dist_change.clone_from(dist_change);
+        self.contact.clone_from(contact);
+        self.collided.clone_from(collided);
+    }
+}
+
 impl TrapEnv {
     /// A world over a set of maps; each episode picks one from its seed.
     pub fn new(cfg: EnvConfig, maps: Arc<Vec<Arc<PreparedMap>>>) -> Result<TrapEnv, EnvError> {

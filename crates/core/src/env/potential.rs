@@ -5,7 +5,7 @@
 
 use super::physics::blocked_probes;
 use super::TrapEnv;
-use crate::asz::{CoarseLattice, FastMarching, Lattice};
+use crate::asz::{AszFields, CoarseLattice, Lattice};
 use serde::{Deserialize, Serialize};
 use std::cell::RefCell;
 
@@ -19,22 +19,22 @@ pub enum Potential {
     Trap,
     /// 1 - |ASZ| / free area: how much of the map the target can no longer
     /// reach first. It rises as the captors cut off escape routes, long
-    /// before any probe is blocked. Marched on cells of 0.2 m
-    /// (`ASZ_COARSENING`), about 16x fewer than the spec's, so a training
-    /// step pays one coarse march per world.
+    /// before any probe is blocked. The per-robot fields of the ASZ
+    /// (`AszFields`) on cells of 0.2 m (`ASZ_COARSENING`), about 16x fewer
+    /// than the spec's, so a training step pays one coarse ASZ per world.
     Asz,
 }
 
 /// Map cells per side of a cell of the ASZ potential's march.
 pub const ASZ_COARSENING: usize = 4;
 
-/// A march's buffers and the coarse lattices (with their free cells) of the
+/// The fields' buffers and the coarse lattices (with their free cells) of the
 /// maps seen, per thread: the vector env steps its worlds on rayon's
 /// threads, and its worlds play many maps at once (26 in the paper's
 /// protocol), so one lattice per map is kept, the oldest dropped past
 /// `ASZ_LATTICES`.
 struct AszScratch {
-    marching: FastMarching,
+    fields: AszFields,
     lattices: Vec<(CoarseLattice, usize)>,
 }
 
@@ -42,7 +42,7 @@ const ASZ_LATTICES: usize = 64;
 
 thread_local! {
     static ASZ_SCRATCH: RefCell<AszScratch> = RefCell::new(AszScratch {
-        marching: FastMarching::new(),
+        fields: AszFields::new(),
         lattices: Vec::new(),
     });
 }
@@ -76,7 +76,7 @@ impl Potential {
                 };
                 let (lattice, free) = &scratch.lattices[at];
                 let (captors, target) = env.asz_sources();
-                let asz = scratch.marching.asz_cells(lattice, target, &captors);
+                let asz = scratch.fields.asz_cells(lattice, target, &captors);
                 1.0 - (asz as f32 / (*free).max(1) as f32).min(1.0)
             }),
         }

@@ -2,7 +2,11 @@
 //! robots, each behind the one `Controller` trait. The names users give
 //! controllers live one level up, in `crate::controllers`.
 
-use crate::asz::{CoarseLattice, FastMarching, Lattice, Source};
+mod lookahead;
+
+pub use lookahead::Lookahead;
+
+use crate::asz::{AszFields, CoarseLattice, FastMarching, Lattice, Source};
 use crate::env::physics::{self, dist};
 use crate::env::{Action, Controller, Side, TrapEnv};
 use crate::map::prepared::ray_dirs;
@@ -214,15 +218,19 @@ impl Controller for Heuristic {
 /// Playing the target, the same rule mirrored (`target_action`): the
 /// largest ASZ, else the rule-based target's action.
 ///
-/// `coarsening` 1 marches on the map's own 0.05 m cells, as the spec says.
-/// A larger factor marches on cells of that many map cells per side
-/// (`asz::CoarseLattice`): about factor^2 fewer cells per march, for a
-/// controller that plays many episodes (held-out panels, league members).
+/// |ASZ| is the per-robot fields' (`asz::AszFields`). `coarsening` 1
+/// marches them on the map's own 0.05 m cells, as the spec says. A larger
+/// factor marches them on cells of that many map cells per side
+/// (`asz::CoarseLattice`), each field from the one coarse cell holding its
+/// robot: about factor^2 fewer cells per march, for a controller that plays
+/// many episodes (held-out panels, league members).
 /// docs/guide/render-bench.md (the `greedy:K` decision timings) measures what it changes.
 pub struct AszGreedy {
     coarsening: usize,
     coarse: Option<CoarseLattice>,
-    marching: FastMarching,
+    /// The robots' arrival fields, kept across the four moves of each
+    /// captor of one decision: only the moving robot's field is marched.
+    fields: AszFields,
     distance: FastMarching,
     /// The lattice and point `distance` holds the geodesic field of: the
     /// captors of one decision share the target's field, so the fallback
@@ -256,7 +264,7 @@ impl AszGreedy {
         AszGreedy {
             coarsening,
             coarse: None,
-            marching: FastMarching::new(),
+            fields: AszFields::new(),
             distance: FastMarching::new(),
             distance_from: None,
         }
@@ -286,17 +294,11 @@ impl AszGreedy {
         let moved = Self::moves_of(env, env.target_index());
         let (captors, target) = env.asz_sources();
         let sizes = if self.coarsening == 1 {
-            target_asz_sizes(
-                &mut self.marching,
-                &**env.map(),
-                &captors,
-                target.speed,
-                &moved,
-            )
+            target_asz_sizes(&mut self.fields, &**env.map(), &captors, target, &moved)
         } else {
             self.lattice(env);
             let lattice = self.coarse.as_ref().unwrap();
-            target_asz_sizes(&mut self.marching, lattice, &captors, target.speed, &moved)
+            target_asz_sizes(&mut self.fields, lattice, &captors, target, &moved)
         };
         if sizes.iter().all(|&s| s == sizes[0]) {
             return target_action(env);
@@ -327,7 +329,7 @@ impl AszGreedy {
         let moved = Self::moves_of(env, i);
         let best = if self.coarsening == 1 {
             greedy_choice(
-                &mut self.marching,
+                &mut self.fields,
                 (&mut self.distance, &mut self.distance_from),
                 &**map,
                 env,
@@ -338,7 +340,7 @@ impl AszGreedy {
             self.lattice(env);
             let lattice = self.coarse.as_ref().unwrap();
             greedy_choice(
-                &mut self.marching,
+                &mut self.fields,
                 (&mut self.distance, &mut self.distance_from),
                 lattice,
                 env,
@@ -352,30 +354,26 @@ impl AszGreedy {
 
 /// |ASZ| of the target at each of the positions its actions take it to.
 fn target_asz_sizes<L: Lattice + ?Sized>(
-    marching: &mut FastMarching,
+    fields: &mut AszFields,
     lattice: &L,
     captors: &[Source],
-    speed: f64,
+    target: Source,
     moved: &[[f64; 2]; 4],
 ) -> [usize; 4] {
-    moved.map(|pos| marching.asz_cells(lattice, Source { pos, speed }, captors))
+    moved.map(|pos| fields.with_moved_target(lattice, target, captors, pos))
 }
 
 /// The index of the greedy action, given where each action takes captor `i`.
 fn greedy_choice<L: Lattice>(
-    marching: &mut FastMarching,
+    fields: &mut AszFields,
     (distance, distance_from): (&mut FastMarching, &mut Option<(u64, [u64; 2])>),
     lattice: &L,
     env: &TrapEnv,
     i: usize,
     moved: &[[f64; 2]; 4],
 ) -> usize {
-    let (mut captors, target) = env.asz_sources();
-    let speed = env.spec(i).max_speed;
-    let sizes = moved.map(|pos| {
-        captors[i] = Source { pos, speed };
-        marching.asz_cells(lattice, target, &captors)
-    });
+    let (captors, target) = env.asz_sources();
+    let sizes = moved.map(|pos| fields.with_moved_captor(lattice, target, &captors, i, pos));
     if sizes.iter().any(|&s| s != sizes[0]) {
         return (0..4).min_by_key(|&a| sizes[a]).unwrap();
     }
