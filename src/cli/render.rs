@@ -21,9 +21,11 @@ pub struct RenderArgs {
     pub captors: ControllerSpec,
     /// Target controller: heuristic (rule-based target), greedy or greedy:K
     /// (ASZ-greedy's mirror: the move that leaves the target the largest
-    /// ASZ; K as for --captors), random, still, ckpt:PATH (a trained policy,
-    /// its most likely action) or sample:PATH (the same policy, sampling its
-    /// actions).
+    /// ASZ; K as for --captors), lookahead:H or lookahead:H:CAPTORS (each
+    /// move played H steps ahead against a model of the captors, the expert
+    /// ones unless CAPTORS names another team; the best future kept),
+    /// random, still, ckpt:PATH (a trained policy, its most likely action)
+    /// or sample:PATH (the same policy, sampling its actions).
     #[arg(long, default_value = "heuristic")]
     pub target: ControllerSpec,
     /// Number of captors K.
