@@ -1,10 +1,10 @@
 //! The ASZ-greedy rows of `t2e-league bench`: one decision for 3 captors on
 //! the spec's 0.05 m cells and on coarser ones (`greedy:K`), over states
 //! taken from real episodes, and how often each coarsening picks the same
-//! action as the spec's cells.
+//! action as the spec's cells; then the lookahead target's decision.
 
 use crate::env::{Action, Controller, EnvConfig, Side, TrapEnv};
-use crate::heuristics::{AszGreedy, Heuristic};
+use crate::heuristics::{target_action, AszGreedy, Heuristic, Lookahead};
 use crate::map::PreparedMap;
 use anyhow::Result;
 use std::sync::Arc;
@@ -110,6 +110,32 @@ pub fn run(
             rate,
             rate / base,
             100.0 * same as f64 / total as f64
+        );
+    }
+    // The lookahead target's decision over the same states: five futures of
+    // its horizon against the expert captors, each scored by a coarse ASZ.
+    println!("\n| target controller | time per decision | decisions/s | moves other than the rule-based target's |");
+    println!("|---|---|---|---|");
+    for horizon in [5, 10, 20] {
+        let mut lookahead = Lookahead::new(horizon, Box::new(Heuristic));
+        let departures = states
+            .iter()
+            .filter(|env| lookahead.target_action(env) != target_action(env))
+            .count();
+        let start = Instant::now();
+        let mut decisions = 0usize;
+        while start.elapsed().as_secs_f64() < secs {
+            lookahead.target_action(&states[decisions % states.len()]);
+            decisions += 1;
+        }
+        let per = start.elapsed().as_secs_f64() / decisions as f64;
+        println!(
+            "| {} | {:.2} ms | {:.0} | {:.1}% ({departures} of {}) |",
+            lookahead.name(),
+            per * 1e3,
+            1.0 / per,
+            100.0 * departures as f64 / states.len() as f64,
+            states.len()
         );
     }
     Ok(())
