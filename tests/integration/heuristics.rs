@@ -392,15 +392,20 @@ fn greedy_by_definition(
     (actions[best], false)
 }
 
-#[test]
-fn greedy_captors_pick_the_definitions_action_on_real_states() {
+/// Three captors and a target on the 26 Gibson maps, episodes of 500 steps.
+fn gibson_3v1() -> TrapEnv {
     let maps = t2e::map::catalog::load_prepared("gibson").unwrap();
     let cfg = EnvConfig {
         num_captors: 3,
         episode_length: 500,
         ..EnvConfig::default()
     };
-    let mut env = TrapEnv::new(cfg, maps).unwrap();
+    TrapEnv::new(cfg, maps).unwrap()
+}
+
+#[test]
+fn greedy_captors_pick_the_definitions_action_on_real_states() {
+    let mut env = gibson_3v1();
     let mut greedy = AszGreedy::default();
     let mut fm = t2e::asz::FastMarching::new();
     let mut rewards = vec![0f32; 4];
@@ -518,13 +523,7 @@ fn future_by_definition(env: &TrapEnv, first: Action, horizon: usize) -> (bool, 
 
 #[test]
 fn the_lookahead_target_plays_the_best_simulated_future() {
-    let maps = t2e::map::catalog::load_prepared("gibson").unwrap();
-    let cfg = EnvConfig {
-        num_captors: 3,
-        episode_length: 500,
-        ..EnvConfig::default()
-    };
-    let mut env = TrapEnv::new(cfg, maps).unwrap();
+    let mut env = gibson_3v1();
     let horizon = 6;
     let mut lookahead = Lookahead::new(horizon, Box::new(Heuristic));
     let mut rewards = vec![0f32; 4];

@@ -119,8 +119,8 @@ pub struct TrapEnv {
 }
 
 /// A copy of the world's state (a controller's lookahead plays on one);
-/// the ASZ's buffers are not copied. Both methods name every field, so a
-/// field added to `TrapEnv` cannot be left out of the copy.
+/// the ASZ's buffers are not copied. It names every field, so a field
+/// added to `TrapEnv` cannot be left out of the copy.
 impl Clone for TrapEnv {
     fn clone(&self) -> TrapEnv {
         let TrapEnv {
@@ -157,40 +157,6 @@ impl Clone for TrapEnv {
             collided: collided.clone(),
             asz_fields: None,
         }
-    }
-
-    fn clone_from(&mut self, source: &TrapEnv) {
-        let TrapEnv {
-            cfg,
-            maps,
-            map,
-            robots,
-            specs,
-            steps,
-            path_len,
-            prev_dist,
-            captured,
-            seed,
-            travelled,
-            dist_change,
-            contact,
-            collided,
-            asz_fields: _,
-        } = source;
-        self.cfg.clone_from(cfg);
-        self.maps.clone_from(maps);
-        self.map.clone_from(map);
-        self.robots.clone_from(robots);
-        self.specs.clone_from(specs);
-        self.steps = *steps;
-        self.path_len.clone_from(path_len);
-        self.prev_dist.clone_from(prev_dist);
-        self.captured = *captured;
-        self.seed = *seed;
-        self.travelled.clone_from(travelled);
-        self.dist_change.clone_from(dist_change);
-        self.contact.clone_from(contact);
-        self.collided.clone_from(collided);
     }
 }
 

@@ -31,7 +31,6 @@ enum Future {
 pub struct Lookahead {
     horizon: usize,
     captors: Box<dyn Controller>,
-    sim: Option<TrapEnv>,
     fields: AszFields,
     lattice: Option<CoarseLattice>,
     actions: Vec<Action>,
@@ -53,7 +52,6 @@ impl Lookahead {
         Lookahead {
             horizon,
             captors,
-            sim: None,
             fields: AszFields::new(),
             lattice: None,
             actions: Vec::new(),
@@ -81,21 +79,20 @@ impl Lookahead {
     /// against the captors' model, on a copy of `env`.
     fn future(&mut self, env: &TrapEnv, first: Action) -> Future {
         let k = env.num_captors();
-        let sim = match &mut self.sim {
-            Some(sim) => {
-                sim.clone_from(env);
-                sim
-            }
-            None => self.sim.insert(env.clone()),
-        };
+        let mut sim = env.clone();
         self.actions.resize(k + 1, Action::Stop);
         self.rewards.resize(k + 1, 0.0);
         for step in 0..self.horizon {
             if sim.is_done() {
                 break;
             }
-            self.captors.act(sim, Side::Captors, &mut self.actions[..k]);
-            self.actions[k] = if step == 0 { first } else { target_action(sim) };
+            self.captors
+                .act(&sim, Side::Captors, &mut self.actions[..k]);
+            self.actions[k] = if step == 0 {
+                first
+            } else {
+                target_action(&sim)
+            };
             sim.step_state(&self.actions, &mut self.rewards);
             if sim.captured {
                 return Future::Caught(step);
