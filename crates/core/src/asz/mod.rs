@@ -3,16 +3,19 @@
 //! The ASZ itself is `AszFields` (fields.rs): one arrival field per robot,
 //! as the spec defines it and the paper's code computes it. Everything that
 //! reads |ASZ| uses it: the environment (SoA, the strict capture rule, the
-//! Python `asz_area` and infos), the ASZ-greedy planner (`greedy[:K]`), the
-//! shaping potential and the renders.
+//! Python `asz_area` and infos), the ASZ-greedy planner on the spec's cells
+//! (`greedy`), the shaping potential, the lookahead target and the renders.
 //!
 //! What stays here is one first-order Fast Marching pass (Sethian) with
 //! labelled fronts, each cell claimed by the front that arrives first. With
 //! one front it is the geodesic distance the planner falls back on
 //! (`distance_field`). With every robot's front it is a one-pass |ASZ|
 //! (`asz_cells`) that closes the narrow gaps between captor regions which
-//! per-robot fields keep open; it is kept only as the baseline the fields
-//! are measured against (the reference conformance test, `bench`).
+//! per-robot fields keep open. It stays for `greedy:K` on coarse cells,
+//! where its fronts start from the 2 x 2 cells around each robot and so
+//! move with every move (fields there, each in the one cell holding its
+//! robot, made the planner far weaker), and as the baseline the fields are
+//! measured against (the reference conformance test, `bench`).
 
 mod coarse;
 mod field_queue;

@@ -218,19 +218,26 @@ impl Controller for Heuristic {
 /// Playing the target, the same rule mirrored (`target_action`): the
 /// largest ASZ, else the rule-based target's action.
 ///
-/// |ASZ| is the per-robot fields' (`asz::AszFields`). `coarsening` 1
-/// marches them on the map's own 0.05 m cells, as the spec says. A larger
-/// factor marches them on cells of that many map cells per side
-/// (`asz::CoarseLattice`), each field from the one coarse cell holding its
-/// robot: about factor^2 fewer cells per march, for a controller that plays
-/// many episodes (held-out panels, league members).
+/// `coarsening` 1 takes |ASZ| from the per-robot fields on the map's own
+/// 0.05 m cells (`asz::AszFields`), as the spec says. A larger factor
+/// takes it from the one-pass labelled march on cells of that many map
+/// cells per side (`asz::CoarseLattice`), each front started from the 2 x 2
+/// cells around its robot: about factor^2 fewer cells per march, for a
+/// controller that plays many episodes (held-out panels, league members).
+/// The fields on coarse cells, each started in the cell holding its
+/// robot, made `greedy:2` much weaker (10.0% of medium-map episodes
+/// against the rule-based target, 52.0% on the march; 2026-11-28): a move
+/// inside one coarse cell changes no field.
 /// docs/guide/render-bench.md (the `greedy:K` decision timings) measures what it changes.
 pub struct AszGreedy {
     coarsening: usize,
     coarse: Option<CoarseLattice>,
-    /// The robots' arrival fields, kept across the four moves of each
-    /// captor of one decision: only the moving robot's field is marched.
+    /// The robots' arrival fields (on the map's own cells), kept across the
+    /// four moves of each captor of one decision: only the moving robot's
+    /// field is marched.
     fields: AszFields,
+    /// The one-pass labelled march, for coarse cells (see `new`).
+    marching: FastMarching,
     distance: FastMarching,
     /// The lattice and point `distance` holds the geodesic field of: the
     /// captors of one decision share the target's field, so the fallback
@@ -265,6 +272,7 @@ impl AszGreedy {
             coarsening,
             coarse: None,
             fields: AszFields::new(),
+            marching: FastMarching::new(),
             distance: FastMarching::new(),
             distance_from: None,
         }
@@ -294,11 +302,17 @@ impl AszGreedy {
         let moved = Self::moves_of(env, env.target_index());
         let (captors, target) = env.asz_sources();
         let sizes = if self.coarsening == 1 {
-            target_asz_sizes(&mut self.fields, &**env.map(), &captors, target, &moved)
+            moved.map(|pos| {
+                self.fields
+                    .with_moved_target(&**env.map(), target, &captors, pos)
+            })
         } else {
             self.lattice(env);
             let lattice = self.coarse.as_ref().unwrap();
-            target_asz_sizes(&mut self.fields, lattice, &captors, target, &moved)
+            moved.map(|pos| {
+                self.marching
+                    .asz_cells(lattice, Source { pos, ..target }, &captors)
+            })
         };
         if sizes.iter().all(|&s| s == sizes[0]) {
             return target_action(env);
@@ -327,24 +341,32 @@ impl AszGreedy {
     pub fn captor_action(&mut self, env: &TrapEnv, i: usize) -> Action {
         let map = env.map();
         let moved = Self::moves_of(env, i);
+        let (mut captors, target) = env.asz_sources();
         let best = if self.coarsening == 1 {
+            let sizes = moved.map(|pos| {
+                self.fields
+                    .with_moved_captor(&**map, target, &captors, i, pos)
+            });
             greedy_choice(
-                &mut self.fields,
+                sizes,
                 (&mut self.distance, &mut self.distance_from),
                 &**map,
-                env,
-                i,
+                target,
                 &moved,
             )
         } else {
             self.lattice(env);
             let lattice = self.coarse.as_ref().unwrap();
+            let speed = env.spec(i).max_speed;
+            let sizes = moved.map(|pos| {
+                captors[i] = Source { pos, speed };
+                self.marching.asz_cells(lattice, target, &captors)
+            });
             greedy_choice(
-                &mut self.fields,
+                sizes,
                 (&mut self.distance, &mut self.distance_from),
                 lattice,
-                env,
-                i,
+                target,
                 &moved,
             )
         };
@@ -352,28 +374,15 @@ impl AszGreedy {
     }
 }
 
-/// |ASZ| of the target at each of the positions its actions take it to.
-fn target_asz_sizes<L: Lattice + ?Sized>(
-    fields: &mut AszFields,
-    lattice: &L,
-    captors: &[Source],
-    target: Source,
-    moved: &[[f64; 2]; 4],
-) -> [usize; 4] {
-    moved.map(|pos| fields.with_moved_target(lattice, target, captors, pos))
-}
-
-/// The index of the greedy action, given where each action takes captor `i`.
+/// The index of the greedy action, given the |ASZ| each action of the
+/// captor leaves and where it takes the captor.
 fn greedy_choice<L: Lattice>(
-    fields: &mut AszFields,
+    sizes: [usize; 4],
     (distance, distance_from): (&mut FastMarching, &mut Option<(u64, [u64; 2])>),
     lattice: &L,
-    env: &TrapEnv,
-    i: usize,
+    target: Source,
     moved: &[[f64; 2]; 4],
 ) -> usize {
-    let (captors, target) = env.asz_sources();
-    let sizes = moved.map(|pos| fields.with_moved_captor(lattice, target, &captors, i, pos));
     if sizes.iter().any(|&s| s != sizes[0]) {
         return (0..4).min_by_key(|&a| sizes[a]).unwrap();
     }
