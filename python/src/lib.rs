@@ -15,7 +15,8 @@ use pyo3::prelude::*;
 use std::sync::{Arc, Mutex, MutexGuard};
 use t2e_core::asz::{cells_to_m2, AszFields, Source};
 use t2e_core::env::features::{egocentric_vector, egocentric_width, pool_patch};
-use t2e_core::env::{Action, Controller, EnvConfig, Side, TrapEnv, VecEnv, PATCH};
+use t2e_core::env::sight::MAX_WALL_RAYS;
+use t2e_core::env::{Action, Controller, EnvConfig, Side, Sight, TrapEnv, VecEnv, PATCH};
 use t2e_core::heuristics::{AszGreedy, Heuristic, RandomActions, Still};
 use t2e_core::map::catalog::load_prepared;
 use t2e_core::map::PreparedMap;
@@ -104,7 +105,12 @@ fn seed_of(seed: &Bound<'_, PyAny>) -> PyResult<u64> {
 }
 
 /// The settings of an environment, each checked and named when refused.
-fn env_config(num_captors: i64, speed_ratio: f64, episode_length: i64) -> PyResult<EnvConfig> {
+fn env_config(
+    num_captors: i64,
+    speed_ratio: f64,
+    episode_length: i64,
+    wall_rays: i64,
+) -> PyResult<EnvConfig> {
     if !(1..=MAX_CAPTORS).contains(&num_captors) {
         return Err(value_error(
             "num_captors",
@@ -126,11 +132,22 @@ fn env_config(num_captors: i64, speed_ratio: f64, episode_length: i64) -> PyResu
             "must be between 1 and 1000000 steps",
         ));
     }
+    let sight = Sight {
+        wall_rays: usize::try_from(wall_rays).unwrap_or(usize::MAX),
+    };
+    sight.validate().map_err(|_| {
+        value_error(
+            "wall_rays",
+            wall_rays,
+            format!("must be 0 (the spec's observation) or between 4 and {MAX_WALL_RAYS} (wall rays appended to each vector; a checkpoint trained with sight names its count in meta.json's net.sight)"),
+        )
+    })?;
     let cfg = EnvConfig {
         num_captors: num_captors as usize,
         captor_speed: 1.0,
         target_speed: speed_ratio,
         episode_length: episode_length as u32,
+        sight,
         ..EnvConfig::default()
     };
     cfg.validate()
@@ -212,6 +229,7 @@ struct EnvArgs {
     speed_ratio: f64,
     protocol: String,
     episode_length: i64,
+    wall_rays: i64,
 }
 
 impl EnvArgs {
@@ -221,6 +239,7 @@ impl EnvArgs {
         speed_ratio: f64,
         protocol: &str,
         episode_length: i64,
+        wall_rays: i64,
     ) -> EnvArgs {
         EnvArgs {
             maps: maps.to_string(),
@@ -228,6 +247,7 @@ impl EnvArgs {
             speed_ratio,
             protocol: protocol.to_string(),
             episode_length,
+            wall_rays,
         }
     }
 
@@ -257,7 +277,7 @@ pub struct Env {
 #[pymethods]
 impl Env {
     #[new]
-    #[pyo3(signature = (maps, num_captors = 3, speed_ratio = 1.0, protocol = "held-out", episode_length = 500, render = false))]
+    #[pyo3(signature = (maps, num_captors = 3, speed_ratio = 1.0, protocol = "held-out", episode_length = 500, render = false, wall_rays = 0))]
     fn new(
         maps: &str,
         num_captors: i64,
@@ -265,9 +285,17 @@ impl Env {
         protocol: &str,
         episode_length: i64,
         render: bool,
+        wall_rays: i64,
     ) -> PyResult<Env> {
-        let cfg = env_config(num_captors, speed_ratio, episode_length)?;
-        let args = EnvArgs::new(maps, num_captors, speed_ratio, protocol, episode_length);
+        let cfg = env_config(num_captors, speed_ratio, episode_length, wall_rays)?;
+        let args = EnvArgs::new(
+            maps,
+            num_captors,
+            speed_ratio,
+            protocol,
+            episode_length,
+            wall_rays,
+        );
         let maps = args.load_maps()?;
         let env = TrapEnv::new(cfg, maps).map_err(|e| PyValueError::new_err(e.to_string()))?;
         Ok(Env {
@@ -292,6 +320,7 @@ impl Env {
             a.protocol.clone(),
             a.episode_length,
             me.render.is_some(),
+            a.wall_rays,
         )
             .into_pyobject(slf.py())?
             .into_any();
@@ -304,10 +333,17 @@ impl Env {
         self.env.agent_names()
     }
 
-    /// Length of an agent's vector observation, 5 + 5 K (docs/reference/env.md).
+    /// Length of an agent's vector observation, 5 + 5 K (docs/reference/env.md)
+    /// and its `wall_rays`.
     #[getter]
     fn vector_len(&self) -> usize {
         self.env.cfg.vector_len()
+    }
+
+    /// Wall rays appended to each vector (0: the spec's observation).
+    #[getter]
+    fn wall_rays(&self) -> usize {
+        self.env.cfg.sight.wall_rays
     }
 
     /// Side of the square obstacle patch, in cells.
@@ -654,7 +690,7 @@ pub struct VectorEnv {
 #[pymethods]
 impl VectorEnv {
     #[new]
-    #[pyo3(signature = (num_envs, maps, num_captors = 3, speed_ratio = 1.0, protocol = "held-out", episode_length = 500, seed = None, captors = None, target = None))]
+    #[pyo3(signature = (num_envs, maps, num_captors = 3, speed_ratio = 1.0, protocol = "held-out", episode_length = 500, seed = None, captors = None, target = None, wall_rays = 0))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         num_envs: i64,
@@ -666,6 +702,7 @@ impl VectorEnv {
         seed: Option<&Bound<'_, PyAny>>,
         captors: Option<&str>,
         target: Option<&str>,
+        wall_rays: i64,
     ) -> PyResult<VectorEnv> {
         if !(1..=65_536).contains(&num_envs) {
             return Err(value_error(
@@ -674,7 +711,7 @@ impl VectorEnv {
                 "must be between 1 and 65536",
             ));
         }
-        let cfg = env_config(num_captors, speed_ratio, episode_length)?;
+        let cfg = env_config(num_captors, speed_ratio, episode_length, wall_rays)?;
         if num_envs * (num_captors + 1) > MAX_VECTOR_AGENTS {
             return Err(value_error(
                 "num_envs",
@@ -685,7 +722,14 @@ impl VectorEnv {
                 ),
             ));
         }
-        let args = EnvArgs::new(maps, num_captors, speed_ratio, protocol, episode_length);
+        let args = EnvArgs::new(
+            maps,
+            num_captors,
+            speed_ratio,
+            protocol,
+            episode_length,
+            wall_rays,
+        );
         let maps = args.load_maps()?;
         // None draws a seed, as `parallel_env().reset(seed=None)` does;
         // `seed` says which, so the run can be repeated.
@@ -750,6 +794,7 @@ impl VectorEnv {
             me.seed,
             me.controllers.0.clone(),
             me.controllers.1.clone(),
+            a.wall_rays,
         )
             .into_pyobject(slf.py())?
             .into_any();
@@ -769,6 +814,12 @@ impl VectorEnv {
     #[getter]
     fn vector_len(&self) -> usize {
         lock(&self.venv).cfg.vector_len()
+    }
+
+    /// Wall rays appended to each vector (0: the spec's observation).
+    #[getter]
+    fn wall_rays(&self) -> usize {
+        lock(&self.venv).cfg.sight.wall_rays
     }
 
     /// Starts episode 0 of every world: vectors [n, N, 5 + 5 K] float32 and
@@ -952,8 +1003,11 @@ fn asz_area(
 /// for each row of spec vectors [A, 5 + 5N] and patches [A, 48, 48], the
 /// egocentric vector [A, 6 + 9N] and the patch max-pooled by `pool`
 /// [A, 48 / pool, 48 / pool]; with `flat`, the two in one float32 row
-/// [A, 6 + 9N + (48 / pool)^2] and no patch array.
+/// [A, 6 + 9N + (48 / pool)^2] and no patch array. Vectors with sight
+/// carry `wall_rays` more numbers after the 5 + 5N, which follow the
+/// egocentric vector as they are.
 #[pyfunction]
+#[pyo3(signature = (vectors, patches, pool, flat, wall_rays = 0))]
 #[allow(clippy::type_complexity)]
 fn shaped_observations<'py>(
     py: Python<'py>,
@@ -961,16 +1015,18 @@ fn shaped_observations<'py>(
     patches: numpy::PyReadonlyArray3<'py, u8>,
     pool: usize,
     flat: bool,
+    wall_rays: usize,
 ) -> PyResult<(Bound<'py, PyArray2<f32>>, Option<Bound<'py, PyArray3<u8>>>)> {
     if ![1, 2, 3, 4, 6].contains(&pool) {
         return Err(value_error("patch_pool", pool, "must be 1, 2, 3, 4 or 6"));
     }
-    let (rows, len) = (vectors.shape()[0], vectors.shape()[1]);
+    let (rows, full) = (vectors.shape()[0], vectors.shape()[1]);
+    let len = full.saturating_sub(wall_rays);
     if len < 5 || (len - 5) % 5 != 0 {
         return Err(value_error(
             "vectors",
-            format!("{len} numbers"),
-            "a spec vector has 5 + 5N numbers",
+            format!("{full} numbers"),
+            format!("a vector has 5 + 5N numbers, then the {wall_rays} wall rays"),
         ));
     }
     if patches.shape() != [rows, PATCH, PATCH] {
@@ -981,12 +1037,12 @@ fn shaped_observations<'py>(
         ));
     }
     let (vectors, patches) = (vectors.as_array(), patches.as_array());
-    let width = egocentric_width((len - 5) / 5);
+    let width = egocentric_width((len - 5) / 5) + wall_rays;
     let side = PATCH / pool;
     let row_len = if flat { width + side * side } else { width };
     let mut out = vec![0f32; rows * row_len];
     let mut pooled = vec![0u8; rows * side * side];
-    let mut vector = vec![0f32; len];
+    let mut vector = vec![0f32; full];
     let mut patch = vec![0u8; PATCH * PATCH];
     for r in 0..rows {
         // Read in index order, whatever the arrays' memory layout.
@@ -998,7 +1054,10 @@ fn shaped_observations<'py>(
             .iter_mut()
             .zip(patches.index_axis(numpy::ndarray::Axis(0), r).iter())
             .for_each(|(p, &x)| *p = x);
-        egocentric_vector(&vector, &mut out[r * row_len..r * row_len + width]);
+        let shaped = &mut out[r * row_len..r * row_len + width];
+        let (ego, rays) = shaped.split_at_mut(width - wall_rays);
+        egocentric_vector(&vector[..len], ego);
+        rays.copy_from_slice(&vector[len..]);
         let cells = &mut pooled[r * side * side..(r + 1) * side * side];
         pool_patch(&patch, pool, cells);
         if flat {

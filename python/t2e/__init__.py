@@ -34,6 +34,7 @@ def vector_env(
     seed: int = None,
     captors: str = None,
     target: str = None,
+    wall_rays: int = 0,
 ) -> VectorEnv:
     """``num_envs`` worlds stepped together in Rust, in parallel and without
     the GIL. ``reset()`` returns (vectors [n, N, 5 + 5 K] float32, patches
@@ -45,10 +46,12 @@ def vector_env(
     Rust (heuristic, greedy, greedy:K, random, still); the actions given
     for it are then ignored. ``seed=None`` draws a seed from the operating
     system, as ``parallel_env().reset(seed=None)`` does; the env's ``seed``
-    attribute says which, so the run can be repeated."""
+    attribute says which, so the run can be repeated. ``wall_rays``
+    appends that many wall distances in each robot's frame to its vector
+    (0: the spec's observation; see ``parallel_env``)."""
     import numbers
 
-    for name, value in (("num_envs", num_envs), ("num_captors", num_captors), ("episode_length", episode_length)):
+    for name, value in (("num_envs", num_envs), ("num_captors", num_captors), ("episode_length", episode_length), ("wall_rays", wall_rays)):
         if isinstance(value, bool) or not isinstance(value, numbers.Integral):
             raise TypeError(f"{name} = {value!r}: must be an integer")
     if isinstance(speed_ratio, bool) or not isinstance(speed_ratio, numbers.Real):
@@ -59,7 +62,7 @@ def vector_env(
         seed = secrets.randbits(64)
     elif isinstance(seed, bool) or not isinstance(seed, numbers.Integral):
         raise TypeError(f"seed = {seed!r}: must be an integer in 0..2**64 or None")
-    return VectorEnv(num_envs, maps, num_captors, speed_ratio, protocol, episode_length, seed, captors, target)
+    return VectorEnv(num_envs, maps, num_captors, speed_ratio, protocol, episode_length, seed, captors, target, wall_rays)
 
 
 __all__ = [

@@ -5,6 +5,8 @@
 - ``egocentric``: what the Rust learners' networks read (``vector_input =
   "egocentric"`` with ``patch_pool``): the vector turned into the robot's
   own frame, 6 + 9N numbers, and the patch max-pooled.
+- with ``wall_rays``, each vector ends in that many wall distances in the
+  robot's frame (divided by the map's 16 m), in every kind.
 - ``flat``: the egocentric vector followed by the pooled patch as 0/1
   floats, one float32 Box, for off-the-shelf MLP policies.
 
@@ -36,12 +38,12 @@ def check(kind, patch_pool) -> None:
         raise ValueError(f"patch_pool = {patch_pool!r}: must be one of {PATCH_POOLS} (it divides the 48-cell patch)")
 
 
-def egocentric_width(vector_len: int) -> int:
-    others = (vector_len - 5) // 5
-    return 6 + 9 * others
+def egocentric_width(vector_len: int, wall_rays: int = 0) -> int:
+    others = (vector_len - wall_rays - 5) // 5
+    return 6 + 9 * others + wall_rays
 
 
-def space(kind: str, patch_pool: int, vector_len: int) -> spaces.Space:
+def space(kind: str, patch_pool: int, vector_len: int, wall_rays: int = 0) -> spaces.Space:
     if kind == "spec":
         return spaces.Dict(
             {
@@ -50,7 +52,7 @@ def space(kind: str, patch_pool: int, vector_len: int) -> spaces.Space:
             }
         )
     side = PATCH // patch_pool
-    width = egocentric_width(vector_len)
+    width = egocentric_width(vector_len, wall_rays)
     if kind == "egocentric":
         return spaces.Dict(
             {
@@ -67,12 +69,13 @@ def egocentric(vectors: np.ndarray) -> np.ndarray:
     return shaped_observations(vectors, np.zeros((len(vectors), PATCH, PATCH), np.uint8), 1, False)[0]
 
 
-def build(kind: str, patch_pool: int, vectors: np.ndarray, patches: np.ndarray):
-    """One observation per row of ``vectors`` [A, 5 + 5N] and ``patches``
-    [A, 48, 48], as ``kind`` shapes them."""
+def build(kind: str, patch_pool: int, vectors: np.ndarray, patches: np.ndarray, wall_rays: int = 0):
+    """One observation per row of ``vectors`` [A, 5 + 5N + wall_rays] and
+    ``patches`` [A, 48, 48], as ``kind`` shapes them (the wall rays, if
+    any, follow the egocentric vector as they are)."""
     if kind == "spec":
         return [{"patch": patches[i], "vector": vectors[i]} for i in range(len(vectors))]
-    shaped, pooled = shaped_observations(vectors, patches, patch_pool, kind == "flat")
+    shaped, pooled = shaped_observations(vectors, patches, patch_pool, kind == "flat", wall_rays)
     if kind == "egocentric":
         return [{"patch": pooled[i], "vector": shaped[i]} for i in range(len(vectors))]
     return list(shaped)

@@ -51,7 +51,10 @@ class T2EParallelEnv(ParallelEnv):
     plays that side inside the env (``heuristic``, ``greedy``,
     ``greedy:K``, ``random``, ``still``, ``ckpt:FOLDER`` for an exported
     player, or a policy from ``t2e.load_policy``), so only the other side's
-    agents remain. Pickling or copying the env makes a new one from the
+    agents remain; ``wall_rays`` 0 (the spec's observation) or 4 to 72
+    wall distances in the robot's frame across the map, appended to every
+    vector (the learners' `net.sight`; not in the paper; a player trained
+    with them needs them). Pickling or copying the env makes a new one from the
     same arguments and random state; it starts without an episode.
     ``state()`` is the global state a centralised critic reads.
     """
@@ -72,6 +75,7 @@ class T2EParallelEnv(ParallelEnv):
         target: Any = None,
         observation: str = "spec",
         patch_pool: int = 4,
+        wall_rays: int = 0,
     ):
         if max_cycles is not None:
             _check_int("max_cycles", max_cycles)
@@ -92,9 +96,11 @@ class T2EParallelEnv(ParallelEnv):
             target=_picklable(target),
             observation=observation,
             patch_pool=patch_pool,
+            wall_rays=wall_rays,
         )
         _check_int("num_captors", num_captors)
         _check_int("episode_length", episode_length)
+        _check_int("wall_rays", wall_rays)
         if not isinstance(speed_ratio, numbers.Real) or isinstance(speed_ratio, bool):
             raise TypeError(f"speed_ratio = {speed_ratio!r}: must be a number (v_e / v_p)")
         if not isinstance(maps, str):
@@ -110,7 +116,10 @@ class T2EParallelEnv(ParallelEnv):
         self.observation = observation
         self.patch_pool = int(patch_pool)
         self._window = _Window() if render_mode == "human" else None
-        self._env = Env(maps, int(num_captors), float(speed_ratio), protocol, int(episode_length), render_mode is not None)
+        self._env = Env(
+            maps, int(num_captors), float(speed_ratio), protocol, int(episode_length), render_mode is not None, int(wall_rays)
+        )
+        self.wall_rays = int(wall_rays)
         self.render_mode = render_mode
         self.asz_info = bool(asz_info)
         self.max_cycles = int(episode_length)
@@ -121,6 +130,14 @@ class T2EParallelEnv(ParallelEnv):
         for name, spec in (("captors", captors), ("target", target)):
             if spec is not None:
                 self._opponents[name] = _opponent(name, spec)
+        for name, opponent in self._opponents.items():
+            # A loaded policy reads this env's vectors as they are.
+            rays = getattr(opponent, "wall_rays", None)
+            if rays is not None and rays != self.wall_rays:
+                raise ValueError(
+                    f"{name} = {_picklable(opponent)!r}: trained with wall_rays = {rays} (net.sight in its meta.json), "
+                    f"this env has wall_rays = {self.wall_rays}; make the env with wall_rays={rays}"
+                )
         if len(self._opponents) == 2:
             raise ValueError("captors and target: both sides played by built-in opponents leaves no agent to act")
         self.possible_agents = [a for a in self._all_agents if _side(a) not in self._opponents]
@@ -129,7 +146,7 @@ class T2EParallelEnv(ParallelEnv):
         self.agents: list[str] = []
         self._last = None
         self._captured = False
-        space = obs.space(observation, self.patch_pool, self._env.vector_len)
+        space = obs.space(observation, self.patch_pool, self._env.vector_len, self.wall_rays)
         self.observation_spaces = {a: space for a in self.possible_agents}
         self.action_spaces = {a: spaces.Discrete(ACTIONS) for a in self.possible_agents}
         self.state_space = spaces.Box(-np.inf, np.inf, shape=(5 * len(self._all_agents) + 1,), dtype=np.float32)
@@ -241,7 +258,7 @@ class T2EParallelEnv(ParallelEnv):
         if any(not isinstance(o, Policy) for o in self._opponents.values()):
             self._last = {a: {"patch": patches[i], "vector": vectors[i]} for i, a in enumerate(self._all_agents)}
         mine = self._rows
-        shaped = obs.build(self.observation, self.patch_pool, vectors[mine], patches[mine])
+        shaped = obs.build(self.observation, self.patch_pool, vectors[mine], patches[mine], self.wall_rays)
         return dict(zip(self.possible_agents, shaped))
 
     def _opponent_actions(self, side: str, opponent) -> Dict[str, int]:

@@ -83,6 +83,12 @@ MAX_CONV_CHANNELS = 512
 PATCH_POOLS = (1, 2, 3, 4, 6)
 MAX_PRIOR = 20.0
 MAX_CAPTORS = 8
+MAX_WALL_RAYS = 72
+
+
+def _wall_rays(net: dict) -> int:
+    """The wall rays a network reads after the spec's vector (net.sight)."""
+    return int(net.get("sight", {}).get("wall_rays", 0))
 
 
 def _verify_manifest(folder: Path) -> None:
@@ -175,6 +181,12 @@ def _read_meta(folder: Path) -> dict:
         raise _refuse(path, f"net.patch_pool {net.get('patch_pool')} does not divide {PATCH}")
     if PATCH // int(net.get("patch_pool", 2)) < 7:
         raise _refuse(path, f"net.patch_pool {net.get('patch_pool')}: the pooled patch is too small for the actor's two convolutions")
+    sight = net.get("sight", {"wall_rays": 0})
+    if not isinstance(sight, dict) or set(sight) - {"wall_rays"}:
+        raise _refuse(path, f"net.sight = {sight!r}: must be an object with wall_rays")
+    rays = sight.get("wall_rays", 0)
+    if isinstance(rays, bool) or not isinstance(rays, int) or not (rays == 0 or 4 <= rays <= MAX_WALL_RAYS):
+        raise _refuse(path, f"net.sight.wall_rays = {rays!r}: must be 0 or an integer from 4 to {MAX_WALL_RAYS}")
     prior = net.get("heuristic_prior", 0.0)
     if isinstance(prior, bool) or not isinstance(prior, (int, float)) or not math.isfinite(prior) or not 0 <= prior <= MAX_PRIOR:
         raise _refuse(path, f"net.heuristic_prior = {prior!r}: must be a number in [0, {MAX_PRIOR}]")
@@ -195,21 +207,25 @@ def _read_meta(folder: Path) -> dict:
     return meta
 
 
-def _vector_features(v, agents: int, kind: str):
-    """The network's first layer's input from vectors [B, 5 + 5N]
-    (`VectorInput` in the Rust nn module)."""
+def _vector_features(v, agents: int, kind: str, sight: int = 0):
+    """The network's first layer's input from vectors [B, 5 + 5N + sight]
+    (`VectorInput` in the Rust nn module; the sight's numbers pass as
+    they are)."""
     import torch
 
     if kind == "layer_norm":
         return v
     per = v.shape[-1] // agents
-    n = (per - 5) // 5
+    n = (per - sight - 5) // 5
+    rays = [a * per + 5 + 5 * n + k for a in range(agents) for k in range(sight)]
     if kind == "scaled":
         parts_lin, parts_ang = [], []
         for a in range(agents):
             b = a * per
             idx = [b, b + 1, b + 2, b + 3] + [b + 5 + k for k in range(2 * n)] + [b + 5 + 2 * n + k for k in range(2 * n)]
+            idx += [b + 5 + 5 * n + k for k in range(sight)]
             scale = [1.0, 1.0, 1 / POSITION_SCALE, 1 / POSITION_SCALE] + [1.0] * (2 * n) + [1 / POSITION_SCALE] * (2 * n)
+            scale += [1.0] * sight
             parts_lin.append(v[..., idx] * torch.tensor(scale, dtype=v.dtype))
             parts_ang.append(v[..., [b + 4] + [b + 5 + 4 * n + k for k in range(n)]])
         lin, ang = torch.cat(parts_lin, -1), torch.cat(parts_ang, -1)
@@ -245,6 +261,7 @@ def _vector_features(v, agents: int, kind: str):
             own_forward, own_left, px / POSITION_SCALE, py / POSITION_SCALE, sin, cos,
             flat(off_f / POSITION_SCALE), flat(off_l / POSITION_SCALE), flat(dist / POSITION_SCALE),
             flat(off_f / reach), flat(off_l / reach), flat(vel_f), flat(vel_l), flat(oh.sin()), flat(oh.cos()),
+            v[..., rays],
         ],
         -1,
     )
@@ -259,8 +276,9 @@ def _build_actor(net: dict, vector_len: int):
     side = PATCH // int(net.get("patch_pool", 2))
     side = ((side - 3) // 2 + 1 - 3) // 2 + 1
     kind = net.get("vector_input", "layer_norm")
-    per, n = vector_len, (vector_len - 5) // 5
-    width = {"layer_norm": vector_len, "scaled": per + 1 + n, "egocentric": 6 + 9 * n}[kind]
+    sight = _wall_rays(net)
+    per, n = vector_len, (vector_len - sight - 5) // 5
+    width = {"layer_norm": vector_len, "scaled": per + 1 + n, "egocentric": 6 + 9 * n + sight}[kind]
 
     class Encoder(nn.Module):
         def __init__(self):
@@ -276,7 +294,7 @@ def _build_actor(net: dict, vector_len: int):
         def forward(self, patches, vectors):
             x = torch.relu(self.conv2(torch.relu(self.conv1(patches.float()))))
             x = torch.relu(self.patch_fc(x.flatten(1)))
-            v = _vector_features(vectors, 1, kind)
+            v = _vector_features(vectors, 1, kind, sight)
             if kind != "scaled":
                 v = self.vector_norm(v)
             v = torch.relu(self.vector_fc(v))
@@ -323,7 +341,8 @@ class TorchPolicy:
         self.side = self.meta["side"]
         self.num_captors = int(self.meta["num_captors"])
         self.net = self.meta["net"]
-        self.vector_len = 5 + 5 * self.num_captors
+        self.wall_rays = _wall_rays(self.net)
+        self.vector_len = 5 + 5 * self.num_captors + self.wall_rays
         self.prior = float(self.net.get("heuristic_prior", 0.0))
         self.actor = _build_actor(self.net, self.vector_len)
         weights = _read_safetensors(folder / "actor.safetensors")
@@ -376,7 +395,9 @@ class TorchPolicy:
         if vectors.shape[1] != self.vector_len:
             raise ValueError(
                 f"observations: vectors of {vectors.shape[1]} numbers; {self.folder} was trained with "
-                f"{self.num_captors} captors ({self.vector_len} numbers)"
+                f"{self.num_captors} captors and {self.wall_rays} wall rays (net.sight in meta.json): "
+                f"{self.vector_len} numbers; make the env with num_captors={self.num_captors}, "
+                f"wall_rays={self.wall_rays}"
             )
         logits = self.logits(patches, vectors)
         if self.prior > 0 and self.side == "target":

@@ -7,6 +7,7 @@
 use super::store::Player;
 use crate::env::{Action, Side, VecEnv};
 use crate::learn::acting::{gather_worlds, sample};
+use crate::nn::checkpoint::DoesNotFit;
 use crate::nn::prior::{add_prior, target_hint};
 use crate::nn::stacked::{PreparedActor, StackedActors};
 use crate::nn::PolicySnapshot;
@@ -184,6 +185,17 @@ impl OpponentNets {
         for stack in &self.stacks {
             let first = &self.cache[&stack.ids[0]];
             let net = &first.snapshot.meta.net;
+            // The stacked network reads the env's vectors as they are.
+            if net.sight != venv.cfg.sight {
+                bail!(
+                    "{}: {}",
+                    first.snapshot.dir.display(),
+                    DoesNotFit::Sight {
+                        trained: net.sight,
+                        env: venv.cfg.sight
+                    }
+                );
+            }
             let (g, h) = (stack.ids.len(), stack.actors.hidden as usize);
             let (vl, pl) = (venv.cfg.vector_len(), net.input_len());
             // Each opponent's rows padded to the most any of them plays.

@@ -340,9 +340,9 @@ fn verified_member(
     source: &std::path::Path,
 ) -> Result<PolicySnapshot> {
     let snap = PolicySnapshot::load(source, side)?;
-    let env = cfg.train_config(side.other()).env;
+    let env = cfg.train_config(side.other()).learning_env();
     snap.meta
-        .check_fits(side, &env)
+        .check_reads(side, &env)
         .map_err(|e| anyhow!("{}: {e}", snap.dir.display()))?;
     if cfg.protocol == Protocol::HeldOut && snap.meta.protocol != Protocol::HeldOut {
         bail!(

@@ -16,6 +16,7 @@ mod league;
 mod league_faults;
 mod learn;
 mod protocol;
+mod sight;
 mod store;
 mod stored_runs;
 mod tch_smoke;

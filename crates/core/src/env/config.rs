@@ -75,6 +75,11 @@ pub struct EnvConfig {
     pub drive_force: DriveForce,
     /// Build observations at every step (off for pure evaluation of rule-based robots).
     pub observations: bool,
+    /// Inputs beyond the spec's in every robot's vector. Not read from an
+    /// env table: it is a learner's choice of inputs (its `net.sight`),
+    /// which whoever builds the env copies here, so a config names it once.
+    #[serde(skip)]
+    pub sight: super::Sight,
 }
 
 impl Default for EnvConfig {
@@ -87,6 +92,7 @@ impl Default for EnvConfig {
             capture_rule: CaptureRule::Fast,
             drive_force: DriveForce::Squared,
             observations: true,
+            sight: super::Sight::OFF,
         }
     }
 }
@@ -109,6 +115,7 @@ impl EnvConfig {
                 return Err(ConfigError::new(name, v, "must be a speed in (0, 10] m/s"));
             }
         }
+        self.sight.validate()?;
         if self.episode_length == 0 {
             return Err(ConfigError::new(
                 "episode_length",
@@ -123,8 +130,14 @@ impl EnvConfig {
         self.num_captors + 1
     }
 
-    /// Length of the agent-related observation vector: 5 + 5 K.
+    /// Length of the agent-related observation vector: 5 + 5 K (spec
+    /// §5), then the sight's numbers.
     pub fn vector_len(&self) -> usize {
+        self.spec_vector_len() + self.sight.len()
+    }
+
+    /// Length of the spec's part of the vector: 5 + 5 K.
+    pub fn spec_vector_len(&self) -> usize {
         5 + 5 * self.num_captors
     }
 

@@ -11,6 +11,7 @@ pub mod observe;
 pub mod physics;
 pub mod placement;
 pub mod potential;
+pub mod sight;
 pub mod vec_env;
 
 pub use action::Action;
@@ -19,6 +20,7 @@ pub use controller::{Controller, Side};
 pub use observe::{PATCH, PATCH_LEN};
 pub use physics::Robot;
 pub use placement::PlacementError;
+pub use sight::Sight;
 pub use vec_env::VecEnv;
 
 use crate::asz::{strict_capture_cells, AszFields, Source};
@@ -32,7 +34,7 @@ use std::sync::Arc;
 /// One agent's observation.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Observation {
-    /// 5 + 5 K numbers (spec §5).
+    /// 5 + 5 K numbers (spec §5), then the sight's if it is on.
     pub vector: Vec<f32>,
     /// 48 x 48, row-major, 1 = obstacle.
     pub patch: Vec<u8>,
@@ -352,10 +354,27 @@ impl TrapEnv {
         }
     }
 
-    /// Observation of agent `i` into caller buffers (vector: 5 + 5 K, patch: 48 x 48).
+    /// Observation of agent `i` into caller buffers (vector: 5 + 5 K and
+    /// the env's sight, patch: 48 x 48).
     pub fn write_observation(&self, i: usize, vector: &mut [f32], patch: &mut [u8]) {
+        self.write_observation_with(self.cfg.sight, i, vector, patch);
+    }
+
+    /// Observation of agent `i` with `sight` rather than the env's own: a
+    /// policy that carries its inputs with it (a checkpoint) sees what it
+    /// was trained on in any env. `vector` holds 5 + 5 K + `sight.len()`.
+    pub fn write_observation_with(
+        &self,
+        sight: Sight,
+        i: usize,
+        vector: &mut [f32],
+        patch: &mut [u8],
+    ) {
+        let spec = 5 + 5 * self.cfg.num_captors;
+        debug_assert_eq!(vector.len(), spec + sight.len());
         observe::write_vector(&self.robots, i, self.cfg.num_captors, vector);
         let r = &self.robots[i];
+        sight.write(&self.map, r, &mut vector[spec..]);
         observe::write_patch(&self.map, r.pos, r.theta, patch);
     }
 

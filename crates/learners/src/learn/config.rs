@@ -388,6 +388,19 @@ impl TrainConfig {
                 })?,
             }
         }
+        if let (Play::Learn(_), Play::Learn(_)) = (&self.captors.play, &self.target.play) {
+            // One env writes both sides' vectors.
+            if self.captors.net.sight != self.target.net.sight {
+                return Err(ConfigError::about(
+                    "captors.net.sight, target.net.sight",
+                    format!(
+                        "differ ({} against {}): two learners in one run read one env's observations, so they see the same",
+                        self.captors.net.sight.label(),
+                        self.target.net.sight.label()
+                    ),
+                ));
+            }
+        }
         if learners == 0 {
             return Err(ConfigError::about(
                 "captors.play, target.play",
@@ -398,6 +411,18 @@ impl TrainConfig {
             ));
         }
         Ok(())
+    }
+
+    /// The env its learners train in: `env` with the learners' sight
+    /// (`validate` holds the two sides' equal when both learn).
+    pub fn learning_env(&self) -> EnvConfig {
+        let mut env = self.env.clone();
+        env.observations = true;
+        env.sight = [&self.captors, &self.target]
+            .into_iter()
+            .find(|side| matches!(side.play, Play::Learn(_)))
+            .map_or(crate::env::Sight::OFF, |side| side.net.sight);
+        env
     }
 
     /// A stable hash of the settings that shape learning (FNV-1a of the

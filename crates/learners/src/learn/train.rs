@@ -253,8 +253,7 @@ impl Trainer {
         if cfg.device == DeviceChoice::Cuda && !tch::Cuda::is_available() {
             bail!("device = \"cuda\" but tch sees no CUDA device; use \"auto\" or \"cpu\"");
         }
-        let mut env_cfg = cfg.env.clone();
-        env_cfg.observations = true;
+        let env_cfg = cfg.learning_env();
         let k = env_cfg.num_captors;
         // Later segments of a resumed run play fresh episodes.
         let mut venv = VecEnv::new(

@@ -20,7 +20,7 @@
 use super::run_dir::RunDirError;
 use super::{obs_tensors, pool_patch, Actor, NetConfig};
 use crate::algorithm::Algorithm;
-use crate::env::{Action, Controller, EnvConfig, Side, TrapEnv, PATCH_LEN};
+use crate::env::{Action, Controller, EnvConfig, Side, Sight, TrapEnv, PATCH_LEN};
 use crate::fs::{write_dir_atomically, write_new_dir_atomically, FsError, Written};
 use crate::util::sha256_file;
 use rand::SeedableRng;
@@ -89,8 +89,9 @@ pub struct PoolMembership {
 }
 
 impl CheckpointMeta {
+    /// The vector its network reads: 5 + 5 K, then its sight's numbers.
     pub fn vector_len(&self) -> usize {
-        5 + 5 * self.num_captors
+        5 + 5 * self.num_captors + self.net.sight.len()
     }
 
     /// Whether this policy can play `side` in environments configured as `cfg`.
@@ -106,6 +107,19 @@ impl CheckpointMeta {
                 trained: self.num_captors,
                 vector_len: self.vector_len(),
                 asked: cfg.num_captors,
+            });
+        }
+        Ok(())
+    }
+
+    /// `check_fits`, for a network fed the env's own observations (a
+    /// league opponent) rather than its own: its sight must be the env's.
+    pub fn check_reads(&self, side: Side, cfg: &EnvConfig) -> Result<(), DoesNotFit> {
+        self.check_fits(side, cfg)?;
+        if self.net.sight != cfg.sight {
+            return Err(DoesNotFit::Sight {
+                trained: self.net.sight,
+                env: cfg.sight,
             });
         }
         Ok(())
@@ -192,6 +206,8 @@ pub enum CheckpointError {
 pub enum DoesNotFit {
     #[error("it holds a {} policy, asked to play the {}", holds.name(), asked.name())]
     Side { holds: Side, asked: Side },
+    #[error("it was trained with sight {} (net.sight in meta.json) and would be fed observations with sight {}: a network reads only the inputs it was trained on", trained.label(), env.label())]
+    Sight { trained: Sight, env: Sight },
     #[error("it was trained with K = {trained} captors and its observations have {vector_len} numbers; this setting has K = {asked}")]
     Captors {
         trained: usize,
@@ -672,13 +688,16 @@ impl Controller for CheckpointController {
     fn act(&mut self, env: &TrapEnv, side: Side, out: &mut [Action]) {
         let agents = side.agents(env.num_captors());
         let n = agents.len();
-        let vl = env.cfg.vector_len();
+        // Its own inputs, whatever the env's: a policy trained with sight
+        // sees with it in any env.
         let net = &self.snapshot.meta.net;
+        let vl = self.snapshot.meta.vector_len();
         let pl = net.input_len();
         self.vectors.resize(n * vl, 0.0);
         self.patches.resize(n * pl, 0);
         for (row, i) in agents.enumerate() {
-            env.write_observation(
+            env.write_observation_with(
+                net.sight,
                 i,
                 &mut self.vectors[row * vl..(row + 1) * vl],
                 &mut self.patch,

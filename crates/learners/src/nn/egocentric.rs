@@ -33,6 +33,8 @@ pub(crate) struct EgocentricVector {
     own: [Tensor; 5],
     /// Indices, N per robot: velocity x, y, offset x, y, relative heading.
     others: [Tensor; 5],
+    /// Indices of the sight's numbers (passed on as they are), robot by robot.
+    sight: Option<Tensor>,
     agents: i64,
     per_other: i64,
     /// Width of the output: agents x (6 + 9N).
@@ -40,8 +42,10 @@ pub(crate) struct EgocentricVector {
 }
 
 impl EgocentricVector {
-    pub(crate) fn new(vector_len: i64, agents: i64) -> EgocentricVector {
-        let (per, n) = super::vector_layout(vector_len, agents);
+    /// `sight`: the numbers after each robot's 5 + 5N (wall rays, already
+    /// in the robot's frame and in [0, 1]), appended as they are.
+    pub(crate) fn new(vector_len: i64, agents: i64, sight: usize) -> EgocentricVector {
+        let (per, n) = super::vector_layout(vector_len, agents, sight as i64);
         let own = std::array::from_fn(|k| {
             Tensor::from_slice(&(0..agents).map(|a| a * per + k as i64).collect::<Vec<_>>())
         });
@@ -62,20 +66,24 @@ impl EgocentricVector {
                 .collect();
             Tensor::from_slice(&idx)
         });
+        let sight_idx: Vec<i64> = (0..agents)
+            .flat_map(|a| (0..sight as i64).map(move |k| a * per + 5 + 5 * n + k))
+            .collect();
         EgocentricVector {
             own,
             others,
+            sight: (sight > 0).then(|| Tensor::from_slice(&sight_idx)),
             agents,
             per_other: n,
-            width: Self::width_of(vector_len as usize, agents as usize) as i64,
+            width: Self::width_of(vector_len as usize, agents as usize, sight) as i64,
         }
     }
 
     /// The output width for `vector_len` numbers of `agents` robots.
-    pub(crate) fn width_of(vector_len: usize, agents: usize) -> usize {
+    pub(crate) fn width_of(vector_len: usize, agents: usize, sight: usize) -> usize {
         let per = vector_len / agents.max(1);
-        let n = per.saturating_sub(5) / 5;
-        agents * (6 + 9 * n)
+        let n = per.saturating_sub(5 + sight) / 5;
+        agents * (6 + 9 * n + sight)
     }
 
     /// `vectors` [..., vector_len] -> [..., width].
@@ -104,26 +112,25 @@ impl EgocentricVector {
         let reach = distance.clamp_min(MIN_DISTANCE);
         let (vel_forward, vel_left) = turn(&ovx, &ovy, &c, &s);
         let flat = |t: Tensor| t.flatten(-2, -1);
-        Tensor::cat(
-            &[
-                own_forward,
-                own_left,
-                px / POSITION_SCALE,
-                py / POSITION_SCALE,
-                sin,
-                cos,
-                flat(&off_forward / POSITION_SCALE),
-                flat(&off_left / POSITION_SCALE),
-                flat(&distance / POSITION_SCALE),
-                flat(&off_forward / &reach),
-                flat(&off_left / &reach),
-                flat(vel_forward),
-                flat(vel_left),
-                flat(oheading.sin()),
-                flat(oheading.cos()),
-            ],
-            last,
-        )
+        let mut parts = vec![
+            own_forward,
+            own_left,
+            px / POSITION_SCALE,
+            py / POSITION_SCALE,
+            sin,
+            cos,
+            flat(&off_forward / POSITION_SCALE),
+            flat(&off_left / POSITION_SCALE),
+            flat(&distance / POSITION_SCALE),
+            flat(&off_forward / &reach),
+            flat(&off_left / &reach),
+            flat(vel_forward),
+            flat(vel_left),
+            flat(oheading.sin()),
+            flat(oheading.cos()),
+        ];
+        parts.extend(self.sight.as_ref().map(pick));
+        Tensor::cat(&parts, last)
     }
 }
 
@@ -155,7 +162,7 @@ mod tests {
         ];
         let mut v = vec![0f32; 15];
         write_vector(&robots, 0, 2, &mut v);
-        let ego = EgocentricVector::new(15, 1);
+        let ego = EgocentricVector::new(15, 1, 0);
         assert_eq!(ego.width, 24);
         let out = Vec::<f32>::try_from(ego.apply(&Tensor::from_slice(&v).unsqueeze(0)).view([-1]))
             .unwrap();
@@ -190,7 +197,7 @@ mod tests {
             robot([2.5, 5.0], [0.0, 0.0], -1.0),
             robot([2.5, 5.0], [0.6, 0.6], 1.1),
         ];
-        let ego = EgocentricVector::new(20, 1);
+        let ego = EgocentricVector::new(20, 1, 0);
         for i in 0..4 {
             let mut v = vec![0f32; 20];
             write_vector(&robots, i, 3, &mut v);
@@ -226,12 +233,12 @@ mod tests {
             for i in 0..2 {
                 write_vector(&robots, i, 3, &mut v[20 * i..20 * (i + 1)]);
             }
-            let ego = EgocentricVector::new(40, 2);
+            let ego = EgocentricVector::new(40, 2, 0);
             Vec::<f32>::try_from(ego.apply(&Tensor::from_slice(&v).view([1, 40])).view([-1]))
                 .unwrap()
         };
         let (a, b) = (features(0.0), features(0.9));
-        assert_eq!(a.len(), EgocentricVector::width_of(40, 2));
+        assert_eq!(a.len(), EgocentricVector::width_of(40, 2, 0));
         // Own velocity (2 per robot) and everything about the others are
         // frame-free; own position and heading (4 per robot) are not.
         let agents = 2;

@@ -18,7 +18,7 @@ pub use crate::env::features::pool_patch;
 pub use checkpoint::{CheckpointController, CheckpointMeta, PolicySnapshot};
 pub(crate) use egocentric::EgocentricVector;
 
-use crate::env::{Action, PATCH};
+use crate::env::{Action, Sight, PATCH};
 use crate::error::{in_range, ConfigError};
 use serde::{Deserialize, Serialize};
 use tch::nn::{self, RNN};
@@ -48,6 +48,11 @@ pub struct NetConfig {
     /// Left out of the stored config while 0, as `vector_input`.
     #[serde(skip_serializing_if = "is_zero")]
     pub heuristic_prior: f64,
+    /// Inputs beyond the spec's (`crate::env::Sight`: wall rays across the
+    /// map), appended to the agent vector; the env is built to write them.
+    /// Left out of the stored config while off, as `vector_input`.
+    #[serde(skip_serializing_if = "Sight::is_off")]
+    pub sight: Sight,
 }
 
 fn is_zero(x: &f64) -> bool {
@@ -62,6 +67,7 @@ impl Default for NetConfig {
             patch_pool: 2,
             vector_input: VectorInput::LayerNorm,
             heuristic_prior: 0.0,
+            sight: Sight::OFF,
         }
     }
 }
@@ -115,24 +121,28 @@ pub(crate) struct ScaledVector {
 const POSITION_SCALE: f32 = 8.0;
 
 /// (numbers per robot, other robots N) of `vector_len` numbers holding
-/// `agents` robots' vectors in `write_vector`'s layout (5 + 5N each).
+/// `agents` robots' vectors in `write_vector`'s layout (5 + 5N each), each
+/// followed by `sight` more (the sight's, `Sight::len`).
 /// Panics on any other length: the network's shape is fixed at build time.
-pub(crate) fn vector_layout(vector_len: i64, agents: i64) -> (i64, i64) {
+pub(crate) fn vector_layout(vector_len: i64, agents: i64, sight: i64) -> (i64, i64) {
     assert!(
         agents > 0 && vector_len % agents == 0,
         "vector of {vector_len} numbers for {agents} robots"
     );
     let per = vector_len / agents;
+    let spec = per - sight;
     assert!(
-        per >= 5 && (per - 5) % 5 == 0,
-        "a robot's vector has 5 + 5N numbers, not {per}"
+        spec >= 5 && (spec - 5) % 5 == 0,
+        "a robot's vector has 5 + 5N + {sight} numbers, not {per}"
     );
-    (per, (per - 5) / 5)
+    (per, (spec - 5) / 5)
 }
 
 impl ScaledVector {
-    pub(crate) fn new(vector_len: i64, agents: i64) -> ScaledVector {
-        let (per, others) = vector_layout(vector_len, agents);
+    /// `sight`: the numbers after each robot's 5 + 5N (wall rays, already
+    /// in [0, 1]), passed on as they are.
+    pub(crate) fn new(vector_len: i64, agents: i64, sight: usize) -> ScaledVector {
+        let (per, others) = vector_layout(vector_len, agents, sight as i64);
         let (mut linear, mut scale, mut angles) = (Vec::new(), Vec::new(), Vec::new());
         for a in 0..agents {
             let base = a * per;
@@ -150,10 +160,13 @@ impl ScaledVector {
             for k in 0..2 * others {
                 push(5 + 2 * others + k, 1.0 / POSITION_SCALE);
             }
+            for k in 0..sight as i64 {
+                push(5 + 5 * others + k, 1.0);
+            }
             angles.push(base + 4);
             angles.extend((0..others).map(|k| base + 5 + 4 * others + k));
         }
-        let width = Self::width_of(vector_len as usize, agents as usize) as i64;
+        let width = Self::width_of(vector_len as usize, agents as usize, sight) as i64;
         debug_assert_eq!(width, linear.len() as i64 + 2 * angles.len() as i64);
         ScaledVector {
             linear: Tensor::from_slice(&linear),
@@ -164,9 +177,9 @@ impl ScaledVector {
     }
 
     /// The output width for `vector_len` numbers of `agents` robots.
-    fn width_of(vector_len: usize, agents: usize) -> usize {
+    fn width_of(vector_len: usize, agents: usize, sight: usize) -> usize {
         let per = vector_len / agents.max(1);
-        let others = per.saturating_sub(5) / 5;
+        let others = per.saturating_sub(5 + sight) / 5;
         agents * (per + 1 + others)
     }
 
@@ -198,6 +211,7 @@ impl NetConfig {
                 "must divide 48 and leave at least 8 pixels (1, 2, 3, 4 or 6)",
             ));
         }
+        self.sight.validate()?;
         // NaN compares false with everything: unchecked, a NaN weight
         // would read as "off" where the prior is tested with `> 0`.
         if !(self.heuristic_prior.is_finite()
@@ -236,8 +250,12 @@ impl NetConfig {
         let conv = 2.0 * 9.0 * (s1 * s1 * c1 * cin + s2 * s2 * c2 * c1);
         let v = match self.vector_input {
             VectorInput::LayerNorm => v,
-            VectorInput::Scaled => ScaledVector::width_of(vector_len, channels) as f64,
-            VectorInput::Egocentric => EgocentricVector::width_of(vector_len, channels) as f64,
+            VectorInput::Scaled => {
+                ScaledVector::width_of(vector_len, channels, self.sight.len()) as f64
+            }
+            VectorInput::Egocentric => {
+                EgocentricVector::width_of(vector_len, channels, self.sight.len()) as f64
+            }
         };
         let linear = 2.0 * (c2 * s2 * s2 * h + v * h + 2.0 * h * h + h * outputs as f64);
         let gru = 2.0 * 2.0 * 3.0 * h * h;
@@ -292,12 +310,12 @@ impl Encoder {
                 vector_len,
             ),
             VectorInput::Scaled => {
-                let s = ScaledVector::new(vector_len, channels);
+                let s = ScaledVector::new(vector_len, channels, cfg.sight.len());
                 let w = s.width;
                 (VectorIn::Scaled(s), w)
             }
             VectorInput::Egocentric => {
-                let e = EgocentricVector::new(vector_len, channels);
+                let e = EgocentricVector::new(vector_len, channels, cfg.sight.len());
                 let w = e.width;
                 let norm = nn::layer_norm(p / "vector_norm", vec![w], Default::default());
                 (VectorIn::Egocentric(e, norm), w)
@@ -693,8 +711,8 @@ mod tests {
             0., 0., 1., 0., // sines of TAU, 0, pi/2, -pi
             1., 1., 0., -1., // cosines
         ];
-        let s = ScaledVector::new(20, 1);
-        assert_eq!((s.width, ScaledVector::width_of(20, 1)), (24, 24));
+        let s = ScaledVector::new(20, 1, 0);
+        assert_eq!((s.width, ScaledVector::width_of(20, 1, 0)), (24, 24));
         let got = Vec::<f32>::try_from(s.apply(&Tensor::from_slice(&v).view([1, 20])).view([-1]))
             .unwrap();
         for (i, (g, w)) in got.iter().zip(&want).enumerate() {
@@ -702,8 +720,8 @@ mod tests {
         }
         // A centralised critic's view: two robots' vectors side by side map
         // robot by robot, linear parts first, then every sine, every cosine.
-        let two = ScaledVector::new(40, 2);
-        assert_eq!((two.width, ScaledVector::width_of(40, 2)), (48, 48));
+        let two = ScaledVector::new(40, 2, 0);
+        assert_eq!((two.width, ScaledVector::width_of(40, 2, 0)), (48, 48));
         let mut vv = v.clone();
         vv.extend(v.iter().map(|x| -x));
         let got =

@@ -161,12 +161,14 @@ impl StackedActors {
             vector_len: first.vector_len,
             vector_input: match first.net.vector_input {
                 super::VectorInput::LayerNorm => StackedVectorIn::LayerNorm,
-                super::VectorInput::Scaled => {
-                    StackedVectorIn::Scaled(ScaledVector::new(first.vector_len, 1))
-                }
-                super::VectorInput::Egocentric => {
-                    StackedVectorIn::Egocentric(EgocentricVector::new(first.vector_len, 1))
-                }
+                super::VectorInput::Scaled => StackedVectorIn::Scaled(ScaledVector::new(
+                    first.vector_len,
+                    1,
+                    first.net.sight.len(),
+                )),
+                super::VectorInput::Egocentric => StackedVectorIn::Egocentric(
+                    EgocentricVector::new(first.vector_len, 1, first.net.sight.len()),
+                ),
             },
             tensors,
         })

@@ -1,0 +1,151 @@
+//! Sight (`net.sight`: wall rays appended to each robot's vector, not in
+//! the paper): the env writes them after the spec's numbers, a network
+//! reads them, a checkpoint carries them in meta.json and sees with them
+//! in any env, and whatever would feed a network other inputs than it was
+//! trained on is refused by name.
+
+use crate::common;
+
+use std::path::{Path, PathBuf};
+use t2e::controllers::ControllerSpec;
+use t2e::env::{Action, Controller, EnvConfig, Side, Sight, TrapEnv, PATCH_LEN};
+use t2e::learn::train::{SideConfig, Trainer};
+use t2e::map::catalog;
+
+const RAYS: Sight = Sight { wall_rays: 8 };
+
+/// A tiny captor team trained one iteration with 8 wall rays.
+fn sighted_run(dir: &Path) -> PathBuf {
+    tch::set_num_threads(1);
+    let mut cfg = common::tiny_train_config("sighted", t2e::protocol::Protocol::HeldOut, "shipped");
+    cfg.captors.net.sight = RAYS;
+    cfg.captors.net.vector_input = t2e::nn::VectorInput::Egocentric;
+    let maps = catalog::load_prepared("shipped:small").unwrap();
+    let mut t = Trainer::new(cfg, maps).unwrap();
+    t.iterate().unwrap();
+    t.save(dir).unwrap().remove(0)
+}
+
+#[test]
+fn rays_follow_the_spec_vector_and_leave_it_as_it_was() {
+    let maps = catalog::load_prepared("shipped:small").unwrap();
+    let plain_cfg = EnvConfig {
+        num_captors: 2,
+        ..EnvConfig::default()
+    };
+    let seen_cfg = EnvConfig {
+        sight: RAYS,
+        ..plain_cfg.clone()
+    };
+    assert_eq!(seen_cfg.vector_len(), plain_cfg.vector_len() + 8);
+    let mut plain = TrapEnv::new(plain_cfg, maps.clone()).unwrap();
+    let mut seen = TrapEnv::new(seen_cfg, maps).unwrap();
+    let a = plain.reset(7).unwrap();
+    let b = seen.reset(7).unwrap();
+    for (x, y) in a.iter().zip(&b) {
+        assert_eq!(x.vector[..], y.vector[..15]);
+        assert_eq!(x.patch, y.patch);
+        assert!(y.vector[15..].iter().all(|&r| r > 0.0 && r <= 1.0), "{y:?}");
+    }
+    // The robots differ in place and heading, so do their rays.
+    assert_ne!(b[0].vector[15..], b[2].vector[15..]);
+    // Written with another sight than the env's, the spec part is the same.
+    let mut v = vec![0f32; 15 + 4];
+    let mut p = vec![0u8; PATCH_LEN];
+    plain.write_observation_with(Sight { wall_rays: 4 }, 0, &mut v, &mut p);
+    assert_eq!(v[..15], a[0].vector[..]);
+    // Ray 0 is straight ahead: 8 rays' first and 4 rays' first agree.
+    assert_eq!(v[15], b[0].vector[15]);
+}
+
+#[test]
+fn a_sighted_checkpoint_records_its_rays_and_sees_with_them_in_any_env() {
+    let run = tempfile::tempdir().unwrap();
+    let ckpt = sighted_run(run.path());
+    let meta = t2e::nn::checkpoint::read_meta(&ckpt).unwrap();
+    assert_eq!(meta.net.sight, RAYS);
+    assert_eq!(meta.vector_len(), 15 + 8);
+    let text = std::fs::read_to_string(ckpt.join("meta.json")).unwrap();
+    assert!(text.contains("\"wall_rays\": 8"), "{text}");
+
+    // As a controller it writes its own inputs: it plays in an env without
+    // sight, and its actions there are those it takes in an env with it.
+    let spec: ControllerSpec = format!("ckpt:{}", ckpt.display()).parse().unwrap();
+    let maps = catalog::load_prepared("shipped:small").unwrap();
+    let plain_cfg = EnvConfig {
+        num_captors: 2,
+        ..EnvConfig::default()
+    };
+    spec.check(Side::Captors, &plain_cfg).unwrap();
+    let play = |cfg: EnvConfig| -> Vec<Action> {
+        let mut env = TrapEnv::new(cfg, maps.clone()).unwrap();
+        env.reset(3).unwrap();
+        let mut c = spec.build(Side::Captors).unwrap();
+        c.reset(&env, 3);
+        let mut all = Vec::new();
+        for _ in 0..20 {
+            let mut out = [Action::Stop; 2];
+            c.act(&env, Side::Captors, &mut out);
+            all.extend(out);
+            let mut acts = out.to_vec();
+            acts.push(Action::Stop);
+            env.step(&acts);
+        }
+        all
+    };
+    let sighted_cfg = EnvConfig {
+        sight: RAYS,
+        ..plain_cfg.clone()
+    };
+    assert_eq!(play(plain_cfg.clone()), play(sighted_cfg.clone()));
+
+    // Fed an env's vectors as they are (a league opponent), it needs the
+    // env's sight to be its own.
+    meta.check_reads(Side::Captors, &sighted_cfg).unwrap();
+    let err = meta
+        .check_reads(Side::Captors, &plain_cfg)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("sight rays8") && err.contains("net.sight") && err.contains("spec"),
+        "{err}"
+    );
+}
+
+#[test]
+fn two_learners_or_a_league_with_different_sight_are_refused_by_name() {
+    let mut cfg = common::tiny_train_config("two", t2e::protocol::Protocol::HeldOut, "shipped");
+    cfg.captors.net.sight = RAYS;
+    cfg.target = SideConfig {
+        play: "mappo".parse().unwrap(),
+        net: cfg.captors.net.clone(),
+        ..SideConfig::default()
+    };
+    cfg.validate().unwrap();
+    assert_eq!(cfg.learning_env().sight, RAYS);
+    cfg.target.net.sight = Sight::OFF;
+    let err = cfg.validate().unwrap_err().to_string();
+    assert!(
+        err.contains("captors.net.sight") && err.contains("rays8 against spec"),
+        "{err}"
+    );
+
+    let league = t2e::league::config::LeagueConfig::parse(
+        "[captors.net.sight]\nwall_rays = 12\n[target.net.sight]\nwall_rays = 12\n",
+    )
+    .unwrap();
+    assert_eq!(
+        league.train_config(Side::Target).learning_env().sight,
+        Sight { wall_rays: 12 }
+    );
+    let err = t2e::league::config::LeagueConfig::parse("[captors.net.sight]\nwall_rays = 12\n")
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("target.net.sight"), "{err}");
+    let err = t2e::league::config::LeagueConfig::parse(
+        "[captors.net.sight]\nwall_rays = 2\n[target.net.sight]\nwall_rays = 2\n",
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(err.contains("sight.wall_rays"), "{err}");
+}
