@@ -157,6 +157,7 @@ fn write_setting(
         "captured",
         "captor_path_len_m",
         "mean_soa_m2",
+        "target_departure_rate",
     ])?;
     for r in records {
         let soa = if r.soa_m2.is_empty() {
@@ -175,6 +176,9 @@ fn write_setting(
             r.captured.to_string(),
             format!("{:.4}", r.captor_path_len),
             soa,
+            r.target_departures
+                .map(|(d, n)| format!("{:.4}", d as f64 / n.max(1) as f64))
+                .unwrap_or_default(),
         ])?;
     }
     w.flush()?;
@@ -359,6 +363,7 @@ mod tests {
             captured,
             captor_path_len: 1.0,
             soa_m2: vec![],
+            target_departures: None,
         };
         let records = vec![record(true), record(false), record(false)];
         let summary = eval::summarise(&setting, "m", &records);

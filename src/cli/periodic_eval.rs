@@ -28,6 +28,10 @@ pub struct EvalRow {
     pub sr_low: f64,
     pub sr_high: f64,
     pub time: f64,
+    /// A target's departure rate (%): its decisions that differ from the
+    /// rule-based target's (empty for captors, and in older files).
+    #[serde(default)]
+    pub departure: Option<f64>,
 }
 
 /// What to evaluate and how often.
@@ -165,6 +169,9 @@ impl PeriodicEval {
             });
             write_rows(&path, &rows)?;
             plot_rows(&self.run_dir.join("eval.png"), &rows)?;
+            if rows.iter().any(|r| r.departure.is_some()) {
+                plot_departure(&self.run_dir.join("departure.png"), &rows)?;
+            }
         }
         Ok(())
     }
@@ -201,6 +208,7 @@ fn rows_of(r: &Running) -> Result<Vec<EvalRow>> {
             sr_low: s.sr_low,
             sr_high: s.sr_high,
             time: s.time,
+            departure: s.target_departure,
         })
         .collect())
 }
@@ -279,5 +287,40 @@ pub fn plot_rows(path: &Path, rows: &[EvalRow]) -> Result<()> {
     let mut img = image::RgbImage::new(800, 720);
     image::imageops::replace(&mut img, &by_time, 0, 0);
     image::imageops::replace(&mut img, &by_steps, 0, 360);
+    plot::save_png(&img, path)
+}
+
+/// A learned target's departure rate (% of its decisions that are not the
+/// rule-based target's) per map set against env steps: how far training
+/// has taken it from a copy.
+pub fn plot_departure(path: &Path, rows: &[EvalRow]) -> Result<()> {
+    let mut maps: Vec<&str> = Vec::new();
+    for r in rows.iter().filter(|r| r.departure.is_some()) {
+        if !maps.contains(&r.maps.as_str()) {
+            maps.push(&r.maps);
+        }
+    }
+    let series: Vec<Series> = maps
+        .iter()
+        .enumerate()
+        .map(|(i, m)| {
+            Series::new(
+                m.to_string(),
+                rows.iter()
+                    .filter(|r| r.maps == *m)
+                    .filter_map(|r| r.departure.map(|d| (r.env_steps as f64 / 1e6, d)))
+                    .collect(),
+                plot::palette(i),
+            )
+        })
+        .collect();
+    let img = line_plot(
+        &series,
+        "target decisions that differ from the rule-based target's",
+        "env steps (M)",
+        "departure %",
+        800,
+        360,
+    );
     plot::save_png(&img, path)
 }

@@ -111,3 +111,40 @@ fn strict_capture_ends_episodes_at_the_asz_threshold() {
         }
     }
 }
+
+/// The departure rate counts the target's decisions that are not the
+/// rule-based target's: none measured for the rule-based target itself,
+/// every decision for a target that stands still (the rule-based target
+/// never stops), and for the lookahead target, whose ties keep the rule's
+/// action, a share strictly between.
+#[test]
+fn a_targets_departures_from_the_rule_based_target_are_counted_per_decision() {
+    let maps = shipped_small();
+    let base = EvalSetting {
+        episodes: 4,
+        episode_length: 60,
+        soa_every: 0,
+        ..EvalSetting::default()
+    };
+    let (rule, records) = eval::run(&base, &maps, "shipped:small", false).unwrap();
+    assert_eq!(rule.target_departure, None);
+    assert!(records.iter().all(|r| r.target_departures.is_none()));
+    let still = EvalSetting {
+        target: ControllerSpec::Still,
+        ..base.clone()
+    };
+    let (s, records) = eval::run(&still, &maps, "shipped:small", false).unwrap();
+    assert_eq!(s.target_departure, Some(100.0));
+    for r in &records {
+        // One decision per step the episode ran.
+        let steps = if r.captured { r.steps } else { 60 };
+        assert_eq!(r.target_departures, Some((steps, steps)), "{r:?}");
+    }
+    let look = EvalSetting {
+        target: "lookahead:3".parse().unwrap(),
+        ..base
+    };
+    let (l, _) = eval::run(&look, &maps, "shipped:small", false).unwrap();
+    let d = l.target_departure.unwrap();
+    assert!(d > 0.0 && d < 100.0, "{d}");
+}

@@ -149,3 +149,48 @@ fn two_learners_or_a_league_with_different_sight_are_refused_by_name() {
     .to_string();
     assert!(err.contains("sight.wall_rays"), "{err}");
 }
+
+#[test]
+fn a_league_with_sight_trains_snapshots_that_carry_it_and_meet_each_other() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = t2e::league::dir::LeagueDir::new(tmp.path().join("league"));
+    let config = tmp.path().join("league.toml");
+    let text = common::league::TINY_LEAGUE
+        .replace(
+            "env_steps_per_learner = 9_600",
+            "env_steps_per_learner = 3_200",
+        )
+        .replace(
+            "[target.net]\n",
+            "[captors.net.sight]\nwall_rays = 8\n[target.net]\n",
+        )
+        .replace(
+            "[snapshots]\n",
+            "[target.net.sight]\nwall_rays = 8\n[snapshots]\n",
+        );
+    std::fs::write(&config, text).unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_t2e-league"))
+        .args(["run", "--config"])
+        .arg(&config)
+        .arg("--dir")
+        .arg(&dir.root)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let (matches, _) = common::league::check(&dir);
+    assert!(matches > 0, "no match was played");
+    let store = t2e::league::store::Store::open(&dir.store).unwrap();
+    let mut snapshots = 0;
+    for p in store.players().unwrap() {
+        if let Some((rel, _)) = &p.checkpoint {
+            let meta = t2e::nn::checkpoint::read_meta(&dir.root.join(rel)).unwrap();
+            assert_eq!(meta.net.sight, RAYS, "{}", p.name);
+            snapshots += 1;
+        }
+    }
+    assert!(snapshots >= 2, "{snapshots} snapshots");
+}

@@ -348,6 +348,7 @@ mod tests {
             sr_high: 100.0 * high,
             path_len: if maps == "small" { 10.0 } else { 30.0 },
             mean_soa_m2: None,
+            target_departure: None,
             soa_curve: Vec::new(),
         };
         (format!("{captors}-{target}-{maps}/summary.json"), s)

@@ -202,6 +202,10 @@ pub struct EpisodeRecord {
     pub captor_path_len: f64,
     /// |ASZ| in m^2 at steps 0, soa_every, 2 soa_every, ... while the episode runs.
     pub soa_m2: Vec<f64>,
+    /// The target's decisions, and how many of them differ from the
+    /// rule-based target's in the same state: (departures, decisions).
+    /// None when the target is the rule-based one (never departs).
+    pub target_departures: Option<(u32, u32)>,
 }
 
 /// The table row of one setting.
@@ -243,6 +247,12 @@ pub struct Summary {
     pub mean_soa_m2: Option<f64>,
     /// (step, mean |ASZ| m^2 over the episodes still running, episodes running).
     pub soa_curve: Vec<(u32, f64, usize)>,
+    /// Share (%) of the target's decisions, over all episodes, that differ
+    /// from the rule-based target's in the same state: how far a learned
+    /// target is from a copy. None for the rule-based target itself and in
+    /// summaries written before the field.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub target_departure: Option<f64>,
 }
 
 /// 95% Wilson score interval for `successes` out of `n`, as fractions.
@@ -294,9 +304,14 @@ pub fn play_episode(
     if setting.soa_every > 0 {
         soa.push(measure(&env, asz_fields));
     }
+    let mut departures = (setting.target != ControllerSpec::Heuristic).then_some((0u32, 0u32));
     while !env.is_done() {
         captors.act(&env, Side::Captors, &mut actions[..k]);
         target.act(&env, Side::Target, &mut actions[k..]);
+        if let Some((departed, decisions)) = &mut departures {
+            *decisions += 1;
+            *departed += u32::from(actions[k] != crate::heuristics::target_action(&env));
+        }
         let info = env.step_state(&actions, &mut rewards);
         if setting.soa_every > 0 && env.steps % setting.soa_every == 0 {
             soa.push(match info.asz_cells {
@@ -317,6 +332,7 @@ pub fn play_episode(
         captured: env.captured,
         captor_path_len: env.path_len[..k].iter().sum::<f64>() / k as f64,
         soa_m2: soa,
+        target_departures: departures,
     })
 }
 
@@ -425,6 +441,17 @@ pub fn captors_learner(spec: &ControllerSpec) -> String {
     }
 }
 
+/// The share (%) of all the target's decisions over `records` that differ
+/// from the rule-based target's in the same state; None where not measured.
+pub fn departure_share(records: &[EpisodeRecord]) -> Option<f64> {
+    let (mut departed, mut decisions) = (0u64, 0u64);
+    for (d, n) in records.iter().filter_map(|r| r.target_departures) {
+        departed += d as u64;
+        decisions += n as u64;
+    }
+    (decisions > 0).then(|| 100.0 * departed as f64 / decisions as f64)
+}
+
 pub fn summarise(setting: &EvalSetting, maps_label: &str, records: &[EpisodeRecord]) -> Summary {
     let n = records.len().max(1) as f64;
     let captures = records.iter().filter(|r| r.captured).count();
@@ -465,6 +492,7 @@ pub fn summarise(setting: &EvalSetting, maps_label: &str, records: &[EpisodeReco
         sr_high: 100.0 * hi,
         path_len: records.iter().map(|r| r.captor_path_len).sum::<f64>() / n,
         mean_soa_m2: (soa_n > 0).then(|| soa_sum / soa_n as f64),
+        target_departure: departure_share(records),
         soa_curve: curve,
     }
 }
@@ -541,6 +569,7 @@ mod tests {
             captured,
             captor_path_len: 2.0,
             soa_m2: soa,
+            target_departures: None,
         };
         let records = vec![
             rec(true, 2, vec![4.0, 2.0, 0.0]),

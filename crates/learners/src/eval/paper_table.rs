@@ -433,6 +433,7 @@ mod tests {
             sr_high: sr + 4.0,
             path_len: 25.0,
             mean_soa_m2: None,
+            target_departure: None,
             soa_curve: Vec::new(),
         }
     }
