@@ -78,6 +78,12 @@ pub struct PpoConfig {
     /// stored config while 0.
     #[serde(skip_serializing_if = "is_zero")]
     pub heuristic_kl: f64,
+    /// Anneal `heuristic_kl` linearly to 0 over this share of the run (as
+    /// `lr_anneal`, by env steps or the `--for` clock): behaviour cloning of
+    /// the rule-based target on the learner's own states first, free RL
+    /// after. 0: the weight stays (the default). Left out while 0.
+    #[serde(skip_serializing_if = "is_zero")]
+    pub heuristic_kl_anneal: f64,
 }
 
 fn is_zero(x: &f64) -> bool {
@@ -104,6 +110,7 @@ impl Default for PpoConfig {
             max_bad_updates: 3,
             lr_anneal: false,
             heuristic_kl: 0.0,
+            heuristic_kl_anneal: 0.0,
         }
     }
 }
@@ -120,6 +127,20 @@ impl PpoConfig {
         in_interval("huber_delta", self.huber_delta, 0.0, 1e6, false)?;
         in_interval("max_grad_norm", self.max_grad_norm, 0.0, 1e6, false)?;
         in_interval("heuristic_kl", self.heuristic_kl, 0.0, 100.0, true)?;
+        in_interval(
+            "heuristic_kl_anneal",
+            self.heuristic_kl_anneal,
+            0.0,
+            1.0,
+            true,
+        )?;
+        if self.heuristic_kl_anneal > 0.0 && self.heuristic_kl == 0.0 {
+            return Err(ConfigError::new(
+                "heuristic_kl_anneal",
+                self.heuristic_kl_anneal,
+                "anneals heuristic_kl, which is 0 (off): set heuristic_kl too",
+            ));
+        }
         for (name, v) in [
             ("epochs", self.epochs),
             ("minibatches", self.minibatches),
@@ -282,6 +303,9 @@ pub struct PpoLearner {
     /// Robots per world on this side.
     pub team: usize,
     pub view: Box<dyn CriticView>,
+    /// The KL weight of the coming update: `cfg.heuristic_kl`, annealed by
+    /// `set_progress` when `cfg.heuristic_kl_anneal` says so.
+    pub kl_weight: f64,
 }
 
 /// MAPPO's and IPPO's kind: PPO over the `ppo` settings, with the critic
@@ -344,7 +368,6 @@ impl PpoLearner {
         let critic_adam = Adam::new(&critic_vs, cfg.lr, cfg.adam_eps);
         PpoLearner {
             algorithm,
-            cfg,
             net,
             device,
             actor_vs,
@@ -356,6 +379,8 @@ impl PpoLearner {
             value_norm: ValueNorm::default(),
             team,
             view,
+            kl_weight: cfg.heuristic_kl,
+            cfg,
         }
     }
 
@@ -603,12 +628,12 @@ impl PpoLearner {
 
                 let mut loss =
                     &policy_loss - cfg.entropy_coef * &entropy + cfg.value_coef * &value_loss;
-                if cfg.heuristic_kl > 0.0 {
+                if self.kl_weight > 0.0 {
                     let hints = mb_hints.as_ref().expect("wants_hints covers heuristic_kl");
                     let kl = -logp_all
                         .gather(1, &hints.unsqueeze(1), false)
                         .mean(Kind::Float);
-                    loss = loss + cfg.heuristic_kl * kl;
+                    loss = loss + self.kl_weight * kl;
                 }
                 let loss_value = loss.double_value(&[]);
                 if !loss_value.is_finite() {
@@ -659,6 +684,16 @@ struct PpoState {
     critic_adam_steps: u64,
 }
 
+/// The KL weight after `done` of the run: `heuristic_kl`, falling
+/// linearly to 0 at `heuristic_kl_anneal` of the run when that is set.
+pub fn kl_weight_at(cfg: &PpoConfig, done: f64) -> f64 {
+    if cfg.heuristic_kl_anneal > 0.0 {
+        cfg.heuristic_kl * (1.0 - done / cfg.heuristic_kl_anneal).max(0.0)
+    } else {
+        cfg.heuristic_kl
+    }
+}
+
 impl Learner for PpoLearner {
     fn algorithm(&self) -> Algorithm {
         self.algorithm
@@ -704,6 +739,7 @@ impl Learner for PpoLearner {
         PpoLearner::update(self, ro, rng)
     }
     fn set_progress(&mut self, done: f64) {
+        self.kl_weight = kl_weight_at(&self.cfg, done);
         if self.cfg.lr_anneal {
             let lr = self.cfg.lr * (1.0 - done.clamp(0.0, 1.0));
             self.actor_adam.lr = lr;
@@ -772,6 +808,32 @@ struct LearnerSnapshot {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_kl_weight_falls_linearly_to_zero_over_its_share_of_the_run() {
+        let cfg = PpoConfig {
+            heuristic_kl: 2.0,
+            heuristic_kl_anneal: 0.4,
+            ..PpoConfig::default()
+        };
+        // 2 x (1 - done / 0.4): 2 at the start, 1 at 0.2, 0 from 0.4 on.
+        for (done, want) in [(0.0, 2.0), (0.1, 1.5), (0.2, 1.0), (0.4, 0.0), (0.9, 0.0)] {
+            assert!((kl_weight_at(&cfg, done) - want).abs() < 1e-12, "{done}");
+        }
+        let constant = PpoConfig {
+            heuristic_kl_anneal: 0.0,
+            ..cfg.clone()
+        };
+        assert_eq!(kl_weight_at(&constant, 0.9), 2.0);
+        let err = PpoConfig {
+            heuristic_kl: 0.0,
+            ..cfg
+        }
+        .validate()
+        .unwrap_err()
+        .to_string();
+        assert!(err.contains("heuristic_kl_anneal"), "{err}");
+    }
 
     #[test]
     fn gae_matches_hand_computed_values() {
