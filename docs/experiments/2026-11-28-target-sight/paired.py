@@ -43,7 +43,7 @@ def main(out: Path) -> None:
         if not rule_dir.exists():
             continue
         rule = settings(rule_dir)
-        for name in ("spec", "sight"):
+        for name in ("spec", "sight", "sight-kl"):
             learned_dir = out / f"eval-{team}-{name}"
             if not learned_dir.exists():
                 continue
