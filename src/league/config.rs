@@ -372,17 +372,11 @@ impl LeagueConfig {
             .validate(&held_out)
             .map_err(|e| e.within("members"))?;
         self.check_validation_apart()?;
-        // A learner's opponents read its env's observations.
-        if self.captors.net.sight != self.target.net.sight {
-            return Err(ConfigError::about(
-                "captors.net.sight, target.net.sight",
-                format!(
-                    "differ ({} against {}): every player of a league meets the others in one env's observations, so both sides see the same",
-                    self.captors.net.sight.label(),
-                    self.target.net.sight.label()
-                ),
-            ));
-        }
+        crate::env::Sight::check_shared(
+            self.captors.net.sight,
+            self.target.net.sight,
+            "every player of a league meets the others in one env's observations",
+        )?;
         if self.matchmaking.members_share > 0.0 && self.members.is_empty() {
             return Err(ConfigError::new(
                 "matchmaking.members_share",

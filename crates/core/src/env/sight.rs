@@ -56,6 +56,22 @@ impl Sight {
         Ok(())
     }
 
+    /// Refuses two sides' sights that differ where `why` says both read
+    /// one env's observations; the error names both fields.
+    pub fn check_shared(captors: Sight, target: Sight, why: &str) -> Result<(), ConfigError> {
+        if captors == target {
+            return Ok(());
+        }
+        Err(ConfigError::about(
+            "captors.net.sight, target.net.sight",
+            format!(
+                "differ ({} against {}): {why}, so both sides see the same",
+                captors.label(),
+                target.label()
+            ),
+        ))
+    }
+
     /// A short name for tables and logs: "spec" when off, else "rays12".
     pub fn label(&self) -> String {
         if self.is_off() {

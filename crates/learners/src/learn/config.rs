@@ -389,17 +389,11 @@ impl TrainConfig {
             }
         }
         if let (Play::Learn(_), Play::Learn(_)) = (&self.captors.play, &self.target.play) {
-            // One env writes both sides' vectors.
-            if self.captors.net.sight != self.target.net.sight {
-                return Err(ConfigError::about(
-                    "captors.net.sight, target.net.sight",
-                    format!(
-                        "differ ({} against {}): two learners in one run read one env's observations, so they see the same",
-                        self.captors.net.sight.label(),
-                        self.target.net.sight.label()
-                    ),
-                ));
-            }
+            crate::env::Sight::check_shared(
+                self.captors.net.sight,
+                self.target.net.sight,
+                "two learners in one run read one env's observations",
+            )?;
         }
         if learners == 0 {
             return Err(ConfigError::about(
