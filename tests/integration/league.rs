@@ -6,6 +6,7 @@
 //! and learners that continue from their last checkpoints.
 
 use crate::common;
+use common::league::run_to_the_end;
 
 use std::path::Path;
 use std::process::{Child, Command, Stdio};
@@ -30,22 +31,6 @@ fn start(dir: &Path, config: &Path) -> Child {
         .stderr(Stdio::null())
         .spawn()
         .unwrap()
-}
-
-/// Runs a league to its end in the foreground; its stderr on failure.
-fn run_to_the_end(dir: &Path, config: &Path) {
-    let out = Command::new(bin())
-        .args(["run", "--config"])
-        .arg(config)
-        .arg("--dir")
-        .arg(dir)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
 }
 
 fn sigkill(pid: i64) {

@@ -8,7 +8,7 @@ use crate::common;
 
 use std::path::{Path, PathBuf};
 use t2e::controllers::ControllerSpec;
-use t2e::env::{Action, Controller, EnvConfig, Side, Sight, TrapEnv, PATCH_LEN};
+use t2e::env::{Action, EnvConfig, Side, Sight, TrapEnv, PATCH_LEN};
 use t2e::learn::train::{SideConfig, Trainer};
 use t2e::map::catalog;
 
@@ -169,18 +169,7 @@ fn a_league_with_sight_trains_snapshots_that_carry_it_and_meet_each_other() {
             "[target.net.sight]\nwall_rays = 8\n[snapshots]\n",
         );
     std::fs::write(&config, text).unwrap();
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_t2e-league"))
-        .args(["run", "--config"])
-        .arg(&config)
-        .arg("--dir")
-        .arg(&dir.root)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    common::league::run_to_the_end(&dir.root, &config);
     let (matches, _) = common::league::check(&dir);
     assert!(matches > 0, "no match was played");
     let store = t2e::league::store::Store::open(&dir.store).unwrap();

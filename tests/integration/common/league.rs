@@ -12,6 +12,22 @@ use t2e::learn::persist::RunDir;
 /// and the evaluator, 9,600 env steps each.
 pub const TINY_LEAGUE: &str = include_str!("tiny_league.toml");
 
+/// Runs a league to its end in the foreground; its stderr on failure.
+pub fn run_to_the_end(dir: &std::path::Path, config: &std::path::Path) {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_t2e-league"))
+        .args(["run", "--config"])
+        .arg(config)
+        .arg("--dir")
+        .arg(dir)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
 /// Checks the invariants; returns (matches, per-learner env steps of their
 /// resume points).
 pub fn check(dir: &LeagueDir) -> (u64, Vec<u64>) {
