@@ -1,6 +1,7 @@
 //! `t2e-league bench`: speed of the environment, the ASZ and observations,
 //! printed as a table beside the reference implementation's figures.
 
+use super::bench_before::BEFORE_DATE;
 use crate::asz::{AszFields, FastMarching};
 use crate::env::{Action, Controller, EnvConfig, Side, TrapEnv, VecEnv, PATCH_LEN};
 use crate::heuristics::{target_action, Heuristic};
@@ -170,10 +171,6 @@ struct Row {
     /// (`BEFORE_DATE`), where that row was measured the same way.
     before_us: Option<f64>,
 }
-
-/// When the `before_us` figures were measured: `bench --threads 1` on the
-/// Gibson maps, on a 2-core machine of the kind the docs' tables come from.
-pub(super) const BEFORE_DATE: &str = "2026-11-26";
 
 /// Repeats `op` (which reports how many units it did) for about `secs` seconds.
 fn measure(secs: f64, mut op: impl FnMut() -> u64) -> Duration {

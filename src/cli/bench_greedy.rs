@@ -3,6 +3,7 @@
 //! taken from real episodes, and how often each coarsening picks the same
 //! action as the spec's cells; then the lookahead target's decision.
 
+use super::bench_before::BEFORE_DATE;
 use crate::env::{Action, Controller, EnvConfig, Side, TrapEnv};
 use crate::heuristics::{target_action, AszGreedy, Heuristic, Lookahead};
 use crate::map::PreparedMap;
@@ -72,7 +73,7 @@ pub fn run(
     let before_ms = (env_spec == "gibson").then_some(7.86);
     println!(
         "| controller | cell | time per decision | decisions/s | x greedy | {before} | x {before} | same action as greedy |",
-        before = super::bench::BEFORE_DATE
+        before = BEFORE_DATE
     );
     println!("|---|---|---|---|---|---|---|---|");
     let mut first_rate = None;

@@ -2,6 +2,7 @@
 use clap::{Parser, Subcommand};
 
 pub mod bench;
+mod bench_before;
 mod bench_greedy;
 mod bench_opponents;
 mod bench_store;

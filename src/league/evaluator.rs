@@ -10,12 +10,13 @@
 
 use super::config::LeagueConfig;
 use super::dir::LeagueDir;
+use super::panels::{load_panels, Panels};
 use super::players::{heuristic_name, learner_name, Seat, EVALUATOR};
+use super::preflight::check_maps_apart;
 use super::store::{BeatState, HeldOutEpisode, Kind, MatchRecord, Panel, Player, Store};
 use super::supervision::{CannotStart, Outcome};
 use crate::controllers::ControllerSpec;
 use crate::env::{CaptureRule, Side};
-use crate::error::ConfigError;
 use crate::eval::{play_episode, EvalSetting};
 use crate::map::PreparedMap;
 use anyhow::{Context, Result};
@@ -30,17 +31,6 @@ enum PanelOpponent<'a> {
     /// A controller that is not a member (held out or validation): its
     /// episodes are kept apart from the matches.
     Controller(Panel, &'a str, &'a ControllerSpec),
-}
-
-/// Each member side's opponents on one panel: (name, controller).
-pub type PanelTeams = Vec<(Side, Vec<(String, ControllerSpec)>)>;
-
-/// The controllers of the held-out and validation panels, per member side.
-pub struct Panels {
-    pub held_out: PanelTeams,
-    pub validation: PanelTeams,
-    /// The validation maps (empty when there is no validation panel).
-    pub validation_maps: Arc<Vec<Arc<PreparedMap>>>,
 }
 
 /// The store key of a member's episode against a controller of a panel.
@@ -222,60 +212,6 @@ pub fn panel_queue(players: &[Player]) -> Vec<(&Player, bool)> {
     queue
 }
 
-/// The held-out and validation opponents per member side, checkpoints
-/// loaded and checked against the league's game, and the validation maps,
-/// checked to hold no test map.
-pub(super) fn load_panels(cfg: &LeagueConfig) -> Result<Panels, ConfigError> {
-    let env = crate::env::EnvConfig {
-        num_captors: cfg.num_captors,
-        target_speed: cfg.curriculum.stages[0],
-        episode_length: cfg.episode_length,
-        ..crate::env::EnvConfig::default()
-    };
-    let load = |panel: Panel| -> Result<PanelTeams, ConfigError> {
-        [Side::Captors, Side::Target]
-            .into_iter()
-            .map(|member_side| {
-                let specs = match panel {
-                    Panel::HeldOut => cfg.evaluator.held_out(member_side),
-                    Panel::Validation => cfg.evaluator.validation(member_side),
-                }
-                .map_err(|e| e.within("evaluator"))?;
-                for (name, spec) in &specs {
-                    spec.check(member_side.other(), &env).map_err(|e| {
-                        ConfigError::new(
-                            format!("evaluator {} opponent", panel.name()),
-                            format!("\"{name}\""),
-                            e.to_string(),
-                        )
-                    })?;
-                }
-                Ok((member_side, specs))
-            })
-            .collect()
-    };
-    let validation_maps = match &cfg.evaluator.validation_maps {
-        None => Arc::new(Vec::new()),
-        Some(spec) => {
-            let maps = crate::map::catalog::load_prepared(spec).map_err(|e| {
-                ConfigError::new(
-                    "evaluator.validation_maps",
-                    format!("\"{spec}\""),
-                    format!("{e:#}"),
-                )
-            })?;
-            crate::protocol::check_extra_maps(spec, &maps)
-                .map_err(|e| ConfigError::about("evaluator.validation_maps", e.to_string()))?;
-            maps
-        }
-    };
-    Ok(Panels {
-        held_out: load(Panel::HeldOut)?,
-        validation: load(Panel::Validation)?,
-        validation_maps,
-    })
-}
-
 /// Runs until Ctrl-C / SIGINT (`Outcome::Stopped`), or until both learners
 /// are done and every snapshot has its panel games (`Outcome::Done`).
 pub fn run_evaluator(dir: &LeagueDir, stop: &AtomicBool) -> Result<Outcome> {
@@ -310,7 +246,7 @@ pub fn run_evaluator(dir: &LeagueDir, stop: &AtomicBool) -> Result<Outcome> {
         .and_then(|panels| {
             // A league stored before maps were compared by content is
             // refused here rather than validated on its training maps.
-            super::preflight::check_maps_apart(
+            check_maps_apart(
                 "evaluator.validation_maps",
                 cfg.evaluator.validation_maps.as_deref().unwrap_or(""),
                 &panels.validation_maps,

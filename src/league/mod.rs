@@ -24,6 +24,8 @@
 //!   network opponents, matches, snapshots.
 //! - `evaluator`: its own process: every snapshot plays a fixed panel
 //!   (members, held-out teams, validation teams on validation maps).
+//! - `panels`: the evaluator's held-out and validation teams and maps, as
+//!   the config names them, loaded and checked.
 //! - `preflight`: the checks of a new league's config that need its maps
 //!   or checkpoints loaded (maps and checkpoints compared by content), run
 //!   before anything is written.
@@ -47,6 +49,7 @@ pub mod matchmaking;
 pub mod members;
 pub mod open;
 pub mod opponents;
+pub mod panels;
 pub mod payoff;
 pub mod players;
 pub mod pool;

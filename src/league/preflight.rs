@@ -32,7 +32,7 @@ pub fn check_new_league(
         );
     }
     if cfg.evaluator.enabled {
-        let panels = super::evaluator::load_panels(cfg)?;
+        let panels = super::panels::load_panels(cfg)?;
         check_maps_apart(
             "evaluator.validation_maps",
             cfg.evaluator.validation_maps.as_deref().unwrap_or(""),

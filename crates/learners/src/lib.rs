@@ -3,7 +3,7 @@
 //! and their training loop (`learn`), the controller catalogue
 //! (`controllers`), the paper's evaluation (`eval`) and the renders
 //! (`render`). It knows nothing of the league or its store; the league
-//! drives it through `learn::Trainer` and the `learn::LeagueHooks` it
+//! drives it through `learn::Trainer` and the `learn::RolloutHooks` it
 //! defines.
 pub mod controllers;
 pub mod eval;

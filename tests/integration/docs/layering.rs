@@ -81,3 +81,143 @@ fn the_learners_crate_depends_on_no_database_and_not_on_the_league() {
         );
     }
 }
+
+/// The modules of `crates/learners/src/learn` (a folder is one module) and
+/// the learn modules each names, read from its source: `super::` paths
+/// resolved from the file's place, and `crate::learn::` paths. Test
+/// modules are left out: they see their parent's names.
+fn learn_imports() -> std::collections::BTreeMap<String, std::collections::BTreeSet<String>> {
+    use std::collections::{BTreeMap, BTreeSet};
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("crates/learners/src/learn");
+    let ident = |s: &str| -> String {
+        s.chars()
+            .take_while(|c| c.is_ascii_alphanumeric() || *c == '_')
+            .collect()
+    };
+    let mut graph: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();
+    let mut stack = vec![root.clone()];
+    while let Some(dir) = stack.pop() {
+        for entry in std::fs::read_dir(&dir).unwrap() {
+            let path = entry.unwrap().path();
+            if path.is_dir() {
+                stack.push(path);
+                continue;
+            }
+            if path.extension().and_then(|e| e.to_str()) != Some("rs") {
+                continue;
+            }
+            // The file's module path under learn: ["train", "collect"], or
+            // [] for learn/mod.rs.
+            let rel = path.strip_prefix(&root).unwrap();
+            let mut module: Vec<String> = rel
+                .with_extension("")
+                .iter()
+                .map(|c| c.to_string_lossy().into_owned())
+                .collect();
+            if module.last().map(String::as_str) == Some("mod") {
+                module.pop();
+            }
+            let node = module.first().cloned().unwrap_or_else(|| "mod".into());
+            let text = std::fs::read_to_string(&path).unwrap();
+            let code = match text.find("#[cfg(test)]\nmod tests") {
+                Some(at) => &text[..at],
+                None => &text[..],
+            };
+            let mut names = BTreeSet::new();
+            let mut add = |resolved: Vec<String>| {
+                if let Some(first) = resolved.first() {
+                    if !first.is_empty() {
+                        names.insert(first.clone());
+                    }
+                } else {
+                    names.insert("mod".into());
+                }
+            };
+            for (at, _) in code.match_indices("crate::learn::") {
+                add(vec![ident(&code[at + "crate::learn::".len()..])]);
+            }
+            let mut rest = code;
+            while let Some(at) = rest.find("super::") {
+                // A whole `super::super::...` chain, not its tail again.
+                if at >= 7 && &rest[at - 7..at] == "super::" {
+                    rest = &rest[at + 7..];
+                    continue;
+                }
+                let mut tail = &rest[at..];
+                let mut ups = 0;
+                while let Some(t) = tail.strip_prefix("super::") {
+                    ups += 1;
+                    tail = t;
+                }
+                let base = &module[..module.len().saturating_sub(ups)];
+                let targets: Vec<String> = if let Some(group) = tail.strip_prefix('{') {
+                    let group = &group[..group.find('}').unwrap()];
+                    group.split(',').map(|s| ident(s.trim())).collect()
+                } else {
+                    vec![ident(tail)]
+                };
+                for target in targets {
+                    let mut resolved = base.to_vec();
+                    resolved.push(target);
+                    add(resolved);
+                }
+                rest = tail;
+            }
+            names.remove(&node);
+            names.remove("");
+            graph.entry(node).or_default().extend(names);
+        }
+    }
+    // Names that are not modules of the floor (items of learn/mod.rs and
+    // the like) are not rooms.
+    let modules: BTreeSet<String> = graph.keys().cloned().collect();
+    for targets in graph.values_mut() {
+        targets.retain(|t| modules.contains(t));
+    }
+    graph
+}
+
+#[test]
+fn the_learn_floor_has_no_import_circle_and_its_settings_are_a_leaf() {
+    let graph = learn_imports();
+    for module in ["settings", "learner", "kind", "config", "train", "ppo"] {
+        assert!(graph.contains_key(module), "no learn::{module}: {graph:?}");
+    }
+    // The reader sees what it must: the registry names the algorithms,
+    // and the algorithms their settings.
+    assert!(
+        graph["kind"].contains("mappo") && graph["kind"].contains("maac"),
+        "{:?}",
+        graph["kind"]
+    );
+    assert!(graph["ppo"].contains("settings"), "{:?}", graph["ppo"]);
+    assert!(
+        graph["settings"].is_empty(),
+        "learn::settings imports {:?}: the settings structs are a leaf",
+        graph["settings"]
+    );
+    for algorithm in ["ppo", "mappo", "ippo", "maddpg", "maac", "offpolicy"] {
+        for above in ["kind", "config", "train"] {
+            assert!(
+                !graph[algorithm].contains(above),
+                "learn::{algorithm} imports learn::{above}, a floor above it"
+            );
+        }
+    }
+    // Kahn's algorithm: whatever cannot be peeled off lies on a circle.
+    let mut left = graph.clone();
+    while let Some(leaf) = left
+        .iter()
+        .find(|(_, targets)| targets.is_empty())
+        .map(|(m, _)| m.clone())
+    {
+        left.remove(&leaf);
+        for targets in left.values_mut() {
+            targets.remove(&leaf);
+        }
+    }
+    assert!(
+        left.is_empty(),
+        "import circle among learn modules: {left:?}"
+    );
+}

@@ -61,3 +61,27 @@ pub fn gather_worlds(
 }
 
 pub use crate::nn::sample;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::SeedableRng;
+    use rand_chacha::ChaCha8Rng;
+
+    #[test]
+    fn sampling_follows_the_probabilities() {
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        let p = [0.1f32, 0.0, 0.6, 0.3, 0.0];
+        let mut counts = [0usize; 5];
+        for _ in 0..20_000 {
+            counts[sample(&p, &mut rng)] += 1;
+        }
+        assert_eq!((counts[1], counts[4]), (0, 0));
+        for (c, q) in counts.iter().zip(p) {
+            assert!(
+                (*c as f64 / 20_000.0 - q as f64).abs() < 0.015,
+                "{counts:?}"
+            );
+        }
+    }
+}

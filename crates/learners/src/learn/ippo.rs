@@ -3,7 +3,7 @@
 //! what its actor sees. Everything else is the PPO of `ppo.rs`.
 
 use super::ppo::{CriticView, PpoKind};
-use super::Algorithm;
+use crate::algorithm::Algorithm;
 use tch::Tensor;
 
 pub struct Ippo;

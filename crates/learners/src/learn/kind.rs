@@ -1,53 +1,19 @@
-//! What a training run asks of an algorithm beyond the `Learner` it builds:
-//! the table of a side's config its settings live in, their chunk length,
-//! discount and checks, the replay it would hold, the cost of its update,
-//! and the learner itself. Each algorithm's file implements `LearnerKind`;
-//! `kind` is the one place that maps an `Algorithm` to it. A new learner is
+//! The registry of learners: `kind` is the one place that maps an
+//! `Algorithm` to its `LearnerKind` (learner.rs), which each algorithm's
+//! file implements. It sits above the algorithms; nothing below imports it. A new learner is
 //! therefore its file, its `Algorithm` variant, and the arm of `kind` (and
 //! of `Algorithm::name`) the compiler then asks for; a test runs every
 //! algorithm through its kind. Only a learner with settings of its own also
 //! adds their table to `SideConfig`, a field beside `ppo`, `maddpg` and
 //! `maac`.
 
-use super::config::SideConfig;
-use super::learner::Learner;
-use super::{ippo, maac, maddpg, mappo, Algorithm};
-use crate::error::ConfigError;
+use super::learner::LearnerKind;
+#[cfg(test)]
+use super::settings::SideConfig;
+use super::{ippo, maac, maddpg, mappo};
+use crate::algorithm::Algorithm;
+#[cfg(test)]
 use tch::Device;
-
-pub trait LearnerKind: Sync {
-    /// The table of a side's config its settings are read from (MAPPO and
-    /// IPPO share `ppo`).
-    fn settings_table(&self) -> &'static str;
-    /// Whether it learns from a replay of past experience (and so cannot
-    /// take a KL pull towards a prior, nor values states while acting).
-    fn off_policy(&self) -> bool {
-        false
-    }
-    /// Steps per recurrent chunk it trains on.
-    fn chunk_len(&self, side: &SideConfig) -> usize;
-    /// The discount it learns with.
-    fn gamma(&self, side: &SideConfig) -> f64;
-    /// Checks its settings; the error names the field within its table.
-    fn validate(&self, side: &SideConfig) -> Result<(), ConfigError>;
-    /// (world-steps, chunk length) of its replay, if it keeps one.
-    fn replay(&self, _side: &SideConfig) -> Option<(usize, usize)> {
-        None
-    }
-    /// FLOPs of its update per rollout row, from the FLOPs of one forward
-    /// pass of actor and critic; NaN where they follow replay settings.
-    fn update_flops(&self, _side: &SideConfig, _actor: f64, _critic: f64) -> f64 {
-        f64::NAN
-    }
-    /// A fresh learner for a team of `team` robots.
-    fn build(
-        &self,
-        side: &SideConfig,
-        vector_len: usize,
-        team: usize,
-        device: Device,
-    ) -> Box<dyn Learner>;
-}
 
 /// The kind of `algorithm`.
 pub fn kind(algorithm: Algorithm) -> &'static dyn LearnerKind {

@@ -4,14 +4,55 @@
 //! recurrent state, which their replay stores), the update on a rollout, and
 //! the tensors and state a checkpoint holds. The algorithms themselves read
 //! top to bottom in their own files (`ppo.rs`, `maddpg.rs`, `maac.rs`).
+//!
+//! `LearnerKind` is what a training run asks of an algorithm beyond the
+//! `Learner` it builds: the table of a side's config its settings live in,
+//! their chunk length, discount and checks, the replay it would hold, the
+//! cost of its update, and the learner itself.
 
 use super::adam::Adam;
 use super::rollout::{BadUpdate, Rollout, UpdateStats};
-use super::Algorithm;
+use super::settings::SideConfig;
+use crate::algorithm::Algorithm;
+use crate::error::ConfigError;
 use crate::nn::{Actor, NetConfig};
 use rand_chacha::ChaCha8Rng;
 use std::path::Path;
-use tch::Tensor;
+use tch::{Device, Tensor};
+
+pub trait LearnerKind: Sync {
+    /// The table of a side's config its settings are read from (MAPPO and
+    /// IPPO share `ppo`).
+    fn settings_table(&self) -> &'static str;
+    /// Whether it learns from a replay of past experience (and so cannot
+    /// take a KL pull towards a prior, nor values states while acting).
+    fn off_policy(&self) -> bool {
+        false
+    }
+    /// Steps per recurrent chunk it trains on.
+    fn chunk_len(&self, side: &SideConfig) -> usize;
+    /// The discount it learns with.
+    fn gamma(&self, side: &SideConfig) -> f64;
+    /// Checks its settings; the error names the field within its table.
+    fn validate(&self, side: &SideConfig) -> Result<(), ConfigError>;
+    /// (world-steps, chunk length) of its replay, if it keeps one.
+    fn replay(&self, _side: &SideConfig) -> Option<(usize, usize)> {
+        None
+    }
+    /// FLOPs of its update per rollout row, from the FLOPs of one forward
+    /// pass of actor and critic; NaN where they follow replay settings.
+    fn update_flops(&self, _side: &SideConfig, _actor: f64, _critic: f64) -> f64 {
+        f64::NAN
+    }
+    /// A fresh learner for a team of `team` robots.
+    fn build(
+        &self,
+        side: &SideConfig,
+        vector_len: usize,
+        team: usize,
+        device: Device,
+    ) -> Box<dyn Learner>;
+}
 
 /// Named tensors of one checkpoint file.
 pub type NamedTensors = Vec<(String, Tensor)>;

@@ -5,7 +5,7 @@
 //! Everything else is the PPO of `ppo.rs`.
 
 use super::ppo::{CriticView, PpoKind};
-use super::Algorithm;
+use crate::algorithm::Algorithm;
 use tch::{Device, Kind, Tensor};
 
 pub struct Mappo;

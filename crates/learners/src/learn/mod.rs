@@ -18,9 +18,11 @@ pub mod offpolicy;
 pub mod persist;
 pub mod ppo;
 pub mod rollout;
+pub mod settings;
 pub mod shaping;
 pub mod train;
 pub mod undo;
 
 pub use crate::algorithm::Algorithm;
-pub use kind::{kind, LearnerKind};
+pub use kind::kind;
+pub use learner::LearnerKind;

@@ -14,13 +14,15 @@
 //! next episode's first one.
 
 use super::adam::Adam;
-use super::config::SideConfig;
-use super::kind::LearnerKind;
-use super::learner::{file, optimizer_file, restore_optimizers, Learner, NamedTensors};
+use super::learner::{
+    file, optimizer_file, restore_optimizers, Learner, LearnerKind, NamedTensors,
+};
 use super::rollout::{BadUpdate, Rollout, UpdateStats};
+use super::settings::replay::{ReplayConfig, ReplaySettings};
+use super::settings::SideConfig;
 use super::undo::UndoPoint;
-use super::Algorithm;
-use crate::error::{in_range, ConfigError};
+use crate::algorithm::Algorithm;
+use crate::error::ConfigError;
 use crate::nn::checkpoint::{load_into, named_cpu_tensors};
 use crate::nn::{obs_tensors, Actor, NetConfig};
 use rand::Rng;
@@ -577,29 +579,6 @@ impl Params {
     }
 }
 
-/// The replay settings every off-policy config has, read once when a
-/// learner is built.
-#[derive(Clone, Debug, PartialEq)]
-pub struct ReplaySettings {
-    pub actor_lr: f64,
-    pub critic_lr: f64,
-    pub adam_eps: f64,
-    pub buffer_steps: usize,
-    pub chunk_len: usize,
-    pub batch_size: usize,
-    pub replay_ratio: f64,
-    pub learning_starts: usize,
-    pub max_bad_updates: u32,
-}
-
-/// What the off-policy kind reads of an algorithm's settings table.
-pub trait ReplayConfig: Clone + Sync {
-    fn replay_settings(&self) -> ReplaySettings;
-    fn gamma(&self) -> f64;
-    /// Checks the table (some settings depend on the networks' shape).
-    fn check(&self, net: &NetConfig) -> Result<(), ConfigError>;
-}
-
 /// MADDPG's and MAAC's kind: where their table is in a side's config and
 /// how a learner is built from it; the rest follows from the table.
 pub struct ReplayKind<C: ReplayConfig> {
@@ -815,34 +794,6 @@ pub fn mean_entropy(log_probs: &Tensor) -> f64 {
 /// batches of `batch` sequences of `len` steps (at least one).
 pub fn gradient_steps(replay_ratio: f64, new_steps: usize, batch: usize, len: usize) -> usize {
     ((replay_ratio * new_steps as f64 / (batch * len) as f64).round() as usize).max(1)
-}
-
-/// Checks shared by the off-policy configs; the error names the field.
-pub fn check_replay(
-    chunk_len: usize,
-    batch_size: usize,
-    buffer_steps: usize,
-    learning_starts: usize,
-) -> Result<(), ConfigError> {
-    in_range("chunk_len", chunk_len, 1..=1000, "must be in 1..=1000")?;
-    in_range(
-        "batch_size",
-        batch_size,
-        1..=100_000,
-        "must be in 1..=100000 sequences",
-    )?;
-    in_range(
-        "buffer_steps",
-        buffer_steps,
-        chunk_len * batch_size..=100_000_000,
-        &format!("must hold at least one batch ({batch_size} sequences of {chunk_len} steps) and at most 100,000,000 steps"),
-    )?;
-    in_range(
-        "learning_starts",
-        learning_starts,
-        0..=buffer_steps,
-        &format!("more than the buffer holds (buffer_steps = {buffer_steps})"),
-    )
 }
 
 impl<T: OffPolicy> Learner for T {

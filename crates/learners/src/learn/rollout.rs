@@ -138,8 +138,4 @@ impl UpdateStats {
 #[error("non-finite update, undone: {0}")]
 pub struct BadUpdate(pub String);
 
-/// Every learner's `max_bad_updates`: updates undone in a row before
-/// training stops, at least one.
-pub fn check_max_bad_updates(n: u32) -> Result<(), crate::error::ConfigError> {
-    crate::error::in_range("max_bad_updates", n, 1..=u32::MAX, "must be at least 1")
-}
+//END

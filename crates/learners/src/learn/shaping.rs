@@ -3,42 +3,8 @@
 //! reward. Shaping of this form leaves the optimal policies unchanged; it
 //! only tells the learner sooner which states lead somewhere. The
 //! environment's reward, the returns a run reports and every evaluation
-//! stay the spec's; a run that shapes says so in its config (and hash).
-
-use crate::env::potential::Potential;
-use crate::error::{in_interval, ConfigError};
-use serde::{Deserialize, Serialize};
-
-/// `[captors.shaping]` / `[target.shaping]` of a training config.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct ShapingConfig {
-    /// The potential, or none (the default: the spec's reward alone).
-    pub potential: Option<Potential>,
-    /// phi = weight x the potential (in [0, 1]) for the captors, and
-    /// -weight x it for the target, whose interest is the opposite. For
-    /// scale: a capture is worth 200, a step of contact 5.
-    pub weight: f64,
-}
-
-impl Default for ShapingConfig {
-    fn default() -> Self {
-        ShapingConfig {
-            potential: None,
-            weight: 50.0,
-        }
-    }
-}
-
-impl ShapingConfig {
-    pub fn validate(&self) -> Result<(), ConfigError> {
-        in_interval("weight", self.weight, 0.0, 1000.0, true)
-    }
-
-    pub fn is_off(&self) -> bool {
-        self.potential.is_none() || self.weight == 0.0
-    }
-}
+//! stay the spec's; a run that shapes says so in its config (and hash):
+//! `settings/shaping.rs`'s `ShapingConfig`.
 
 /// The shaping term of one step, in potential units: gamma phi(s') - phi(s)
 /// with phi(s) = `before`. An episode that ended by capture reached a
@@ -87,20 +53,5 @@ mod tests {
         assert!((f - 0.0).abs() < 1e-6);
         let f = shaping_term(0.5, 1.0, 0.0, false, false, 1.0);
         assert!((f - 0.5).abs() < 1e-6);
-    }
-
-    #[test]
-    fn weights_out_of_range_are_refused() {
-        for w in [-1.0, f64::NAN, f64::INFINITY, 1e4] {
-            let c = ShapingConfig {
-                potential: Some(Potential::Trap),
-                weight: w,
-            };
-            assert!(
-                c.validate().unwrap_err().to_string().contains("weight"),
-                "{w}"
-            );
-        }
-        assert!(ShapingConfig::default().is_off());
     }
 }
