@@ -248,7 +248,11 @@ fn eight_workers_and_a_status_poller_contend_without_loss() {
         std::thread::sleep(Duration::from_millis(300));
     }
     assert!(boss.wait().unwrap().success());
-    assert!(polls >= 10, "only {polls} polls");
+    // How many polls fit in the league's 25 s depends on the machine's
+    // load (each is a process); a few are enough to contend, and at least
+    // one must have seen the league at work.
+    assert!(polls >= 3, "only {polls} polls");
+    assert!(last_matches > 0, "no poll saw a match being recorded");
     let (m, _) = check(&dir);
     assert!(m >= last_matches && m > 0);
     let s = store(&url).unwrap();
