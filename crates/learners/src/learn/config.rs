@@ -8,8 +8,6 @@ use super::map_sampling::MapSampling;
 use super::settings::is_default;
 pub use super::settings::{Play, SideConfig, SideDefaults, TrainDefaults};
 use crate::algorithm::Algorithm;
-#[cfg(test)]
-use crate::controllers::ControllerSpec;
 use crate::env::{EnvConfig, Side};
 use crate::error::{in_range, ConfigError};
 use crate::protocol::Protocol;
@@ -319,6 +317,7 @@ fn validate_name(name: &str) -> Result<(), ConfigError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::controllers::ControllerSpec;
 
     #[test]
     fn config_errors_name_the_field() {

@@ -8,12 +8,8 @@
 //! `maac`.
 
 use super::learner::LearnerKind;
-#[cfg(test)]
-use super::settings::SideConfig;
 use super::{ippo, maac, maddpg, mappo};
 use crate::algorithm::Algorithm;
-#[cfg(test)]
-use tch::Device;
 
 /// The kind of `algorithm`.
 pub fn kind(algorithm: Algorithm) -> &'static dyn LearnerKind {
@@ -36,7 +32,9 @@ pub fn learner_names(last: &str) -> String {
 
 #[cfg(test)]
 mod tests {
+    use super::super::settings::SideConfig;
     use super::*;
+    use tch::Device;
 
     #[test]
     fn every_algorithm_has_a_kind_that_builds_its_learner_from_the_default_settings() {
