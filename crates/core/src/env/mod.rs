@@ -373,8 +373,14 @@ impl TrapEnv {
         let spec = 5 + 5 * self.cfg.num_captors;
         debug_assert_eq!(vector.len(), spec + sight.len());
         observe::write_vector(&self.robots, i, self.cfg.num_captors, vector);
+        sight.write(
+            &self.map,
+            &self.robots,
+            i,
+            self.cfg.num_captors,
+            &mut vector[spec..],
+        );
         let r = &self.robots[i];
-        sight.write(&self.map, r, &mut vector[spec..]);
         observe::write_patch(&self.map, r.pos, r.theta, patch);
     }
 

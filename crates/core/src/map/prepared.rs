@@ -7,6 +7,7 @@
 
 use super::grid::{floor_isize, Grid, CELL_SIZE};
 use std::sync::atomic::{AtomicU8, Ordering};
+use std::sync::OnceLock;
 
 /// Obstacle border around the grid in the padded copy; covers the corner of a
 /// rotated 48x48 patch (24 * sqrt 2 < 34 cells) and short rays.
@@ -59,7 +60,15 @@ pub struct PreparedMap {
     square_blocked: Vec<u8>,
     /// Unique per prepared map, so reusable buffers know when the map changed.
     pub id: u64,
+    /// Per coarse-map size n (index n, up to `MAX_COARSE`): the share of
+    /// obstacle cells in each of n x n coarse cells, row-major from the
+    /// grid's first row. Made on first use: the map is static, and most
+    /// runs never ask.
+    coarse_walls: [OnceLock<Box<[f32]>>; MAX_COARSE + 1],
 }
+
+/// The largest coarse map `coarse_walls` makes.
+pub const MAX_COARSE: usize = 64;
 
 static NEXT_MAP_ID: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
 
@@ -112,7 +121,40 @@ impl PreparedMap {
             ray_steps,
             square_blocked,
             id: fresh_id(),
+            coarse_walls: std::array::from_fn(|_| OnceLock::new()),
         }
+    }
+
+    /// The share of obstacle cells in each of `n` x `n` coarse cells over
+    /// the grid, row-major from the grid's first row; coarse cell (a, b)
+    /// holds grid rows `a * side / n .. (a + 1) * side / n` (and likewise
+    /// columns), so a side that n does not divide is still covered once.
+    pub fn coarse_walls(&self, n: usize) -> &[f32] {
+        assert!(
+            (1..=MAX_COARSE).contains(&n),
+            "coarse map of {n} cells (1..={MAX_COARSE})"
+        );
+        self.coarse_walls[n].get_or_init(|| {
+            let side = self.side();
+            let bound = |k: usize| k * side / n;
+            let mut out = vec![0f32; n * n];
+            for a in 0..n {
+                for b in 0..n {
+                    let (rows, cols) = (bound(a)..bound(a + 1), bound(b)..bound(b + 1));
+                    let total = rows.len() * cols.len();
+                    let blocked = rows
+                        .flat_map(|r| cols.clone().map(move |c| (r, c)))
+                        .filter(|&(r, c)| !self.grid.is_free(r as isize, c as isize))
+                        .count();
+                    out[a * n + b] = if total == 0 {
+                        1.0
+                    } else {
+                        blocked as f32 / total as f32
+                    };
+                }
+            }
+            out.into_boxed_slice()
+        })
     }
 
     pub fn side(&self) -> usize {
