@@ -15,7 +15,7 @@ use pyo3::prelude::*;
 use std::sync::{Arc, Mutex, MutexGuard};
 use t2e_core::asz::{cells_to_m2, AszFields, Source};
 use t2e_core::env::features::{egocentric_vector, egocentric_width, pool_patch};
-use t2e_core::env::sight::MAX_WALL_RAYS;
+use t2e_core::env::sight::{MAP_CELLS, MAX_WALL_RAYS};
 use t2e_core::env::{Action, Controller, EnvConfig, Side, Sight, TrapEnv, VecEnv, PATCH};
 use t2e_core::heuristics::{AszGreedy, Heuristic, RandomActions, Still};
 use t2e_core::map::catalog::load_prepared;
@@ -110,6 +110,7 @@ fn env_config(
     speed_ratio: f64,
     episode_length: i64,
     wall_rays: i64,
+    map_cells: i64,
 ) -> PyResult<EnvConfig> {
     if !(1..=MAX_CAPTORS).contains(&num_captors) {
         return Err(value_error(
@@ -132,14 +133,27 @@ fn env_config(
             "must be between 1 and 1000000 steps",
         ));
     }
-    let sight = Sight {
-        wall_rays: usize::try_from(wall_rays).unwrap_or(usize::MAX),
-    };
-    sight.validate().map_err(|_| {
+    let rays = Sight::rays(usize::try_from(wall_rays).unwrap_or(usize::MAX));
+    rays.validate().map_err(|_| {
         value_error(
             "wall_rays",
             wall_rays,
             format!("must be 0 (the spec's observation) or between 4 and {MAX_WALL_RAYS} (wall rays appended to each vector; a checkpoint trained with sight names its count in meta.json's net.sight)"),
+        )
+    })?;
+    let sight = Sight {
+        map_cells: usize::try_from(map_cells).unwrap_or(usize::MAX),
+        ..rays
+    };
+    sight.validate().map_err(|_| {
+        value_error(
+            "map_cells",
+            map_cells,
+            format!(
+                "must be 0 (no map) or between {} and {} (cells across the coarse map of walls, captors, target and self appended to each vector; a checkpoint trained with it names its size in meta.json's net.sight)",
+                MAP_CELLS.start(),
+                MAP_CELLS.end()
+            ),
         )
     })?;
     let cfg = EnvConfig {
@@ -230,6 +244,7 @@ struct EnvArgs {
     protocol: String,
     episode_length: i64,
     wall_rays: i64,
+    map_cells: i64,
 }
 
 impl EnvArgs {
@@ -240,6 +255,7 @@ impl EnvArgs {
         protocol: &str,
         episode_length: i64,
         wall_rays: i64,
+        map_cells: i64,
     ) -> EnvArgs {
         EnvArgs {
             maps: maps.to_string(),
@@ -248,6 +264,7 @@ impl EnvArgs {
             protocol: protocol.to_string(),
             episode_length,
             wall_rays,
+            map_cells,
         }
     }
 
@@ -277,7 +294,8 @@ pub struct Env {
 #[pymethods]
 impl Env {
     #[new]
-    #[pyo3(signature = (maps, num_captors = 3, speed_ratio = 1.0, protocol = "held-out", episode_length = 500, render = false, wall_rays = 0))]
+    #[pyo3(signature = (maps, num_captors = 3, speed_ratio = 1.0, protocol = "held-out", episode_length = 500, render = false, wall_rays = 0, map_cells = 0))]
+    #[allow(clippy::too_many_arguments)]
     fn new(
         maps: &str,
         num_captors: i64,
@@ -286,8 +304,15 @@ impl Env {
         episode_length: i64,
         render: bool,
         wall_rays: i64,
+        map_cells: i64,
     ) -> PyResult<Env> {
-        let cfg = env_config(num_captors, speed_ratio, episode_length, wall_rays)?;
+        let cfg = env_config(
+            num_captors,
+            speed_ratio,
+            episode_length,
+            wall_rays,
+            map_cells,
+        )?;
         let args = EnvArgs::new(
             maps,
             num_captors,
@@ -295,6 +320,7 @@ impl Env {
             protocol,
             episode_length,
             wall_rays,
+            map_cells,
         );
         let maps = args.load_maps()?;
         let env = TrapEnv::new(cfg, maps).map_err(|e| PyValueError::new_err(e.to_string()))?;
@@ -321,6 +347,7 @@ impl Env {
             a.episode_length,
             me.render.is_some(),
             a.wall_rays,
+            a.map_cells,
         )
             .into_pyobject(slf.py())?
             .into_any();
@@ -334,7 +361,7 @@ impl Env {
     }
 
     /// Length of an agent's vector observation, 5 + 5 K (docs/reference/env.md)
-    /// and its `wall_rays`.
+    /// and its sight: `wall_rays` and 4 `map_cells`^2.
     #[getter]
     fn vector_len(&self) -> usize {
         self.env.cfg.vector_len()
@@ -344,6 +371,13 @@ impl Env {
     #[getter]
     fn wall_rays(&self) -> usize {
         self.env.cfg.sight.wall_rays
+    }
+
+    /// Cells across the coarse map appended to each vector after the wall
+    /// rays (0: no map), in four channels: walls, captors, target, self.
+    #[getter]
+    fn map_cells(&self) -> usize {
+        self.env.cfg.sight.map_cells
     }
 
     /// Side of the square obstacle patch, in cells.
@@ -690,7 +724,7 @@ pub struct VectorEnv {
 #[pymethods]
 impl VectorEnv {
     #[new]
-    #[pyo3(signature = (num_envs, maps, num_captors = 3, speed_ratio = 1.0, protocol = "held-out", episode_length = 500, seed = None, captors = None, target = None, wall_rays = 0))]
+    #[pyo3(signature = (num_envs, maps, num_captors = 3, speed_ratio = 1.0, protocol = "held-out", episode_length = 500, seed = None, captors = None, target = None, wall_rays = 0, map_cells = 0))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         num_envs: i64,
@@ -703,6 +737,7 @@ impl VectorEnv {
         captors: Option<&str>,
         target: Option<&str>,
         wall_rays: i64,
+        map_cells: i64,
     ) -> PyResult<VectorEnv> {
         if !(1..=65_536).contains(&num_envs) {
             return Err(value_error(
@@ -711,7 +746,13 @@ impl VectorEnv {
                 "must be between 1 and 65536",
             ));
         }
-        let cfg = env_config(num_captors, speed_ratio, episode_length, wall_rays)?;
+        let cfg = env_config(
+            num_captors,
+            speed_ratio,
+            episode_length,
+            wall_rays,
+            map_cells,
+        )?;
         if num_envs * (num_captors + 1) > MAX_VECTOR_AGENTS {
             return Err(value_error(
                 "num_envs",
@@ -729,6 +770,7 @@ impl VectorEnv {
             protocol,
             episode_length,
             wall_rays,
+            map_cells,
         );
         let maps = args.load_maps()?;
         // None draws a seed, as `parallel_env().reset(seed=None)` does;
@@ -795,6 +837,7 @@ impl VectorEnv {
             me.controllers.0.clone(),
             me.controllers.1.clone(),
             a.wall_rays,
+            a.map_cells,
         )
             .into_pyobject(slf.py())?
             .into_any();
@@ -820,6 +863,13 @@ impl VectorEnv {
     #[getter]
     fn wall_rays(&self) -> usize {
         lock(&self.venv).cfg.sight.wall_rays
+    }
+
+    /// Cells across the coarse map appended to each vector after the wall
+    /// rays (0: no map).
+    #[getter]
+    fn map_cells(&self) -> usize {
+        lock(&self.venv).cfg.sight.map_cells
     }
 
     /// Starts episode 0 of every world: vectors [n, N, 5 + 5 K] float32 and
@@ -1004,10 +1054,11 @@ fn asz_area(
 /// egocentric vector [A, 6 + 9N] and the patch max-pooled by `pool`
 /// [A, 48 / pool, 48 / pool]; with `flat`, the two in one float32 row
 /// [A, 6 + 9N + (48 / pool)^2] and no patch array. Vectors with sight
-/// carry `wall_rays` more numbers after the 5 + 5N, which follow the
-/// egocentric vector as they are.
+/// carry `wall_rays` + 4 `map_cells`^2 more numbers after the 5 + 5N (the
+/// wall rays, then the coarse map), which follow the egocentric vector as
+/// they are.
 #[pyfunction]
-#[pyo3(signature = (vectors, patches, pool, flat, wall_rays = 0))]
+#[pyo3(signature = (vectors, patches, pool, flat, wall_rays = 0, map_cells = 0))]
 #[allow(clippy::type_complexity)]
 fn shaped_observations<'py>(
     py: Python<'py>,
@@ -1016,17 +1067,41 @@ fn shaped_observations<'py>(
     pool: usize,
     flat: bool,
     wall_rays: usize,
+    map_cells: usize,
 ) -> PyResult<(Bound<'py, PyArray2<f32>>, Option<Bound<'py, PyArray3<u8>>>)> {
     if ![1, 2, 3, 4, 6].contains(&pool) {
         return Err(value_error("patch_pool", pool, "must be 1, 2, 3, 4 or 6"));
     }
+    if map_cells != 0 && !MAP_CELLS.contains(&map_cells) {
+        return Err(value_error(
+            "map_cells",
+            map_cells,
+            format!(
+                "must be 0 (no map) or between {} and {}",
+                MAP_CELLS.start(),
+                MAP_CELLS.end()
+            ),
+        ));
+    }
+    // The sight's numbers after the spec's: the rays, then the map.
+    let map_len = Sight {
+        wall_rays: 0,
+        map_cells,
+    }
+    .map_len();
+    let sight_len = wall_rays.saturating_add(map_len);
     let (rows, full) = (vectors.shape()[0], vectors.shape()[1]);
-    let len = full.saturating_sub(wall_rays);
+    let len = full.saturating_sub(sight_len);
     if len < 5 || (len - 5) % 5 != 0 {
+        let tail = if map_cells == 0 {
+            format!("the {wall_rays} wall rays")
+        } else {
+            format!("the {wall_rays} wall rays and the {map_len} numbers of the {map_cells} x {map_cells} map")
+        };
         return Err(value_error(
             "vectors",
             format!("{full} numbers"),
-            format!("a vector has 5 + 5N numbers, then the {wall_rays} wall rays"),
+            format!("a vector has 5 + 5N numbers, then {tail}"),
         ));
     }
     if patches.shape() != [rows, PATCH, PATCH] {
@@ -1037,7 +1112,7 @@ fn shaped_observations<'py>(
         ));
     }
     let (vectors, patches) = (vectors.as_array(), patches.as_array());
-    let width = egocentric_width((len - 5) / 5) + wall_rays;
+    let width = egocentric_width((len - 5) / 5) + sight_len;
     let side = PATCH / pool;
     let row_len = if flat { width + side * side } else { width };
     let mut out = vec![0f32; rows * row_len];
@@ -1055,9 +1130,9 @@ fn shaped_observations<'py>(
             .zip(patches.index_axis(numpy::ndarray::Axis(0), r).iter())
             .for_each(|(p, &x)| *p = x);
         let shaped = &mut out[r * row_len..r * row_len + width];
-        let (ego, rays) = shaped.split_at_mut(width - wall_rays);
+        let (ego, sight) = shaped.split_at_mut(width - sight_len);
         egocentric_vector(&vector[..len], ego);
-        rays.copy_from_slice(&vector[len..]);
+        sight.copy_from_slice(&vector[len..]);
         let cells = &mut pooled[r * side * side..(r + 1) * side * side];
         pool_patch(&patch, pool, cells);
         if flat {

@@ -35,6 +35,7 @@ def vector_env(
     captors: str = None,
     target: str = None,
     wall_rays: int = 0,
+    map_cells: int = 0,
 ) -> VectorEnv:
     """``num_envs`` worlds stepped together in Rust, in parallel and without
     the GIL. ``reset()`` returns (vectors [n, N, 5 + 5 K] float32, patches
@@ -48,10 +49,18 @@ def vector_env(
     system, as ``parallel_env().reset(seed=None)`` does; the env's ``seed``
     attribute says which, so the run can be repeated. ``wall_rays``
     appends that many wall distances in each robot's frame to its vector
-    (0: the spec's observation; see ``parallel_env``)."""
+    (0: the spec's observation; see ``parallel_env``), and ``map_cells``
+    (0, or 8 to 32) a coarse map of the whole map after them, 4 *
+    map_cells**2 numbers (walls, captors, target, self)."""
     import numbers
 
-    for name, value in (("num_envs", num_envs), ("num_captors", num_captors), ("episode_length", episode_length), ("wall_rays", wall_rays)):
+    for name, value in (
+        ("num_envs", num_envs),
+        ("num_captors", num_captors),
+        ("episode_length", episode_length),
+        ("wall_rays", wall_rays),
+        ("map_cells", map_cells),
+    ):
         if isinstance(value, bool) or not isinstance(value, numbers.Integral):
             raise TypeError(f"{name} = {value!r}: must be an integer")
     if isinstance(speed_ratio, bool) or not isinstance(speed_ratio, numbers.Real):
@@ -62,7 +71,9 @@ def vector_env(
         seed = secrets.randbits(64)
     elif isinstance(seed, bool) or not isinstance(seed, numbers.Integral):
         raise TypeError(f"seed = {seed!r}: must be an integer in 0..2**64 or None")
-    return VectorEnv(num_envs, maps, num_captors, speed_ratio, protocol, episode_length, seed, captors, target, wall_rays)
+    return VectorEnv(
+        num_envs, maps, num_captors, speed_ratio, protocol, episode_length, seed, captors, target, wall_rays, map_cells
+    )
 
 
 __all__ = [

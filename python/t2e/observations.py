@@ -6,7 +6,10 @@
   "egocentric"`` with ``patch_pool``): the vector turned into the robot's
   own frame, 6 + 9N numbers, and the patch max-pooled.
 - with ``wall_rays``, each vector ends in that many wall distances in the
-  robot's frame (divided by the map's 16 m), in every kind.
+  robot's frame (divided by the map's 16 m), in every kind; with
+  ``map_cells``, then in a coarse north-up map of the whole map,
+  ``map_cells`` x ``map_cells`` cells in four channels (walls, captors,
+  target, self), 4 * map_cells**2 numbers, row by row.
 - ``flat``: the egocentric vector followed by the pooled patch as 0/1
   floats, one float32 Box, for off-the-shelf MLP policies.
 
@@ -38,12 +41,19 @@ def check(kind, patch_pool) -> None:
         raise ValueError(f"patch_pool = {patch_pool!r}: must be one of {PATCH_POOLS} (it divides the 48-cell patch)")
 
 
-def egocentric_width(vector_len: int, wall_rays: int = 0) -> int:
-    others = (vector_len - wall_rays - 5) // 5
-    return 6 + 9 * others + wall_rays
+def sight_len(wall_rays: int = 0, map_cells: int = 0) -> int:
+    """Numbers the sight appends to each vector: the rays, then the map's
+    four channels of ``map_cells`` x ``map_cells``."""
+    return wall_rays + 4 * map_cells * map_cells
 
 
-def space(kind: str, patch_pool: int, vector_len: int, wall_rays: int = 0) -> spaces.Space:
+def egocentric_width(vector_len: int, wall_rays: int = 0, map_cells: int = 0) -> int:
+    sight = sight_len(wall_rays, map_cells)
+    others = (vector_len - sight - 5) // 5
+    return 6 + 9 * others + sight
+
+
+def space(kind: str, patch_pool: int, vector_len: int, wall_rays: int = 0, map_cells: int = 0) -> spaces.Space:
     if kind == "spec":
         return spaces.Dict(
             {
@@ -52,7 +62,7 @@ def space(kind: str, patch_pool: int, vector_len: int, wall_rays: int = 0) -> sp
             }
         )
     side = PATCH // patch_pool
-    width = egocentric_width(vector_len, wall_rays)
+    width = egocentric_width(vector_len, wall_rays, map_cells)
     if kind == "egocentric":
         return spaces.Dict(
             {
@@ -69,13 +79,16 @@ def egocentric(vectors: np.ndarray) -> np.ndarray:
     return shaped_observations(vectors, np.zeros((len(vectors), PATCH, PATCH), np.uint8), 1, False)[0]
 
 
-def build(kind: str, patch_pool: int, vectors: np.ndarray, patches: np.ndarray, wall_rays: int = 0):
-    """One observation per row of ``vectors`` [A, 5 + 5N + wall_rays] and
-    ``patches`` [A, 48, 48], as ``kind`` shapes them (the wall rays, if
-    any, follow the egocentric vector as they are)."""
+def build(
+    kind: str, patch_pool: int, vectors: np.ndarray, patches: np.ndarray, wall_rays: int = 0, map_cells: int = 0
+):
+    """One observation per row of ``vectors`` [A, 5 + 5N + wall_rays +
+    4 map_cells^2] and ``patches`` [A, 48, 48], as ``kind`` shapes them
+    (the wall rays and the map, if any, follow the egocentric vector as
+    they are)."""
     if kind == "spec":
         return [{"patch": patches[i], "vector": vectors[i]} for i in range(len(vectors))]
-    shaped, pooled = shaped_observations(vectors, patches, patch_pool, kind == "flat", wall_rays)
+    shaped, pooled = shaped_observations(vectors, patches, patch_pool, kind == "flat", wall_rays, map_cells)
     if kind == "egocentric":
         return [{"patch": pooled[i], "vector": shaped[i]} for i in range(len(vectors))]
     return list(shaped)

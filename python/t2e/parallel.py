@@ -54,7 +54,11 @@ class T2EParallelEnv(ParallelEnv):
     agents remain; ``wall_rays`` 0 (the spec's observation) or 4 to 72
     wall distances in the robot's frame across the map, appended to every
     vector (the learners' `net.sight`; not in the paper; a player trained
-    with them needs them). Pickling or copying the env makes a new one from the
+    with them needs them); ``map_cells`` 0 (no map) or 8 to 32: a coarse
+    north-up map of the whole map, ``map_cells`` cells across, in four
+    channels (walls' share of the cell, captors in it, the target, this
+    robot), 4 * map_cells**2 numbers after the rays (`net.sight` too; a
+    player trained with it needs it). Pickling or copying the env makes a new one from the
     same arguments and random state; it starts without an episode.
     ``state()`` is the global state a centralised critic reads.
     """
@@ -76,6 +80,7 @@ class T2EParallelEnv(ParallelEnv):
         observation: str = "spec",
         patch_pool: int = 4,
         wall_rays: int = 0,
+        map_cells: int = 0,
     ):
         if max_cycles is not None:
             _check_int("max_cycles", max_cycles)
@@ -97,10 +102,12 @@ class T2EParallelEnv(ParallelEnv):
             observation=observation,
             patch_pool=patch_pool,
             wall_rays=wall_rays,
+            map_cells=map_cells,
         )
         _check_int("num_captors", num_captors)
         _check_int("episode_length", episode_length)
         _check_int("wall_rays", wall_rays)
+        _check_int("map_cells", map_cells)
         if not isinstance(speed_ratio, numbers.Real) or isinstance(speed_ratio, bool):
             raise TypeError(f"speed_ratio = {speed_ratio!r}: must be a number (v_e / v_p)")
         if not isinstance(maps, str):
@@ -117,9 +124,17 @@ class T2EParallelEnv(ParallelEnv):
         self.patch_pool = int(patch_pool)
         self._window = _Window() if render_mode == "human" else None
         self._env = Env(
-            maps, int(num_captors), float(speed_ratio), protocol, int(episode_length), render_mode is not None, int(wall_rays)
+            maps,
+            int(num_captors),
+            float(speed_ratio),
+            protocol,
+            int(episode_length),
+            render_mode is not None,
+            int(wall_rays),
+            int(map_cells),
         )
         self.wall_rays = int(wall_rays)
+        self.map_cells = int(map_cells)
         self.render_mode = render_mode
         self.asz_info = bool(asz_info)
         self.max_cycles = int(episode_length)
@@ -132,12 +147,14 @@ class T2EParallelEnv(ParallelEnv):
                 self._opponents[name] = _opponent(name, spec)
         for name, opponent in self._opponents.items():
             # A loaded policy reads this env's vectors as they are.
-            rays = getattr(opponent, "wall_rays", None)
-            if rays is not None and rays != self.wall_rays:
-                raise ValueError(
-                    f"{name} = {_picklable(opponent)!r}: trained with wall_rays = {rays} (net.sight in its meta.json), "
-                    f"this env has wall_rays = {self.wall_rays}; make the env with wall_rays={rays}"
-                )
+            for field in ("wall_rays", "map_cells"):
+                theirs = getattr(opponent, field, None)
+                ours = getattr(self, field)
+                if theirs is not None and theirs != ours:
+                    raise ValueError(
+                        f"{name} = {_picklable(opponent)!r}: trained with {field} = {theirs} (net.sight in its meta.json), "
+                        f"this env has {field} = {ours}; make the env with {field}={theirs}"
+                    )
         if len(self._opponents) == 2:
             raise ValueError("captors and target: both sides played by built-in opponents leaves no agent to act")
         self.possible_agents = [a for a in self._all_agents if _side(a) not in self._opponents]
@@ -146,7 +163,7 @@ class T2EParallelEnv(ParallelEnv):
         self.agents: list[str] = []
         self._last = None
         self._captured = False
-        space = obs.space(observation, self.patch_pool, self._env.vector_len, self.wall_rays)
+        space = obs.space(observation, self.patch_pool, self._env.vector_len, self.wall_rays, self.map_cells)
         self.observation_spaces = {a: space for a in self.possible_agents}
         self.action_spaces = {a: spaces.Discrete(ACTIONS) for a in self.possible_agents}
         self.state_space = spaces.Box(-np.inf, np.inf, shape=(5 * len(self._all_agents) + 1,), dtype=np.float32)
@@ -258,7 +275,9 @@ class T2EParallelEnv(ParallelEnv):
         if any(not isinstance(o, Policy) for o in self._opponents.values()):
             self._last = {a: {"patch": patches[i], "vector": vectors[i]} for i, a in enumerate(self._all_agents)}
         mine = self._rows
-        shaped = obs.build(self.observation, self.patch_pool, vectors[mine], patches[mine], self.wall_rays)
+        shaped = obs.build(
+            self.observation, self.patch_pool, vectors[mine], patches[mine], self.wall_rays, self.map_cells
+        )
         return dict(zip(self.possible_agents, shaped))
 
     def _opponent_actions(self, side: str, opponent) -> Dict[str, int]:

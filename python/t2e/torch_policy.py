@@ -84,11 +84,26 @@ PATCH_POOLS = (1, 2, 3, 4, 6)
 MAX_PRIOR = 20.0
 MAX_CAPTORS = 8
 MAX_WALL_RAYS = 72
+# Cells across the coarse map of net.sight.map_cells (0: no map).
+MAP_CELLS = (8, 32)
+MAP_CHANNELS = 4
 
 
 def _wall_rays(net: dict) -> int:
     """The wall rays a network reads after the spec's vector (net.sight)."""
     return int(net.get("sight", {}).get("wall_rays", 0))
+
+
+def _map_cells(net: dict) -> int:
+    """Cells across the coarse map a network reads after the rays
+    (net.sight; absent before the map existed: none)."""
+    return int(net.get("sight", {}).get("map_cells", 0))
+
+
+def _sight_len(net: dict) -> int:
+    """Numbers the sight appends to each vector: the rays, then the map."""
+    cells = _map_cells(net)
+    return _wall_rays(net) + MAP_CHANNELS * cells * cells
 
 
 def _verify_manifest(folder: Path) -> None:
@@ -182,11 +197,15 @@ def _read_meta(folder: Path) -> dict:
     if PATCH // int(net.get("patch_pool", 2)) < 7:
         raise _refuse(path, f"net.patch_pool {net.get('patch_pool')}: the pooled patch is too small for the actor's two convolutions")
     sight = net.get("sight", {"wall_rays": 0})
-    if not isinstance(sight, dict) or set(sight) - {"wall_rays"}:
-        raise _refuse(path, f"net.sight = {sight!r}: must be an object with wall_rays")
+    if not isinstance(sight, dict) or set(sight) - {"wall_rays", "map_cells"}:
+        raise _refuse(path, f"net.sight = {sight!r}: must be an object with wall_rays and map_cells")
     rays = sight.get("wall_rays", 0)
     if isinstance(rays, bool) or not isinstance(rays, int) or not (rays == 0 or 4 <= rays <= MAX_WALL_RAYS):
         raise _refuse(path, f"net.sight.wall_rays = {rays!r}: must be 0 or an integer from 4 to {MAX_WALL_RAYS}")
+    cells = sight.get("map_cells", 0)
+    low, high = MAP_CELLS
+    if isinstance(cells, bool) or not isinstance(cells, int) or not (cells == 0 or low <= cells <= high):
+        raise _refuse(path, f"net.sight.map_cells = {cells!r}: must be 0 or an integer from {low} to {high}")
     prior = net.get("heuristic_prior", 0.0)
     if isinstance(prior, bool) or not isinstance(prior, (int, float)) or not math.isfinite(prior) or not 0 <= prior <= MAX_PRIOR:
         raise _refuse(path, f"net.heuristic_prior = {prior!r}: must be a number in [0, {MAX_PRIOR}]")
@@ -276,7 +295,7 @@ def _build_actor(net: dict, vector_len: int):
     side = PATCH // int(net.get("patch_pool", 2))
     side = ((side - 3) // 2 + 1 - 3) // 2 + 1
     kind = net.get("vector_input", "layer_norm")
-    sight = _wall_rays(net)
+    sight = _sight_len(net)
     per, n = vector_len, (vector_len - sight - 5) // 5
     width = {"layer_norm": vector_len, "scaled": per + 1 + n, "egocentric": 6 + 9 * n + sight}[kind]
 
@@ -342,7 +361,8 @@ class TorchPolicy:
         self.num_captors = int(self.meta["num_captors"])
         self.net = self.meta["net"]
         self.wall_rays = _wall_rays(self.net)
-        self.vector_len = 5 + 5 * self.num_captors + self.wall_rays
+        self.map_cells = _map_cells(self.net)
+        self.vector_len = 5 + 5 * self.num_captors + _sight_len(self.net)
         self.prior = float(self.net.get("heuristic_prior", 0.0))
         self.actor = _build_actor(self.net, self.vector_len)
         weights = _read_safetensors(folder / "actor.safetensors")
@@ -368,7 +388,7 @@ class TorchPolicy:
 
     def logits(self, patches: np.ndarray, vectors: np.ndarray):
         """Logits [B, 5] of one step for rows of observations (patches
-        [B, 48, 48] uint8, vectors [B, 5 + 5 K] float32), advancing the
+        [B, 48, 48] uint8, vectors [B, 5 + 5 K + sight] float32), advancing the
         recurrent state."""
         torch = self._torch
         pooled = _pool(np.asarray(patches, dtype=np.uint8), int(self.net.get("patch_pool", 2)))
@@ -393,11 +413,15 @@ class TorchPolicy:
         patches = np.stack([observations[a]["patch"] for a in agents])
         vectors = np.stack([observations[a]["vector"] for a in agents])
         if vectors.shape[1] != self.vector_len:
+            if self.map_cells:
+                seen = f"{self.wall_rays} wall rays and a {self.map_cells} x {self.map_cells} map"
+                make = f"wall_rays={self.wall_rays}, map_cells={self.map_cells}"
+            else:
+                seen, make = f"{self.wall_rays} wall rays", f"wall_rays={self.wall_rays}"
             raise ValueError(
                 f"observations: vectors of {vectors.shape[1]} numbers; {self.folder} was trained with "
-                f"{self.num_captors} captors and {self.wall_rays} wall rays (net.sight in meta.json): "
-                f"{self.vector_len} numbers; make the env with num_captors={self.num_captors}, "
-                f"wall_rays={self.wall_rays}"
+                f"{self.num_captors} captors and {seen} (net.sight in meta.json): "
+                f"{self.vector_len} numbers; make the env with num_captors={self.num_captors}, {make}"
             )
         logits = self.logits(patches, vectors)
         if self.prior > 0 and self.side == "target":
