@@ -30,10 +30,11 @@
 //! assert_eq!(env.reset(42).unwrap(), first);
 //! ```
 pub mod cli;
-pub mod league;
 
 // The floors below, each in its own crate, under the names the rest of the
-// code and its users know: the core (no libtorch, no database) and the
-// learners (libtorch, no database).
+// code and its users know: the core (no libtorch, no database), the
+// learners (libtorch, no database) and the league (rules, store, processes;
+// no command line).
+pub use league;
 pub use t2e_core::{algorithm, asz, env, error, fs, heuristics, map, protocol, util, PROJECT_ROOT};
 pub use t2e_learners::{controllers, eval, learn, nn, render};

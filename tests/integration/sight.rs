@@ -97,7 +97,10 @@ fn the_coarse_map_follows_the_rays_and_shows_every_robot() {
             assert!(captors[mine] >= 1.0);
         }
         // Walls and robots are shared; only "self" differs between robots.
-        assert_eq!(obs[0].vector[19..19 + 3 * cells], o.vector[19..19 + 3 * cells]);
+        assert_eq!(
+            obs[0].vector[19..19 + 3 * cells],
+            o.vector[19..19 + 3 * cells]
+        );
     }
 }
 

@@ -1,7 +1,8 @@
 //! ARCHITECTURE.md's floors as the build sees them: the core crate reaches
 //! neither libtorch nor a database, by any path through its dependencies,
 //! so it builds and tests where neither is installed; the learners' crate
-//! reaches no database and not the league.
+//! reaches no database and not the league; the league crate has no command
+//! line, and its rules name neither its store nor its processes.
 
 /// Every package `package` reaches through its normal and build
 /// dependencies, itself included.
@@ -69,6 +70,7 @@ fn the_learners_crate_depends_on_no_database_and_not_on_the_league() {
     );
     for banned in [
         "t2e-league",
+        "league",
         "sqlx",
         "sqlx-core",
         "libsqlite3-sys",
@@ -79,6 +81,80 @@ fn the_learners_crate_depends_on_no_database_and_not_on_the_league() {
             !crates.iter().any(|c| c == banned),
             "t2e-learners reaches {banned}:\n{tree}"
         );
+    }
+}
+
+#[test]
+fn the_league_crate_has_no_command_line_and_sits_below_the_cli() {
+    let crates = reached_by("league");
+    let tree = crates.join("\n");
+    assert!(
+        ["league", "t2e-learners", "t2e-core", "sqlx"]
+            .iter()
+            .all(|want| crates.iter().any(|c| c == want)),
+        "{tree}"
+    );
+    assert!(
+        !crates.iter().any(|c| c == "t2e-league"),
+        "the league crate reaches the CLI's package:\n{tree}"
+    );
+    // Its own dependencies, as its manifest names them: no argument parser
+    // (the learners' crate still carries clap for its own flags).
+    let manifest = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("league/Cargo.toml");
+    let text = std::fs::read_to_string(&manifest).unwrap();
+    let table: toml::Table = text.parse().unwrap();
+    for section in ["dependencies", "build-dependencies"] {
+        if let Some(deps) = table.get(section).and_then(|d| d.as_table()) {
+            for banned in ["clap", "clap_mangen", "clap-markdown", "t2e-league"] {
+                assert!(
+                    !deps.contains_key(banned),
+                    "{}: [{section}] names {banned}",
+                    manifest.display()
+                );
+            }
+        }
+    }
+}
+
+/// The words by which league code reaches the store or the processes.
+const STORE_OR_PROCESSES: [&str; 8] = [
+    "crate::store",
+    "crate::run",
+    "crate::process",
+    "crate::manager",
+    "crate::worker",
+    "crate::learner",
+    "sqlx",
+    "std::process",
+];
+
+#[test]
+fn the_league_rules_name_neither_the_store_nor_the_processes() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("league/src/rules");
+    let mut files = 0;
+    for entry in std::fs::read_dir(&root).unwrap() {
+        let path = entry.unwrap().path();
+        let text = std::fs::read_to_string(&path).unwrap();
+        // Tests may build their data any way they like.
+        let code = match text.find("#[cfg(test)]") {
+            Some(at) => &text[..at],
+            None => &text[..],
+        };
+        for banned in STORE_OR_PROCESSES {
+            assert!(
+                !code.contains(banned),
+                "{} names {banned}: the rules compute from data alone",
+                path.display()
+            );
+        }
+        files += 1;
+    }
+    assert!(files >= 10, "{files} files in {}", root.display());
+    // And the data they compute with has no process either.
+    let data = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("league/src/data.rs");
+    let text = std::fs::read_to_string(&data).unwrap();
+    for banned in ["crate::store", "crate::run", "std::process"] {
+        assert!(!text.contains(banned), "{} names {banned}", data.display());
     }
 }
 

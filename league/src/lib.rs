@@ -1,0 +1,59 @@
+//! The league: captor and target learners that train against pools of each
+//! other's checkpoints (AlphaStar's league, adapted), with ratings on one
+//! scale and a curriculum over the target's speed.
+//!
+//! Three floors, each a folder, each importing only the ones below it:
+//!
+//! - `data`: the league's data types (players, matches, ratings, seats,
+//!   panels), which the rules compute with and the store keeps.
+//! - `rules/`: pure and seeded, no store, no process:
+//!   - `config`: the league's TOML; `evaluator_config`: its `[evaluator]`;
+//!   - `players`: who plays, by name (`Seat`, main and heuristic names);
+//!   - `members`: the permanent heuristic members, the default ones and
+//!     the extra ones a config adds (`[members]`);
+//!   - `matchmaking`: PFSP opponent draws; `payoff`: the payoff table;
+//!   - `ratings`: live Weng-Lin ratings and a batch Bradley-Terry fit;
+//!   - `curriculum`: the speed-ratio stages and when to move on;
+//!   - `selection`: the validation-best snapshot `export --best` exports;
+//!   - `supervision`: the one outcome of every process exit, the crash
+//!     budget.
+//! - `store/`: the store (players, matches, ratings, curriculum,
+//!   heartbeats, crashes, seats, config) on SQLite or PostgreSQL, sqlx kept
+//!   inside it; its migrations are in `league/migrations`.
+//! - `run/`: the league's processes and folders:
+//!   - `dir`: the league directory's layout; `open`: opening one, every
+//!     check before any write (identity, store, config); `preflight`: the
+//!     checks of a new league's config that need its maps or checkpoints
+//!     loaded;
+//!   - `pool`: snapshot folders and their rows (written once, adopted,
+//!     quarantined, never deleted);
+//!   - `process`: spawning a seat's process, per-host locks, logs;
+//!   - `manager` (`t2e-league run`) and `manager_lease`; `worker`
+//!     (`t2e-league worker`); `seats`: the manager's side of a league
+//!     whose seats run on workers;
+//!   - `learner`: one main learner's process; `opponents`: the opponents
+//!     it plays per world;
+//!   - `evaluator` and `panels`: every snapshot against a fixed panel;
+//!   - `exploit`: a fresh best response against one frozen player;
+//!   - `status`: what `status` and `export` read from a league.
+//!
+//! The modules keep their short paths (`league::config`, `league::store`,
+//! `league::learner`) through the re-exports below.
+
+pub mod data;
+pub mod rules;
+pub mod run;
+pub mod store;
+
+pub use rules::{
+    config, curriculum, evaluator_config, matchmaking, members, payoff, players, ratings,
+    selection, supervision,
+};
+pub use run::{
+    dir, evaluator, exploit, learner, manager, manager_lease, open, opponents, panels, pool,
+    preflight, process, seats, status, worker,
+};
+
+// The floors below, under the names the league's code knows them by.
+pub(crate) use t2e_core::{asz, env, error, fs, map, protocol, util};
+pub(crate) use t2e_learners::{controllers, eval, learn, nn, render};

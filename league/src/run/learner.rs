@@ -1,0 +1,922 @@
+//! One main learner of the league, as its own process (`t2e-league
+//! league-learner`, spawned by the manager). It trains like `train` does,
+//! except that every world draws its opponent when its episode starts:
+//! a snapshot of the other side by PFSP, the other side's latest snapshot
+//! (its main learner), or a heuristic member. Heuristic opponents play
+//! inside the vector env; network opponents are batched, one forward pass
+//! per distinct opponent over the rows of the worlds that play it. Every
+//! finished episode is recorded in the store (once), and the learner adds
+//! frozen copies of itself to the pool.
+
+use crate::config::LeagueConfig;
+use crate::curriculum::Curriculum;
+use crate::dir::LeagueDir;
+use crate::env::{Action, Side, VecEnv};
+use crate::learn::train::{RolloutHooks, Trainer};
+use crate::matchmaking::{
+    choose_opponent, draw_seed, pick_slot, slot_seed, Candidate, Fixed, MatchmakingConfig, Opponent,
+};
+use crate::opponents::{OpponentNets, WorldOpponent};
+use crate::players::{learner_name, Seat, SeatRole};
+use crate::pool::{add_snapshot, SnapshotOutcome};
+use crate::store::{BeatState, Kind, MatchRecord, NewPlayer, Player, Store};
+use crate::supervision::{CannotStart, Outcome};
+use anyhow::{bail, Context, Result};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Instant;
+
+pub struct LeagueHooks<'a> {
+    store: &'a Store,
+    dir: &'a LeagueDir,
+    cfg: &'a LeagueConfig,
+    side: Side,
+    learner_id: i64,
+    learner_name: String,
+    /// Its seat: what it draws and whether it moves the curriculum.
+    seat: Seat,
+    matchmaking: MatchmakingConfig,
+    /// The other side's playable members, and this learner's record against each.
+    members: Vec<Player>,
+    candidates: Vec<Candidate>,
+    /// The other side's extra heuristic members (`[members]`), by id.
+    extras: Vec<i64>,
+    main: Option<i64>,
+    target_exploiter: Option<i64>,
+    worlds: Vec<WorldOpponent>,
+    /// The other side's networks in play: loaded, stacked, run.
+    pub nets: OpponentNets,
+    /// This window's opponent slots (`MatchmakingConfig::slots`), the window
+    /// they were drawn for, and vector-env steps so far (windows count them).
+    slots: Vec<Opponent>,
+    slots_window: Option<u64>,
+    pub vector_steps: u64,
+    rng: ChaCha8Rng,
+    pub curriculum: Curriculum,
+    pub wins: u64,
+    pub games: u64,
+    pub matches_recorded: u64,
+}
+
+impl<'a> LeagueHooks<'a> {
+    pub fn new(
+        store: &'a Store,
+        dir: &'a LeagueDir,
+        cfg: &'a LeagueConfig,
+        seat: Seat,
+        learner_id: i64,
+    ) -> Result<LeagueHooks<'a>> {
+        let side = seat.side;
+        let mut matchmaking = cfg.matchmaking.clone();
+        if seat.draws_main_line_only() {
+            // Always the main learner once it has a snapshot; the pool
+            // (heuristics first) until then.
+            matchmaking.main_share = 1.0;
+            matchmaking.members_share = 0.0;
+        }
+        let mut hooks = LeagueHooks {
+            store,
+            dir,
+            cfg,
+            side,
+            learner_id,
+            learner_name: seat.name(),
+            seat,
+            matchmaking,
+            members: Vec::new(),
+            candidates: Vec::new(),
+            extras: Vec::new(),
+            main: None,
+            target_exploiter: None,
+            worlds: Vec::new(),
+            nets: OpponentNets::new(side.other(), cfg.opponent_cache, cfg.greedy_opponents),
+            slots: Vec::new(),
+            slots_window: None,
+            vector_steps: 0,
+            rng: ChaCha8Rng::seed_from_u64(cfg.seed ^ learner_id as u64 ^ 0x0990),
+            curriculum: Curriculum::new(),
+            wins: 0,
+            games: 0,
+            matches_recorded: 0,
+        };
+        hooks.refresh()?;
+        if seat.drives_curriculum() {
+            // The window survives restarts: rebuilt from the matches the
+            // store holds since the current stage began.
+            let since = store
+                .curriculum_history()?
+                .last()
+                .map(|c| c.at_ms)
+                .unwrap_or(0);
+            let speed = hooks.curriculum.speed(&cfg.curriculum);
+            let recent = store.recent_outcomes(learner_id, speed, since, cfg.curriculum.window)?;
+            hooks.curriculum.recent = recent.into();
+        }
+        Ok(hooks)
+    }
+
+    fn other(&self) -> Side {
+        self.side.other()
+    }
+
+    fn seat(&self) -> Seat {
+        self.seat
+    }
+
+    /// Re-reads the pool, this learner's record and the curriculum stage.
+    pub fn refresh(&mut self) -> Result<()> {
+        let playable = crate::pool::playable(&self.store.players()?, self.seat());
+        self.members = playable.members;
+        self.main = playable.main;
+        // Only the main captors draw the target exploiter (`target_exploiter_share`);
+        // without it, the share falls to PFSP. An exploiter's `playable` has none.
+        self.target_exploiter = playable.exploiter.filter(|_| self.side == Side::Captors);
+        let extra_names = self.cfg.members.extra_names(self.side.other());
+        self.extras = self
+            .members
+            .iter()
+            .filter(|m| extra_names.contains(&m.name))
+            .map(|m| m.id)
+            .collect();
+        let payoff = self.store.payoff()?;
+        self.candidates = self
+            .members
+            .iter()
+            .map(|m| {
+                let rec = crate::payoff::record(&payoff, self.learner_id, self.side, Some(m.id));
+                Candidate {
+                    player: m.id,
+                    wins: rec.wins as f64,
+                    games: rec.games as f64,
+                }
+            })
+            .collect();
+        if let Some(change) = self.store.curriculum_history()?.last() {
+            if change.stage != self.curriculum.stage {
+                self.curriculum.stage = change.stage;
+                self.curriculum.recent.clear();
+            }
+        }
+        Ok(())
+    }
+
+    /// Draws opponents for every world (a fresh start or a resumed run).
+    pub fn assign_all(&mut self, venv: &mut VecEnv) -> Result<()> {
+        self.worlds.clear();
+        for e in 0..venv.num_envs() {
+            let w = self.draw(venv, e)?;
+            self.worlds.push(w);
+        }
+        Ok(())
+    }
+
+    /// Draws world `e`'s opponent and speed for its current episode and sets
+    /// the world up for them.
+    fn draw(&mut self, venv: &mut VecEnv, e: usize) -> Result<WorldOpponent> {
+        let other = self.other();
+        let seed = draw_seed(self.cfg.seed, self.learner_id, e, venv.env(e).seed);
+        let mm = &self.matchmaking;
+        let fixed = Fixed {
+            main: self.main,
+            extras: &self.extras,
+            target_exploiter: self.target_exploiter,
+        };
+        let pick = if mm.slots == 0 {
+            choose_opponent(&self.candidates, fixed, mm, seed)
+        } else {
+            let window = self.vector_steps / self.cfg.episode_length as u64;
+            if self.slots_window != Some(window) {
+                self.slots = (0..mm.slots)
+                    .filter_map(|s| {
+                        let seed = slot_seed(self.cfg.seed, self.learner_id, s, window);
+                        choose_opponent(&self.candidates, fixed, mm, seed)
+                    })
+                    .collect();
+                self.slots_window = Some(window);
+            }
+            self.slots.get(pick_slot(self.slots.len(), seed)).copied()
+        };
+        let player = match pick {
+            Some(Opponent::Main) => self.main.expect("main drawn only when there is one"),
+            Some(Opponent::Member(id)) => id,
+            None => bail!(
+                "the {} pool is empty: the heuristic member is missing",
+                other.name()
+            ),
+        };
+        let Some(member) = self.members.iter().find(|m| m.id == player).cloned() else {
+            if self.slots_window.is_some() {
+                // A slot's member left the pool (quarantined): draw the slots again.
+                self.slots_window = None;
+                return self.draw(venv, e);
+            }
+            bail!("drawn member {player} is not in the pool");
+        };
+        let u: f64 = ChaCha8Rng::seed_from_u64(seed ^ 0x5BEED).gen();
+        let speed = self
+            .curriculum
+            .sample_speed(&self.cfg.curriculum, self.side, u);
+        venv.set_world_speeds(e, 1.0, speed)
+            .map_err(anyhow::Error::msg)?;
+        let network = match member.kind {
+            Kind::Heuristic => {
+                let Some(spec) = self.cfg.members.spec_of(other, &member.name) else {
+                    bail!(
+                        "{} is a heuristic member the league's config does not name ([members])",
+                        member.name
+                    );
+                };
+                venv.script_world(
+                    e,
+                    other,
+                    Some(spec.build(other).map_err(anyhow::Error::msg)?),
+                );
+                None
+            }
+            _ => match {
+                let in_use: Vec<i64> = self.worlds.iter().filter_map(|w| w.network).collect();
+                self.nets.load(&self.dir.root, &member, &in_use)
+            } {
+                Ok(hidden) => {
+                    venv.script_world(e, other, None);
+                    Some((member.id, hidden))
+                }
+                Err(err) => {
+                    // A member whose files are gone or corrupt leaves the pool; the league goes on.
+                    tracing::warn!("quarantining {}: {err:#}", member.name);
+                    self.store.quarantine(member.id, &format!("{err:#}"))?;
+                    self.refresh()?;
+                    self.slots_window = None;
+                    return self.draw(venv, e);
+                }
+            },
+        };
+        let team = other.agents(self.cfg.num_captors).len();
+        Ok(WorldOpponent {
+            player,
+            hidden: vec![0.0; network.map(|(_, h)| h).unwrap_or(0) * team],
+            network: network.map(|(id, _)| id),
+            speed,
+        })
+    }
+}
+
+impl RolloutHooks for LeagueHooks<'_> {
+    fn before_step(&mut self, venv: &mut VecEnv, actions: &mut [Action]) -> Result<()> {
+        self.vector_steps += 1;
+        self.nets.act(
+            venv,
+            &mut self.worlds,
+            self.cfg.num_captors,
+            &mut self.rng,
+            actions,
+        )
+    }
+
+    fn after_step(&mut self, venv: &mut VecEnv) -> Result<()> {
+        let finished = venv.finished.clone();
+        for s in &finished {
+            let w = self.worlds[s.env].clone();
+            let (captor_player, target_player) = match self.side {
+                Side::Captors => (self.learner_id, w.player),
+                Side::Target => (w.player, self.learner_id),
+            };
+            let recorded = self.store.record_match(&MatchRecord {
+                key: format!("{}/{:016x}", self.learner_name, s.seed),
+                captor_player,
+                target_player,
+                map: s.map.clone(),
+                num_captors: self.cfg.num_captors,
+                speed_ratio: w.speed,
+                seed: s.seed,
+                captured: s.captured,
+                steps: s.steps,
+                final_asz_m2: None,
+                recorded_by: self.learner_name.clone(),
+            })?;
+            self.matches_recorded += recorded as u64;
+            let won = match self.side {
+                Side::Captors => s.captured,
+                Side::Target => !s.captured,
+            };
+            self.games += 1;
+            self.wins += won as u64;
+            if self.seat.drives_curriculum() {
+                if let Some(stage) =
+                    self.curriculum
+                        .record(&self.cfg.curriculum, w.speed, s.captured)
+                {
+                    let speed = self.curriculum.speed(&self.cfg.curriculum);
+                    self.store.push_curriculum(
+                        stage,
+                        speed,
+                        &format!(
+                            "main captors won at least {:.0}% of their last {} matches at the previous stage",
+                            100.0 * self.cfg.curriculum.promote_at,
+                            self.cfg.curriculum.window
+                        ),
+                    )?;
+                    tracing::info!("curriculum: stage {stage}, speed ratio {speed}");
+                }
+            }
+            let next = self.draw(venv, s.env)?;
+            self.worlds[s.env] = next;
+        }
+        Ok(())
+    }
+}
+
+/// Whether a main learner at `mine` env steps waits for the other main
+/// learner, given the other's last heartbeat (state, env steps, age in ms;
+/// None before its first): it does while it is more than `lead` ahead of a
+/// learner that is still training. A learner that is done, stopped or
+/// silent for two minutes (crashed, restarting) is not waited for.
+pub fn should_wait(mine: u64, other: Option<(BeatState, u64, i64)>, lead: u64) -> bool {
+    if lead == 0 {
+        return false;
+    }
+    match other {
+        None => mine > lead,
+        Some((state, steps, age_ms)) => {
+            matches!(state, BeatState::Training | BeatState::Waiting)
+                && age_ms < 120_000
+                && mine > steps.saturating_add(lead)
+        }
+    }
+}
+
+/// When a learner adds a snapshot of itself to the pool.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SnapshotRule {
+    /// At least this many env steps since its last snapshot...
+    pub every_env_steps: u64,
+    /// ...and winning at least this share of its games since then...
+    pub win_rate: f64,
+    /// ...or this many env steps since its last snapshot, winning or not.
+    pub timeout_env_steps: u64,
+}
+
+impl SnapshotRule {
+    /// A seat's rule: main learners snapshot on `[snapshots]`, exploiters
+    /// on their own win rate and timeout (`[exploiters]`), and an exploiter
+    /// that never resets (`target_resets = false`) on a clock, winning or
+    /// not: it has no attempt to end.
+    pub fn of(cfg: &LeagueConfig, seat: Seat) -> SnapshotRule {
+        let every_env_steps = cfg.snapshots.every_env_steps;
+        let (win_rate, timeout_env_steps) = match seat.role {
+            SeatRole::Main => (cfg.snapshots.win_rate, cfg.snapshots.timeout_env_steps),
+            SeatRole::Exploiter if !cfg.exploiters.resets_after_snapshot(seat) => {
+                (0.0, every_env_steps)
+            }
+            SeatRole::Exploiter => (cfg.exploiters.win_rate, cfg.exploiters.timeout_env_steps),
+        };
+        SnapshotRule {
+            every_env_steps,
+            win_rate,
+            timeout_env_steps,
+        }
+    }
+}
+
+/// Whether a learner `since` env steps past its last snapshot, having won
+/// `wins` of `games` since, snapshots now (AlphaStar's rule: when it beats
+/// its opponents, or at a timeout so the pool keeps moving).
+pub fn should_snapshot(since: u64, wins: u64, games: u64, rule: SnapshotRule) -> bool {
+    let winning = games > 0 && wins as f64 / games as f64 >= rule.win_rate;
+    (since >= rule.every_env_steps && winning) || since >= rule.timeout_env_steps
+}
+
+/// Waits (heartbeating "waiting") while `should_wait`; returns the seconds waited.
+fn wait_for_other_main(
+    store: &Store,
+    seat: Seat,
+    mine: u64,
+    lead: u64,
+    stop: &AtomicBool,
+) -> Result<f64> {
+    let other = learner_name(match seat.side {
+        Side::Captors => Side::Target,
+        Side::Target => Side::Captors,
+    });
+    let started = Instant::now();
+    let mut announced = false;
+    let mut next_warning = 60;
+    while !stop.load(Ordering::SeqCst) {
+        let beats = store.heartbeats()?;
+        let now = crate::store::now_ms();
+        let theirs = beats
+            .iter()
+            .find(|b| b.learner == other)
+            .map(|b| (b.state, b.env_steps, now - b.at_ms));
+        if !should_wait(mine, theirs, lead) {
+            break;
+        }
+        if !announced {
+            tracing::info!(
+                "{}: {} env steps ahead of {other} by more than {lead}: waiting for it",
+                seat.name(),
+                mine
+            );
+            announced = true;
+        }
+        // Said again every minute: a seat nobody runs is waited for
+        // forever, and the one line above scrolls away.
+        let waited = started.elapsed().as_secs();
+        if waited >= next_warning {
+            next_warning += 60;
+            let why = match theirs {
+                None => format!("{other} has never run: no process or worker has taken its seat (start a `worker` on the league's store, or give `run --workers` one per seat)"),
+                Some((state, steps, _)) => format!("{other} is {state:?} at {steps} env steps"),
+            };
+            tracing::warn!("{}: waiting {waited} s for {other}; {why}", seat.name());
+        }
+        store.heartbeat(&seat.name(), BeatState::Waiting, mine, None)?;
+        std::thread::sleep(std::time::Duration::from_millis(500));
+    }
+    Ok(started.elapsed().as_secs_f64())
+}
+
+fn cannot_start(e: anyhow::Error) -> anyhow::Error {
+    anyhow::Error::new(CannotStart(format!("{e:#}")))
+}
+
+/// Runs one learner (main or exploiter) until its budget is spent or `stop`
+/// is set; checkpoints its own state and adds snapshots of itself to the
+/// pool (an exploiter then starts again from its initial weights). Errors
+/// before the first iteration are `CannotStart`.
+pub fn run_learner(dir: &LeagueDir, seat: Seat, stop: &AtomicBool) -> Result<Outcome> {
+    let opened = crate::open::open_process(dir).map_err(cannot_start)?;
+    let (cfg, store, league_id) = (opened.cfg, opened.store, opened.league_id);
+    if seat.is_exploiter() && !cfg.exploiters.enabled(seat.side) {
+        return Err(cannot_start(anyhow::anyhow!(
+            "{}: this league has no {} (exploiters.{} = false in {})",
+            dir.root.display(),
+            seat.name(),
+            seat.side.name(),
+            dir.config_path().display()
+        )));
+    }
+    let threads = dir.threads_per_learner(&cfg);
+    tch::set_num_threads(threads as i32);
+    let _ = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build_global();
+    let started = start_learner(dir, &cfg, &store, seat).map_err(cannot_start)?;
+    train_learner(dir, &cfg, &store, &league_id, seat, started, stop)
+}
+
+/// A learner ready to train: its trainer at its resume point.
+struct Started {
+    trainer: Trainer,
+    learner_id: i64,
+}
+
+fn start_learner(
+    dir: &LeagueDir,
+    cfg: &LeagueConfig,
+    store: &Store,
+    seat: Seat,
+) -> Result<Started> {
+    let name = seat.name();
+    let learner_id = store.add_player(&NewPlayer {
+        name: name.clone(),
+        side: seat.side,
+        kind: match seat.role {
+            SeatRole::Main => Kind::Learner,
+            SeatRole::Exploiter => Kind::Exploiter,
+        },
+        parent: None,
+        env_steps: 0,
+        curriculum_stage: 0,
+        checkpoint: None,
+    })?;
+    let row = store
+        .players()?
+        .into_iter()
+        .find(|p| p.id == learner_id)
+        .context("the learner's own row vanished")?;
+    let maps = crate::map::catalog::load_prepared(&cfg.maps)
+        .with_context(|| format!("maps = \"{}\"", cfg.maps))?;
+    let tcfg = cfg.seat_train_config(seat);
+    let run_dir = dir.seat_dir(seat);
+    let trainer = match resume_point(dir, store, &row, &tcfg)? {
+        ResumePoint::Fresh => {
+            std::fs::create_dir_all(&run_dir)?;
+            Trainer::new(tcfg, maps)?
+        }
+        ResumePoint::State => {
+            let t = Trainer::resume(tcfg, maps, &run_dir)?;
+            tracing::info!("{name}: resuming at {} env steps", t.env_steps);
+            t
+        }
+    };
+    Ok(Started {
+        trainer,
+        learner_id,
+    })
+}
+
+/// Where a learner starts: from nothing, or from what its `state.json`
+/// names (rebuilt first from the checkpoint the store names, if the file
+/// was lost). Never from nothing when the store or the disk shows that it
+/// trained before.
+enum ResumePoint {
+    Fresh,
+    State,
+}
+
+fn resume_point(
+    dir: &LeagueDir,
+    store: &Store,
+    row: &crate::store::Player,
+    tcfg: &crate::learn::train::TrainConfig,
+) -> Result<ResumePoint> {
+    use crate::learn::persist::{RunDir, RunState};
+    let run = RunDir::new(dir.seat_dir(Seat {
+        side: row.side,
+        role: if row.kind == Kind::Exploiter {
+            SeatRole::Exploiter
+        } else {
+            SeatRole::Main
+        },
+    }));
+    let state_path = run.state_path();
+    if run.has_state() {
+        let state = run.read_state()?;
+        if state.env_steps < row.env_steps {
+            bail!(
+                "{}: at {} env steps, but the store ({}) recorded {} at {} env steps; it would train again over steps it already played. Put the newer state.json back",
+                state_path.display(),
+                state.env_steps,
+                store.url(),
+                row.name,
+                row.env_steps
+            );
+        }
+        return Ok(ResumePoint::State);
+    }
+    // state.json is lost (or was never written: a first save killed
+    // between its checkpoint and its state): resume from the newest of the
+    // learner's checkpoints that verifies, is not behind the store's
+    // record, and was written under this config.
+    let checkpoints_dir = run.checkpoints_dir();
+    let names = run.checkpoint_names(Some(row.side)).unwrap_or_default();
+    let mut rejected = Vec::new();
+    for name in names.iter().rev() {
+        let ckpt = run.checkpoint(name);
+        let usable = (|| -> Result<crate::nn::checkpoint::CheckpointMeta> {
+            let meta = crate::nn::checkpoint::read_meta(&ckpt)?;
+            for file in meta.files.keys() {
+                crate::nn::checkpoint::verify_file(&ckpt, &meta, file)?;
+            }
+            if meta.config_hash != tcfg.hash() {
+                bail!("written under another config (hash {})", meta.config_hash);
+            }
+            if meta.env_steps < row.env_steps {
+                bail!(
+                    "at {} env steps, behind the store's {}",
+                    meta.env_steps,
+                    row.env_steps
+                );
+            }
+            Ok(meta)
+        })();
+        match usable {
+            Ok(meta) => {
+                run.write_state(&RunState {
+                    iteration: meta.iteration,
+                    env_steps: meta.env_steps,
+                    wall_s: 0.0,
+                    config_hash: meta.config_hash.clone(),
+                    checkpoints: vec![(row.side, name.clone())],
+                })?;
+                tracing::warn!(
+                    "{}: {} was missing; rebuilt from {}, its newest checkpoint that verifies ({} env steps)",
+                    row.name,
+                    state_path.display(),
+                    ckpt.display(),
+                    meta.env_steps
+                );
+                return Ok(ResumePoint::State);
+            }
+            Err(e) => rejected.push(format!("{name}: {e:#}")),
+        }
+    }
+    if row.env_steps == 0 && row.checkpoint.is_none() && rejected.is_empty() {
+        return Ok(ResumePoint::Fresh);
+    }
+    bail!(
+        "{}: missing, and no checkpoint in {} can stand in for it (the store ({}) records {} at {} env steps{}); refusing to start it over. Put state.json back",
+        state_path.display(),
+        checkpoints_dir.display(),
+        store.url(),
+        row.name,
+        row.env_steps,
+        if rejected.is_empty() {
+            String::new()
+        } else {
+            format!("; {}", rejected.join("; "))
+        }
+    )
+}
+
+fn train_learner(
+    dir: &LeagueDir,
+    cfg: &LeagueConfig,
+    store: &Store,
+    league_id: &str,
+    seat: Seat,
+    started: Started,
+    stop: &AtomicBool,
+) -> Result<Outcome> {
+    let side = seat.side;
+    let name = seat.name();
+    let Started {
+        mut trainer,
+        learner_id,
+    } = started;
+    let run_dir = dir.seat_dir(seat);
+    let initial = run_dir.join("initial");
+    let resets = cfg.exploiters.resets_after_snapshot(seat);
+    if resets && !initial.join("meta.json").is_file() {
+        // What every reset returns to (written once, before any training).
+        trainer.save_side(side, &initial)?;
+    }
+    // A snapshot of its own whose row it did not live to add (killed between
+    // the folder and the row): into the pool before anything counts snapshots.
+    for (rel, adopted) in crate::pool::adopt_unrecorded(dir, store, league_id, Some(&name))? {
+        match adopted {
+            Ok(()) => {
+                tracing::warn!("{name}: adopted {rel}, a snapshot whose row it did not live to add")
+            }
+            Err(e) => tracing::warn!("{name}: left {rel} out of the pool ({e:#})"),
+        }
+    }
+    let mut hooks = LeagueHooks::new(store, dir, cfg, seat, learner_id)?;
+    hooks.vector_steps = trainer.env_steps / cfg.num_envs as u64;
+    let mut last_snapshot = store
+        .players()?
+        .iter()
+        .filter(|p| p.parent == Some(learner_id))
+        .map(|p| p.env_steps)
+        .max()
+        .unwrap_or(0);
+    if resets && last_snapshot == trainer.env_steps && trainer.env_steps > 0 {
+        // Killed between its snapshot and its reset: reset now, or it would
+        // go on training the weights it just added to the pool.
+        trainer.reset_learner(side, &initial)?;
+        save_learner(&trainer, store, dir, seat, learner_id)?;
+        tracing::info!(
+            "{name}: back to its initial weights (its last snapshot is its resume point)"
+        );
+    }
+    hooks.assign_all(trainer.venv_mut())?;
+    let (mut wins_at_snapshot, mut games_at_snapshot) = (0u64, 0u64);
+    store.heartbeat(&name, BeatState::Training, trainer.env_steps, None)?;
+    let (segment_start, steps_at_start) = (Instant::now(), trainer.env_steps);
+    let mut own_inference = 0.0;
+    let mut waited = 0.0;
+    while trainer.env_steps < cfg.env_steps_per_learner && !stop.load(Ordering::SeqCst) {
+        if seat.keeps_pace() {
+            waited +=
+                wait_for_other_main(store, seat, trainer.env_steps, cfg.pace_env_steps, stop)?;
+            if stop.load(Ordering::SeqCst) {
+                break;
+            }
+        }
+        let started = Instant::now();
+        let m = trainer.iterate_with(&mut hooks)?;
+        own_inference += m.time_inference;
+        let since = trainer.env_steps.saturating_sub(last_snapshot);
+        let (w, g) = (
+            hooks.wins - wins_at_snapshot,
+            hooks.games - games_at_snapshot,
+        );
+        if should_snapshot(since, w, g, SnapshotRule::of(cfg, seat)) {
+            // The learner's own checkpoint first: a restart then resumes at
+            // or after this snapshot, so it never takes one under a name
+            // the pool already holds.
+            save_learner(&trainer, store, dir, seat, learner_id)?;
+            match add_snapshot(
+                &trainer,
+                store,
+                dir,
+                league_id,
+                seat,
+                learner_id,
+                hooks.curriculum.stage,
+            )? {
+                SnapshotOutcome::Added(snap) => {
+                    tracing::info!("{name}: snapshot {snap} joins the pool")
+                }
+                SnapshotOutcome::AlreadyInPool(snap) => tracing::info!(
+                    "{name}: {snap} is already in the pool (recorded before a restart); it stays as recorded"
+                ),
+                SnapshotOutcome::Blocked(snap) => tracing::warn!(
+                    "{name}: cannot add the snapshot {snap}: {} exists and is not a recorded member (put there by hand?); left alone, this snapshot is skipped",
+                    dir.players_dir().join(&snap).display()
+                ),
+            }
+            last_snapshot = trainer.env_steps;
+            wins_at_snapshot = hooks.wins;
+            games_at_snapshot = hooks.games;
+            if resets {
+                trainer.reset_learner(side, &initial)?;
+                // The reset is the new resume point: a restart must not
+                // bring back the weights that were just snapshotted.
+                save_learner(&trainer, store, dir, seat, learner_id)?;
+                tracing::info!("{name}: back to its initial weights");
+            }
+        } else if trainer.iteration % cfg.checkpoint_every == 0 {
+            save_learner(&trainer, store, dir, seat, learner_id)?;
+        }
+        hooks.refresh()?;
+        let steps = (cfg.num_envs * cfg.rollout_steps) as f64;
+        store.heartbeat(
+            &name,
+            BeatState::Training,
+            trainer.env_steps,
+            Some(steps / started.elapsed().as_secs_f64()),
+        )?;
+    }
+    save_learner(&trainer, store, dir, seat, learner_id)?;
+    let outcome = if trainer.env_steps >= cfg.env_steps_per_learner {
+        Outcome::Done
+    } else {
+        Outcome::Stopped
+    };
+    let state = match outcome {
+        Outcome::Done => BeatState::Done,
+        Outcome::Stopped => BeatState::Stopped,
+    };
+    let secs = segment_start.elapsed().as_secs_f64() - waited;
+    let trained = trainer.env_steps - steps_at_start;
+    let rate = trained as f64 / secs.max(1e-9);
+    // A run that trained no step (a finished league started again) keeps
+    // the rate it reported last.
+    store.heartbeat(
+        &name,
+        state,
+        trainer.env_steps,
+        (trained > 0).then_some(rate),
+    )?;
+    tracing::info!(
+        "{name}: {state} at {} env steps, {} matches recorded; this run {:.1} s training ({waited:.1} s waiting for the other side), {rate:.0} env steps/s",
+        trainer.env_steps, hooks.matches_recorded, secs
+    );
+    let team = side.agents(cfg.num_captors).len() as f64;
+    let own_rows = trained as f64 * team;
+    if own_rows > 0.0 && hooks.nets.rows > 0 {
+        tracing::info!(
+            "{name}: inference per robot row: own networks (actor + critic, sampling) {:.2} us, opponent networks (actor, batched per opponent) {:.2} us over {} rows",
+            1e6 * own_inference / own_rows,
+            1e6 * hooks.nets.seconds / hooks.nets.rows as f64,
+            hooks.nets.rows
+        );
+    }
+    Ok(outcome)
+}
+
+/// The learner's own resume point, and its row pointed at it.
+fn save_learner(
+    trainer: &Trainer,
+    store: &Store,
+    dir: &LeagueDir,
+    seat: Seat,
+    id: i64,
+) -> Result<()> {
+    let run_dir = dir.seat_dir(seat);
+    let written = trainer.save(&run_dir)?;
+    if let Some(ckpt) = written.first() {
+        let sha = crate::util::sha256_file(&ckpt.join("meta.json"))?;
+        let rel = dir.relative(ckpt);
+        store.update_learner(id, trainer.env_steps, (&rel, &sha))?;
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_learner_snapshots_when_it_wins_or_at_the_timeout() {
+        let rule = SnapshotRule {
+            every_env_steps: 40_000,
+            win_rate: 0.55,
+            timeout_env_steps: 80_000,
+        };
+        assert!(
+            should_snapshot(40_000, 11, 20, rule),
+            "55% after 40 k steps"
+        );
+        assert!(!should_snapshot(40_000, 10, 20, rule), "50% is under 55%");
+        assert!(
+            !should_snapshot(39_999, 20, 20, rule),
+            "winning, but too soon"
+        );
+        assert!(
+            !should_snapshot(60_000, 0, 0, rule),
+            "no games: not winning"
+        );
+        assert!(
+            should_snapshot(80_000, 0, 0, rule),
+            "the timeout, winning or not"
+        );
+        assert!(should_snapshot(80_000, 0, 20, rule));
+    }
+
+    #[test]
+    fn a_target_exploiter_that_keeps_learning_snapshots_on_the_clock_and_never_resets() {
+        let text = "[snapshots]\nevery_env_steps = 50_000\nwin_rate = 0.55\ntimeout_env_steps = 90_000\n\
+                    [exploiters]\ncaptors = true\ntarget = true\nwin_rate = 0.7\ntimeout_env_steps = 120_000\n";
+        let resetting = LeagueConfig::parse(text).unwrap();
+        let keeping = LeagueConfig::parse(&format!("{text}target_resets = false\n")).unwrap();
+        let (captors_x, target_x) = (
+            Seat::exploiter(Side::Captors),
+            Seat::exploiter(Side::Target),
+        );
+        // Which seats reset, in each league.
+        for (cfg, target_resets) in [(&resetting, true), (&keeping, false)] {
+            let r = |seat| cfg.exploiters.resets_after_snapshot(seat);
+            assert!(!r(Seat::main(Side::Captors)) && !r(Seat::main(Side::Target)));
+            assert!(r(captors_x));
+            assert_eq!(r(target_x), target_resets);
+        }
+        // The resetting exploiter: its own win rate and timeout.
+        let rule = SnapshotRule::of(&resetting, target_x);
+        assert!(!should_snapshot(50_000, 13, 20, rule), "65% is under 70%");
+        assert!(should_snapshot(50_000, 14, 20, rule));
+        assert!(!should_snapshot(119_999, 0, 20, rule));
+        // The one that keeps learning: every 50 k env steps, losing or not.
+        let rule = SnapshotRule::of(&keeping, target_x);
+        assert!(!should_snapshot(49_999, 20, 20, rule));
+        assert!(should_snapshot(50_000, 0, 20, rule));
+        assert!(should_snapshot(50_000, 0, 0, rule));
+        // Nothing else moves: the captor exploiter and the main learners.
+        for seat in [
+            captors_x,
+            Seat::main(Side::Captors),
+            Seat::main(Side::Target),
+        ] {
+            assert_eq!(
+                SnapshotRule::of(&keeping, seat),
+                SnapshotRule::of(&resetting, seat)
+            );
+        }
+        assert_eq!(
+            SnapshotRule::of(&keeping, captors_x).timeout_env_steps,
+            120_000
+        );
+        // Left out, the stored config does not name it (its hash is unchanged);
+        // without a target exploiter it is refused, named.
+        assert!(!toml::to_string(&resetting)
+            .unwrap()
+            .contains("target_resets"));
+        let err = LeagueConfig::parse("[exploiters]\ntarget_resets = false\n")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.starts_with("exploiters.target_resets") && err.contains("no target exploiter"),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn a_learner_waits_only_for_a_live_learner_it_is_far_ahead_of() {
+        assert!(
+            !should_wait(50_000, Some((BeatState::Training, 0, 10)), 0),
+            "0: never"
+        );
+        assert!(should_wait(
+            30_001,
+            Some((BeatState::Training, 10_000, 1_000)),
+            20_000
+        ));
+        assert!(
+            !should_wait(30_000, Some((BeatState::Training, 10_000, 1_000)), 20_000),
+            "exactly the lead"
+        );
+        assert!(should_wait(
+            30_001,
+            Some((BeatState::Waiting, 10_000, 1_000)),
+            20_000
+        ));
+        assert!(
+            !should_wait(90_000, Some((BeatState::Done, 10_000, 1_000)), 20_000),
+            "done: nothing to wait for"
+        );
+        assert!(!should_wait(
+            90_000,
+            Some((BeatState::Stopped, 10_000, 1_000)),
+            20_000
+        ));
+        assert!(
+            !should_wait(90_000, Some((BeatState::Training, 10_000, 130_000)), 20_000),
+            "silent: crashed"
+        );
+        assert!(should_wait(20_001, None, 20_000), "not started yet");
+        assert!(!should_wait(5_000, None, 20_000));
+    }
+}

@@ -1,0 +1,408 @@
+//! `t2e-league run`: the league's manager. It starts a league (or resumes
+//! the one its directory holds, after `open::plan_start`'s checks), spawns
+//! each learner and the evaluator as child processes of the same binary,
+//! and supervises them: every exit has one outcome (`supervision`): a crash
+//! is recorded and restarted from the last checkpoint with back-off until
+//! the crash budget is spent, a process that cannot start stops the league
+//! with its error. It stops at the budget (the learners stop themselves),
+//! after `--for`, or on Ctrl-C: every learner finishes its iteration,
+//! checkpoints and exits. Every line it prints reaches a redirected log.
+//!
+//! Processes, not threads: a crash stays in its process, each process sizes
+//! its own libtorch and rayon pools, and the processes share nothing but the
+//! league directory (so learners can later run on other machines against a
+//! shared database). Children get SIGKILL if the manager dies (Linux
+//! `PR_SET_PDEATHSIG`), and each learner holds a lock of its own, so a
+//! killed manager never leaves a learner running twice.
+
+use crate::config::LeagueConfig;
+use crate::dir::{new_league_id, LeagueDir, LeagueIdentity};
+use crate::env::Side;
+use crate::fs::write_file_atomically;
+use crate::manager_lease::ManagerGuard;
+use crate::open::{plan_start, StartPlan};
+use crate::players::Seat;
+use crate::pool::{ensure_members, reconcile};
+use crate::process::{interrupt, lock_holder, spawn, try_lock, Ended, Role, Supervised};
+use crate::store::Store;
+use crate::supervision::{CrashBudget, Exit, Next};
+use anyhow::{bail, Context, Result};
+use indicatif::{MultiProgress, ProgressBar, ProgressStyle};
+use std::fs::File;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
+
+/// Prints a line above the progress bars on a terminal, and plainly where
+/// stderr is redirected (indicatif draws nothing there, lines included).
+fn say(multi: &MultiProgress, line: impl AsRef<str>) {
+    if multi.is_hidden() {
+        // Not eprintln!: a redirected stderr on a full disk would panic the
+        // manager, the one process left to say what happened.
+        use std::io::Write;
+        let _ = writeln!(std::io::stderr(), "{}", line.as_ref());
+    } else {
+        multi.println(line.as_ref()).ok();
+    }
+}
+
+/// Starts or resumes the league in `dir` and runs it to its end. Every
+/// check (`open::plan_start`) passes before anything is written.
+/// How the manager runs the league's seats.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Launch {
+    /// As child processes of its own (the embedded default, one host).
+    Direct,
+    /// As seats in the store, taken by workers (`worker`) on any host; the
+    /// manager starts `local` of them itself, logging to `logs`.
+    Workers { local: usize, logs: PathBuf },
+}
+
+pub fn run(
+    dir: &LeagueDir,
+    config: Option<&Path>,
+    run_for: Option<Duration>,
+    stop: &AtomicBool,
+) -> Result<()> {
+    run_with(dir, config, run_for, stop, &Launch::Direct)
+}
+
+/// `run`, with the seats run as `launch` says.
+pub fn run_with(
+    dir: &LeagueDir,
+    config: Option<&Path>,
+    run_for: Option<Duration>,
+    stop: &AtomicBool,
+    launch: &Launch,
+) -> Result<()> {
+    let (plan, _lock, early) = {
+        // The lock comes first (two managers must not both decide), but a
+        // directory that does not exist yet is created only once the plan
+        // says a league starts there.
+        // A store kept apart from the pool has its own guard (the manager
+        // lease, taken before any write), and a pool that turns out not to
+        // be the league's must not get even a league.lock: plan first there.
+        let external = dir.store != crate::store::StoreUrl::in_dir(&dir.root);
+        // A league.lock already there is the league's own: take it before
+        // the lease too, or a manager that is only frozen (its flock still
+        // held) would lose the lease to one that then fails on the lock,
+        // and on waking find itself replaced: no manager at all.
+        let held = if dir.root.is_dir() && (!external || dir.root.join("league.lock").is_file()) {
+            Some(lock(dir)?)
+        } else {
+            None
+        };
+        let plan = plan_start(dir, config)?;
+        // The store's manager lease before anything is written: a manager
+        // that is not the league's own (another host, another --pool)
+        // changes nothing.
+        let early = match &plan {
+            StartPlan::Resume { .. } => {
+                let store = Store::open_existing(&dir.store)?;
+                let guard = ManagerGuard::take(&store, dir)?;
+                Some((store, guard))
+            }
+            StartPlan::New(_) => None,
+        };
+        let held = match held {
+            None if external && dir.root.is_dir() => Some(lock(dir)?),
+            held => held,
+        };
+        (plan, held, early)
+    };
+    let mut early = early;
+    let (cfg, league_id) = match plan {
+        StartPlan::New(cfg) => {
+            // Refuse maps that do not fit the protocol here, with the file's
+            // name, rather than in learners that cannot start.
+            let origin = config
+                .map(|p| p.display().to_string())
+                .unwrap_or_else(|| dir.config_path().display().to_string());
+            let maps = crate::map::catalog::load_prepared(&cfg.maps)
+                .with_context(|| format!("{origin}: maps = \"{}\"", cfg.maps))?;
+            cfg.protocol
+                .check_training_maps(&cfg.maps, &maps)
+                .map_err(|e| anyhow::anyhow!("{origin}: {e}"))?;
+            crate::pool::check_trained_members(&cfg)
+                .map_err(|e| anyhow::anyhow!("{origin}: {e:#}"))?;
+            crate::preflight::check_new_league(&cfg, &maps)
+                .map_err(|e| anyhow::anyhow!("{origin}: {e}"))?;
+            std::fs::create_dir_all(&dir.root)
+                .with_context(|| format!("cannot create {}", dir.root.display()))?;
+            (cfg, None)
+        }
+        StartPlan::Resume {
+            cfg,
+            restore_config,
+            identity,
+            write_identity,
+            set_store_identity,
+        } => {
+            if restore_config {
+                write_file_atomically(
+                    &dir.config_path(),
+                    toml::to_string_pretty(&cfg)?.as_bytes(),
+                )?;
+                tracing::warn!(
+                    "{}: was missing; restored from the league's store",
+                    dir.config_path().display()
+                );
+            }
+            if set_store_identity {
+                Store::open_existing(&dir.store)?.set_league_id_once(&identity.league_id)?;
+            }
+            if write_identity {
+                dir.write_identity(&identity)?;
+            }
+            tracing::info!("resuming the league {} in {}", cfg.name, dir.root.display());
+            (cfg, Some(identity.league_id))
+        }
+    };
+    let _lock = match _lock {
+        Some(l) => l,
+        None => lock(dir)?,
+    };
+    let (store, mut guard) = match early.take() {
+        Some(held) => held,
+        None => {
+            let store = Store::open(&dir.store)?;
+            let guard = ManagerGuard::take(&store, dir)?;
+            (store, guard)
+        }
+    };
+    let result = run_league(
+        dir, &cfg, &store, league_id, &mut guard, run_for, stop, launch,
+    );
+    guard.release(&store);
+    result
+}
+
+/// The league once its store is open and this manager holds its lease.
+#[allow(clippy::too_many_arguments)]
+fn run_league(
+    dir: &LeagueDir,
+    cfg: &LeagueConfig,
+    store: &Store,
+    league_id: Option<String>,
+    guard: &mut ManagerGuard,
+    run_for: Option<Duration>,
+    stop: &AtomicBool,
+    launch: &Launch,
+) -> Result<()> {
+    let cfg = cfg.clone();
+    let league_id = match league_id {
+        Some(id) => id,
+        None => {
+            // A new league: the store first (config, identity), then
+            // league.json and config.toml; a start killed in between resumes.
+            let stored = store.config_once(&toml::to_string_pretty(&cfg)?)?;
+            if LeagueConfig::parse(&stored).ok().as_ref() != Some(&cfg) {
+                bail!(
+                    "{}: its store was started with another config",
+                    dir.root.display()
+                );
+            }
+            let id = store.set_league_id_once(&new_league_id())?;
+            dir.write_identity(&LeagueIdentity {
+                league_id: id.clone(),
+                name: cfg.name.clone(),
+            })?;
+            write_file_atomically(&dir.config_path(), toml::to_string_pretty(&cfg)?.as_bytes())?;
+            tracing::info!("starting the league {} in {}", cfg.name, dir.root.display());
+            id
+        }
+    };
+    ensure_members(dir, store, &cfg)?;
+    let found = reconcile(dir, store, &league_id)?;
+    for r in &found.removed_temporaries {
+        tracing::info!("removed {r}: a temporary its writer left when it was killed");
+    }
+    for a in &found.adopted {
+        tracing::info!("adopted {a}: a complete snapshot whose row its writer did not live to add");
+    }
+    for (u, why) in &found.unrecorded {
+        tracing::warn!(
+            "left {u} in place, out of the pool: no row names it and it cannot be adopted ({why})"
+        );
+    }
+    for q in &found.quarantined {
+        tracing::warn!("quarantined {q}: its checkpoint files are missing or corrupt");
+    }
+    for r in &found.reinstated {
+        tracing::info!("reinstated {r}: its files are back and verify against its recorded hash");
+    }
+    let mut seats = vec![Seat::main(Side::Captors), Seat::main(Side::Target)];
+    for side in [Side::Captors, Side::Target] {
+        if cfg.exploiters.enabled(side) {
+            seats.push(Seat::exploiter(side));
+        }
+    }
+    for seat in &seats {
+        crate::learn::persist::RunDir::new(dir.seat_dir(*seat)).clean_stale_temporaries()?;
+    }
+
+    let mut roles: Vec<Role> = seats.iter().map(|s| Role::Learner(*s)).collect();
+    if cfg.evaluator.enabled {
+        roles.push(Role::Evaluator);
+    }
+    if let Launch::Workers { local, logs } = launch {
+        return crate::seats::supervise_workers(
+            dir, &cfg, store, &roles, *local, logs, run_for, stop, guard,
+        );
+    }
+    let multi = MultiProgress::new();
+    let bars: Vec<ProgressBar> = seats
+        .iter()
+        .map(|seat| {
+            let b = multi.add(ProgressBar::new(cfg.env_steps_per_learner));
+            b.set_style(
+                ProgressStyle::with_template(
+                    "{prefix:>12} [{bar:25}] {human_pos}/{human_len} steps {msg}",
+                )
+                .unwrap()
+                .progress_chars("=> "),
+            );
+            b.set_prefix(seat.name());
+            b
+        })
+        .collect();
+    let logs = dir.root.join("logs");
+    let mut procs: Vec<Supervised> = roles.into_iter().map(Supervised::new).collect();
+    let budget = CrashBudget::default();
+    let deadline = run_for.map(|d| Instant::now() + d);
+    let mut stopping = false;
+    let mut failure: Option<String> = None;
+    let mut last_status = Instant::now() - Duration::from_secs(60);
+    loop {
+        if !stopping
+            && (stop.load(Ordering::SeqCst)
+                || failure.is_some()
+                || deadline.is_some_and(|d| Instant::now() >= d))
+        {
+            stopping = true;
+            say(
+                &multi,
+                "stopping: each learner finishes its iteration and checkpoints",
+            );
+            for p in &procs {
+                if let Some(c) = &p.child {
+                    interrupt(c);
+                }
+            }
+        }
+        for p in &mut procs {
+            // Ctrl-C reaches the learners and the manager at once: a
+            // learner that stopped on it was asked to.
+            let asked = stopping || stop.load(Ordering::SeqCst);
+            if let Some(Ended {
+                exit,
+                next,
+                crash_text,
+            }) = p.reap(asked, budget)?
+            {
+                match next {
+                    Next::Finished => p.finished = true,
+                    Next::Restart { after, cause } => {
+                        record_crash(&multi, &store, &p.role.name(), &cause, &crash_text);
+                        say(
+                            &multi,
+                            format!(
+                                "{} crashed ({cause}); restarting from its last checkpoint in {} s (log: {})",
+                                p.role.name(),
+                                after.as_secs(),
+                                p.role.log_path(&logs).display()
+                            ),
+                        );
+                        p.restart_at = Some(Instant::now() + after);
+                    }
+                    Next::StopLeague { why } => {
+                        if exit != Exit::CannotStart {
+                            record_crash(&multi, &store, &p.role.name(), &why, &crash_text);
+                        }
+                        say(
+                            &multi,
+                            format!("{why} (log: {})", p.role.log_path(&logs).display()),
+                        );
+                        p.finished = true;
+                        failure.get_or_insert(why);
+                    }
+                }
+            }
+            if p.child.is_none() && !p.finished && !stopping {
+                if let Some(at) = p.restart_at {
+                    if Instant::now() >= at {
+                        let (child, output) = spawn(dir, p.role, &logs, None)?;
+                        p.child = Some(child);
+                        p.output = Some(output);
+                        p.started = Instant::now();
+                        p.restart_at = None;
+                    }
+                }
+            }
+            if stopping && p.child.is_none() {
+                p.finished = true;
+            }
+        }
+        if let Err(e) = guard.renew(store) {
+            failure.get_or_insert(format!("{e:#}"));
+        }
+        if last_status.elapsed() >= Duration::from_secs(2) {
+            last_status = Instant::now();
+            // The bars are a view: a store that cannot be read for a moment
+            // (busy, disk full) must not end the league.
+            if let (Ok(beats), Ok(matches)) = (store.heartbeats(), store.match_count()) {
+                for (bar, p) in bars.iter().zip(&procs) {
+                    if let Some(b) = beats.iter().find(|b| b.learner == p.role.name()) {
+                        bar.set_position(b.env_steps);
+                        bar.set_message(format!(
+                            "| {:.0} steps/s | {} | {matches} matches",
+                            b.steps_per_s, b.state
+                        ));
+                    }
+                }
+            }
+        }
+        if procs.iter().all(|p| p.finished) {
+            break;
+        }
+        std::thread::sleep(Duration::from_millis(200));
+    }
+    for b in &bars {
+        b.finish();
+    }
+    let players = store.players()?.len();
+    tracing::info!(
+        "league {}: {} matches, {players} players; `t2e-league status --dir {}` shows the table",
+        cfg.name,
+        store.match_count()?,
+        dir.root.display()
+    );
+    match failure {
+        Some(why) => bail!("{why}"),
+        None => Ok(()),
+    }
+}
+
+/// Records a crash in the store; a store that cannot take it (disk full)
+/// is reported, and the league goes on.
+fn record_crash(multi: &MultiProgress, store: &Store, name: &str, cause: &str, tail: &str) {
+    if let Err(e) = store.record_crash(name, cause, tail) {
+        say(
+            multi,
+            format!("could not record the crash of {name} in the store: {e}"),
+        );
+    }
+}
+
+/// Takes the league's manager lock, or says who holds it.
+fn lock(dir: &LeagueDir) -> Result<File> {
+    let lock_path = dir.root.join("league.lock");
+    match try_lock(&lock_path)? {
+        Some(l) => Ok(l),
+        None => bail!(
+            "{}: a manager (pid {}) is already running this league; stop it first (Ctrl-C) or pick another --dir",
+            dir.root.display(),
+            lock_holder(&lock_path)
+        ),
+    }
+}

@@ -1,0 +1,163 @@
+//! `export`: a player's checkpoint copied out of the league, by name or as the validation panel's best.
+
+use super::*;
+use std::fmt::Write as _;
+
+/// Writes one player as a self-contained folder: its checkpoint files, the
+/// league's config, its rating history and a SHA-256 manifest; `eval
+/// --captors ckpt:OUT` (or `--target`) plays it on another machine.
+pub fn export(dir: &LeagueDir, player: &str, out: &Path) -> Result<()> {
+    let (cfg, store) = open(dir)?;
+    let players = store.players()?;
+    let p = players
+        .iter()
+        .find(|p| p.name == player || p.id.to_string() == player)
+        .with_context(|| {
+            format!(
+                "no player '{player}' in {} (players: {})",
+                dir.root.display(),
+                crate::store::player_names(&players)
+            )
+        })?;
+    let Some((rel, meta_sha)) = &p.checkpoint else {
+        bail!(
+            "{} is a heuristic member: it has no weights to export",
+            p.name
+        );
+    };
+    let src = dir.root.join(rel);
+    let got = crate::util::sha256_file(&src.join("meta.json"))
+        .with_context(|| format!("{}: meta.json missing", src.display()))?;
+    if &got != meta_sha {
+        bail!("{}: meta.json does not match the store's sha256: refusing to export a corrupt checkpoint", src.display());
+    }
+    // Loading verifies every weight file against meta.json and refuses NaN.
+    crate::nn::PolicySnapshot::load(&src, p.side)?;
+    if let Some(why) = &p.quarantined {
+        tracing::info!(
+            "note: {} is quarantined ({why}); its files verify against the hashes recorded with it, so they are exported",
+            p.name
+        );
+    }
+    if out.exists() {
+        bail!("{}: already exists; pick a new --out", out.display());
+    }
+    if dir.contains(out) {
+        bail!(
+            "--out {}: inside the league directory {}; the league owns what is there (players/ is reconciled at every start). Export outside it",
+            out.display(),
+            dir.root.display()
+        );
+    }
+    crate::fs::write_dir_atomically(out, |tmp| {
+        let mut manifest = String::new();
+        crate::fs::copy_files(&src, tmp)?;
+        // The config as the store holds it, byte for byte: what the league
+        // ran with, in the words it was written in.
+        let config_text = match store.stored_config()? {
+            Some(text) => text,
+            None => toml::to_string_pretty(&cfg).context("cannot write the league's config")?,
+        };
+        std::fs::write(tmp.join("league-config.toml"), config_text)?;
+        let mut csv = String::from("match_id,mu,sigma,at_ms\n");
+        for r in store.rating_history(p.id)? {
+            let _ = writeln!(
+                csv,
+                "{},{},{},{}",
+                r.match_id.map(|x| x.to_string()).unwrap_or_default(),
+                r.mu,
+                r.sigma,
+                r.at_ms
+            );
+        }
+        std::fs::write(tmp.join("ratings.csv"), csv)?;
+        let info = serde_json::json!({
+            "player": p.name, "id": p.id, "side": p.side.name(), "kind": p.kind.name(),
+            "parent": p.parent, "env_steps": p.env_steps, "league": dir.root.display().to_string(),
+        });
+        std::fs::write(
+            tmp.join("player.json"),
+            serde_json::to_string_pretty(&info)?,
+        )?;
+        let mut names: Vec<_> = std::fs::read_dir(tmp)?
+            .map(|e| e.map(|e| e.file_name().to_string_lossy().into_owned()))
+            .collect::<std::io::Result<_>>()?;
+        names.sort();
+        for n in names {
+            let _ = writeln!(
+                manifest,
+                "{}  {n}",
+                crate::util::sha256_file(&tmp.join(&n))?
+            );
+        }
+        std::fs::write(tmp.join("SHA256SUMS"), manifest)?;
+        Ok::<(), anyhow::Error>(())
+    })?;
+    Ok(())
+}
+
+/// The validation-best snapshot of a side's main learner, and the panel.
+pub struct BestValidated {
+    pub player: Player,
+    pub win_rate: f64,
+    pub mean_steps: f64,
+    pub episodes: u64,
+    /// The validation teams, comma-separated, and their maps.
+    pub opponents: String,
+}
+
+/// The main learner's snapshot of `side` that did best on the validation
+/// panel (`selection::rank_validated`), for `export --best`.
+pub fn best_validated(dir: &LeagueDir, side: Side) -> Result<BestValidated> {
+    let (cfg, store) = open(dir)?;
+    let opponents: Vec<String> = cfg
+        .evaluator
+        .validation(side)
+        .map_err(|e| anyhow::anyhow!("{}: evaluator.{e}", dir.config_path().display()))?
+        .into_iter()
+        .map(|(name, _)| name)
+        .collect();
+    let ranked = crate::selection::rank_validated(
+        &store.players()?,
+        &store.held_out_results()?,
+        side,
+        &opponents,
+        cfg.evaluator.episodes as u64,
+    )
+    .map_err(|e| match e {
+        // "Wait for the evaluator" would wait for ever.
+        crate::selection::NoChoice::NoneComplete { .. } if !cfg.evaluator.enabled => {
+            anyhow::anyhow!(
+                "{}: no snapshot has a complete validation, and the league's evaluator is off ([evaluator] enabled = false), so none will; export a player by name",
+                dir.root.display()
+            )
+        }
+        e => anyhow::anyhow!("{}: {e}", dir.root.display()),
+    })?;
+    let best = ranked
+        .into_iter()
+        .next()
+        .expect("rank_validated never returns an empty list");
+    Ok(BestValidated {
+        player: best.player,
+        win_rate: best.win_rate,
+        mean_steps: best.mean_steps,
+        episodes: best.episodes,
+        opponents: format!(
+            "{} on {}",
+            opponents.join(", "),
+            cfg.evaluator.validation_maps.as_deref().unwrap_or("?")
+        ),
+    })
+}
+
+/// The best player of a side by the Bradley-Terry fit, among those with weights.
+pub fn best_player(r: &StatusReport, side: Side) -> Option<String> {
+    r.players
+        .iter()
+        .filter(|p| {
+            p.side == side && p.kind != Kind::Heuristic && p.quarantined.is_none() && p.games > 0
+        })
+        .max_by(|a, b| a.bt_elo.total_cmp(&b.bt_elo))
+        .map(|p| p.name.clone())
+}
