@@ -27,6 +27,8 @@
 //!     loaded;
 //!   - `pool`: snapshot folders and their rows (written once, adopted,
 //!     quarantined, never deleted);
+//!   - `child`: the league's child processes as one typed command, which
+//!     the parents spawn and the CLI reads back;
 //!   - `process`: spawning a seat's process, per-host locks, logs;
 //!   - `manager` (`t2e-league run`) and `manager_lease`; `worker`
 //!     (`t2e-league worker`); `seats`: the manager's side of a league
@@ -50,7 +52,7 @@ pub use rules::{
     selection, supervision,
 };
 pub use run::{
-    dir, evaluator, exploit, learner, manager, manager_lease, open, opponents, panels, pool,
+    child, dir, evaluator, exploit, learner, manager, manager_lease, open, opponents, panels, pool,
     preflight, process, seats, status, worker,
 };
 

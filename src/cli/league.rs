@@ -2,7 +2,9 @@
 //! the hidden `league-learner` the manager spawns.
 
 use crate::env::Side;
+use crate::league::child::{self, ChildCommand};
 use crate::league::dir::LeagueDir;
+use crate::league::players::Role;
 use crate::league::store::StoreUrl;
 use crate::league::supervision::{CannotStart, Outcome};
 use crate::league::worker::WorkerOptions;
@@ -193,16 +195,22 @@ pub struct ExploitArgs {
     pub quiet: bool,
 }
 
+/// A league seat's process (`league-learner`, `league-evaluator`), spawned
+/// by `run` or a worker: its arguments are read by the league's own typed
+/// command (`league::child::ChildCommand`), the one that wrote them.
 #[derive(clap::Args, Debug)]
-pub struct LearnerArgs {
-    #[arg(long)]
-    pub dir: PathBuf,
-    /// captors or target.
-    #[arg(long)]
-    pub side: String,
-    /// Run the side's main exploiter instead of its main learner.
-    #[arg(long)]
-    pub exploiter: bool,
+pub struct SeatArgs {
+    #[arg(trailing_var_arg = true, allow_hyphen_values = true, num_args = 0..)]
+    pub args: Vec<std::ffi::OsString>,
+}
+
+impl SeatArgs {
+    fn read(&self, subcommand: &str) -> Result<(Role, LeagueDir)> {
+        match ChildCommand::parse_seat(subcommand, &self.args)? {
+            ChildCommand::Seat { role, dir } => Ok((role, process::dir_from_env(&dir)?)),
+            other => bail!("{subcommand}: not a seat ({other:?})"),
+        }
+    }
 }
 
 static STOP: AtomicBool = AtomicBool::new(false);
@@ -580,14 +588,8 @@ pub fn exploit(args: ExploitArgs) -> Result<()> {
     }
 }
 
-#[derive(clap::Args, Debug)]
-pub struct EvaluatorArgs {
-    #[arg(long)]
-    pub dir: PathBuf,
-}
-
-pub fn evaluator(args: EvaluatorArgs) -> Result<()> {
-    let dir = process::dir_from_env(&args.dir)?;
+pub fn evaluator(args: SeatArgs) -> Result<()> {
+    let (_, dir) = args.read(child::EVALUATOR)?;
     let lock_path = dir.root.join("learners").join("evaluator.lock");
     std::fs::create_dir_all(lock_path.parent().unwrap())?;
     let Some(_lock) = process::try_lock(&lock_path)? else {
@@ -615,21 +617,10 @@ fn exit_with(result: Result<Outcome>) -> Result<()> {
     }
 }
 
-pub fn learner(args: LearnerArgs) -> Result<()> {
-    let side = match args.side.as_str() {
-        "captors" => Side::Captors,
-        "target" => Side::Target,
-        other => bail!("--side {other}: expected captors or target"),
-    };
-    let dir = process::dir_from_env(&args.dir)?;
-    use crate::league::players::{Seat, SeatRole};
-    let seat = Seat {
-        side,
-        role: if args.exploiter {
-            SeatRole::Exploiter
-        } else {
-            SeatRole::Main
-        },
+pub fn learner(args: SeatArgs) -> Result<()> {
+    let (role, dir) = args.read(child::LEARNER)?;
+    let Role::Learner(seat) = role else {
+        bail!("{}: not a learner's seat", child::LEARNER);
     };
     let lock_path = dir.seat_dir(seat).with_extension("lock");
     std::fs::create_dir_all(lock_path.parent().unwrap())?;
@@ -642,4 +633,60 @@ pub fn learner(args: LearnerArgs) -> Result<()> {
     };
     on_ctrl_c()?;
     exit_with(learner::run_learner(&dir, seat, &STOP))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cli::{Cli, Command};
+    use clap::Parser;
+    use std::ffi::OsString;
+
+    fn parse(child: &ChildCommand) -> Command {
+        let mut argv: Vec<OsString> = vec!["t2e-league".into()];
+        argv.extend(child.args());
+        Cli::try_parse_from(argv).unwrap().command
+    }
+
+    /// What the league's parents spawn is what the binary reads: every
+    /// seat comes back as the same typed command, and a local worker with
+    /// its pool, log folder and seat count.
+    #[test]
+    fn the_cli_reads_every_child_process_the_league_spawns() {
+        use crate::league::players::Seat;
+        let dir = PathBuf::from("/tmp/a league");
+        for role in [
+            Role::Evaluator,
+            Role::Learner(Seat::main(Side::Captors)),
+            Role::Learner(Seat::exploiter(Side::Target)),
+        ] {
+            let child = ChildCommand::Seat {
+                role,
+                dir: dir.clone(),
+            };
+            let (args, subcommand) = match parse(&child) {
+                Command::LeagueLearner(a) => (a, child::LEARNER),
+                Command::LeagueEvaluator(a) => (a, child::EVALUATOR),
+                other => panic!("{child:?} parsed as {other:?}"),
+            };
+            assert_eq!(subcommand, child.subcommand());
+            assert_eq!(
+                ChildCommand::parse_seat(subcommand, &args.args).unwrap(),
+                child
+            );
+        }
+        let worker = ChildCommand::Worker {
+            pool: dir.clone(),
+            logs: PathBuf::from("/tmp/logs"),
+            seats: 1,
+        };
+        match parse(&worker) {
+            Command::Worker(w) => {
+                assert_eq!(w.pool, dir);
+                assert_eq!(w.dir, PathBuf::from("/tmp/logs"));
+                assert_eq!(w.seats, 1);
+            }
+            other => panic!("the worker parsed as {other:?}"),
+        }
+    }
 }

@@ -81,10 +81,10 @@ pub enum Command {
     Worker(league::WorkerArgs),
     /// One learner of a league (spawned by `run`).
     #[command(hide = true)]
-    LeagueLearner(league::LearnerArgs),
+    LeagueLearner(league::SeatArgs),
     /// A league's evaluator (spawned by `run`).
     #[command(hide = true)]
-    LeagueEvaluator(league::EvaluatorArgs),
+    LeagueEvaluator(league::SeatArgs),
     /// Write docs/reference/cli.md and the man pages from these definitions.
     #[command(hide = true)]
     GenerateDocs(docs::GenerateDocsArgs),

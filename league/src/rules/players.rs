@@ -4,6 +4,7 @@
 //! none of them needs the others for it.
 
 use crate::env::Side;
+use std::path::{Path, PathBuf};
 
 /// The evaluator's name: its heartbeat row and the recorder of the panel's
 /// matches. One name, so the status's filters and the processes agree.
@@ -85,6 +86,39 @@ pub fn heuristic_name(side: Side) -> String {
     match side {
         Side::Captors => "expert-captors".into(),
         Side::Target => "rule-based-target".into(),
+    }
+}
+
+/// What a seat runs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Role {
+    Learner(Seat),
+    Evaluator,
+}
+
+impl Role {
+    /// The seat's name (`captors-main`, `target-exploiter`, `evaluator`).
+    pub fn name(self) -> String {
+        match self {
+            Role::Learner(seat) => seat.name(),
+            Role::Evaluator => EVALUATOR.into(),
+        }
+    }
+
+    /// The role a seat name stands for.
+    pub fn from_name(name: &str) -> Option<Role> {
+        if name == EVALUATOR {
+            return Some(Role::Evaluator);
+        }
+        [Side::Captors, Side::Target]
+            .into_iter()
+            .flat_map(|side| [Seat::main(side), Seat::exploiter(side)])
+            .find(|seat| seat.name() == name)
+            .map(Role::Learner)
+    }
+
+    pub fn log_path(self, logs: &Path) -> PathBuf {
+        logs.join(format!("{}.log", self.name()))
     }
 }
 

@@ -2,6 +2,7 @@
 //! evaluator and `exploit`, and the league directory they share, over the
 //! rules and the store.
 
+pub mod child;
 pub mod dir;
 pub mod evaluator;
 pub mod exploit;

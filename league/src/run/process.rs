@@ -2,9 +2,9 @@
 //! roles a seat can hold, spawning one as a child of this binary, the locks
 //! that keep a seat from running twice on a host, and their logs.
 
+use crate::child::ChildCommand;
 use crate::dir::LeagueDir;
-use crate::env::Side;
-use crate::players::{Seat, EVALUATOR};
+pub use crate::players::Role;
 use crate::store::{now_ms, StoreUrl};
 use crate::supervision::{classify, decide, last_error_line, CrashBudget, Exit, Next};
 use anyhow::{Context, Result};
@@ -44,39 +44,6 @@ pub fn lock_holder(path: &Path) -> String {
     std::fs::read_to_string(path)
         .map(|s| s.trim().to_string())
         .unwrap_or_default()
-}
-
-/// What a seat runs.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Role {
-    Learner(Seat),
-    Evaluator,
-}
-
-impl Role {
-    /// The seat's name (`captors-main`, `target-exploiter`, `evaluator`).
-    pub fn name(self) -> String {
-        match self {
-            Role::Learner(seat) => seat.name(),
-            Role::Evaluator => EVALUATOR.into(),
-        }
-    }
-
-    /// The role a seat name stands for.
-    pub fn from_name(name: &str) -> Option<Role> {
-        if name == EVALUATOR {
-            return Some(Role::Evaluator);
-        }
-        [Side::Captors, Side::Target]
-            .into_iter()
-            .flat_map(|side| [Seat::main(side), Seat::exploiter(side)])
-            .find(|seat| seat.name() == name)
-            .map(Role::Learner)
-    }
-
-    pub fn log_path(self, logs: &Path) -> PathBuf {
-        logs.join(format!("{}.log", self.name()))
-    }
 }
 
 /// A child process its parent (the manager, a worker) supervises.
@@ -258,21 +225,9 @@ pub fn spawn(
     logs: &Path,
     host: Option<&str>,
 ) -> Result<(Child, Output)> {
-    let mut cmd =
-        crate::util::own_command().context("cannot find this program to spawn learners")?;
-    match role {
-        Role::Learner(seat) => {
-            cmd.arg("league-learner")
-                .arg("--side")
-                .arg(seat.side.name());
-            if seat.is_exploiter() {
-                cmd.arg("--exploiter");
-            }
-        }
-        Role::Evaluator => {
-            cmd.arg("league-evaluator");
-        }
-    };
+    let mut cmd = ChildCommand::seat(role, dir)
+        .command()
+        .context("cannot find this program to spawn learners")?;
     // Any store but the default league.db in the pool folder reaches the
     // child, or a worker's learner would look for one there and refuse.
     match &dir.store {
@@ -287,7 +242,6 @@ pub fn spawn(
     if let Some(h) = host {
         cmd.env("T2E_HOST", h);
     }
-    cmd.arg("--dir").arg(&dir.root);
     spawn_logged(cmd, &role.log_path(logs))
         .with_context(|| format!("cannot start the {}", role.name()))
 }
@@ -399,6 +353,8 @@ pub fn dir_from_env(root: &Path) -> Result<LeagueDir> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::env::Side;
+    use crate::players::Seat;
 
     #[test]
     fn seat_names_name_their_roles() {

@@ -16,15 +16,14 @@ use std::time::{Duration, Instant};
 
 /// Starts a worker for the league in `dir` as a child of this process.
 pub fn spawn_worker(dir: &LeagueDir, logs: &Path, index: usize) -> Result<Child> {
-    let mut cmd =
-        crate::util::own_command().context("cannot find this program to spawn workers")?;
-    cmd.arg("worker")
-        .arg("--pool")
-        .arg(&dir.root)
-        .arg("--dir")
-        .arg(logs.parent().unwrap_or(logs))
-        .arg("--seats")
-        .arg("1");
+    let child = crate::child::ChildCommand::Worker {
+        pool: dir.root.clone(),
+        logs: logs.parent().unwrap_or(logs).to_path_buf(),
+        seats: 1,
+    };
+    let mut cmd = child
+        .command()
+        .context("cannot find this program to spawn workers")?;
     match &dir.store {
         StoreUrl::Postgres(_) => cmd.env("T2E_STORE", dir.store.secret()),
         StoreUrl::Sqlite(path) => cmd.env("T2E_STORE", path),

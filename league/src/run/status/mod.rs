@@ -382,10 +382,7 @@ fn pid_is_league_process(pid: i64) -> bool {
         return false;
     }
     match std::fs::read(format!("/proc/{pid}/cmdline")) {
-        Ok(cmd) => {
-            let text = String::from_utf8_lossy(&cmd);
-            text.contains("league-learner") || text.contains("league-evaluator")
-        }
+        Ok(cmd) => crate::child::ChildCommand::is_league_process(&cmd),
         Err(_) => false,
     }
 }
