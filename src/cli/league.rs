@@ -494,7 +494,7 @@ pub fn status(args: StatusArgs) -> Result<()> {
             if watch.is_some() {
                 print!("\x1b[2J\x1b[H");
             }
-            print!("{}", status::render(&r));
+            print!("{}", crate::cli::status_text::render(&r));
         }
         let Some(w) = watch else { break };
         let until = std::time::Instant::now() + w;
@@ -575,7 +575,7 @@ pub fn exploit(args: ExploitArgs) -> Result<()> {
             if !fresh {
                 println!("already recorded in the store (the same player, weights, learner, budget, seed and evaluation):");
             }
-            print!("{}", exploit::render(&rows, &player));
+            print!("{}", render_exploit(&rows, &player));
             Ok(())
         }
         ExploitOutcome::Stopped { env_steps, folder } => {
@@ -633,6 +633,38 @@ pub fn learner(args: SeatArgs) -> Result<()> {
     };
     on_ctrl_c()?;
     exit_with(learner::run_learner(&dir, seat, &STOP))
+}
+
+/// The rows as a table: map set, episodes, the best response's win rate
+/// with its 95% Wilson interval.
+fn render_exploit(rows: &[crate::league::store::ExploitRecord], player: &str) -> String {
+    use crate::eval::wilson_interval;
+    let mut s = String::new();
+    if let Some(r) = rows.first() {
+        s.push_str(&format!(
+            "best response ({}, budget {}: {} env steps, {:.1} min of training, seed {}) against {player}, {}:1 at 1.0:{}:\n",
+            r.best_response,
+            r.budget,
+            r.env_steps,
+            r.train_ms as f64 / 60_000.0,
+            r.seed,
+            r.num_captors,
+            crate::eval::ratio_label(r.speed_ratio),
+        ));
+    }
+    s.push_str("| maps | episodes | best response wins % | 95% interval |\n|---|---|---|---|\n");
+    for r in rows {
+        let (lo, hi) = wilson_interval(r.wins as usize, r.episodes as usize);
+        s.push_str(&format!(
+            "| {} | {} | {:.1} | [{:.1}, {:.1}] |\n",
+            r.maps,
+            r.episodes,
+            100.0 * r.wins as f64 / r.episodes as f64,
+            100.0 * lo,
+            100.0 * hi
+        ));
+    }
+    s
 }
 
 #[cfg(test)]

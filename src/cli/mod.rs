@@ -13,6 +13,7 @@ pub mod logging;
 pub mod maps;
 pub mod periodic_eval;
 pub mod render;
+pub mod status_text;
 pub mod table;
 pub mod train;
 

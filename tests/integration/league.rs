@@ -153,7 +153,7 @@ fn killed_at_random_moments_the_league_loses_and_duplicates_nothing() {
     ] {
         assert!(json.get(key).is_some(), "status --json lacks {key}");
     }
-    let text = t2e::league::status::render(&report);
+    let text = t2e::cli::status_text::render(&report);
     assert!(
         text.contains("payoff") && text.contains("captors-main"),
         "{text}"
@@ -351,7 +351,7 @@ fn held_out_opponents_play_every_snapshot_but_never_the_league() {
         .find(|l| l.name == "evaluator")
         .unwrap();
     assert_eq!(evaluator.env_steps, 2 * episodes, "panel episodes counted");
-    let text = t2e::league::status::render(&report);
+    let text = t2e::cli::status_text::render(&report);
     assert!(
         text.contains("random (held out)") && text.contains("still (held out)"),
         "{text}"

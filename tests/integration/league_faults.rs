@@ -683,7 +683,7 @@ fn status_reports_the_dead_as_dead_and_the_finished_as_they_were() {
         assert_ne!(r.state, "evaluating", "{r:?}");
     }
     assert!(report.learners.iter().any(|r| r.state == "dead"));
-    let text = t2e::league::status::render(&report);
+    let text = t2e::cli::status_text::render(&report);
     assert!(text.contains("dead"), "{text}");
 }
 

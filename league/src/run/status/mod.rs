@@ -56,11 +56,9 @@ use std::path::Path;
 
 mod export;
 mod plot;
-mod text;
 
 pub use export::{best_player, best_validated, export, BestValidated};
 pub use plot::{panel_curves, plot, rating_lines, PanelCurve, RatingLine};
-pub use text::render;
 
 #[derive(Clone, Debug, Serialize)]
 pub struct PlayerRow {
@@ -213,7 +211,7 @@ fn exploit_rows(players: &[Player], records: Vec<ExploitRecord>) -> Vec<ExploitR
 
 /// The frozen weights of an exploit, as a table cell: the hash's first 12
 /// digits and the player's env steps then (`?` when not recorded).
-fn frozen_label(e: &ExploitRow) -> String {
+pub fn frozen_label(e: &ExploitRow) -> String {
     match &e.player_sha256 {
         None => "heuristic".into(),
         Some(sha) => format!(

@@ -1,6 +1,8 @@
 //! `status` as text: the tables a person reads in a terminal.
 
-use super::*;
+use crate::env::Side;
+use crate::league::players::EVALUATOR;
+use crate::league::status::*;
 use std::fmt::Write as _;
 
 /// The report as text: players, learners, curriculum, payoff matrix, crashes.
