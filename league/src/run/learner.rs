@@ -532,7 +532,7 @@ fn resume_point(
     row: &crate::store::Player,
     tcfg: &crate::learn::train::TrainConfig,
 ) -> Result<ResumePoint> {
-    use crate::learn::persist::{RunDir, RunState};
+    use crate::learn::persist::{Recovery, RunDir};
     let run = RunDir::new(dir.seat_dir(Seat {
         side: row.side,
         role: if row.kind == Kind::Exploiter {
@@ -542,74 +542,39 @@ fn resume_point(
         },
     }));
     let state_path = run.state_path();
-    if run.has_state() {
-        let state = run.read_state()?;
-        if state.env_steps < row.env_steps {
-            bail!(
-                "{}: at {} env steps, but the store ({}) recorded {} at {} env steps; it would train again over steps it already played. Put the newer state.json back",
-                state_path.display(),
-                state.env_steps,
-                store.url(),
+    let rejected = match run.recover(row.side, &tcfg.hash(), row.env_steps)? {
+        Recovery::Kept { env_steps } if env_steps < row.env_steps => bail!(
+            "{}: at {} env steps, but the store ({}) recorded {} at {} env steps; it would train again over steps it already played. Put the newer state.json back",
+            state_path.display(),
+            env_steps,
+            store.url(),
+            row.name,
+            row.env_steps
+        ),
+        Recovery::Kept { .. } => return Ok(ResumePoint::State),
+        Recovery::Rebuilt {
+            checkpoint,
+            env_steps,
+        } => {
+            tracing::warn!(
+                "{}: {} was missing; rebuilt from {}, its newest checkpoint that verifies ({} env steps)",
                 row.name,
-                row.env_steps
+                state_path.display(),
+                checkpoint.display(),
+                env_steps
             );
+            return Ok(ResumePoint::State);
         }
-        return Ok(ResumePoint::State);
-    }
-    // state.json is lost (or was never written: a first save killed
-    // between its checkpoint and its state): resume from the newest of the
-    // learner's checkpoints that verifies, is not behind the store's
-    // record, and was written under this config.
-    let checkpoints_dir = run.checkpoints_dir();
-    let names = run.checkpoint_names(Some(row.side)).unwrap_or_default();
-    let mut rejected = Vec::new();
-    for name in names.iter().rev() {
-        let ckpt = run.checkpoint(name);
-        let usable = (|| -> Result<crate::nn::checkpoint::CheckpointMeta> {
-            let meta = crate::nn::checkpoint::read_meta(&ckpt)?;
-            for file in meta.files.keys() {
-                crate::nn::checkpoint::verify_file(&ckpt, &meta, file)?;
-            }
-            if meta.config_hash != tcfg.hash() {
-                bail!("written under another config (hash {})", meta.config_hash);
-            }
-            if meta.env_steps < row.env_steps {
-                bail!(
-                    "at {} env steps, behind the store's {}",
-                    meta.env_steps,
-                    row.env_steps
-                );
-            }
-            Ok(meta)
-        })();
-        match usable {
-            Ok(meta) => {
-                run.write_state(&RunState {
-                    iteration: meta.iteration,
-                    env_steps: meta.env_steps,
-                    wall_s: 0.0,
-                    config_hash: meta.config_hash.clone(),
-                    checkpoints: vec![(row.side, name.clone())],
-                })?;
-                tracing::warn!(
-                    "{}: {} was missing; rebuilt from {}, its newest checkpoint that verifies ({} env steps)",
-                    row.name,
-                    state_path.display(),
-                    ckpt.display(),
-                    meta.env_steps
-                );
-                return Ok(ResumePoint::State);
-            }
-            Err(e) => rejected.push(format!("{name}: {e:#}")),
+        Recovery::Empty if row.env_steps == 0 && row.checkpoint.is_none() => {
+            return Ok(ResumePoint::Fresh)
         }
-    }
-    if row.env_steps == 0 && row.checkpoint.is_none() && rejected.is_empty() {
-        return Ok(ResumePoint::Fresh);
-    }
+        Recovery::Empty => Vec::new(),
+        Recovery::Unusable(rejected) => rejected,
+    };
     bail!(
         "{}: missing, and no checkpoint in {} can stand in for it (the store ({}) records {} at {} env steps{}); refusing to start it over. Put state.json back",
         state_path.display(),
-        checkpoints_dir.display(),
+        run.checkpoints_dir().display(),
         store.url(),
         row.name,
         row.env_steps,

@@ -10,7 +10,7 @@ use crate::nn::checkpoint::{
     read_checked, read_meta, write_checkpoint, write_new_checkpoint, CheckpointError,
     CheckpointMeta,
 };
-pub use crate::nn::run_dir::{RunDir, RunState};
+pub use crate::nn::run_dir::{Recovery, RunDir, RunState};
 use anyhow::{bail, Context, Result};
 use std::path::Path;
 

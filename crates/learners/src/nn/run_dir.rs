@@ -39,6 +39,11 @@ pub enum RunDirError {
     },
     #[error("cannot read {}: {cause}", .dir.display())]
     Unlistable { dir: PathBuf, cause: std::io::Error },
+    #[error("cannot remove the old checkpoint {}: {cause}", .path.display())]
+    Unremovable {
+        path: PathBuf,
+        cause: std::io::Error,
+    },
     #[error(transparent)]
     Write(#[from] FsError),
 }
@@ -62,6 +67,22 @@ impl RunState {
             .find(|(s, _)| *s == side)
             .map(|(_, n)| n.as_str())
     }
+}
+
+/// Where a run folder stands for a learner about to resume
+/// (`RunDir::recover`).
+#[derive(Clone, Debug, PartialEq)]
+pub enum Recovery {
+    /// `state.json` is there, as read.
+    Kept { env_steps: u64 },
+    /// `state.json` was missing and is rebuilt from this checkpoint, the
+    /// newest that verifies, was written under the run's config and is not
+    /// behind what the run is known to have played.
+    Rebuilt { checkpoint: PathBuf, env_steps: u64 },
+    /// No `state.json` and no checkpoint: nothing was ever saved.
+    Empty,
+    /// No `state.json`, and every checkpoint was refused: `name: why`.
+    Unusable(Vec<String>),
 }
 
 /// A run folder (it need not exist yet).
@@ -133,6 +154,94 @@ impl RunDir {
         latest_in(&self.checkpoints_dir(), side)
     }
 
+    /// Where the run stands for `side`'s learner, written under the config
+    /// of hash `config_hash`, known elsewhere (a league's store) to have
+    /// played `played` env steps. A missing `state.json` (lost, or a first
+    /// save killed between its checkpoint and its state) is rebuilt from
+    /// the newest of the side's checkpoints that verifies file by file,
+    /// carries `config_hash` and is not behind `played`; never from one
+    /// that does not.
+    pub fn recover(
+        &self,
+        side: Side,
+        config_hash: &str,
+        played: u64,
+    ) -> Result<Recovery, RunDirError> {
+        use crate::nn::checkpoint::{read_meta, verify_file};
+        if self.has_state() {
+            let state = self.read_state()?;
+            return Ok(Recovery::Kept {
+                env_steps: state.env_steps,
+            });
+        }
+        let names = self.checkpoint_names(Some(side)).unwrap_or_default();
+        let mut rejected = Vec::new();
+        for name in names.iter().rev() {
+            let ckpt = self.checkpoint(name);
+            let usable = (|| -> Result<crate::nn::checkpoint::CheckpointMeta, String> {
+                let meta = read_meta(&ckpt).map_err(|e| format!("{e:#}"))?;
+                for file in meta.files.keys() {
+                    verify_file(&ckpt, &meta, file).map_err(|e| format!("{e:#}"))?;
+                }
+                if meta.config_hash != config_hash {
+                    return Err(format!(
+                        "written under another config (hash {})",
+                        meta.config_hash
+                    ));
+                }
+                if meta.env_steps < played {
+                    return Err(format!(
+                        "at {} env steps, behind the store's {played}",
+                        meta.env_steps
+                    ));
+                }
+                Ok(meta)
+            })();
+            match usable {
+                Ok(meta) => {
+                    self.write_state(&RunState {
+                        iteration: meta.iteration,
+                        env_steps: meta.env_steps,
+                        wall_s: 0.0,
+                        config_hash: meta.config_hash.clone(),
+                        checkpoints: vec![(side, name.clone())],
+                    })?;
+                    return Ok(Recovery::Rebuilt {
+                        checkpoint: ckpt,
+                        env_steps: meta.env_steps,
+                    });
+                }
+                Err(why) => rejected.push(format!("{name}: {why}")),
+            }
+        }
+        Ok(if rejected.is_empty() {
+            Recovery::Empty
+        } else {
+            Recovery::Unusable(rejected)
+        })
+    }
+
+    /// Removes all but the newest `keep` checkpoints, never one that
+    /// `state.json` names (the run resumes from it) and never a write in
+    /// progress.
+    pub fn prune_checkpoints(&self, keep: usize) -> Result<(), RunDirError> {
+        let named: Vec<String> = self
+            .read_state()
+            .map(|s| s.checkpoints.into_iter().map(|(_, name)| name).collect())
+            .unwrap_or_default();
+        let names = self.checkpoint_names(None)?;
+        let old = names.len().saturating_sub(keep);
+        for name in &names[..old] {
+            if named.contains(name) {
+                continue;
+            }
+            let path = self.checkpoint(name);
+            std::fs::remove_dir_all(&path)
+                .map_err(|cause| RunDirError::Unremovable { path, cause })?;
+        }
+        Ok(())
+    }
+
     /// The checkpoint of `side` that `state.json` names, if there is a
     /// `state.json` naming one; an error if that checkpoint is gone (never
     /// an older one in its place: that would play the wrong weights).
@@ -202,6 +311,49 @@ pub fn latest_checkpoint(run_or_checkpoints: &Path, side: Side) -> Option<PathBu
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Without state.json a run is empty, or its checkpoints are refused
+    /// one by one with the reason; with it, it is kept as read, and no
+    /// checkpoint is pruned that it names.
+    #[test]
+    fn recovery_and_pruning_follow_the_state_and_never_guess() {
+        let tmp = tempfile::tempdir().unwrap();
+        let run = RunDir::new(tmp.path().join("run"));
+        assert_eq!(
+            run.recover(Side::Target, "abc", 0).unwrap(),
+            Recovery::Empty
+        );
+        let broken = run.checkpoint("target-000000009600");
+        std::fs::create_dir_all(&broken).unwrap();
+        std::fs::write(broken.join("meta.json"), "{").unwrap();
+        match run.recover(Side::Target, "abc", 0).unwrap() {
+            Recovery::Unusable(why) => {
+                assert_eq!(why.len(), 1);
+                assert!(why[0].starts_with("target-000000009600: "), "{why:?}");
+            }
+            other => panic!("a broken checkpoint recovered as {other:?}"),
+        }
+        // The captors' checkpoints are not the target's to stand in.
+        assert!(matches!(
+            run.recover(Side::Captors, "abc", 0).unwrap(),
+            Recovery::Empty
+        ));
+        for steps in [3200, 6400, 12800] {
+            std::fs::create_dir_all(run.checkpoint(&format!("target-{steps:012}"))).unwrap();
+        }
+        run.write_state(&state(vec![(Side::Target, "target-000000003200".into())]))
+            .unwrap();
+        assert_eq!(
+            run.recover(Side::Target, "abc", 0).unwrap(),
+            Recovery::Kept { env_steps: 9600 }
+        );
+        run.prune_checkpoints(1).unwrap();
+        assert_eq!(
+            run.checkpoint_names(None).unwrap(),
+            ["target-000000003200", "target-000000012800"],
+            "the named checkpoint and the newest stay"
+        );
+    }
 
     fn state(checkpoints: Vec<(Side, String)>) -> RunState {
         RunState {
