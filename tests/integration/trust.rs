@@ -712,11 +712,11 @@ fn a_reset_learner_is_back_to_its_initial_weights() {
         tmp.path().join("later"),
         tmp.path().join("reset"),
     );
-    t.save_side(Side::Captors, &initial).unwrap();
+    t.side(Side::Captors).unwrap().save(&initial).unwrap();
     t.iterate().unwrap();
-    t.save_side(Side::Captors, &later).unwrap();
-    t.reset_learner(Side::Captors, &initial).unwrap();
-    t.save_side(Side::Captors, &reset).unwrap();
+    t.side(Side::Captors).unwrap().save(&later).unwrap();
+    t.side(Side::Captors).unwrap().reset_to(&initial).unwrap();
+    t.side(Side::Captors).unwrap().save(&reset).unwrap();
     let files = |d: &Path| read_meta(d).unwrap().files;
     for f in [
         "actor.safetensors",

@@ -606,7 +606,7 @@ fn train_learner(
     let resets = cfg.exploiters.resets_after_snapshot(seat);
     if resets && !initial.join("meta.json").is_file() {
         // What every reset returns to (written once, before any training).
-        trainer.save_side(side, &initial)?;
+        trainer.side(side)?.save(&initial)?;
     }
     // A snapshot of its own whose row it did not live to add (killed between
     // the folder and the row): into the pool before anything counts snapshots.
@@ -630,7 +630,7 @@ fn train_learner(
     if resets && last_snapshot == trainer.env_steps && trainer.env_steps > 0 {
         // Killed between its snapshot and its reset: reset now, or it would
         // go on training the weights it just added to the pool.
-        trainer.reset_learner(side, &initial)?;
+        trainer.side(side)?.reset_to(&initial)?;
         save_learner(&trainer, store, dir, seat, learner_id)?;
         tracing::info!(
             "{name}: back to its initial weights (its last snapshot is its resume point)"
@@ -664,7 +664,7 @@ fn train_learner(
             // the pool already holds.
             save_learner(&trainer, store, dir, seat, learner_id)?;
             match add_snapshot(
-                &trainer,
+                &mut trainer,
                 store,
                 dir,
                 league_id,
@@ -687,7 +687,7 @@ fn train_learner(
             wins_at_snapshot = hooks.wins;
             games_at_snapshot = hooks.games;
             if resets {
-                trainer.reset_learner(side, &initial)?;
+                trainer.side(side)?.reset_to(&initial)?;
                 // The reset is the new resume point: a restart must not
                 // bring back the weights that were just snapshotted.
                 save_learner(&trainer, store, dir, seat, learner_id)?;

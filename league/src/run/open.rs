@@ -307,7 +307,7 @@ fn check_pool_identity(dir: &LeagueDir, league_id: &str, db: &StoreUrl) -> Resul
             continue;
         }
         if let Ok(meta) = crate::nn::checkpoint::read_meta(&e.path()) {
-            if let Some(m) = meta.league {
+            if let Ok(Some(m)) = crate::pool::PoolMembership::of(&meta) {
                 if m.league_id != league_id {
                     bail!(
                         "{}: belongs to league {}, but {db} is league {league_id}: the store and the pool are from different leagues",

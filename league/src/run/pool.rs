@@ -18,12 +18,43 @@ use crate::controllers::ControllerSpec;
 use crate::dir::LeagueDir;
 use crate::env::Side;
 use crate::learn::train::Trainer;
-use crate::nn::checkpoint::{read_meta, PoolMembership};
+use crate::nn::checkpoint::{read_meta, CheckpointMeta};
 use crate::nn::PolicySnapshot;
 use crate::players::{learner_name, Seat, SeatRole};
 use crate::protocol::Protocol;
 use crate::store::{Kind, NewPlayer, Player, Store};
 use anyhow::{anyhow, bail, Context, Result};
+
+/// Which league pool a snapshot belongs to, and as whom: the label a
+/// snapshot's meta.json carries (`CheckpointMeta::pool_label`, under
+/// `league`), so its folder can be matched to its store row, or the row
+/// rebuilt, from its own files.
+#[derive(Clone, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PoolMembership {
+    /// The league's identity (`league.json`).
+    pub league_id: String,
+    /// The snapshot's player name.
+    pub player: String,
+    /// The player name of the learner it is a snapshot of.
+    pub parent: String,
+    pub curriculum_stage: usize,
+}
+
+impl PoolMembership {
+    /// The membership a checkpoint's sidecar names: none for a folder that
+    /// is no snapshot (a main learner's checkpoint, a `train` run's), an
+    /// error for a label that is not a membership.
+    pub fn of(meta: &CheckpointMeta) -> Result<Option<PoolMembership>> {
+        meta.pool_label
+            .as_ref()
+            .map(|label| {
+                serde_json::from_value(label.clone())
+                    .context("meta.json's `league` is not a pool membership")
+            })
+            .transpose()
+    }
+}
 
 /// What a learner may draw from the pool.
 #[derive(Clone, Debug, PartialEq)]
@@ -92,7 +123,7 @@ pub enum SnapshotOutcome {
 /// renamed into place, never over an existing folder) before the row that
 /// names them. A name the pool already holds is left as it is.
 pub fn add_snapshot(
-    trainer: &Trainer,
+    trainer: &mut Trainer,
     store: &Store,
     dir: &LeagueDir,
     league_id: &str,
@@ -108,16 +139,15 @@ pub fn add_snapshot(
     if folder.symlink_metadata().is_ok() {
         return Ok(SnapshotOutcome::Blocked(name));
     }
-    trainer.save_pool_member(
-        seat.side,
-        &folder,
-        PoolMembership {
-            league_id: league_id.to_string(),
-            player: name.clone(),
-            parent: seat.name(),
-            curriculum_stage: stage,
-        },
-    )?;
+    let membership = PoolMembership {
+        league_id: league_id.to_string(),
+        player: name.clone(),
+        parent: seat.name(),
+        curriculum_stage: stage,
+    };
+    trainer
+        .side(seat.side)?
+        .save_new(&folder, serde_json::to_value(&membership)?)?;
     let sha = crate::util::sha256_file(&folder.join("meta.json"))?;
     store.add_player(&NewPlayer {
         name: name.clone(),
@@ -212,7 +242,7 @@ pub fn adopt_unrecorded(
         if let Some(parent) = parent {
             let mine = read_meta(&path)
                 .ok()
-                .and_then(|m| m.league)
+                .and_then(|m| PoolMembership::of(&m).ok().flatten())
                 .is_some_and(|m| m.parent == parent);
             if !mine {
                 continue;
@@ -243,9 +273,7 @@ fn adopt(
     players: &[crate::store::Player],
 ) -> Result<()> {
     let meta = read_meta(path)?;
-    let member = meta
-        .league
-        .clone()
+    let member = PoolMembership::of(&meta)?
         .context("its meta.json names no league pool (not a snapshot this league wrote)")?;
     if member.league_id != league_id {
         anyhow::bail!(

@@ -75,7 +75,13 @@ pub fn check(dir: &LeagueDir) -> (u64, Vec<u64>) {
                 // complete snapshot that the next start adopts.
                 let meta = t2e::nn::checkpoint::read_meta(&path)
                     .unwrap_or_else(|e| panic!("orphan {}: {e:#}", path.display()));
-                assert!(meta.league.is_some(), "orphan {}", path.display());
+                assert!(
+                    t2e::league::pool::PoolMembership::of(&meta)
+                        .unwrap()
+                        .is_some(),
+                    "orphan {}",
+                    path.display()
+                );
                 t2e::nn::PolicySnapshot::load(&path, meta.side).unwrap();
             }
         }

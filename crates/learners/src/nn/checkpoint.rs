@@ -69,23 +69,12 @@ pub struct CheckpointMeta {
     pub learner_state: Option<serde_json::Value>,
     /// SHA-256 (hex) of every file of the folder but this one, by file name.
     pub files: BTreeMap<String, String>,
-    /// Set on a league snapshot: the pool it belongs to, so the folder can
-    /// be matched to its store row (or the row rebuilt) from its own files.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub league: Option<PoolMembership>,
-}
-
-/// Which league pool a snapshot belongs to, and as whom.
-#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct PoolMembership {
-    /// The league's identity (`league.json`).
-    pub league_id: String,
-    /// The snapshot's player name.
-    pub player: String,
-    /// The player name of the learner it is a snapshot of.
-    pub parent: String,
-    pub curriculum_stage: usize,
+    /// What the writer of a new folder says it is (`SideHandle::save_new`;
+    /// a league's snapshot: its pool, its player and parent), kept as
+    /// given and never read by this crate. Stored as `league` in meta.json,
+    /// the name it has always had there.
+    #[serde(rename = "league", default, skip_serializing_if = "Option::is_none")]
+    pub pool_label: Option<serde_json::Value>,
 }
 
 impl CheckpointMeta {

@@ -18,6 +18,7 @@ mod collect;
 mod hooks;
 mod metrics;
 mod save;
+pub use save::SideHandle;
 
 pub use super::config::{
     check_rollout, DeviceChoice, Play, SideConfig, SideDefaults, TrainConfig, TrainDefaults,

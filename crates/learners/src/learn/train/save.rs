@@ -1,5 +1,6 @@
 //! A run's learners to and from disk: a checkpoint of every side and
-//! `state.json`, one side as a folder, and a side put back to a checkpoint.
+//! `state.json`; and through one side's handle (`Trainer::side`), that side
+//! as a folder, as a new labelled folder, or put back to a checkpoint.
 
 use super::super::persist::{self, RunDir, RunState};
 use super::{LearnerSide, Trainer};
@@ -26,7 +27,7 @@ impl Trainer {
             code_version: code_version(),
             learner_state: None,
             files: Default::default(),
-            league: None,
+            pool_label: None,
         }
     }
 
@@ -52,47 +53,56 @@ impl Trainer {
         Ok(written)
     }
 
-    /// Writes `side`'s learner as the checkpoint folder `dir` (the league's
-    /// snapshots), atomically.
-    pub fn save_side(&self, side: Side, dir: &Path) -> Result<()> {
-        let ls = self
+    /// One learning side of this run, to save or reset on its own (a
+    /// league's snapshots and exploiter resets).
+    pub fn side(&mut self, side: Side) -> Result<SideHandle<'_>> {
+        let index = self
             .learners
             .iter()
-            .find(|l| l.side == side)
+            .position(|l| l.side == side)
             .with_context(|| format!("no {} learner in this run", side.name()))?;
-        persist::save_learner(dir, ls.learner.as_ref(), self.meta(ls))?;
+        Ok(SideHandle {
+            trainer: self,
+            index,
+        })
+    }
+}
+
+/// One learning side of a `Trainer` (`Trainer::side`).
+pub struct SideHandle<'a> {
+    trainer: &'a mut Trainer,
+    index: usize,
+}
+
+impl SideHandle<'_> {
+    fn learner(&self) -> &LearnerSide {
+        &self.trainer.learners[self.index]
+    }
+
+    /// Writes the side's learner as the checkpoint folder `dir`, atomically.
+    pub fn save(&self, dir: &Path) -> Result<()> {
+        let ls = self.learner();
+        persist::save_learner(dir, ls.learner.as_ref(), self.trainer.meta(ls))?;
         Ok(())
     }
 
-    /// Writes `side`'s learner as a new league pool member at `dir`, which
-    /// must not exist (a recorded member never changes), its sidecar naming
-    /// the pool it belongs to.
-    pub fn save_pool_member(
-        &self,
-        side: Side,
-        dir: &Path,
-        membership: crate::nn::checkpoint::PoolMembership,
-    ) -> Result<()> {
-        let ls = self
-            .learners
-            .iter()
-            .find(|l| l.side == side)
-            .with_context(|| format!("no {} learner in this run", side.name()))?;
-        let mut meta = self.meta(ls);
-        meta.league = Some(membership);
+    /// Writes the side's learner as a new checkpoint folder `dir`, which
+    /// must not exist (what is recorded never changes), its sidecar
+    /// carrying `label`: the caller's own record of what the folder is (a
+    /// league's pool membership), stored as given and never read here.
+    pub fn save_new(&self, dir: &Path, label: serde_json::Value) -> Result<()> {
+        let ls = self.learner();
+        let mut meta = self.trainer.meta(ls);
+        meta.pool_label = Some(label);
         persist::save_new_learner(dir, ls.learner.as_ref(), meta)?;
         Ok(())
     }
 
-    /// Puts `side`'s learner back to the checkpoint folder `dir` (weights,
-    /// Adam moments, return statistics) and clears its recurrent states; the
-    /// run's step and iteration counts go on (a league exploiter's reset).
-    pub fn reset_learner(&mut self, side: Side, dir: &Path) -> Result<()> {
-        let ls = self
-            .learners
-            .iter_mut()
-            .find(|l| l.side == side)
-            .with_context(|| format!("no {} learner in this run", side.name()))?;
+    /// Puts the side's learner back to the checkpoint folder `dir`
+    /// (weights, Adam moments, return statistics) and clears its recurrent
+    /// states; the run's step and iteration counts go on.
+    pub fn reset_to(&mut self, dir: &Path) -> Result<()> {
+        let ls = &mut self.trainer.learners[self.index];
         persist::load_learner(dir, ls.learner.as_mut())?;
         ls.actor_h = ls.actor_h.zeros_like();
         ls.critic_h = ls.critic_h.zeros_like();
