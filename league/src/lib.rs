@@ -52,8 +52,8 @@ pub use rules::{
     selection, supervision,
 };
 pub use run::{
-    child, dir, evaluator, exploit, learner, manager, manager_lease, open, opponents, panels, pool,
-    preflight, process, seats, status, worker,
+    child, dir, evaluator, exploit, exploit_key, learner, manager, manager_lease, open, opponents,
+    panels, pool, preflight, process, seats, status, worker,
 };
 
 // The floors below, under the names the league's code knows them by.

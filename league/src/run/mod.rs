@@ -6,6 +6,7 @@ pub mod child;
 pub mod dir;
 pub mod evaluator;
 pub mod exploit;
+pub mod exploit_key;
 pub mod learner;
 pub mod manager;
 pub mod manager_lease;
