@@ -14,6 +14,8 @@
 //!   - `matchmaking`: PFSP opponent draws; `payoff`: the payoff table;
 //!   - `ratings`: live Weng-Lin ratings and a batch Bradley-Terry fit;
 //!   - `curriculum`: the speed-ratio stages and when to move on;
+//!   - `roles`: every answer that depends on a seat's role (one row per
+//!     seat), the snapshot rule and the pacing of the main learners;
 //!   - `selection`: the validation-best snapshot `export --best` exports;
 //!   - `supervision`: the one outcome of every process exit, the crash
 //!     budget.
@@ -48,7 +50,7 @@ pub mod run;
 pub mod store;
 
 pub use rules::{
-    config, curriculum, evaluator_config, matchmaking, members, payoff, players, ratings,
+    config, curriculum, evaluator_config, matchmaking, members, payoff, players, ratings, roles,
     selection, supervision,
 };
 pub use run::{

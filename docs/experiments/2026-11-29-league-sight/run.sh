@@ -13,7 +13,8 @@
 # the validation panel (league-target) and the main learner as it stopped
 # (league-final).
 # EPISODES (default 200) episodes per setting; BUDGET (default 600000)
-# env steps per best response.
+# env steps per best response; CONFIG (default league-sight.toml beside
+# this script) the league's config for a new league.
 set -euo pipefail
 bin=$1
 league=$2
@@ -25,6 +26,7 @@ stages=${*:-league export eval exploit}
 episodes=${EPISODES:-200}
 budget=${BUDGET:-600000}
 here=$(cd "$(dirname "$0")" && pwd)
+config=${CONFIG:-$here/league-sight.toml}
 mkdir -p "$out"
 for stage in $stages; do
     case $stage in
@@ -32,7 +34,7 @@ for stage in $stages; do
         if [ -d "$league" ]; then
             "$bin" run --dir "$league"
         else
-            "$bin" run --config "$here/league-sight.toml" --dir "$league"
+            "$bin" run --config "$config" --dir "$league"
         fi
         ;;
     export)

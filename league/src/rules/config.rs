@@ -14,7 +14,6 @@ use crate::learn::train::{SideConfig, SideDefaults, TrainConfig};
 use crate::learn::Algorithm;
 use crate::matchmaking::MatchmakingConfig;
 use crate::members::MembersConfig;
-use crate::players::Seat;
 use crate::protocol::Protocol;
 use anyhow::{anyhow, Context, Result};
 use serde::{Deserialize, Serialize};
@@ -170,13 +169,6 @@ impl ExploiterConfig {
             Side::Target => self.target,
         }
     }
-
-    /// Whether `seat` goes back to its initial weights after each snapshot:
-    /// an exploiter does, unless it is the target exploiter and
-    /// `target_resets = false`.
-    pub fn resets_after_snapshot(&self, seat: Seat) -> bool {
-        seat.is_exploiter() && (seat.side == Side::Captors || self.target_resets)
-    }
 }
 
 impl Default for LeagueConfig {
@@ -242,24 +234,6 @@ impl LeagueConfig {
             Side::Captors => &self.captors,
             Side::Target => &self.target,
         }
-    }
-
-    /// The training config of `seat`'s learner: its side learns; the other
-    /// side is played per world by opponents the league draws (a still
-    /// placeholder until the first draw). An exploiter's differs from its
-    /// side's main learner in its name and seed (its own initial weights
-    /// and episodes), and the target exploiter in its prior where
-    /// `exploiters.target_prior` is set.
-    pub fn seat_train_config(&self, seat: Seat) -> TrainConfig {
-        let mut t = self.train_config(seat.side);
-        if seat.is_exploiter() {
-            t.name = seat.name();
-            t.seed ^= 0xE7_0000;
-            if let (Side::Target, Some(prior)) = (seat.side, self.exploiters.target_prior) {
-                t.target.net.heuristic_prior = prior;
-            }
-        }
-        t
     }
 
     pub fn train_config(&self, side: Side) -> TrainConfig {
@@ -494,6 +468,7 @@ impl LeagueConfig {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::players::Seat;
 
     #[test]
     fn a_league_learner_is_a_training_side_with_the_leagues_defaults() {
@@ -532,8 +507,13 @@ mod tests {
         let text = "[target.net]\nheuristic_prior = 10.0\n[exploiters]\ntarget = true\n";
         let main_only = LeagueConfig::parse(text).unwrap();
         let seat = |side| Seat::exploiter(side);
-        let prior =
-            |cfg: &LeagueConfig, s: Seat| cfg.seat_train_config(s).target.net.heuristic_prior;
+        let prior = |cfg: &LeagueConfig, s: Seat| {
+            crate::roles::SeatRules::of(cfg, s)
+                .train_config(cfg)
+                .target
+                .net
+                .heuristic_prior
+        };
         // Left out, the exploiter leans on the main target's prior, and the
         // stored config (its hash) is what it was.
         assert_eq!(prior(&main_only, seat(Side::Target)), 10.0);
@@ -544,8 +524,8 @@ mod tests {
         assert_eq!(prior(&free, seat(Side::Target)), 0.0);
         assert_eq!(prior(&free, Seat::main(Side::Target)), 10.0);
         assert_eq!(
-            free.seat_train_config(seat(Side::Captors)),
-            main_only.seat_train_config(seat(Side::Captors))
+            crate::roles::SeatRules::of(&free, seat(Side::Captors)).train_config(&free),
+            crate::roles::SeatRules::of(&main_only, seat(Side::Captors)).train_config(&main_only)
         );
         // Out of range, or with no target exploiter to take it: refused, named.
         for (bad, why) in [

@@ -9,5 +9,6 @@ pub mod members;
 pub mod payoff;
 pub mod players;
 pub mod ratings;
+pub mod roles;
 pub mod selection;
 pub mod supervision;

@@ -129,7 +129,7 @@ mod tests {
     #[test]
     fn each_seat_answers_the_leagues_questions_as_its_role_says() {
         // (seat, name, main line only, curriculum, pace); whether it resets is
-        // the config's (`ExploiterConfig::resets_after_snapshot`)
+        // the config's too (`roles::SeatRules`)
         let table = [
             (Seat::main(Side::Captors), "captors-main", false, true, true),
             (Seat::main(Side::Target), "target-main", false, false, true),

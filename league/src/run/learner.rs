@@ -17,8 +17,9 @@ use crate::matchmaking::{
     choose_opponent, draw_seed, pick_slot, slot_seed, Candidate, Fixed, MatchmakingConfig, Opponent,
 };
 use crate::opponents::{OpponentNets, WorldOpponent};
-use crate::players::{learner_name, Seat, SeatRole};
+use crate::players::{learner_name, Seat};
 use crate::pool::{add_snapshot, SnapshotOutcome};
+use crate::roles::{seat_of_row, should_snapshot, should_wait, SeatRules};
 use crate::store::{BeatState, Kind, MatchRecord, NewPlayer, Player, Store};
 use crate::supervision::{CannotStart, Outcome};
 use anyhow::{bail, Context, Result};
@@ -327,66 +328,6 @@ impl RolloutHooks for LeagueHooks<'_> {
     }
 }
 
-/// Whether a main learner at `mine` env steps waits for the other main
-/// learner, given the other's last heartbeat (state, env steps, age in ms;
-/// None before its first): it does while it is more than `lead` ahead of a
-/// learner that is still training. A learner that is done, stopped or
-/// silent for two minutes (crashed, restarting) is not waited for.
-pub fn should_wait(mine: u64, other: Option<(BeatState, u64, i64)>, lead: u64) -> bool {
-    if lead == 0 {
-        return false;
-    }
-    match other {
-        None => mine > lead,
-        Some((state, steps, age_ms)) => {
-            matches!(state, BeatState::Training | BeatState::Waiting)
-                && age_ms < 120_000
-                && mine > steps.saturating_add(lead)
-        }
-    }
-}
-
-/// When a learner adds a snapshot of itself to the pool.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct SnapshotRule {
-    /// At least this many env steps since its last snapshot...
-    pub every_env_steps: u64,
-    /// ...and winning at least this share of its games since then...
-    pub win_rate: f64,
-    /// ...or this many env steps since its last snapshot, winning or not.
-    pub timeout_env_steps: u64,
-}
-
-impl SnapshotRule {
-    /// A seat's rule: main learners snapshot on `[snapshots]`, exploiters
-    /// on their own win rate and timeout (`[exploiters]`), and an exploiter
-    /// that never resets (`target_resets = false`) on a clock, winning or
-    /// not: it has no attempt to end.
-    pub fn of(cfg: &LeagueConfig, seat: Seat) -> SnapshotRule {
-        let every_env_steps = cfg.snapshots.every_env_steps;
-        let (win_rate, timeout_env_steps) = match seat.role {
-            SeatRole::Main => (cfg.snapshots.win_rate, cfg.snapshots.timeout_env_steps),
-            SeatRole::Exploiter if !cfg.exploiters.resets_after_snapshot(seat) => {
-                (0.0, every_env_steps)
-            }
-            SeatRole::Exploiter => (cfg.exploiters.win_rate, cfg.exploiters.timeout_env_steps),
-        };
-        SnapshotRule {
-            every_env_steps,
-            win_rate,
-            timeout_env_steps,
-        }
-    }
-}
-
-/// Whether a learner `since` env steps past its last snapshot, having won
-/// `wins` of `games` since, snapshots now (AlphaStar's rule: when it beats
-/// its opponents, or at a timeout so the pool keeps moving).
-pub fn should_snapshot(since: u64, wins: u64, games: u64, rule: SnapshotRule) -> bool {
-    let winning = games > 0 && wins as f64 / games as f64 >= rule.win_rate;
-    (since >= rule.every_env_steps && winning) || since >= rule.timeout_env_steps
-}
-
 /// Waits (heartbeating "waiting") while `should_wait`; returns the seconds waited.
 fn wait_for_other_main(
     store: &Store,
@@ -448,7 +389,7 @@ fn cannot_start(e: anyhow::Error) -> anyhow::Error {
 pub fn run_learner(dir: &LeagueDir, seat: Seat, stop: &AtomicBool) -> Result<Outcome> {
     let opened = crate::open::open_process(dir).map_err(cannot_start)?;
     let (cfg, store, league_id) = (opened.cfg, opened.store, opened.league_id);
-    if seat.is_exploiter() && !cfg.exploiters.enabled(seat.side) {
+    if !SeatRules::of(&cfg, seat).enabled {
         return Err(cannot_start(anyhow::anyhow!(
             "{}: this league has no {} (exploiters.{} = false in {})",
             dir.root.display(),
@@ -482,10 +423,7 @@ fn start_learner(
     let learner_id = store.add_player(&NewPlayer {
         name: name.clone(),
         side: seat.side,
-        kind: match seat.role {
-            SeatRole::Main => Kind::Learner,
-            SeatRole::Exploiter => Kind::Exploiter,
-        },
+        kind: SeatRules::of(cfg, seat).kind,
         parent: None,
         env_steps: 0,
         curriculum_stage: 0,
@@ -498,7 +436,7 @@ fn start_learner(
         .context("the learner's own row vanished")?;
     let maps = crate::map::catalog::load_prepared(&cfg.maps)
         .with_context(|| format!("maps = \"{}\"", cfg.maps))?;
-    let tcfg = cfg.seat_train_config(seat);
+    let tcfg = SeatRules::of(cfg, seat).train_config(cfg);
     let run_dir = dir.seat_dir(seat);
     let trainer = match resume_point(dir, store, &row, &tcfg)? {
         ResumePoint::Fresh => {
@@ -533,14 +471,9 @@ fn resume_point(
     tcfg: &crate::learn::train::TrainConfig,
 ) -> Result<ResumePoint> {
     use crate::learn::persist::{Recovery, RunDir};
-    let run = RunDir::new(dir.seat_dir(Seat {
-        side: row.side,
-        role: if row.kind == Kind::Exploiter {
-            SeatRole::Exploiter
-        } else {
-            SeatRole::Main
-        },
-    }));
+    let seat = seat_of_row(row.side, row.kind)
+        .with_context(|| format!("{} is no learner's row", row.name))?;
+    let run = RunDir::new(dir.seat_dir(seat));
     let state_path = run.state_path();
     let rejected = match run.recover(row.side, &tcfg.hash(), row.env_steps)? {
         Recovery::Kept { env_steps } if env_steps < row.env_steps => bail!(
@@ -603,7 +536,7 @@ fn train_learner(
     } = started;
     let run_dir = dir.seat_dir(seat);
     let initial = run_dir.join("initial");
-    let resets = cfg.exploiters.resets_after_snapshot(seat);
+    let resets = SeatRules::of(cfg, seat).resets_after_snapshot;
     if resets && !initial.join("meta.json").is_file() {
         // What every reset returns to (written once, before any training).
         trainer.side(side)?.save(&initial)?;
@@ -658,7 +591,7 @@ fn train_learner(
             hooks.wins - wins_at_snapshot,
             hooks.games - games_at_snapshot,
         );
-        if should_snapshot(since, w, g, SnapshotRule::of(cfg, seat)) {
+        if should_snapshot(since, w, g, SeatRules::of(cfg, seat).snapshot) {
             // The learner's own checkpoint first: a restart then resumes at
             // or after this snapshot, so it never takes one under a name
             // the pool already holds.
@@ -759,129 +692,4 @@ fn save_learner(
         store.update_learner(id, trainer.env_steps, (&rel, &sha))?;
     }
     Ok(())
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn a_learner_snapshots_when_it_wins_or_at_the_timeout() {
-        let rule = SnapshotRule {
-            every_env_steps: 40_000,
-            win_rate: 0.55,
-            timeout_env_steps: 80_000,
-        };
-        assert!(
-            should_snapshot(40_000, 11, 20, rule),
-            "55% after 40 k steps"
-        );
-        assert!(!should_snapshot(40_000, 10, 20, rule), "50% is under 55%");
-        assert!(
-            !should_snapshot(39_999, 20, 20, rule),
-            "winning, but too soon"
-        );
-        assert!(
-            !should_snapshot(60_000, 0, 0, rule),
-            "no games: not winning"
-        );
-        assert!(
-            should_snapshot(80_000, 0, 0, rule),
-            "the timeout, winning or not"
-        );
-        assert!(should_snapshot(80_000, 0, 20, rule));
-    }
-
-    #[test]
-    fn a_target_exploiter_that_keeps_learning_snapshots_on_the_clock_and_never_resets() {
-        let text = "[snapshots]\nevery_env_steps = 50_000\nwin_rate = 0.55\ntimeout_env_steps = 90_000\n\
-                    [exploiters]\ncaptors = true\ntarget = true\nwin_rate = 0.7\ntimeout_env_steps = 120_000\n";
-        let resetting = LeagueConfig::parse(text).unwrap();
-        let keeping = LeagueConfig::parse(&format!("{text}target_resets = false\n")).unwrap();
-        let (captors_x, target_x) = (
-            Seat::exploiter(Side::Captors),
-            Seat::exploiter(Side::Target),
-        );
-        // Which seats reset, in each league.
-        for (cfg, target_resets) in [(&resetting, true), (&keeping, false)] {
-            let r = |seat| cfg.exploiters.resets_after_snapshot(seat);
-            assert!(!r(Seat::main(Side::Captors)) && !r(Seat::main(Side::Target)));
-            assert!(r(captors_x));
-            assert_eq!(r(target_x), target_resets);
-        }
-        // The resetting exploiter: its own win rate and timeout.
-        let rule = SnapshotRule::of(&resetting, target_x);
-        assert!(!should_snapshot(50_000, 13, 20, rule), "65% is under 70%");
-        assert!(should_snapshot(50_000, 14, 20, rule));
-        assert!(!should_snapshot(119_999, 0, 20, rule));
-        // The one that keeps learning: every 50 k env steps, losing or not.
-        let rule = SnapshotRule::of(&keeping, target_x);
-        assert!(!should_snapshot(49_999, 20, 20, rule));
-        assert!(should_snapshot(50_000, 0, 20, rule));
-        assert!(should_snapshot(50_000, 0, 0, rule));
-        // Nothing else moves: the captor exploiter and the main learners.
-        for seat in [
-            captors_x,
-            Seat::main(Side::Captors),
-            Seat::main(Side::Target),
-        ] {
-            assert_eq!(
-                SnapshotRule::of(&keeping, seat),
-                SnapshotRule::of(&resetting, seat)
-            );
-        }
-        assert_eq!(
-            SnapshotRule::of(&keeping, captors_x).timeout_env_steps,
-            120_000
-        );
-        // Left out, the stored config does not name it (its hash is unchanged);
-        // without a target exploiter it is refused, named.
-        assert!(!toml::to_string(&resetting)
-            .unwrap()
-            .contains("target_resets"));
-        let err = LeagueConfig::parse("[exploiters]\ntarget_resets = false\n")
-            .unwrap_err()
-            .to_string();
-        assert!(
-            err.starts_with("exploiters.target_resets") && err.contains("no target exploiter"),
-            "{err}"
-        );
-    }
-
-    #[test]
-    fn a_learner_waits_only_for_a_live_learner_it_is_far_ahead_of() {
-        assert!(
-            !should_wait(50_000, Some((BeatState::Training, 0, 10)), 0),
-            "0: never"
-        );
-        assert!(should_wait(
-            30_001,
-            Some((BeatState::Training, 10_000, 1_000)),
-            20_000
-        ));
-        assert!(
-            !should_wait(30_000, Some((BeatState::Training, 10_000, 1_000)), 20_000),
-            "exactly the lead"
-        );
-        assert!(should_wait(
-            30_001,
-            Some((BeatState::Waiting, 10_000, 1_000)),
-            20_000
-        ));
-        assert!(
-            !should_wait(90_000, Some((BeatState::Done, 10_000, 1_000)), 20_000),
-            "done: nothing to wait for"
-        );
-        assert!(!should_wait(
-            90_000,
-            Some((BeatState::Stopped, 10_000, 1_000)),
-            20_000
-        ));
-        assert!(
-            !should_wait(90_000, Some((BeatState::Training, 10_000, 130_000)), 20_000),
-            "silent: crashed"
-        );
-        assert!(should_wait(20_001, None, 20_000), "not started yet");
-        assert!(!should_wait(5_000, None, 20_000));
-    }
 }

@@ -20,7 +20,7 @@ use crate::env::Side;
 use crate::learn::train::Trainer;
 use crate::nn::checkpoint::{read_meta, CheckpointMeta};
 use crate::nn::PolicySnapshot;
-use crate::players::{learner_name, Seat, SeatRole};
+use crate::players::{learner_name, Seat};
 use crate::protocol::Protocol;
 use crate::store::{Kind, NewPlayer, Player, Store};
 use anyhow::{anyhow, bail, Context, Result};
@@ -99,14 +99,7 @@ pub fn playable(players: &[Player], seat: Seat) -> Playable {
     }
 }
 
-/// The player name of `seat`'s snapshot at `env_steps`.
-pub fn snapshot_name(seat: Seat, env_steps: u64) -> String {
-    let owner = match seat.role {
-        SeatRole::Main => seat.side.name().to_string(),
-        SeatRole::Exploiter => seat.name(),
-    };
-    format!("{owner}-snap-{env_steps:012}")
-}
+pub use crate::roles::snapshot_name;
 
 /// What `add_snapshot` did.
 #[derive(Clone, Debug, PartialEq, Eq)]
