@@ -138,13 +138,6 @@ pub struct SnapshotRule {
     pub timeout_env_steps: u64,
 }
 
-impl SnapshotRule {
-    /// A seat's rule (`SeatRules::of`).
-    pub fn of(cfg: &LeagueConfig, seat: Seat) -> SnapshotRule {
-        SeatRules::of(cfg, seat).snapshot
-    }
-}
-
 /// Whether a learner `since` env steps past its last snapshot, having won
 /// `wins` of `games` since, snapshots now (AlphaStar's rule: when it beats
 /// its opponents, or at a timeout so the pool keeps moving).
@@ -279,12 +272,12 @@ mod tests {
             assert_eq!(r(target_x), target_resets);
         }
         // The resetting exploiter: its own win rate and timeout.
-        let rule = SnapshotRule::of(&resetting, target_x);
+        let rule = SeatRules::of(&resetting, target_x).snapshot;
         assert!(!should_snapshot(50_000, 13, 20, rule), "65% is under 70%");
         assert!(should_snapshot(50_000, 14, 20, rule));
         assert!(!should_snapshot(119_999, 0, 20, rule));
         // The one that keeps learning: every 50 k env steps, losing or not.
-        let rule = SnapshotRule::of(&keeping, target_x);
+        let rule = SeatRules::of(&keeping, target_x).snapshot;
         assert!(!should_snapshot(49_999, 20, 20, rule));
         assert!(should_snapshot(50_000, 0, 20, rule));
         assert!(should_snapshot(50_000, 0, 0, rule));
@@ -295,12 +288,14 @@ mod tests {
             Seat::main(Side::Target),
         ] {
             assert_eq!(
-                SnapshotRule::of(&keeping, seat),
-                SnapshotRule::of(&resetting, seat)
+                SeatRules::of(&keeping, seat).snapshot,
+                SeatRules::of(&resetting, seat).snapshot
             );
         }
         assert_eq!(
-            SnapshotRule::of(&keeping, captors_x).timeout_env_steps,
+            SeatRules::of(&keeping, captors_x)
+                .snapshot
+                .timeout_env_steps,
             120_000
         );
         // Left out, the stored config does not name it (its hash is unchanged);

@@ -10,6 +10,7 @@ use crate::env::Side;
 use crate::players::Role;
 use crate::players::{Seat, SeatRole};
 use std::ffi::{OsStr, OsString};
+use std::os::unix::ffi::OsStrExt;
 use std::path::PathBuf;
 use std::process::Command;
 
@@ -173,20 +174,8 @@ impl ChildCommand {
         cmdline
             .split(|&b| b == 0)
             .skip(1)
-            .map(OsStr::new_from_bytes)
+            .map(OsStr::from_bytes)
             .any(|arg| arg == LEARNER || arg == EVALUATOR)
-    }
-}
-
-/// Bytes as an `OsStr`, for the /proc command lines of this platform.
-trait FromBytes {
-    fn new_from_bytes(bytes: &[u8]) -> &OsStr;
-}
-
-impl FromBytes for OsStr {
-    fn new_from_bytes(bytes: &[u8]) -> &OsStr {
-        use std::os::unix::ffi::OsStrExt;
-        OsStr::from_bytes(bytes)
     }
 }
 

@@ -536,7 +536,8 @@ fn train_learner(
     } = started;
     let run_dir = dir.seat_dir(seat);
     let initial = run_dir.join("initial");
-    let resets = SeatRules::of(cfg, seat).resets_after_snapshot;
+    let rules = SeatRules::of(cfg, seat);
+    let resets = rules.resets_after_snapshot;
     if resets && !initial.join("meta.json").is_file() {
         // What every reset returns to (written once, before any training).
         trainer.side(side)?.save(&initial)?;
@@ -591,7 +592,7 @@ fn train_learner(
             hooks.wins - wins_at_snapshot,
             hooks.games - games_at_snapshot,
         );
-        if should_snapshot(since, w, g, SeatRules::of(cfg, seat).snapshot) {
+        if should_snapshot(since, w, g, rules.snapshot) {
             // The learner's own checkpoint first: a restart then resumes at
             // or after this snapshot, so it never takes one under a name
             // the pool already holds.

@@ -99,7 +99,7 @@ pub fn playable(players: &[Player], seat: Seat) -> Playable {
     }
 }
 
-pub use crate::roles::snapshot_name;
+use crate::roles::snapshot_name;
 
 /// What `add_snapshot` did.
 #[derive(Clone, Debug, PartialEq, Eq)]
