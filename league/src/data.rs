@@ -4,7 +4,7 @@
 //! (a side, kind or state written by a newer build) is an error when read,
 //! never taken for a default.
 
-use crate::env::Side;
+use t2e_core::env::Side;
 
 /// What kind of member a player is.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]

@@ -41,8 +41,10 @@
 //!   - `exploit`: a fresh best response against one frozen player;
 //!   - `status`: what `status` and `export` read from a league.
 //!
-//! The modules keep their short paths (`league::config`, `league::store`,
-//! `league::learner`) through the re-exports below.
+//! Users keep the modules' short paths (`league::config`, `league::store`,
+//! `league::learner`) through the re-exports below; inside the crate each
+//! file names the floor it imports from (`crate::rules::config`,
+//! `t2e_core::env`), so its arrows can be read from its imports.
 
 pub mod data;
 pub mod rules;
@@ -57,7 +59,3 @@ pub use run::{
     child, dir, evaluator, exploit, exploit_key, learner, manager, manager_lease, open, opponents,
     panels, pool, preflight, process, seats, status, worker,
 };
-
-// The floors below, under the names the league's code knows them by.
-pub(crate) use t2e_core::{asz, env, error, fs, map, protocol, util};
-pub(crate) use t2e_learners::{controllers, eval, learn, nn, render};

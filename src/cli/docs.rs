@@ -20,11 +20,11 @@ pub struct GenerateDocsArgs {
 
 /// docs/reference/cli.md: every visible subcommand and option, as clap
 /// knows them, under a note that says the file is generated.
-pub fn cli_markdown() -> String {
+pub fn cli_markdown<C: CommandFactory>() -> String {
     let options = clap_markdown::MarkdownOptions::new()
         .title("Command-line reference".into())
         .show_footer(false);
-    let body = clap_markdown::help_markdown_custom::<super::Cli>(&options);
+    let body = clap_markdown::help_markdown_custom::<C>(&options);
     // The title line first, then the note.
     let (title, rest) = body.split_once('\n').unwrap_or((&body, ""));
     format!(
@@ -35,7 +35,7 @@ pub fn cli_markdown() -> String {
 
 /// The man pages: t2e-league.1 and one t2e-league-SUBCOMMAND.1 per
 /// visible subcommand, as (file name, roff text), sorted by name.
-pub fn man_pages() -> Result<Vec<(String, String)>> {
+pub fn man_pages<C: CommandFactory>() -> Result<Vec<(String, String)>> {
     let mut pages = Vec::new();
     // After `build`, each subcommand's display name is its man page's
     // name (t2e-league-eval), as clap_mangen::generate_to names them.
@@ -49,7 +49,7 @@ pub fn man_pages() -> Result<Vec<(String, String)>> {
         }
         Ok(())
     }
-    let mut cmd = super::Cli::command().disable_help_subcommand(true);
+    let mut cmd = C::command().disable_help_subcommand(true);
     cmd.build();
     walk(&cmd, &mut pages)?;
     pages.sort();
@@ -60,10 +60,10 @@ fn write(path: &Path, text: &str) -> Result<()> {
     std::fs::write(path, text).with_context(|| format!("cannot write {}", path.display()))
 }
 
-pub fn run(args: GenerateDocsArgs) -> Result<()> {
+pub fn run<C: CommandFactory>(args: GenerateDocsArgs) -> Result<()> {
     let man = args.out.join("man");
     std::fs::create_dir_all(&man).with_context(|| format!("cannot create {}", man.display()))?;
-    write(&args.out.join("cli.md"), &cli_markdown())?;
+    write(&args.out.join("cli.md"), &cli_markdown::<C>())?;
     // Pages of subcommands that no longer exist go.
     for e in std::fs::read_dir(&man)?.flatten() {
         let n = e.file_name().to_string_lossy().into_owned();
@@ -71,7 +71,7 @@ pub fn run(args: GenerateDocsArgs) -> Result<()> {
             std::fs::remove_file(e.path())?;
         }
     }
-    let pages = man_pages()?;
+    let pages = man_pages::<C>()?;
     for (name, text) in &pages {
         write(&man.join(name), text)?;
     }

@@ -6,6 +6,7 @@ mod bench_before;
 mod bench_greedy;
 mod bench_opponents;
 mod bench_store;
+mod csv_rows;
 pub mod docs;
 pub mod eval;
 pub mod league;
@@ -16,20 +17,6 @@ pub mod render;
 pub mod status_text;
 pub mod table;
 pub mod train;
-
-/// The rows of a CSV file this program wrote (none if it does not exist
-/// yet); a malformed row is an error naming the file.
-pub fn read_csv<T: serde::de::DeserializeOwned>(path: &std::path::Path) -> anyhow::Result<Vec<T>> {
-    use anyhow::Context;
-    if !path.exists() {
-        return Ok(Vec::new());
-    }
-    let mut r =
-        csv::Reader::from_path(path).with_context(|| format!("cannot read {}", path.display()))?;
-    r.deserialize()
-        .collect::<Result<Vec<T>, _>>()
-        .with_context(|| format!("{}: malformed row", path.display()))
-}
 
 #[derive(Parser, Debug)]
 #[command(
@@ -121,6 +108,6 @@ pub fn main() -> anyhow::Result<()> {
         Command::Worker(a) => league::worker(a),
         Command::LeagueLearner(a) => league::learner(a),
         Command::LeagueEvaluator(a) => league::evaluator(a),
-        Command::GenerateDocs(a) => docs::run(a),
+        Command::GenerateDocs(a) => docs::run::<Cli>(a),
     }
 }

@@ -214,7 +214,7 @@ fn rows_of(r: &Running) -> Result<Vec<EvalRow>> {
 }
 
 pub fn read_rows(path: &Path) -> Result<Vec<EvalRow>> {
-    super::read_csv(path)
+    super::csv_rows::read_csv(path)
 }
 
 fn write_rows(path: &Path, rows: &[EvalRow]) -> Result<()> {

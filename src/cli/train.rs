@@ -362,7 +362,7 @@ fn append_metrics(path: &Path, m: &Metrics) -> Result<()> {
 }
 
 pub fn read_metrics(path: &Path) -> Result<Vec<Metrics>> {
-    super::read_csv(path)
+    super::csv_rows::read_csv(path)
 }
 
 /// After a kill, rows past the last checkpoint describe iterations the

@@ -593,7 +593,7 @@ fn a_target_leaning_on_the_rule_based_one_plays_it_and_learns_from_its_own_logit
 fn a_kl_towards_the_rule_based_target_pulls_the_learned_target_to_its_actions() {
     use t2e::env::controller::Controller;
     use t2e::heuristics::{expert_captor_action, target_action};
-    use t2e::nn::checkpoint::CheckpointController;
+    use t2e::nn::CheckpointController;
     tch::set_num_threads(1);
     let room_maps = || maps(room(60, 260, 60, 260));
     let trained = |kl: f64| {

@@ -3,21 +3,21 @@
 //! field has a documented default; typos and impossible values are errors
 //! that name the file and the field.
 
-use crate::controllers::ControllerSpec;
-use crate::curriculum::CurriculumConfig;
-use crate::env::{EnvConfig, Side};
-use crate::error::{in_interval, in_range, ConfigError, ConfigFileError};
-use crate::evaluator_config::EvaluatorConfig;
-use crate::learn::ppo::PpoConfig;
-use crate::learn::train::Play;
-use crate::learn::train::{SideConfig, SideDefaults, TrainConfig};
-use crate::learn::Algorithm;
-use crate::matchmaking::MatchmakingConfig;
-use crate::members::MembersConfig;
-use crate::protocol::Protocol;
+use crate::rules::curriculum::CurriculumConfig;
+use crate::rules::evaluator_config::EvaluatorConfig;
+use crate::rules::matchmaking::MatchmakingConfig;
+use crate::rules::members::MembersConfig;
 use anyhow::{anyhow, Context, Result};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
+use t2e_core::env::{EnvConfig, Side};
+use t2e_core::error::{in_interval, in_range, ConfigError, ConfigFileError};
+use t2e_core::protocol::Protocol;
+use t2e_learners::controllers::ControllerSpec;
+use t2e_learners::learn::ppo::PpoConfig;
+use t2e_learners::learn::train::Play;
+use t2e_learners::learn::train::{SideConfig, SideDefaults, TrainConfig};
+use t2e_learners::learn::Algorithm;
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -28,7 +28,7 @@ pub struct LeagueConfig {
     pub seed: u64,
     /// Each learner stops after this many environment steps of its own.
     pub env_steps_per_learner: u64,
-    /// "held-out" or "paper" (`crate::protocol`): a config file must name
+    /// "held-out" or "paper" (`t2e_core::protocol`): a config file must name
     /// it, and the training maps must fit it.
     pub protocol: Protocol,
     /// Training maps: held-out, never the Gibson test set (`generated:N`,
@@ -217,14 +217,14 @@ impl LeagueConfig {
         let text = std::fs::read_to_string(path)
             .with_context(|| format!("{}: cannot read", path.display()))?;
         if require_protocol {
-            crate::protocol::require_named(&text)
+            t2e_core::protocol::require_named(&text)
                 .map_err(|e| anyhow!("{}: {e}", path.display()))?;
         }
         Self::parse(&text).map_err(|e| anyhow!("{}: {e}", path.display()))
     }
 
     pub fn parse(text: &str) -> Result<LeagueConfig, ConfigFileError> {
-        let cfg: LeagueConfig = crate::util::from_toml(text)?;
+        let cfg: LeagueConfig = t2e_core::util::from_toml(text)?;
         cfg.validate()?;
         Ok(cfg)
     }
@@ -258,7 +258,7 @@ impl LeagueConfig {
             num_envs: self.num_envs,
             rollout_steps: self.rollout_steps,
             checkpoint_every: self.checkpoint_every,
-            device: crate::learn::config::DeviceChoice::Cpu,
+            device: t2e_learners::learn::config::DeviceChoice::Cpu,
             protocol: self.protocol,
             maps: self.maps.clone(),
             extra_maps: Default::default(),
@@ -282,8 +282,8 @@ impl LeagueConfig {
         if let Some(spec) = &self.evaluator.validation_maps {
             let shared = spec == &self.maps
                 || match (
-                    crate::map::catalog::generated_set(spec),
-                    crate::map::catalog::generated_set(&self.maps),
+                    t2e_core::map::catalog::generated_set(spec),
+                    t2e_core::map::catalog::generated_set(&self.maps),
                 ) {
                     (Some((vs, vc)), Some((ts, tc))) => {
                         vs.start < ts.end && ts.start < vs.end && vc.iter().any(|c| tc.contains(c))
@@ -346,7 +346,7 @@ impl LeagueConfig {
             .validate(&held_out)
             .map_err(|e| e.within("members"))?;
         self.check_validation_apart()?;
-        crate::env::Sight::check_shared(
+        t2e_core::env::Sight::check_shared(
             self.captors.net.sight,
             self.target.net.sight,
             "every player of a league meets the others in one env's observations",
@@ -377,7 +377,7 @@ impl LeagueConfig {
                 "exploiters.target_prior",
                 prior,
                 0.0,
-                crate::nn::prior::MAX_WEIGHT,
+                t2e_learners::nn::prior::MAX_WEIGHT,
                 true,
             )?;
             if !self.exploiters.target {
@@ -423,7 +423,7 @@ impl LeagueConfig {
         )?;
         // The worlds and the rollout first: the budget check below divides
         // by them, and must not blame the budget for an impossible rollout.
-        crate::learn::train::check_rollout(self.num_envs, self.rollout_steps)?;
+        t2e_learners::learn::train::check_rollout(self.num_envs, self.rollout_steps)?;
         let per_iteration = (self.num_envs * self.rollout_steps) as u64;
         if self.env_steps_per_learner < per_iteration.max(1) {
             return Err(ConfigError::new(
@@ -455,7 +455,7 @@ impl LeagueConfig {
                     format!("\"{play}\""),
                     format!(
                         "a league's learner learns: {}",
-                        crate::learn::kind::learner_names("or")
+                        t2e_learners::learn::kind::learner_names("or")
                     ),
                 ));
             }
@@ -468,7 +468,7 @@ impl LeagueConfig {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::players::Seat;
+    use crate::rules::players::Seat;
 
     #[test]
     fn a_league_learner_is_a_training_side_with_the_leagues_defaults() {
@@ -478,7 +478,7 @@ mod tests {
         assert_eq!(league.captors.play, Play::Learn(Algorithm::Mappo));
         assert_eq!(league.captors.ppo.minibatches, 4);
         assert_eq!(league.captors.net.hidden, 32);
-        let side: SideConfig = crate::util::from_toml("[net]\nhidden = 32\n").unwrap();
+        let side: SideConfig = t2e_core::util::from_toml("[net]\nhidden = 32\n").unwrap();
         assert_eq!(side.play, Play::Script(ControllerSpec::Heuristic));
         assert_eq!(side.ppo.minibatches, 1);
         // The league's learner reaches its training run unchanged.
@@ -508,7 +508,7 @@ mod tests {
         let main_only = LeagueConfig::parse(text).unwrap();
         let seat = |side| Seat::exploiter(side);
         let prior = |cfg: &LeagueConfig, s: Seat| {
-            crate::roles::SeatRules::of(cfg, s)
+            crate::rules::roles::SeatRules::of(cfg, s)
                 .train_config(cfg)
                 .target
                 .net
@@ -524,8 +524,9 @@ mod tests {
         assert_eq!(prior(&free, seat(Side::Target)), 0.0);
         assert_eq!(prior(&free, Seat::main(Side::Target)), 10.0);
         assert_eq!(
-            crate::roles::SeatRules::of(&free, seat(Side::Captors)).train_config(&free),
-            crate::roles::SeatRules::of(&main_only, seat(Side::Captors)).train_config(&main_only)
+            crate::rules::roles::SeatRules::of(&free, seat(Side::Captors)).train_config(&free),
+            crate::rules::roles::SeatRules::of(&main_only, seat(Side::Captors))
+                .train_config(&main_only)
         );
         // Out of range, or with no target exploiter to take it: refused, named.
         for (bad, why) in [

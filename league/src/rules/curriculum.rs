@@ -4,10 +4,10 @@
 //! stage against the pool's targets; a share of episodes keeps replaying
 //! earlier stages so nothing is forgotten.
 
-use crate::env::Side;
-use crate::error::{in_interval, in_range, ConfigError};
 use serde::{Deserialize, Serialize};
 use std::collections::VecDeque;
+use t2e_core::env::Side;
+use t2e_core::error::{in_interval, in_range, ConfigError};
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]

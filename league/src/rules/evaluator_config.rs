@@ -3,10 +3,10 @@
 //! the league folder and the evaluator process alike, so it lives with the
 //! configs rather than in the process that plays the panels.
 
-use crate::controllers::ControllerSpec;
-use crate::env::Side;
-use crate::error::{in_interval, in_range, ConfigError};
 use serde::{Deserialize, Serialize};
+use t2e_core::env::Side;
+use t2e_core::error::{in_interval, in_range, ConfigError};
+use t2e_learners::controllers::ControllerSpec;
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]

@@ -5,11 +5,11 @@
 //! episodes, the other side's current main learner. Pure functions: the
 //! caller supplies the head-to-head record and a seed.
 
-use crate::env::vec_env::episode_seed;
-use crate::error::{in_interval, in_range, ConfigError};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
+use t2e_core::env::vec_env::episode_seed;
+use t2e_core::error::{in_interval, in_range, ConfigError};
 
 /// How PFSP turns P[learner wins] = x into a sampling weight.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]

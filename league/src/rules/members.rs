@@ -7,11 +7,11 @@
 //! out is a decision every table states: a member cannot also be a held-out
 //! opponent.
 
-use crate::controllers::ControllerSpec;
-use crate::env::Side;
-use crate::error::ConfigError;
-use crate::players::heuristic_name;
+use crate::rules::players::heuristic_name;
 use serde::{Deserialize, Serialize};
+use t2e_core::env::Side;
+use t2e_core::error::ConfigError;
+use t2e_learners::controllers::ControllerSpec;
 
 /// Extra permanent members, per side, as controller names: heuristics
 /// (`greedy:K`, `random`, `still`) and trained teams (`ckpt:PATH`, a

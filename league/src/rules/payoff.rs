@@ -5,7 +5,7 @@
 //! games its captors did not win.
 
 use crate::data::PairResult;
-use crate::env::Side;
+use t2e_core::env::Side;
 
 /// Wins and games of a player who plays `side`.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]

@@ -3,8 +3,8 @@
 //! directory layout, the processes and the learners all name players, and
 //! none of them needs the others for it.
 
-use crate::env::Side;
 use std::path::{Path, PathBuf};
+use t2e_core::env::Side;
 
 /// The evaluator's name: its heartbeat row and the recorder of the panel's
 /// matches. One name, so the status's filters and the processes agree.

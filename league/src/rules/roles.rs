@@ -5,11 +5,11 @@
 //! between the two main learners. One row per seat (`SeatRules::of`),
 //! held by a table test.
 
-use crate::config::LeagueConfig;
 use crate::data::{BeatState, Kind};
-use crate::env::Side;
-use crate::learn::train::TrainConfig;
-use crate::players::{Seat, SeatRole};
+use crate::rules::config::LeagueConfig;
+use crate::rules::players::{Seat, SeatRole};
+use t2e_core::env::Side;
+use t2e_learners::learn::train::TrainConfig;
 
 /// A seat's answers under one config.
 #[derive(Clone, Debug)]

@@ -6,8 +6,8 @@
 //! figures would be tuned to it. Pure: the store's rows in, a choice out.
 
 use crate::data::{HeldOutResult, Kind, Panel, Player};
-use crate::env::Side;
-use crate::players::learner_name;
+use crate::rules::players::learner_name;
+use t2e_core::env::Side;
 
 /// One snapshot's validation result: the mean over the validation teams
 /// of the rate the snapshot wins and of the episodes' length.

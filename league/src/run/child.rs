@@ -5,14 +5,14 @@
 //! (`ChildCommand::is_league_process`): the argument list is written in
 //! one place and read in the same place.
 
-use crate::dir::LeagueDir;
-use crate::env::Side;
-use crate::players::Role;
-use crate::players::{Seat, SeatRole};
+use crate::rules::players::Role;
+use crate::rules::players::{Seat, SeatRole};
+use crate::run::dir::LeagueDir;
 use std::ffi::{OsStr, OsString};
 use std::os::unix::ffi::OsStrExt;
 use std::path::PathBuf;
 use std::process::Command;
+use t2e_core::env::Side;
 
 /// The subcommand of a seat's learner.
 pub const LEARNER: &str = "league-learner";
@@ -90,7 +90,7 @@ impl ChildCommand {
 
     /// This program with `args`, ready to spawn.
     pub fn command(&self) -> std::io::Result<Command> {
-        let mut cmd = crate::util::own_command()?;
+        let mut cmd = t2e_core::util::own_command()?;
         cmd.args(self.args());
         Ok(cmd)
     }

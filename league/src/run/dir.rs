@@ -17,12 +17,12 @@
 //!                          frozen player), run/ (the best response's run)
 //! ```
 
-use crate::config::LeagueConfig;
-use crate::env::Side;
+use crate::rules::config::LeagueConfig;
 use crate::store::StoreUrl;
 use anyhow::{bail, Context, Result};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
+use t2e_core::env::Side;
 
 /// `league.json`: which league a directory holds. The id is random, written
 /// once when the league starts; the store and every snapshot carry it too.
@@ -47,7 +47,7 @@ pub fn new_league_id() -> String {
         std::process::id(),
         COUNTER.fetch_add(1, Ordering::SeqCst)
     );
-    crate::util::sha256_hex(seed.as_bytes())[..16].to_string()
+    t2e_core::util::sha256_hex(seed.as_bytes())[..16].to_string()
 }
 
 #[derive(Clone, Debug)]
@@ -104,7 +104,7 @@ impl LeagueDir {
     }
 
     pub fn write_identity(&self, id: &LeagueIdentity) -> Result<()> {
-        Ok(crate::fs::write_file_atomically(
+        Ok(t2e_core::fs::write_file_atomically(
             &self.identity_path(),
             serde_json::to_string_pretty(id)?.as_bytes(),
         )?)
@@ -136,7 +136,7 @@ impl LeagueDir {
             seats.sort_by_key(|e| e.file_name());
             for e in seats {
                 let path = e.path();
-                let run = crate::learn::persist::RunDir::new(&path);
+                let run = t2e_learners::learn::persist::RunDir::new(&path);
                 let checkpoints = run.checkpoint_names(None).map_or(0, |n| n.len());
                 if run.has_state() || checkpoints > 0 {
                     found.push(format!(
@@ -160,11 +160,11 @@ impl LeagueDir {
     }
 
     pub fn learner_dir(&self, side: Side) -> PathBuf {
-        self.seat_dir(crate::players::Seat::main(side))
+        self.seat_dir(crate::rules::players::Seat::main(side))
     }
 
     /// A learner's run folder (main learner or exploiter).
-    pub fn seat_dir(&self, seat: crate::players::Seat) -> PathBuf {
+    pub fn seat_dir(&self, seat: crate::rules::players::Seat) -> PathBuf {
         self.root.join("learners").join(seat.name())
     }
 
@@ -175,7 +175,7 @@ impl LeagueDir {
     pub fn log_path(&self, side: Side) -> PathBuf {
         self.root
             .join("logs")
-            .join(format!("{}.log", crate::players::learner_name(side)))
+            .join(format!("{}.log", crate::rules::players::learner_name(side)))
     }
 
     /// `path` relative to the league directory, '/'-separated (as stored).

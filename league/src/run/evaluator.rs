@@ -8,21 +8,21 @@
 //! to the matches the ratings and the matchmaker read. Bounded to a share of one
 //! core: after each episode it sleeps in proportion to the episode's time.
 
-use crate::config::LeagueConfig;
-use crate::controllers::ControllerSpec;
-use crate::dir::LeagueDir;
-use crate::env::{CaptureRule, Side};
-use crate::eval::{play_episode, EvalSetting};
-use crate::map::PreparedMap;
-use crate::panels::{load_panels, Panels};
-use crate::players::{heuristic_name, learner_name, Seat, EVALUATOR};
-use crate::preflight::check_maps_apart;
+use crate::rules::config::LeagueConfig;
+use crate::rules::players::{heuristic_name, learner_name, Seat, EVALUATOR};
+use crate::rules::supervision::{CannotStart, Outcome};
+use crate::run::dir::LeagueDir;
+use crate::run::panels::{load_panels, Panels};
+use crate::run::preflight::check_maps_apart;
 use crate::store::{BeatState, HeldOutEpisode, Kind, MatchRecord, Panel, Player, Store};
-use crate::supervision::{CannotStart, Outcome};
 use anyhow::{Context, Result};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
+use t2e_core::env::{CaptureRule, Side};
+use t2e_core::map::PreparedMap;
+use t2e_learners::controllers::ControllerSpec;
+use t2e_learners::eval::{play_episode, EvalSetting};
 
 /// Who a snapshot plays on the panel.
 enum PanelOpponent<'a> {
@@ -77,8 +77,9 @@ fn evaluate_pending(
             .checkpoint
             .as_ref()
             .context("snapshot without a checkpoint")?;
-        let spec =
-            ControllerSpec::Checkpoint(crate::controllers::CheckpointSpec::new(dir.root.join(rel)));
+        let spec = ControllerSpec::Checkpoint(t2e_learners::controllers::CheckpointSpec::new(
+            dir.root.join(rel),
+        ));
         'opponents: for opponent in &opponents {
             let other = match opponent {
                 PanelOpponent::Member(_) => ControllerSpec::Heuristic,
@@ -108,7 +109,7 @@ fn evaluate_pending(
                 capture_rule: CaptureRule::Fast,
                 soa_every: 0,
             };
-            let mut asz_fields = crate::asz::AszFields::new();
+            let mut asz_fields = t2e_core::asz::AszFields::new();
             for episode in 0..cfg.evaluator.episodes {
                 if stop.load(Ordering::SeqCst) {
                     return Ok(played);
@@ -215,7 +216,7 @@ pub fn panel_queue(players: &[Player]) -> Vec<(&Player, bool)> {
 /// Runs until Ctrl-C / SIGINT (`Outcome::Stopped`), or until both learners
 /// are done and every snapshot has its panel games (`Outcome::Done`).
 pub fn run_evaluator(dir: &LeagueDir, stop: &AtomicBool) -> Result<Outcome> {
-    let opened = crate::open::open_process(dir)
+    let opened = crate::run::open::open_process(dir)
         .map_err(|e| anyhow::Error::new(CannotStart(format!("{e:#}"))))?;
     let (cfg, store) = (opened.cfg, opened.store);
     if !cfg.evaluator.enabled {
@@ -239,7 +240,7 @@ pub fn run_evaluator(dir: &LeagueDir, stop: &AtomicBool) -> Result<Outcome> {
     let _ = rayon::ThreadPoolBuilder::new()
         .num_threads(1)
         .build_global();
-    let maps = crate::map::catalog::load_prepared(&cfg.maps)
+    let maps = t2e_core::map::catalog::load_prepared(&cfg.maps)
         .with_context(|| format!("maps = \"{}\"", cfg.maps))
         .map_err(|e| anyhow::Error::new(CannotStart(format!("{e:#}"))))?;
     let panels = load_panels(&cfg)

@@ -8,25 +8,25 @@
 //! finished episode is recorded in the store (once), and the learner adds
 //! frozen copies of itself to the pool.
 
-use crate::config::LeagueConfig;
-use crate::curriculum::Curriculum;
-use crate::dir::LeagueDir;
-use crate::env::{Action, Side, VecEnv};
-use crate::learn::train::{RolloutHooks, Trainer};
-use crate::matchmaking::{
+use crate::rules::config::LeagueConfig;
+use crate::rules::curriculum::Curriculum;
+use crate::rules::matchmaking::{
     choose_opponent, draw_seed, pick_slot, slot_seed, Candidate, Fixed, MatchmakingConfig, Opponent,
 };
-use crate::opponents::{OpponentNets, WorldOpponent};
-use crate::players::{learner_name, Seat};
-use crate::pool::{add_snapshot, SnapshotOutcome};
-use crate::roles::{seat_of_row, should_snapshot, should_wait, SeatRules};
+use crate::rules::players::{learner_name, Seat};
+use crate::rules::roles::{seat_of_row, should_snapshot, should_wait, SeatRules};
+use crate::rules::supervision::{CannotStart, Outcome};
+use crate::run::dir::LeagueDir;
+use crate::run::opponents::{OpponentNets, WorldOpponent};
+use crate::run::pool::{add_snapshot, SnapshotOutcome};
 use crate::store::{BeatState, Kind, MatchRecord, NewPlayer, Player, Store};
-use crate::supervision::{CannotStart, Outcome};
 use anyhow::{bail, Context, Result};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
+use t2e_core::env::{Action, Side, VecEnv};
+use t2e_learners::learn::train::{RolloutHooks, Trainer};
 
 pub struct LeagueHooks<'a> {
     store: &'a Store,
@@ -127,7 +127,7 @@ impl<'a> LeagueHooks<'a> {
 
     /// Re-reads the pool, this learner's record and the curriculum stage.
     pub fn refresh(&mut self) -> Result<()> {
-        let playable = crate::pool::playable(&self.store.players()?, self.seat());
+        let playable = crate::run::pool::playable(&self.store.players()?, self.seat());
         self.members = playable.members;
         self.main = playable.main;
         // Only the main captors draw the target exploiter (`target_exploiter_share`);
@@ -145,7 +145,8 @@ impl<'a> LeagueHooks<'a> {
             .members
             .iter()
             .map(|m| {
-                let rec = crate::payoff::record(&payoff, self.learner_id, self.side, Some(m.id));
+                let rec =
+                    crate::rules::payoff::record(&payoff, self.learner_id, self.side, Some(m.id));
                 Candidate {
                     player: m.id,
                     wins: rec.wins as f64,
@@ -387,7 +388,7 @@ fn cannot_start(e: anyhow::Error) -> anyhow::Error {
 /// pool (an exploiter then starts again from its initial weights). Errors
 /// before the first iteration are `CannotStart`.
 pub fn run_learner(dir: &LeagueDir, seat: Seat, stop: &AtomicBool) -> Result<Outcome> {
-    let opened = crate::open::open_process(dir).map_err(cannot_start)?;
+    let opened = crate::run::open::open_process(dir).map_err(cannot_start)?;
     let (cfg, store, league_id) = (opened.cfg, opened.store, opened.league_id);
     if !SeatRules::of(&cfg, seat).enabled {
         return Err(cannot_start(anyhow::anyhow!(
@@ -434,7 +435,7 @@ fn start_learner(
         .into_iter()
         .find(|p| p.id == learner_id)
         .context("the learner's own row vanished")?;
-    let maps = crate::map::catalog::load_prepared(&cfg.maps)
+    let maps = t2e_core::map::catalog::load_prepared(&cfg.maps)
         .with_context(|| format!("maps = \"{}\"", cfg.maps))?;
     let tcfg = SeatRules::of(cfg, seat).train_config(cfg);
     let run_dir = dir.seat_dir(seat);
@@ -468,9 +469,9 @@ fn resume_point(
     dir: &LeagueDir,
     store: &Store,
     row: &crate::store::Player,
-    tcfg: &crate::learn::train::TrainConfig,
+    tcfg: &t2e_learners::learn::train::TrainConfig,
 ) -> Result<ResumePoint> {
-    use crate::learn::persist::{Recovery, RunDir};
+    use t2e_learners::learn::persist::{Recovery, RunDir};
     let seat = seat_of_row(row.side, row.kind)
         .with_context(|| format!("{} is no learner's row", row.name))?;
     let run = RunDir::new(dir.seat_dir(seat));
@@ -544,7 +545,7 @@ fn train_learner(
     }
     // A snapshot of its own whose row it did not live to add (killed between
     // the folder and the row): into the pool before anything counts snapshots.
-    for (rel, adopted) in crate::pool::adopt_unrecorded(dir, store, league_id, Some(&name))? {
+    for (rel, adopted) in crate::run::pool::adopt_unrecorded(dir, store, league_id, Some(&name))? {
         match adopted {
             Ok(()) => {
                 tracing::warn!("{name}: adopted {rel}, a snapshot whose row it did not live to add")
@@ -688,7 +689,7 @@ fn save_learner(
     let run_dir = dir.seat_dir(seat);
     let written = trainer.save(&run_dir)?;
     if let Some(ckpt) = written.first() {
-        let sha = crate::util::sha256_file(&ckpt.join("meta.json"))?;
+        let sha = t2e_core::util::sha256_file(&ckpt.join("meta.json"))?;
         let rel = dir.relative(ckpt);
         store.update_learner(id, trainer.env_steps, (&rel, &sha))?;
     }

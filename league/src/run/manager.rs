@@ -15,23 +15,23 @@
 //! `PR_SET_PDEATHSIG`), and each learner holds a lock of its own, so a
 //! killed manager never leaves a learner running twice.
 
-use crate::config::LeagueConfig;
-use crate::dir::{new_league_id, LeagueDir, LeagueIdentity};
-use crate::env::Side;
-use crate::fs::write_file_atomically;
-use crate::manager_lease::ManagerGuard;
-use crate::open::{plan_start, StartPlan};
-use crate::players::Seat;
-use crate::pool::{ensure_members, reconcile};
-use crate::process::{interrupt, lock_holder, spawn, try_lock, Ended, Role, Supervised};
+use crate::rules::config::LeagueConfig;
+use crate::rules::players::Seat;
+use crate::rules::supervision::{CrashBudget, Exit, Next};
+use crate::run::dir::{new_league_id, LeagueDir, LeagueIdentity};
+use crate::run::manager_lease::ManagerGuard;
+use crate::run::open::{plan_start, StartPlan};
+use crate::run::pool::{ensure_members, reconcile};
+use crate::run::process::{interrupt, lock_holder, spawn, try_lock, Ended, Role, Supervised};
 use crate::store::Store;
-use crate::supervision::{CrashBudget, Exit, Next};
 use anyhow::{bail, Context, Result};
 use indicatif::{MultiProgress, ProgressBar, ProgressStyle};
 use std::fs::File;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
+use t2e_core::env::Side;
+use t2e_core::fs::write_file_atomically;
 
 /// Prints a line above the progress bars on a terminal, and plainly where
 /// stderr is redirected (indicatif draws nothing there, lines included).
@@ -118,14 +118,14 @@ pub fn run_with(
             let origin = config
                 .map(|p| p.display().to_string())
                 .unwrap_or_else(|| dir.config_path().display().to_string());
-            let maps = crate::map::catalog::load_prepared(&cfg.maps)
+            let maps = t2e_core::map::catalog::load_prepared(&cfg.maps)
                 .with_context(|| format!("{origin}: maps = \"{}\"", cfg.maps))?;
             cfg.protocol
                 .check_training_maps(&cfg.maps, &maps)
                 .map_err(|e| anyhow::anyhow!("{origin}: {e}"))?;
-            crate::pool::check_trained_members(&cfg)
+            crate::run::pool::check_trained_members(&cfg)
                 .map_err(|e| anyhow::anyhow!("{origin}: {e:#}"))?;
-            crate::preflight::check_new_league(&cfg, &maps)
+            crate::run::preflight::check_new_league(&cfg, &maps)
                 .map_err(|e| anyhow::anyhow!("{origin}: {e}"))?;
             std::fs::create_dir_all(&dir.root)
                 .with_context(|| format!("cannot create {}", dir.root.display()))?;
@@ -238,7 +238,7 @@ fn run_league(
         }
     }
     for seat in &seats {
-        crate::learn::persist::RunDir::new(dir.seat_dir(*seat)).clean_stale_temporaries()?;
+        t2e_learners::learn::persist::RunDir::new(dir.seat_dir(*seat)).clean_stale_temporaries()?;
     }
 
     let mut roles: Vec<Role> = seats.iter().map(|s| Role::Learner(*s)).collect();
@@ -246,7 +246,7 @@ fn run_league(
         roles.push(Role::Evaluator);
     }
     if let Launch::Workers { local, logs } = launch {
-        return crate::seats::supervise_workers(
+        return crate::run::seats::supervise_workers(
             dir, &cfg, store, &roles, *local, logs, run_for, stop, guard,
         );
     }

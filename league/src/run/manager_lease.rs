@@ -2,7 +2,7 @@
 //! wherever it runs. Its own file because the manager and `seats.rs` (the
 //! manager's side of a league on workers) both hold it.
 
-use crate::dir::{new_league_id, LeagueDir};
+use crate::run::dir::{new_league_id, LeagueDir};
 use crate::store::Store;
 use anyhow::{bail, Result};
 use std::time::{Duration, Instant};

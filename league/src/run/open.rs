@@ -14,8 +14,8 @@
 //!   checks its identity against `league.json`.
 //! - `open_read_only` (`status`, `export`) changes nothing on disk.
 
-use crate::config::LeagueConfig;
-use crate::dir::{LeagueDir, LeagueIdentity};
+use crate::rules::config::LeagueConfig;
+use crate::run::dir::{LeagueDir, LeagueIdentity};
 use crate::store::{Presence, Store, StoreUrl};
 use anyhow::{bail, Context, Result};
 use std::path::Path;
@@ -178,7 +178,7 @@ pub fn plan_start(dir: &LeagueDir, given: Option<&Path>) -> Result<StartPlan> {
             name: stored_cfg.name.clone(),
         },
         (None, None) => LeagueIdentity {
-            league_id: crate::dir::new_league_id(),
+            league_id: crate::run::dir::new_league_id(),
             name: stored_cfg.name.clone(),
         },
     };
@@ -306,8 +306,8 @@ fn check_pool_identity(dir: &LeagueDir, league_id: &str, db: &StoreUrl) -> Resul
         if e.file_name().to_string_lossy().starts_with('.') {
             continue;
         }
-        if let Ok(meta) = crate::nn::checkpoint::read_meta(&e.path()) {
-            if let Ok(Some(m)) = crate::pool::PoolMembership::of(&meta) {
+        if let Ok(meta) = t2e_learners::nn::checkpoint::read_meta(&e.path()) {
+            if let Ok(Some(m)) = crate::run::pool::PoolMembership::of(&meta) {
                 if m.league_id != league_id {
                     bail!(
                         "{}: belongs to league {}, but {db} is league {league_id}: the store and the pool are from different leagues",

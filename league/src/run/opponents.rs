@@ -4,12 +4,6 @@
 //! play them. Heuristic opponents play inside the vector env and never
 //! come here.
 
-use crate::env::{Action, Side, VecEnv};
-use crate::learn::acting::{gather_worlds, sample};
-use crate::nn::checkpoint::DoesNotFit;
-use crate::nn::prior::{add_prior, target_hint};
-use crate::nn::stacked::{PreparedActor, StackedActors};
-use crate::nn::PolicySnapshot;
 use crate::store::Player;
 use anyhow::{bail, Context, Result};
 use rand_chacha::ChaCha8Rng;
@@ -17,6 +11,12 @@ use std::collections::{BTreeMap, HashMap};
 use std::path::Path;
 use std::sync::Arc;
 use std::time::Instant;
+use t2e_core::env::{Action, Side, VecEnv};
+use t2e_learners::learn::acting::{gather_worlds, sample};
+use t2e_learners::nn::checkpoint::DoesNotFit;
+use t2e_learners::nn::prior::{add_prior, target_hint};
+use t2e_learners::nn::stacked::{PreparedActor, StackedActors};
+use t2e_learners::nn::PolicySnapshot;
 use tch::{Device, Kind as TKind, Tensor};
 
 /// A loaded opponent network.
@@ -124,7 +124,7 @@ impl OpponentNets {
             .clone()
             .with_context(|| format!("{} has no checkpoint", member.name))?;
         let dir = root.join(&rel);
-        let got = crate::util::sha256_file(&dir.join("meta.json"))
+        let got = t2e_core::util::sha256_file(&dir.join("meta.json"))
             .with_context(|| format!("{}: meta.json missing", dir.display()))?;
         if got != meta_sha {
             bail!(

@@ -3,13 +3,13 @@
 //! game, and the validation maps, checked to hold no test map. Loaded by
 //! `run` before a new league is stored (preflight) and by the evaluator.
 
-use crate::config::LeagueConfig;
-use crate::controllers::ControllerSpec;
-use crate::env::Side;
-use crate::error::ConfigError;
-use crate::map::PreparedMap;
+use crate::rules::config::LeagueConfig;
 use crate::store::Panel;
 use std::sync::Arc;
+use t2e_core::env::Side;
+use t2e_core::error::ConfigError;
+use t2e_core::map::PreparedMap;
+use t2e_learners::controllers::ControllerSpec;
 
 /// Each member side's opponents on one panel: (name, controller).
 pub type PanelTeams = Vec<(Side, Vec<(String, ControllerSpec)>)>;
@@ -26,11 +26,11 @@ pub struct Panels {
 /// loaded and checked against the league's game, and the validation maps,
 /// checked to hold no test map.
 pub fn load_panels(cfg: &LeagueConfig) -> Result<Panels, ConfigError> {
-    let env = crate::env::EnvConfig {
+    let env = t2e_core::env::EnvConfig {
         num_captors: cfg.num_captors,
         target_speed: cfg.curriculum.stages[0],
         episode_length: cfg.episode_length,
-        ..crate::env::EnvConfig::default()
+        ..t2e_core::env::EnvConfig::default()
     };
     let load = |panel: Panel| -> Result<PanelTeams, ConfigError> {
         [Side::Captors, Side::Target]
@@ -57,14 +57,14 @@ pub fn load_panels(cfg: &LeagueConfig) -> Result<Panels, ConfigError> {
     let validation_maps = match &cfg.evaluator.validation_maps {
         None => Arc::new(Vec::new()),
         Some(spec) => {
-            let maps = crate::map::catalog::load_prepared(spec).map_err(|e| {
+            let maps = t2e_core::map::catalog::load_prepared(spec).map_err(|e| {
                 ConfigError::new(
                     "evaluator.validation_maps",
                     format!("\"{spec}\""),
                     format!("{e:#}"),
                 )
             })?;
-            crate::protocol::check_extra_maps(spec, &maps)
+            t2e_core::protocol::check_extra_maps(spec, &maps)
                 .map_err(|e| ConfigError::about("evaluator.validation_maps", e.to_string()))?;
             maps
         }

@@ -13,17 +13,17 @@
 //! - Rows whose files are missing or fail their hashes are quarantined: the
 //!   league goes on without them.
 
-use crate::config::LeagueConfig;
-use crate::controllers::ControllerSpec;
-use crate::dir::LeagueDir;
-use crate::env::Side;
-use crate::learn::train::Trainer;
-use crate::nn::checkpoint::{read_meta, CheckpointMeta};
-use crate::nn::PolicySnapshot;
-use crate::players::{learner_name, Seat};
-use crate::protocol::Protocol;
+use crate::rules::config::LeagueConfig;
+use crate::rules::players::{learner_name, Seat};
+use crate::run::dir::LeagueDir;
 use crate::store::{Kind, NewPlayer, Player, Store};
 use anyhow::{anyhow, bail, Context, Result};
+use t2e_core::env::Side;
+use t2e_core::protocol::Protocol;
+use t2e_learners::controllers::ControllerSpec;
+use t2e_learners::learn::train::Trainer;
+use t2e_learners::nn::checkpoint::{read_meta, CheckpointMeta};
+use t2e_learners::nn::PolicySnapshot;
 
 /// Which league pool a snapshot belongs to, and as whom: the label a
 /// snapshot's meta.json carries (`CheckpointMeta::pool_label`, under
@@ -99,7 +99,7 @@ pub fn playable(players: &[Player], seat: Seat) -> Playable {
     }
 }
 
-use crate::roles::snapshot_name;
+use crate::rules::roles::snapshot_name;
 
 /// What `add_snapshot` did.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -141,7 +141,7 @@ pub fn add_snapshot(
     trainer
         .side(seat.side)?
         .save_new(&folder, serde_json::to_value(&membership)?)?;
-    let sha = crate::util::sha256_file(&folder.join("meta.json"))?;
+    let sha = t2e_core::util::sha256_file(&folder.join("meta.json"))?;
     store.add_player(&NewPlayer {
         name: name.clone(),
         side: seat.side,
@@ -174,7 +174,7 @@ pub struct Reconciled {
 pub fn reconcile(dir: &LeagueDir, store: &Store, league_id: &str) -> Result<Reconciled> {
     let mut out = Reconciled::default();
     let players_dir = dir.players_dir();
-    for p in crate::fs::clean_stale_temporaries(&players_dir)? {
+    for p in t2e_core::fs::clean_stale_temporaries(&players_dir)? {
         out.removed_temporaries.push(dir.relative(&p));
     }
     for (rel, adopted) in adopt_unrecorded(dir, store, league_id, None)? {
@@ -192,7 +192,7 @@ pub fn reconcile(dir: &LeagueDir, store: &Store, league_id: &str) -> Result<Reco
             continue;
         };
         let meta = dir.root.join(rel).join("meta.json");
-        let ok = crate::util::sha256_file(&meta).is_ok_and(|got| &got == sha)
+        let ok = t2e_core::util::sha256_file(&meta).is_ok_and(|got| &got == sha)
             && PolicySnapshot::load(&dir.root.join(rel), p.side).is_ok();
         match (ok, p.quarantined.is_some()) {
             (false, false) => {
@@ -295,7 +295,7 @@ fn adopt(
         curriculum_stage: member.curriculum_stage,
         checkpoint: Some((
             dir.relative(path),
-            crate::util::sha256_file(&path.join("meta.json"))?,
+            t2e_core::util::sha256_file(&path.join("meta.json"))?,
         )),
     })?;
     Ok(())
@@ -389,7 +389,7 @@ fn import_member(
     let snap = verified_member(cfg, side, source)?;
     let target = dir.players_dir().join(name);
     if target.exists() {
-        let same = crate::util::sha256_file(&target.join("meta.json"))
+        let same = t2e_core::util::sha256_file(&target.join("meta.json"))
             .is_ok_and(|sha| sha == snap.meta_sha256)
             && PolicySnapshot::load(&target, side).is_ok();
         if !same {
@@ -399,7 +399,9 @@ fn import_member(
             );
         }
     } else {
-        crate::fs::write_new_dir_atomically(&target, |tmp| crate::fs::copy_files(&snap.dir, tmp))?;
+        t2e_core::fs::write_new_dir_atomically(&target, |tmp| {
+            t2e_core::fs::copy_files(&snap.dir, tmp)
+        })?;
         // The copy, not the source, is what the league plays.
         PolicySnapshot::load(&target, side)?;
     }
@@ -412,7 +414,7 @@ fn import_member(
         curriculum_stage: 0,
         checkpoint: Some((
             dir.relative(&target),
-            crate::util::sha256_file(&target.join("meta.json"))?,
+            t2e_core::util::sha256_file(&target.join("meta.json"))?,
         )),
     })?;
     tracing::info!(

@@ -10,14 +10,14 @@
 //! all the training maps. Checkpoints are compared by canonical path and
 //! by the hashes of their weights, so `x/../team` is `team`.
 
-use crate::config::LeagueConfig;
-use crate::controllers::ControllerSpec;
-use crate::env::Side;
-use crate::error::ConfigError;
-use crate::map::PreparedMap;
+use crate::rules::config::LeagueConfig;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
+use t2e_core::env::Side;
+use t2e_core::error::ConfigError;
+use t2e_core::map::PreparedMap;
+use t2e_learners::controllers::ControllerSpec;
 
 /// Every check `run` owes a new league before its first env step, with
 /// `training` the league's training maps, loaded.
@@ -32,7 +32,7 @@ pub fn check_new_league(
         );
     }
     if cfg.evaluator.enabled {
-        let panels = crate::panels::load_panels(cfg)?;
+        let panels = crate::run::panels::load_panels(cfg)?;
         check_maps_apart(
             "evaluator.validation_maps",
             cfg.evaluator.validation_maps.as_deref().unwrap_or(""),
@@ -97,7 +97,7 @@ impl CheckpointIdentity {
     fn of(path: &Path) -> CheckpointIdentity {
         CheckpointIdentity {
             canonical: path.canonicalize().unwrap_or_else(|_| path.to_path_buf()),
-            files: crate::nn::checkpoint::read_meta(path)
+            files: t2e_learners::nn::checkpoint::read_meta(path)
                 .ok()
                 .map(|m| m.files)
                 .filter(|f| !f.is_empty()),

@@ -2,11 +2,11 @@
 //! roles a seat can hold, spawning one as a child of this binary, the locks
 //! that keep a seat from running twice on a host, and their logs.
 
-use crate::child::ChildCommand;
-use crate::dir::LeagueDir;
-pub use crate::players::Role;
+pub use crate::rules::players::Role;
+use crate::rules::supervision::{classify, decide, last_error_line, CrashBudget, Exit, Next};
+use crate::run::child::ChildCommand;
+use crate::run::dir::LeagueDir;
 use crate::store::{now_ms, StoreUrl};
-use crate::supervision::{classify, decide, last_error_line, CrashBudget, Exit, Next};
 use anyhow::{Context, Result};
 use std::collections::VecDeque;
 use std::fs::{File, TryLockError};
@@ -353,8 +353,8 @@ pub fn dir_from_env(root: &Path) -> Result<LeagueDir> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::env::Side;
-    use crate::players::Seat;
+    use crate::rules::players::Seat;
+    use t2e_core::env::Side;
 
     #[test]
     fn seat_names_name_their_roles() {

@@ -4,9 +4,9 @@
 //! `--for` passes or Ctrl-C. Workers on other hosts (`t2e-league worker`)
 //! take seats the same way as the local ones; the manager only reads.
 
-use crate::config::LeagueConfig;
-use crate::dir::LeagueDir;
-use crate::process::Role;
+use crate::rules::config::LeagueConfig;
+use crate::run::dir::LeagueDir;
+use crate::run::process::Role;
 use crate::store::{SeatRow, SeatState, Store, StoreUrl};
 use anyhow::{bail, Context, Result};
 use std::path::Path;
@@ -16,7 +16,7 @@ use std::time::{Duration, Instant};
 
 /// Starts a worker for the league in `dir` as a child of this process.
 pub fn spawn_worker(dir: &LeagueDir, logs: &Path, index: usize) -> Result<Child> {
-    let child = crate::child::ChildCommand::Worker {
+    let child = crate::run::child::ChildCommand::Worker {
         pool: dir.root.clone(),
         logs: logs.parent().unwrap_or(logs).to_path_buf(),
         seats: 1,
@@ -30,7 +30,7 @@ pub fn spawn_worker(dir: &LeagueDir, logs: &Path, index: usize) -> Result<Child>
     };
     // Through a pipe: a worker whose log sits on a full disk would die in
     // its first line of output.
-    crate::process::spawn_logged(cmd, &logs.join(format!("worker-{index}.log")))
+    crate::run::process::spawn_logged(cmd, &logs.join(format!("worker-{index}.log")))
         .map(|(child, _)| child)
         .context("cannot start a worker")
 }
@@ -46,7 +46,7 @@ pub fn supervise_workers(
     logs: &Path,
     run_for: Option<Duration>,
     stop: &AtomicBool,
-    guard: &mut crate::manager_lease::ManagerGuard,
+    guard: &mut crate::run::manager_lease::ManagerGuard,
 ) -> Result<()> {
     let names: Vec<String> = roles.iter().map(|r| r.name()).collect();
     store.define_seats(&names)?;
@@ -79,7 +79,10 @@ pub fn supervise_workers(
         {
             stopping = true;
             tracing::info!("stopping: each worker's seats finish their iteration and checkpoint");
-            workers.iter().flatten().for_each(crate::process::interrupt);
+            workers
+                .iter()
+                .flatten()
+                .for_each(crate::run::process::interrupt);
         }
         let mut all_done = false;
         if last_look.elapsed() >= Duration::from_secs(1) {

@@ -19,11 +19,11 @@
 //! - The pool folder must be the one every host shares: a worker that
 //!   cannot see a file the store names refuses to start, naming the file.
 
-use crate::dir::LeagueDir;
-use crate::open::open_process;
-use crate::process::{interrupt, spawn, Ended, Role, Supervised};
+use crate::rules::supervision::{CrashBudget, Exit, Next};
+use crate::run::dir::LeagueDir;
+use crate::run::open::open_process;
+use crate::run::process::{interrupt, spawn, Ended, Role, Supervised};
 use crate::store::{SeatLease, SeatRow, SeatState, Store};
-use crate::supervision::{CrashBudget, Exit, Next};
 use anyhow::{bail, Result};
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -174,7 +174,7 @@ pub fn run_worker(dir: &LeagueDir, opts: &WorkerOptions, stop: &AtomicBool) -> R
         "{}:{}:{}",
         opts.host,
         std::process::id(),
-        &crate::dir::new_league_id()[..8]
+        &crate::run::dir::new_league_id()[..8]
     );
     let lease_ms = opts.lease.as_millis() as i64;
     let budget = CrashBudget::default();

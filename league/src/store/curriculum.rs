@@ -1,6 +1,6 @@
 //! The `curriculum` table: the speed curriculum's stage changes, in order.
 
-use super::{now_ms, Store, StoreError};
+use super::connection::{now_ms, Store, StoreError};
 use crate::data::StageChange;
 
 impl Store {

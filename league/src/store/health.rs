@@ -1,7 +1,7 @@
 //! The `heartbeats` and `crashes` tables: each learner's latest state and
 //! throughput, and every crash with its last error line.
 
-use super::{host_name, now_ms, Store, StoreError};
+use super::connection::{host_name, now_ms, Store, StoreError};
 use crate::data::{BeatState, Crash, Heartbeat};
 
 impl Store {

@@ -5,7 +5,7 @@
 //! held-out panel is watched; the validation panel chooses what `export
 //! --best` exports.
 
-use super::{now_ms, Store, StoreError};
+use super::connection::{now_ms, Store, StoreError};
 pub use crate::data::{HeldOutEpisode, HeldOutResult, Panel};
 
 /// A panel as the store writes it (`Panel::name`).
@@ -23,7 +23,7 @@ fn parse_panel(s: &str) -> Result<Panel, sqlx::Error> {
 impl<'r> sqlx::FromRow<'r, sqlx::any::AnyRow> for HeldOutResult {
     fn from_row(r: &'r sqlx::any::AnyRow) -> Result<Self, sqlx::Error> {
         use sqlx::Row;
-        let n = |col: &str| super::u64_column(r, col);
+        let n = |col: &str| super::connection::u64_column(r, col);
         Ok(HeldOutResult {
             member: r.try_get("member")?,
             panel: parse_panel(&r.try_get::<String, _>("panel")?)?,
@@ -100,8 +100,8 @@ impl Store {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::env::Side;
     use crate::store::{Kind, NewPlayer, StoreUrl};
+    use t2e_core::env::Side;
 
     #[test]
     fn held_out_episodes_are_recorded_once_and_stay_out_of_the_matches() {

@@ -14,7 +14,8 @@
 //! names the holder, so a worker whose lease was taken over cannot change
 //! the seat any more (`renew_lease` tells it so).
 
-use super::{now_ms, Backend, Store, StoreError};
+use super::connection::{now_ms, Store, StoreError};
+use super::url::Backend;
 use crate::data::{SeatRow, SeatState};
 use sqlx::Row;
 

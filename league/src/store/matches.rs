@@ -3,7 +3,8 @@
 //! A match and its rating update are one transaction (`Tx`): the match is
 //! written here, the ratings by `store::ratings`.
 
-use super::{now_ms, ratings, Store, StoreError, Tx};
+use super::connection::{now_ms, Store, StoreError, Tx};
+use super::ratings;
 use crate::data::{MatchRecord, PairResult};
 use sqlx::Row;
 

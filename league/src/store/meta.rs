@@ -1,7 +1,7 @@
 //! The `league_config` table: the league's config, stored once, and its
 //! identity.
 
-use super::{now_ms, Store, StoreError};
+use super::connection::{now_ms, Store, StoreError};
 use sqlx::Row;
 
 impl Store {

@@ -1,7 +1,7 @@
 //! The `players` table: the league's learners and its frozen members, with
 //! the checkpoint files each names (a recorded member never changes).
 
-use super::{now_ms, Store, StoreError};
+use super::connection::{now_ms, Store, StoreError};
 use crate::data::{self, PlayerRow};
 use crate::data::{side_name, NewPlayer, Player};
 use sqlx::Row;

@@ -1,9 +1,9 @@
 //! The `ratings` table: every player's live rating after each of its
 //! matches, appended in the match's own transaction.
 
-use super::{now_ms, Store, StoreError, Tx};
+use super::connection::{now_ms, Store, StoreError, Tx};
 use crate::data::RatingEntry;
-use crate::ratings::{self, Rating};
+use crate::rules::ratings::{self, Rating};
 use sqlx::Row;
 use std::collections::HashMap;
 

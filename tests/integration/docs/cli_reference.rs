@@ -32,7 +32,7 @@ fn first_difference(a: &str, b: &str) -> String {
 fn the_cli_reference_is_what_the_code_generates() {
     let path = reference().join("cli.md");
     let committed = std::fs::read_to_string(&path).unwrap_or_default();
-    let generated = cli_markdown();
+    let generated = cli_markdown::<t2e::cli::Cli>();
     assert!(
         committed == generated,
         "{} is out of date ({}); regenerate it with `{REGENERATE}`",
@@ -48,7 +48,7 @@ fn the_cli_reference_is_what_the_code_generates() {
 #[test]
 fn the_man_pages_are_what_the_code_generates() {
     let dir = reference().join("man");
-    let pages = man_pages().unwrap();
+    let pages = man_pages::<t2e::cli::Cli>().unwrap();
     let mut stale = Vec::new();
     for (name, generated) in &pages {
         let committed = std::fs::read_to_string(dir.join(name)).unwrap_or_default();

@@ -9,14 +9,16 @@
 
 pub mod checkpoint;
 mod egocentric;
+pub mod policy;
 pub mod prior;
 pub mod run_dir;
 pub mod stacked;
 
 /// Pooling happens once per observation, outside the network.
 pub use crate::env::features::pool_patch;
-pub use checkpoint::{CheckpointController, CheckpointMeta, PolicySnapshot};
+pub use checkpoint::CheckpointMeta;
 pub(crate) use egocentric::EgocentricVector;
+pub use policy::{CheckpointController, PolicyError, PolicySnapshot};
 
 use crate::env::{Action, Sight, PATCH};
 use crate::error::{in_range, ConfigError};

@@ -1,7 +1,13 @@
 //! `export`: a player's checkpoint copied out of the league, by name or as the validation panel's best.
 
-use super::*;
+use super::report::StatusReport;
+use crate::run::dir::LeagueDir;
+use crate::run::open::open_read_only as open;
+use crate::store::{Kind, Player};
+use anyhow::{bail, Context, Result};
 use std::fmt::Write as _;
+use std::path::Path;
+use t2e_core::env::Side;
 
 /// Writes one player as a self-contained folder: its checkpoint files, the
 /// league's config, its rating history and a SHA-256 manifest; `eval
@@ -26,13 +32,13 @@ pub fn export(dir: &LeagueDir, player: &str, out: &Path) -> Result<()> {
         );
     };
     let src = dir.root.join(rel);
-    let got = crate::util::sha256_file(&src.join("meta.json"))
+    let got = t2e_core::util::sha256_file(&src.join("meta.json"))
         .with_context(|| format!("{}: meta.json missing", src.display()))?;
     if &got != meta_sha {
         bail!("{}: meta.json does not match the store's sha256: refusing to export a corrupt checkpoint", src.display());
     }
     // Loading verifies every weight file against meta.json and refuses NaN.
-    crate::nn::PolicySnapshot::load(&src, p.side)?;
+    t2e_learners::nn::PolicySnapshot::load(&src, p.side)?;
     if let Some(why) = &p.quarantined {
         tracing::info!(
             "note: {} is quarantined ({why}); its files verify against the hashes recorded with it, so they are exported",
@@ -49,9 +55,9 @@ pub fn export(dir: &LeagueDir, player: &str, out: &Path) -> Result<()> {
             dir.root.display()
         );
     }
-    crate::fs::write_dir_atomically(out, |tmp| {
+    t2e_core::fs::write_dir_atomically(out, |tmp| {
         let mut manifest = String::new();
-        crate::fs::copy_files(&src, tmp)?;
+        t2e_core::fs::copy_files(&src, tmp)?;
         // The config as the store holds it, byte for byte: what the league
         // ran with, in the words it was written in.
         let config_text = match store.stored_config()? {
@@ -87,7 +93,7 @@ pub fn export(dir: &LeagueDir, player: &str, out: &Path) -> Result<()> {
             let _ = writeln!(
                 manifest,
                 "{}  {n}",
-                crate::util::sha256_file(&tmp.join(&n))?
+                t2e_core::util::sha256_file(&tmp.join(&n))?
             );
         }
         std::fs::write(tmp.join("SHA256SUMS"), manifest)?;
@@ -117,7 +123,7 @@ pub fn best_validated(dir: &LeagueDir, side: Side) -> Result<BestValidated> {
         .into_iter()
         .map(|(name, _)| name)
         .collect();
-    let ranked = crate::selection::rank_validated(
+    let ranked = crate::rules::selection::rank_validated(
         &store.players()?,
         &store.held_out_results()?,
         side,
@@ -126,7 +132,7 @@ pub fn best_validated(dir: &LeagueDir, side: Side) -> Result<BestValidated> {
     )
     .map_err(|e| match e {
         // "Wait for the evaluator" would wait for ever.
-        crate::selection::NoChoice::NoneComplete { .. } if !cfg.evaluator.enabled => {
+        crate::rules::selection::NoChoice::NoneComplete { .. } if !cfg.evaluator.enabled => {
             anyhow::anyhow!(
                 "{}: no snapshot has a complete validation, and the league's evaluator is off ([evaluator] enabled = false), so none will; export a player by name",
                 dir.root.display()

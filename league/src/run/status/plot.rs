@@ -1,6 +1,12 @@
 //! `status --plot`: ratings over matches, the panel's curves over env steps, and the payoff heat map.
 
-use super::*;
+use super::report::{PanelRow, PlayerRow, StatusReport};
+use crate::run::dir::LeagueDir;
+use crate::run::open::open_read_only as open;
+use crate::store::Kind;
+use anyhow::Result;
+use std::path::Path;
+use t2e_core::env::Side;
 
 /// One line of the ratings plot.
 #[derive(Clone, Debug, PartialEq)]
@@ -156,9 +162,9 @@ pub fn panel_curves(players: &[PlayerRow], panel: &[PanelRow]) -> Vec<PanelCurve
 /// played), then the payoff matrix as a heat map (captor win rate, rows
 /// captors, columns targets).
 pub fn plot(dir: &LeagueDir, r: &StatusReport, path: &Path) -> Result<()> {
-    use crate::render::heat_map::{heat_map, HeatMap};
-    use crate::render::plot::{line_plot, palette, save_png, Series};
     use image::{Rgb, RgbImage};
+    use t2e_learners::render::heat_map::{heat_map, HeatMap};
+    use t2e_learners::render::plot::{line_plot, palette, save_png, Series};
     let (cfg, store) = open(dir)?;
     let mut history = Vec::new();
     for p in &r.players {
@@ -202,12 +208,12 @@ pub fn plot(dir: &LeagueDir, r: &StatusReport, path: &Path) -> Result<()> {
             &format!(
                 "panel: each snapshot's win % ({}, 1.0:{}, {} steps{})",
                 cfg.maps,
-                crate::eval::ratio_label(cfg.curriculum.stages[0]),
+                t2e_learners::eval::ratio_label(cfg.curriculum.stages[0]),
                 cfg.episode_length,
                 match &cfg.evaluator.validation_maps {
                     Some(v) => format!(
                         "; validation: {v}, {} steps",
-                        crate::eval::EvalSetting::default().episode_length
+                        t2e_learners::eval::EvalSetting::default().episode_length
                     ),
                     None => String::new(),
                 }

@@ -1,0 +1,234 @@
+//! A checkpoint as a player: the user's path resolved to a checkpoint
+//! folder (a run folder gives its named or newest checkpoint), the actor's
+//! weights read and verified once (`PolicySnapshot`), and the controller
+//! that plays them (`CheckpointController`). It stands above both the
+//! checkpoint format (checkpoint.rs) and the run folder (run_dir.rs), which
+//! know nothing of each other's callers.
+
+use super::checkpoint::{
+    load_into, read_checked, read_meta_hashed, verify_manifest, CheckpointError, CheckpointMeta,
+};
+use super::run_dir::{latest_checkpoint, RunDir, RunDirError};
+use super::{obs_tensors, pool_patch, Actor};
+use crate::env::{Action, Controller, Side, TrapEnv, PATCH_LEN};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use tch::{nn, Device, Kind, Tensor};
+
+/// Why a checkpoint cannot be loaded as a player: the folder itself, or the
+/// run folder it was looked up in.
+#[derive(Debug, thiserror::Error)]
+pub enum PolicyError {
+    #[error(transparent)]
+    Checkpoint(#[from] CheckpointError),
+    #[error(transparent)]
+    RunDir(#[from] RunDirError),
+}
+
+/// Resolves what a user wrote after `ckpt:`: a checkpoint folder, a file in
+/// one, or a run folder (its newest checkpoint of `side`).
+pub fn resolve_checkpoint(path: &Path, side: Side) -> Result<PathBuf, PolicyError> {
+    if path.is_file() {
+        let dir = path.parent().unwrap_or(Path::new("."));
+        if dir.join("meta.json").is_file() {
+            return Ok(dir.to_path_buf());
+        }
+        return Err(CheckpointError::NotInCheckpointFolder(path.to_path_buf()).into());
+    }
+    if path.join("meta.json").is_file() {
+        return Ok(path.to_path_buf());
+    }
+    if let Some(named) = RunDir::new(path).named_checkpoint(side)? {
+        return Ok(named);
+    }
+    let looks_like_a_checkpoint = path
+        .file_name()
+        .and_then(|n| n.to_str())
+        .is_some_and(|n| n.starts_with(&format!("{}-", side.name())));
+    if path.is_dir() && looks_like_a_checkpoint {
+        return Err(CheckpointError::Incomplete(path.to_path_buf()).into());
+    }
+    if path.is_dir() {
+        return latest_checkpoint(path, side).ok_or_else(|| {
+            CheckpointError::NoCheckpointInside {
+                path: path.to_path_buf(),
+                side: side.name(),
+            }
+            .into()
+        });
+    }
+    Err(CheckpointError::NoSuchCheckpoint(path.to_path_buf()).into())
+}
+
+/// A policy read from disk once and kept as plain tensors on the CPU; every
+/// controller built from it gets its own copy of the network (tch modules
+/// are not shared between threads).
+#[derive(Debug)]
+pub struct PolicySnapshot {
+    pub dir: PathBuf,
+    pub meta: CheckpointMeta,
+    /// SHA-256 of the `meta.json` bytes `meta` was read from.
+    pub meta_sha256: String,
+    weights: Vec<(String, Vec<i64>, Vec<f32>)>,
+}
+
+impl PolicySnapshot {
+    pub fn load(path: &Path, side: Side) -> Result<PolicySnapshot, PolicyError> {
+        let dir = resolve_checkpoint(path, side)?;
+        verify_manifest(&dir)?;
+        let (meta, meta_sha256) = read_meta_hashed(&dir)?;
+        let tensors = read_checked(&dir, &meta, "actor.safetensors")?;
+        let weights = tensors
+            .into_iter()
+            .map(|(n, t)| {
+                let t = t.to_kind(Kind::Float).contiguous();
+                let mut data = vec![0f32; t.numel()];
+                t.copy_data(&mut data, t.numel());
+                (n, t.size(), data)
+            })
+            .collect();
+        let snap = PolicySnapshot {
+            dir,
+            meta,
+            meta_sha256,
+            weights,
+        };
+        // Fail now, with the file's name, rather than inside an episode.
+        snap.build_actor(Device::Cpu)?;
+        Ok(snap)
+    }
+
+    /// A fresh network with these weights.
+    pub fn build_actor(&self, device: Device) -> Result<(nn::VarStore, Actor), CheckpointError> {
+        let mut vs = nn::VarStore::new(device);
+        let actor = Actor::new(&vs.root(), &self.meta.net, self.meta.vector_len());
+        let tensors: Vec<(String, Tensor)> = self
+            .weights
+            .iter()
+            .map(|(n, shape, data)| (n.clone(), Tensor::from_slice(data).view(shape.as_slice())))
+            .collect();
+        load_into(&mut vs, &tensors, &self.dir.join("actor.safetensors"))?;
+        vs.freeze();
+        Ok((vs, actor))
+    }
+}
+
+/// A checkpoint playing one side, greedily (the most likely action), as in
+/// the paper's evaluation, or sampling its actions (`sampling`).
+pub struct CheckpointController {
+    snapshot: Arc<PolicySnapshot>,
+    /// Some when actions are sampled: drawn afresh from each episode's seed,
+    /// so the same seed plays the same episode.
+    sampler: Option<ChaCha8Rng>,
+    _vs: nn::VarStore,
+    actor: Actor,
+    hidden: Option<Tensor>,
+    vectors: Vec<f32>,
+    patch: Vec<u8>,
+    patches: Vec<u8>,
+}
+
+impl CheckpointController {
+    pub fn new(snapshot: Arc<PolicySnapshot>) -> Result<CheckpointController, CheckpointError> {
+        let (vs, actor) = snapshot.build_actor(Device::Cpu)?;
+        Ok(CheckpointController {
+            snapshot,
+            sampler: None,
+            _vs: vs,
+            actor,
+            hidden: None,
+            vectors: Vec::new(),
+            patch: vec![0; PATCH_LEN],
+            patches: Vec::new(),
+        })
+    }
+}
+
+impl CheckpointController {
+    /// Samples each action from the policy instead of taking the most likely.
+    pub fn sampling(mut self) -> CheckpointController {
+        self.sampler = Some(ChaCha8Rng::seed_from_u64(0));
+        self
+    }
+}
+
+impl Controller for CheckpointController {
+    fn name(&self) -> String {
+        let how = if self.sampler.is_some() {
+            "sample"
+        } else {
+            "ckpt"
+        };
+        format!("{how}:{}", self.snapshot.dir.display())
+    }
+
+    fn reset(&mut self, _env: &TrapEnv, seed: u64) {
+        self.hidden = None;
+        if let Some(rng) = &mut self.sampler {
+            // Apart from the streams the environment draws from the seed.
+            *rng = ChaCha8Rng::seed_from_u64(seed ^ 0x5a4d_504c_4520_6163);
+        }
+    }
+
+    fn act(&mut self, env: &TrapEnv, side: Side, out: &mut [Action]) {
+        let agents = side.agents(env.num_captors());
+        let n = agents.len();
+        // Its own inputs, whatever the env's: a policy trained with sight
+        // sees with it in any env.
+        let net = &self.snapshot.meta.net;
+        let vl = self.snapshot.meta.vector_len();
+        let pl = net.input_len();
+        self.vectors.resize(n * vl, 0.0);
+        self.patches.resize(n * pl, 0);
+        for (row, i) in agents.enumerate() {
+            env.write_observation_with(
+                net.sight,
+                i,
+                &mut self.vectors[row * vl..(row + 1) * vl],
+                &mut self.patch,
+            );
+            pool_patch(
+                &self.patch,
+                net.patch_pool as usize,
+                &mut self.patches[row * pl..(row + 1) * pl],
+            );
+        }
+        let h = self.hidden.take().unwrap_or_else(|| {
+            Tensor::zeros([n as i64, self.actor.hidden], (Kind::Float, Device::Cpu))
+        });
+        let (p, v) = obs_tensors(
+            &self.patches,
+            &self.vectors,
+            n,
+            1,
+            net.input_side(),
+            Device::Cpu,
+        );
+        let (logits, h) = tch::no_grad(|| self.actor.step(&p, &v, &h));
+        // A checkpoint's prior is validated to be a target's (one robot).
+        let logits = if net.heuristic_prior > 0.0 && side == Side::Target {
+            let hint = Tensor::from_slice(&[super::prior::target_hint(env)]);
+            super::prior::add_prior(logits, &hint, net.heuristic_prior)
+        } else {
+            logits
+        };
+        self.hidden = Some(h);
+        if let Some(rng) = &mut self.sampler {
+            let probs = logits.softmax(-1, Kind::Float);
+            let mut p = vec![0f32; n * Action::COUNT];
+            probs.copy_data(&mut p, n * Action::COUNT);
+            for (o, row) in out.iter_mut().zip(p.chunks_exact(Action::COUNT)) {
+                *o = Action::from_index(super::sample(row, rng));
+            }
+            return;
+        }
+        let best = logits.argmax(1, false);
+        let mut idx = vec![0i64; n];
+        best.copy_data(&mut idx, n);
+        for (o, a) in out.iter_mut().zip(idx) {
+            *o = Action::from_index(a as usize);
+        }
+    }
+}

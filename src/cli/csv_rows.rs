@@ -1,0 +1,16 @@
+//! The CSV files this program writes and reads back (training metrics,
+//! periodic evaluations).
+
+/// The rows of a CSV file this program wrote (none if it does not exist
+/// yet); a malformed row is an error naming the file.
+pub fn read_csv<T: serde::de::DeserializeOwned>(path: &std::path::Path) -> anyhow::Result<Vec<T>> {
+    use anyhow::Context;
+    if !path.exists() {
+        return Ok(Vec::new());
+    }
+    let mut r =
+        csv::Reader::from_path(path).with_context(|| format!("cannot read {}", path.display()))?;
+    r.deserialize()
+        .collect::<Result<Vec<T>, _>>()
+        .with_context(|| format!("{}: malformed row", path.display()))
+}
