@@ -17,7 +17,7 @@
 //! - Loading verifies each weight file against its hash in `meta.json` and
 //!   refuses non-finite weights: a flipped byte or a NaN never plays.
 
-use super::NetConfig;
+use super::config::NetConfig;
 use crate::algorithm::Algorithm;
 use crate::env::{EnvConfig, Side, Sight};
 use crate::fs::{write_dir_atomically, write_new_dir_atomically, FsError, Written};

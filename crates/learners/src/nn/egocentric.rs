@@ -45,7 +45,7 @@ impl EgocentricVector {
     /// `sight`: the numbers after each robot's 5 + 5N (wall rays, already
     /// in the robot's frame and in [0, 1]), appended as they are.
     pub(crate) fn new(vector_len: i64, agents: i64, sight: usize) -> EgocentricVector {
-        let (per, n) = super::vector_layout(vector_len, agents, sight as i64);
+        let (per, n) = super::vector::vector_layout(vector_len, agents, sight as i64);
         let own = std::array::from_fn(|k| {
             Tensor::from_slice(&(0..agents).map(|a| a * per + k as i64).collect::<Vec<_>>())
         });

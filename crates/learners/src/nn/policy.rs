@@ -8,8 +8,10 @@
 use super::checkpoint::{
     load_into, read_checked, read_meta_hashed, verify_manifest, CheckpointError, CheckpointMeta,
 };
+use super::net::{obs_tensors, Actor};
 use super::run_dir::{latest_checkpoint, RunDir, RunDirError};
-use super::{obs_tensors, pool_patch, Actor};
+use super::seeding::sample;
+use crate::env::features::pool_patch;
 use crate::env::{Action, Controller, Side, TrapEnv, PATCH_LEN};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -220,7 +222,7 @@ impl Controller for CheckpointController {
             let mut p = vec![0f32; n * Action::COUNT];
             probs.copy_data(&mut p, n * Action::COUNT);
             for (o, row) in out.iter_mut().zip(p.chunks_exact(Action::COUNT)) {
-                *o = Action::from_index(super::sample(row, rng));
+                *o = Action::from_index(sample(row, rng));
             }
             return;
         }

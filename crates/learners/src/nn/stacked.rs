@@ -12,7 +12,10 @@
 //! Numerically this is the same network as `Actor::step` (a test checks it
 //! to 1e-5 against each opponent's own pass).
 
-use super::{Actor, EgocentricVector, NetConfig, ScaledVector, VectorIn};
+use super::config::{NetConfig, VectorInput};
+use super::egocentric::EgocentricVector;
+use super::net::{Actor, VectorIn};
+use super::vector::ScaledVector;
 use crate::env::Action;
 use tch::{Kind, Tensor};
 
@@ -160,15 +163,17 @@ impl StackedActors {
             input_side: first.net.input_side() as i64,
             vector_len: first.vector_len,
             vector_input: match first.net.vector_input {
-                super::VectorInput::LayerNorm => StackedVectorIn::LayerNorm,
-                super::VectorInput::Scaled => StackedVectorIn::Scaled(ScaledVector::new(
+                VectorInput::LayerNorm => StackedVectorIn::LayerNorm,
+                VectorInput::Scaled => StackedVectorIn::Scaled(ScaledVector::new(
                     first.vector_len,
                     1,
                     first.net.sight.len(),
                 )),
-                super::VectorInput::Egocentric => StackedVectorIn::Egocentric(
-                    EgocentricVector::new(first.vector_len, 1, first.net.sight.len()),
-                ),
+                VectorInput::Egocentric => StackedVectorIn::Egocentric(EgocentricVector::new(
+                    first.vector_len,
+                    1,
+                    first.net.sight.len(),
+                )),
             },
             tensors,
         })

@@ -1,7 +1,7 @@
 //! MADDPG's settings table (`[captors.maddpg]`, `[target.maddpg]`), with
 //! its defaults and the checks that name each field.
 
-use super::check_max_bad_updates;
+use super::bad_updates::check_max_bad_updates;
 use super::replay::{check_replay, ReplayConfig, ReplaySettings};
 use crate::error::{in_interval, ConfigError};
 use crate::nn::NetConfig;

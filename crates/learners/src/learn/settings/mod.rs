@@ -3,6 +3,7 @@
 //! `net`, `shaping`). A leaf of the learn floor: the algorithms read these
 //! structs, and nothing here knows an algorithm's code.
 
+mod bad_updates;
 pub mod maac;
 pub mod maddpg;
 pub mod ppo;
@@ -13,6 +14,7 @@ use crate::algorithm::Algorithm;
 use crate::controllers::ControllerSpec;
 use crate::error::ConfigError;
 use crate::nn::NetConfig;
+pub use bad_updates::check_max_bad_updates;
 pub use maac::MaacConfig;
 pub use maddpg::MaddpgConfig;
 pub use ppo::PpoConfig;
@@ -180,10 +182,4 @@ impl<D: SideDefaults> SideConfig<D> {
             defaults: PhantomData,
         }
     }
-}
-
-/// Every learner's `max_bad_updates`: updates undone in a row before
-/// training stops, at least one.
-pub fn check_max_bad_updates(n: u32) -> Result<(), ConfigError> {
-    crate::error::in_range("max_bad_updates", n, 1..=u32::MAX, "must be at least 1")
 }

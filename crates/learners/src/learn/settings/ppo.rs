@@ -1,7 +1,7 @@
 //! PPO's settings table (`[captors.ppo]`, `[target.ppo]`), shared by MAPPO
 //! and IPPO, with the paper's defaults and the checks that name each field.
 
-use super::check_max_bad_updates;
+use super::bad_updates::check_max_bad_updates;
 use crate::error::{in_interval, in_range, ConfigError};
 use serde::{Deserialize, Serialize};
 

@@ -6,7 +6,7 @@ use super::super::acting::{gather_side, gather_worlds, sample};
 use super::super::shaping::shaping_term;
 use super::hooks::RolloutHooks;
 use super::metrics::RolloutTally;
-use super::{LearnerSide, Trainer};
+use super::trainer::{LearnerSide, Trainer};
 use crate::env::{Action, VecEnv};
 use crate::nn::obs_tensors;
 use crate::nn::prior::{add_prior, target_hint};

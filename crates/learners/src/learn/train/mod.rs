@@ -18,7 +18,10 @@ mod collect;
 mod hooks;
 mod metrics;
 mod save;
+mod trainer;
 pub use save::SideHandle;
+pub use trainer::Trainer;
+use trainer::LearnerSide;
 
 pub use super::config::{
     check_rollout, DeviceChoice, Play, SideConfig, SideDefaults, TrainConfig, TrainDefaults,
@@ -42,41 +45,6 @@ use std::path::Path;
 use std::sync::Arc;
 use std::time::Instant;
 use tch::{Device, Kind, Tensor};
-
-/// One learning side during training.
-pub(super) struct LearnerSide {
-    side: Side,
-    learner: Box<dyn Learner>,
-    rollout: Rollout,
-    team: usize,
-    rows: usize,
-    actor_h: Tensor,
-    critic_h: Tensor,
-    /// 0 for rows whose world just started an episode.
-    next_mask: Vec<f32>,
-    /// Updates undone in a row because they were not finite.
-    bad_updates: u32,
-    /// (phi's signed weight for this side, the side's gamma) when it shapes.
-    shaping: Option<(f32, f64)>,
-}
-
-pub struct Trainer {
-    pub cfg: TrainConfig,
-    pub device: Device,
-    venv: VecEnv,
-    learners: Vec<LearnerSide>,
-    rng: ChaCha8Rng,
-    actions: Vec<Action>,
-    pub iteration: u64,
-    pub env_steps: u64,
-    /// Training time of earlier segments of a resumed run.
-    pub wall_s: f64,
-    /// A wall-clock budget for this invocation (`train --for`): from
-    /// `wall_s` = .0, .1 seconds of training. Schedules (`lr_anneal`) then
-    /// end with whichever budget runs out first, steps or seconds.
-    clock_budget: Option<(f64, f64)>,
-    config_hash: String,
-}
 
 fn mix_seed(seed: u64, iteration: u64) -> u64 {
     episode_seed(seed, usize::MAX, iteration)

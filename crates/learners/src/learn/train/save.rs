@@ -3,7 +3,7 @@
 //! as a folder, as a new labelled folder, or put back to a checkpoint.
 
 use super::super::persist::{self, RunDir, RunState};
-use super::{LearnerSide, Trainer};
+use super::trainer::{LearnerSide, Trainer};
 use crate::env::Side;
 use crate::nn::checkpoint::{checkpoint_name, code_version, CheckpointMeta, FORMAT};
 use anyhow::{Context, Result};
