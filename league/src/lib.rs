@@ -57,5 +57,5 @@ pub use rules::{
 };
 pub use run::{
     child, dir, evaluator, exploit, exploit_key, learner, manager, manager_lease, open, opponents,
-    panels, pool, preflight, process, seats, status, worker,
+    panels, pool, preflight, process, seats, status, view, worker,
 };

@@ -1,12 +1,14 @@
 //! The league's subcommands: `run` (the manager), `status`, `export`, and
 //! the hidden `league-learner` the manager spawns.
 
+use super::progress::Bars;
 use crate::env::Side;
 use crate::league::child::{self, ChildCommand};
 use crate::league::dir::LeagueDir;
 use crate::league::players::Role;
 use crate::league::store::StoreUrl;
 use crate::league::supervision::{CannotStart, Outcome};
+use crate::league::view::{Quiet, View};
 use crate::league::worker::WorkerOptions;
 use crate::league::{learner, manager, process, status};
 use anyhow::{bail, Context, Result};
@@ -243,7 +245,13 @@ pub fn run(args: RunArgs) -> Result<()> {
         if args.pool.is_some() || args.workers.is_some() {
             bail!("--pool and --workers go with --store URL (a league whose seats run on workers)");
         }
-        return manager::run(&LeagueDir::new(dir), args.config.as_deref(), run_for, &STOP);
+        return manager::run(
+            &LeagueDir::new(dir),
+            args.config.as_deref(),
+            run_for,
+            &STOP,
+            &Bars::default(),
+        );
     };
     let url = StoreUrl::parse(store).map_err(anyhow::Error::msg)?;
     let Some(pool) = &args.pool else {
@@ -280,7 +288,14 @@ pub fn run(args: RunArgs) -> Result<()> {
         local: args.workers.unwrap_or(seats),
         logs: dir.join("logs"),
     };
-    manager::run_with(&league, args.config.as_deref(), run_for, &STOP, &launch)
+    manager::run_with(
+        &league,
+        args.config.as_deref(),
+        run_for,
+        &STOP,
+        &launch,
+        &Bars::default(),
+    )
 }
 
 /// Where status, export and exploit look for a league without --dir.
@@ -566,7 +581,12 @@ pub fn exploit(args: ExploitArgs) -> Result<()> {
         STOP.store(true, Ordering::SeqCst)
     })
     .context("cannot install the Ctrl-C handler")?;
-    match exploit::run(&dir, &args.player, &opts, &STOP)? {
+    let view: Box<dyn View> = if args.quiet {
+        Box::new(Quiet)
+    } else {
+        Box::new(Bars::default())
+    };
+    match exploit::run(&dir, &args.player, &opts, &STOP, view.as_ref())? {
         ExploitOutcome::Recorded {
             rows,
             player,

@@ -13,6 +13,7 @@ pub mod league;
 pub mod logging;
 pub mod maps;
 pub mod periodic_eval;
+mod progress;
 pub mod render;
 pub mod status_text;
 pub mod table;

@@ -23,28 +23,15 @@ use crate::run::manager_lease::ManagerGuard;
 use crate::run::open::{plan_start, StartPlan};
 use crate::run::pool::{ensure_members, reconcile};
 use crate::run::process::{interrupt, lock_holder, spawn, try_lock, Ended, Role, Supervised};
+use crate::run::view::{SeatProgress, View};
 use crate::store::Store;
 use anyhow::{bail, Context, Result};
-use indicatif::{MultiProgress, ProgressBar, ProgressStyle};
 use std::fs::File;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 use t2e_core::env::Side;
 use t2e_core::fs::write_file_atomically;
-
-/// Prints a line above the progress bars on a terminal, and plainly where
-/// stderr is redirected (indicatif draws nothing there, lines included).
-fn say(multi: &MultiProgress, line: impl AsRef<str>) {
-    if multi.is_hidden() {
-        // Not eprintln!: a redirected stderr on a full disk would panic the
-        // manager, the one process left to say what happened.
-        use std::io::Write;
-        let _ = writeln!(std::io::stderr(), "{}", line.as_ref());
-    } else {
-        multi.println(line.as_ref()).ok();
-    }
-}
 
 /// Starts or resumes the league in `dir` and runs it to its end. Every
 /// check (`open::plan_start`) passes before anything is written.
@@ -63,8 +50,9 @@ pub fn run(
     config: Option<&Path>,
     run_for: Option<Duration>,
     stop: &AtomicBool,
+    view: &dyn View,
 ) -> Result<()> {
-    run_with(dir, config, run_for, stop, &Launch::Direct)
+    run_with(dir, config, run_for, stop, &Launch::Direct, view)
 }
 
 /// `run`, with the seats run as `launch` says.
@@ -74,6 +62,7 @@ pub fn run_with(
     run_for: Option<Duration>,
     stop: &AtomicBool,
     launch: &Launch,
+    view: &dyn View,
 ) -> Result<()> {
     let (plan, _lock, early) = {
         // The lock comes first (two managers must not both decide), but a
@@ -171,7 +160,7 @@ pub fn run_with(
         }
     };
     let result = run_league(
-        dir, &cfg, &store, league_id, &mut guard, run_for, stop, launch,
+        dir, &cfg, &store, league_id, &mut guard, run_for, stop, launch, view,
     );
     guard.release(&store);
     result
@@ -188,6 +177,7 @@ fn run_league(
     run_for: Option<Duration>,
     stop: &AtomicBool,
     launch: &Launch,
+    view: &dyn View,
 ) -> Result<()> {
     let cfg = cfg.clone();
     let league_id = match league_id {
@@ -250,22 +240,8 @@ fn run_league(
             dir, &cfg, store, &roles, *local, logs, run_for, stop, guard,
         );
     }
-    let multi = MultiProgress::new();
-    let bars: Vec<ProgressBar> = seats
-        .iter()
-        .map(|seat| {
-            let b = multi.add(ProgressBar::new(cfg.env_steps_per_learner));
-            b.set_style(
-                ProgressStyle::with_template(
-                    "{prefix:>12} [{bar:25}] {human_pos}/{human_len} steps {msg}",
-                )
-                .unwrap()
-                .progress_chars("=> "),
-            );
-            b.set_prefix(seat.name());
-            b
-        })
-        .collect();
+    let seat_names: Vec<String> = seats.iter().map(|s| s.name()).collect();
+    view.seats(&seat_names, cfg.env_steps_per_learner);
     let logs = dir.root.join("logs");
     let mut procs: Vec<Supervised> = roles.into_iter().map(Supervised::new).collect();
     let budget = CrashBudget::default();
@@ -280,10 +256,7 @@ fn run_league(
                 || deadline.is_some_and(|d| Instant::now() >= d))
         {
             stopping = true;
-            say(
-                &multi,
-                "stopping: each learner finishes its iteration and checkpoints",
-            );
+            view.say("stopping: each learner finishes its iteration and checkpoints");
             for p in &procs {
                 if let Some(c) = &p.child {
                     interrupt(c);
@@ -303,10 +276,9 @@ fn run_league(
                 match next {
                     Next::Finished => p.finished = true,
                     Next::Restart { after, cause } => {
-                        record_crash(&multi, &store, &p.role.name(), &cause, &crash_text);
-                        say(
-                            &multi,
-                            format!(
+                        record_crash(view, &store, &p.role.name(), &cause, &crash_text);
+                        view.say(
+                            &format!(
                                 "{} crashed ({cause}); restarting from its last checkpoint in {} s (log: {})",
                                 p.role.name(),
                                 after.as_secs(),
@@ -317,12 +289,12 @@ fn run_league(
                     }
                     Next::StopLeague { why } => {
                         if exit != Exit::CannotStart {
-                            record_crash(&multi, &store, &p.role.name(), &why, &crash_text);
+                            record_crash(view, &store, &p.role.name(), &why, &crash_text);
                         }
-                        say(
-                            &multi,
-                            format!("{why} (log: {})", p.role.log_path(&logs).display()),
-                        );
+                        view.say(&format!(
+                            "{why} (log: {})",
+                            p.role.log_path(&logs).display()
+                        ));
                         p.finished = true;
                         failure.get_or_insert(why);
                     }
@@ -351,13 +323,17 @@ fn run_league(
             // The bars are a view: a store that cannot be read for a moment
             // (busy, disk full) must not end the league.
             if let (Ok(beats), Ok(matches)) = (store.heartbeats(), store.match_count()) {
-                for (bar, p) in bars.iter().zip(&procs) {
-                    if let Some(b) = beats.iter().find(|b| b.learner == p.role.name()) {
-                        bar.set_position(b.env_steps);
-                        bar.set_message(format!(
-                            "| {:.0} steps/s | {} | {matches} matches",
-                            b.steps_per_s, b.state
-                        ));
+                for name in &seat_names {
+                    if let Some(b) = beats.iter().find(|b| &b.learner == name) {
+                        view.seat(
+                            name,
+                            &SeatProgress {
+                                env_steps: b.env_steps,
+                                steps_per_s: b.steps_per_s,
+                                state: b.state.to_string(),
+                                matches,
+                            },
+                        );
                     }
                 }
             }
@@ -367,9 +343,7 @@ fn run_league(
         }
         std::thread::sleep(Duration::from_millis(200));
     }
-    for b in &bars {
-        b.finish();
-    }
+    view.finish();
     let players = store.players()?.len();
     tracing::info!(
         "league {}: {} matches, {players} players; `t2e-league status --dir {}` shows the table",
@@ -385,12 +359,11 @@ fn run_league(
 
 /// Records a crash in the store; a store that cannot take it (disk full)
 /// is reported, and the league goes on.
-fn record_crash(multi: &MultiProgress, store: &Store, name: &str, cause: &str, tail: &str) {
+fn record_crash(view: &dyn View, store: &Store, name: &str, cause: &str, tail: &str) {
     if let Err(e) = store.record_crash(name, cause, tail) {
-        say(
-            multi,
-            format!("could not record the crash of {name} in the store: {e}"),
-        );
+        view.say(&format!(
+            "could not record the crash of {name} in the store: {e}"
+        ));
     }
 }
 

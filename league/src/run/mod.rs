@@ -18,4 +18,5 @@ pub mod preflight;
 pub mod process;
 pub mod seats;
 pub mod status;
+pub mod view;
 pub mod worker;

@@ -20,8 +20,8 @@ mod metrics;
 mod save;
 mod trainer;
 pub use save::SideHandle;
-pub use trainer::Trainer;
 use trainer::LearnerSide;
+pub use trainer::Trainer;
 
 pub use super::config::{
     check_rollout, DeviceChoice, Play, SideConfig, SideDefaults, TrainConfig, TrainDefaults,
