@@ -34,12 +34,15 @@
 //!   - `process`: spawning a seat's process, per-host locks, logs;
 //!   - `manager` (`t2e-league run`) and `manager_lease`; `worker`
 //!     (`t2e-league worker`); `seats`: the manager's side of a league
-//!     whose seats run on workers;
+//!     whose seats run on workers; `supervisor`: the one loop the three
+//!     run, each as a small policy;
 //!   - `learner`: one main learner's process; `opponents`: the opponents
 //!     it plays per world;
 //!   - `evaluator` and `panels`: every snapshot against a fixed panel;
 //!   - `exploit`: a fresh best response against one frozen player;
-//!   - `status`: what `status` and `export` read from a league.
+//!   - `status`: what `status` and `export` read from a league;
+//!   - `view`: what the manager and `exploit` show while they run, as
+//!     calls on a `View` the caller implements (the CLI's progress bars).
 //!
 //! Users keep the modules' short paths (`league::config`, `league::store`,
 //! `league::learner`) through the re-exports below; inside the crate each
@@ -57,5 +60,5 @@ pub use rules::{
 };
 pub use run::{
     child, dir, evaluator, exploit, exploit_key, learner, manager, manager_lease, open, opponents,
-    panels, pool, preflight, process, seats, status, view, worker,
+    panels, pool, preflight, process, seats, status, supervisor, view, worker,
 };

@@ -22,13 +22,14 @@ use crate::run::dir::{new_league_id, LeagueDir, LeagueIdentity};
 use crate::run::manager_lease::ManagerGuard;
 use crate::run::open::{plan_start, StartPlan};
 use crate::run::pool::{ensure_members, reconcile};
-use crate::run::process::{interrupt, lock_holder, spawn, try_lock, Ended, Role, Supervised};
+use crate::run::process::{lock_holder, spawn, try_lock, Ended, Role, Supervised};
+use crate::run::supervisor::{supervise, Pass, Policy};
 use crate::run::view::{SeatProgress, View};
 use crate::store::Store;
 use anyhow::{bail, Context, Result};
 use std::fs::File;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::AtomicBool;
 use std::time::{Duration, Instant};
 use t2e_core::env::Side;
 use t2e_core::fs::write_file_atomically;
@@ -242,107 +243,18 @@ fn run_league(
     }
     let seat_names: Vec<String> = seats.iter().map(|s| s.name()).collect();
     view.seats(&seat_names, cfg.env_steps_per_learner);
-    let logs = dir.root.join("logs");
-    let mut procs: Vec<Supervised> = roles.into_iter().map(Supervised::new).collect();
-    let budget = CrashBudget::default();
-    let deadline = run_for.map(|d| Instant::now() + d);
-    let mut stopping = false;
-    let mut failure: Option<String> = None;
-    let mut last_status = Instant::now() - Duration::from_secs(60);
-    loop {
-        if !stopping
-            && (stop.load(Ordering::SeqCst)
-                || failure.is_some()
-                || deadline.is_some_and(|d| Instant::now() >= d))
-        {
-            stopping = true;
-            view.say("stopping: each learner finishes its iteration and checkpoints");
-            for p in &procs {
-                if let Some(c) = &p.child {
-                    interrupt(c);
-                }
-            }
-        }
-        for p in &mut procs {
-            // Ctrl-C reaches the learners and the manager at once: a
-            // learner that stopped on it was asked to.
-            let asked = stopping || stop.load(Ordering::SeqCst);
-            if let Some(Ended {
-                exit,
-                next,
-                crash_text,
-            }) = p.reap(asked, budget)?
-            {
-                match next {
-                    Next::Finished => p.finished = true,
-                    Next::Restart { after, cause } => {
-                        record_crash(view, &store, &p.role.name(), &cause, &crash_text);
-                        view.say(
-                            &format!(
-                                "{} crashed ({cause}); restarting from its last checkpoint in {} s (log: {})",
-                                p.role.name(),
-                                after.as_secs(),
-                                p.role.log_path(&logs).display()
-                            ),
-                        );
-                        p.restart_at = Some(Instant::now() + after);
-                    }
-                    Next::StopLeague { why } => {
-                        if exit != Exit::CannotStart {
-                            record_crash(view, &store, &p.role.name(), &why, &crash_text);
-                        }
-                        view.say(&format!(
-                            "{why} (log: {})",
-                            p.role.log_path(&logs).display()
-                        ));
-                        p.finished = true;
-                        failure.get_or_insert(why);
-                    }
-                }
-            }
-            if p.child.is_none() && !p.finished && !stopping {
-                if let Some(at) = p.restart_at {
-                    if Instant::now() >= at {
-                        let (child, output) = spawn(dir, p.role, &logs, None)?;
-                        p.child = Some(child);
-                        p.output = Some(output);
-                        p.started = Instant::now();
-                        p.restart_at = None;
-                    }
-                }
-            }
-            if stopping && p.child.is_none() {
-                p.finished = true;
-            }
-        }
-        if let Err(e) = guard.renew(store) {
-            failure.get_or_insert(format!("{e:#}"));
-        }
-        if last_status.elapsed() >= Duration::from_secs(2) {
-            last_status = Instant::now();
-            // The bars are a view: a store that cannot be read for a moment
-            // (busy, disk full) must not end the league.
-            if let (Ok(beats), Ok(matches)) = (store.heartbeats(), store.match_count()) {
-                for name in &seat_names {
-                    if let Some(b) = beats.iter().find(|b| &b.learner == name) {
-                        view.seat(
-                            name,
-                            &SeatProgress {
-                                env_steps: b.env_steps,
-                                steps_per_s: b.steps_per_s,
-                                state: b.state.to_string(),
-                                matches,
-                            },
-                        );
-                    }
-                }
-            }
-        }
-        if procs.iter().all(|p| p.finished) {
-            break;
-        }
-        std::thread::sleep(Duration::from_millis(200));
-    }
+    let mut manager = Manager {
+        dir,
+        store,
+        guard,
+        view,
+        logs: dir.root.join("logs"),
+        procs: roles.into_iter().map(Supervised::new).collect(),
+        seat_names,
+        budget: CrashBudget::default(),
+        last_view: Instant::now() - Duration::from_secs(60),
+    };
+    let result = supervise(&mut manager, stop, run_for);
     view.finish();
     let players = store.players()?.len();
     tracing::info!(
@@ -351,9 +263,103 @@ fn run_league(
         store.match_count()?,
         dir.root.display()
     );
-    match failure {
-        Some(why) => bail!("{why}"),
-        None => Ok(()),
+    result
+}
+
+/// The manager of a league on one host: its seats are its own children.
+struct Manager<'a> {
+    dir: &'a LeagueDir,
+    store: &'a Store,
+    guard: &'a mut ManagerGuard,
+    view: &'a dyn View,
+    logs: PathBuf,
+    procs: Vec<Supervised>,
+    seat_names: Vec<String>,
+    budget: CrashBudget,
+    last_view: Instant,
+}
+
+impl Policy for Manager<'_> {
+    fn interrupt(&mut self) {
+        self.view
+            .say("stopping: each learner finishes its iteration and checkpoints");
+        self.procs.iter().for_each(Supervised::interrupt);
+    }
+
+    fn pass(&mut self, pass: &mut Pass) -> Result<()> {
+        for p in &mut self.procs {
+            if let Some(Ended {
+                exit,
+                next,
+                crash_text,
+            }) = p.reap(pass.asked, self.budget)?
+            {
+                let log = p.role.log_path(&self.logs);
+                match next {
+                    Next::Finished => p.finished = true,
+                    Next::Restart { after, cause } => {
+                        record_crash(self.view, self.store, &p.role.name(), &cause, &crash_text);
+                        self.view.say(&format!(
+                            "{} crashed ({cause}); restarting from its last checkpoint in {} s (log: {})",
+                            p.role.name(),
+                            after.as_secs(),
+                            log.display()
+                        ));
+                        p.restart_at = Some(Instant::now() + after);
+                    }
+                    Next::StopLeague { why } => {
+                        if exit != Exit::CannotStart {
+                            record_crash(self.view, self.store, &p.role.name(), &why, &crash_text);
+                        }
+                        self.view.say(&format!("{why} (log: {})", log.display()));
+                        p.finished = true;
+                        pass.fail(why);
+                    }
+                }
+            }
+            p.restart_when_due(pass.stopping, |role| {
+                spawn(self.dir, role, &self.logs, None)
+            })?;
+            if pass.stopping && p.child.is_none() {
+                p.finished = true;
+            }
+        }
+        if let Err(e) = self.guard.renew(self.store) {
+            pass.fail(format!("{e:#}"));
+        }
+        if self.last_view.elapsed() >= Duration::from_secs(2) {
+            self.last_view = Instant::now();
+            self.show_seats();
+        }
+        Ok(())
+    }
+
+    fn through(&self, _stopping: bool) -> bool {
+        self.procs.iter().all(|p| p.finished)
+    }
+}
+
+impl Manager<'_> {
+    /// The seats' progress from their heartbeats. A view only: a store
+    /// that cannot be read for a moment (busy, disk full) must not end the
+    /// league.
+    fn show_seats(&self) {
+        let (Ok(beats), Ok(matches)) = (self.store.heartbeats(), self.store.match_count()) else {
+            return;
+        };
+        for name in &self.seat_names {
+            if let Some(b) = beats.iter().find(|b| &b.learner == name) {
+                self.view.seat(
+                    name,
+                    &SeatProgress {
+                        env_steps: b.env_steps,
+                        steps_per_s: b.steps_per_s,
+                        state: b.state.to_string(),
+                        matches,
+                    },
+                );
+            }
+        }
     }
 }
 

@@ -18,5 +18,6 @@ pub mod preflight;
 pub mod process;
 pub mod seats;
 pub mod status;
+pub mod supervisor;
 pub mod view;
 pub mod worker;

@@ -114,6 +114,33 @@ impl Supervised {
         }))
     }
 
+    /// Starts it again with `start` once its back-off has passed; nothing
+    /// starts while its supervisor is stopping.
+    pub fn restart_when_due(
+        &mut self,
+        stopping: bool,
+        start: impl FnOnce(Role) -> Result<(Child, Output)>,
+    ) -> Result<()> {
+        if self.child.is_some() || self.finished || stopping {
+            return Ok(());
+        }
+        if self.restart_at.is_some_and(|at| Instant::now() >= at) {
+            let (child, output) = start(self.role)?;
+            self.child = Some(child);
+            self.output = Some(output);
+            self.started = Instant::now();
+            self.restart_at = None;
+        }
+        Ok(())
+    }
+
+    /// Asks its child, if it runs, to stop.
+    pub fn interrupt(&self) {
+        if let Some(c) = &self.child {
+            interrupt(c);
+        }
+    }
+
     /// A process to start now.
     pub fn new(role: Role) -> Supervised {
         Supervised {

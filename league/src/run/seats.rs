@@ -7,11 +7,12 @@
 use crate::rules::config::LeagueConfig;
 use crate::run::dir::LeagueDir;
 use crate::run::process::Role;
+use crate::run::supervisor::{supervise, Pass, Policy};
 use crate::store::{SeatRow, SeatState, Store, StoreUrl};
-use anyhow::{bail, Context, Result};
+use anyhow::{Context, Result};
 use std::path::Path;
 use std::process::Child;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::AtomicBool;
 use std::time::{Duration, Instant};
 
 /// Starts a worker for the league in `dir` as a child of this process.
@@ -66,110 +67,136 @@ pub fn supervise_workers(
     for i in 0..local {
         workers.push(Some(spawn_worker(dir, logs, i)?));
     }
-    let deadline = run_for.map(|d| Instant::now() + d);
-    let mut stopping = false;
-    let mut failure: Option<String> = None;
-    let mut last_look = Instant::now() - Duration::from_secs(60);
-    let mut last_line = String::new();
-    loop {
-        if !stopping
-            && (stop.load(Ordering::SeqCst)
-                || failure.is_some()
-                || deadline.is_some_and(|d| Instant::now() >= d))
-        {
-            stopping = true;
-            tracing::info!("stopping: each worker's seats finish their iteration and checkpoint");
-            workers
-                .iter()
-                .flatten()
-                .for_each(crate::run::process::interrupt);
-        }
-        let mut all_done = false;
-        if last_look.elapsed() >= Duration::from_secs(1) {
-            last_look = Instant::now();
-            if let Err(e) = guard.renew(store) {
-                failure.get_or_insert(format!("{e:#}"));
-            }
-            // A store out of reach for a moment is waited out (`Store::run`).
-            let mut seats = store.seats()?;
-            // A seat row deleted by hand would leave its learner unrun and
-            // the other one waiting for it forever: define it again, open,
-            // and a worker resumes it from its checkpoint.
-            let missing: Vec<String> = names
-                .iter()
-                .filter(|n| !seats.iter().any(|s| &s.name == *n))
-                .cloned()
-                .collect();
-            if !missing.is_empty() && !stopping {
-                store.define_seats(&missing)?;
-                tracing::warn!(
-                    "seat {} was missing from {} (its row deleted?); defined it again, open for a worker",
-                    missing.join(", "),
-                    store.url()
-                );
-                seats = store.seats()?;
-            }
-            if let Some(s) = seats.iter().find(|s| !names.contains(&s.name)) {
-                failure.get_or_insert(format!(
-                    "{}: holds seat {}, which is not one of this league's ({}); remove its row, or run the manager that defined it",
-                    store.url(),
-                    s.name,
-                    names.join(", ")
-                ));
-            }
-            if let Some(why) = SeatRow::first_failure(&seats) {
-                failure.get_or_insert(why);
-            }
-            all_done = seats.iter().all(|s| s.state == SeatState::Done);
-            let line = seats
-                .iter()
-                .map(|s| {
-                    format!(
-                        "{} {}{}",
-                        s.name,
-                        s.state.name(),
-                        match (&s.host, s.state) {
-                            (Some(h), SeatState::Open) if s.holder.is_some() => format!(" on {h}"),
-                            _ => String::new(),
-                        }
-                    )
-                })
-                .collect::<Vec<_>>()
-                .join(", ");
-            if line != last_line {
-                tracing::info!("seats: {line}");
-                last_line = line;
-            }
-        }
-        for (i, slot) in workers.iter_mut().enumerate() {
-            if let Some(c) = slot {
-                if let Some(status) = c.try_wait()? {
-                    *slot = None;
-                    if !stopping && !all_done && !status.success() {
-                        tracing::warn!(
-                            "worker {i} exited ({status}); starting another (log: {})",
-                            logs.join(format!("worker-{i}.log")).display()
-                        );
-                        std::thread::sleep(Duration::from_secs(1));
-                        *slot = Some(spawn_worker(dir, logs, i)?);
-                    }
-                }
-            }
-        }
-        let running = workers.iter().flatten().count();
-        if (all_done || stopping) && running == 0 {
-            break;
-        }
-        std::thread::sleep(Duration::from_millis(200));
-    }
+    let mut seats = Seats {
+        dir,
+        store,
+        guard,
+        logs,
+        names,
+        workers,
+        all_done: false,
+        last_look: Instant::now() - Duration::from_secs(60),
+        last_line: String::new(),
+    };
+    let result = supervise(&mut seats, stop, run_for);
     tracing::info!(
         "league {}: {} matches, {} players; `t2e-league status --store URL` shows the table",
         cfg.name,
         store.match_count()?,
         store.players()?.len()
     );
-    match failure {
-        Some(why) => bail!("{why}"),
-        None => Ok(()),
+    result
+}
+
+/// The manager of a league on workers: it follows the seats in the store
+/// and keeps its local workers running.
+struct Seats<'a> {
+    dir: &'a LeagueDir,
+    store: &'a Store,
+    guard: &'a mut crate::run::manager_lease::ManagerGuard,
+    logs: &'a Path,
+    names: Vec<String>,
+    workers: Vec<Option<Child>>,
+    all_done: bool,
+    last_look: Instant,
+    last_line: String,
+}
+
+impl Policy for Seats<'_> {
+    fn interrupt(&mut self) {
+        tracing::info!("stopping: each worker's seats finish their iteration and checkpoint");
+        self.workers
+            .iter()
+            .flatten()
+            .for_each(crate::run::process::interrupt);
+    }
+
+    fn pass(&mut self, pass: &mut Pass) -> Result<()> {
+        if self.last_look.elapsed() >= Duration::from_secs(1) {
+            self.last_look = Instant::now();
+            if let Err(e) = self.guard.renew(self.store) {
+                pass.fail(format!("{e:#}"));
+            }
+            self.look(pass)?;
+        }
+        for (i, slot) in self.workers.iter_mut().enumerate() {
+            if let Some(c) = slot {
+                if let Some(status) = c.try_wait()? {
+                    *slot = None;
+                    if !pass.stopping && !self.all_done && !status.success() {
+                        tracing::warn!(
+                            "worker {i} exited ({status}); starting another (log: {})",
+                            self.logs.join(format!("worker-{i}.log")).display()
+                        );
+                        std::thread::sleep(Duration::from_secs(1));
+                        *slot = Some(spawn_worker(self.dir, self.logs, i)?);
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+
+    fn through(&self, stopping: bool) -> bool {
+        (self.all_done || stopping) && self.workers.iter().flatten().count() == 0
+    }
+}
+
+impl Seats<'_> {
+    /// Reads the seats: a failed one ends the league, a missing one is
+    /// defined again, their states go to the log when they change.
+    fn look(&mut self, pass: &mut Pass) -> Result<()> {
+        let (store, names) = (self.store, &self.names);
+        // A store out of reach for a moment is waited out (`Store::run`).
+        let mut seats = store.seats()?;
+        // A seat row deleted by hand would leave its learner unrun and
+        // the other one waiting for it forever: define it again, open,
+        // and a worker resumes it from its checkpoint.
+        let missing: Vec<String> = names
+            .iter()
+            .filter(|n| !seats.iter().any(|s| &s.name == *n))
+            .cloned()
+            .collect();
+        if !missing.is_empty() && !pass.stopping {
+            store.define_seats(&missing)?;
+            tracing::warn!(
+                "seat {} was missing from {} (its row deleted?); defined it again, open for a worker",
+                missing.join(", "),
+                store.url()
+            );
+            seats = store.seats()?;
+        }
+        if let Some(s) = seats.iter().find(|s| !names.contains(&s.name)) {
+            pass.fail(format!(
+                "{}: holds seat {}, which is not one of this league's ({}); remove its row, or run the manager that defined it",
+                store.url(),
+                s.name,
+                names.join(", ")
+            ));
+        }
+        if let Some(why) = SeatRow::first_failure(&seats) {
+            pass.fail(why);
+        }
+        self.all_done = seats.iter().all(|s| s.state == SeatState::Done);
+        let line = seats
+            .iter()
+            .map(|s| {
+                format!(
+                    "{} {}{}",
+                    s.name,
+                    s.state.name(),
+                    match (&s.host, s.state) {
+                        (Some(h), SeatState::Open) if s.holder.is_some() => format!(" on {h}"),
+                        _ => String::new(),
+                    }
+                )
+            })
+            .collect::<Vec<_>>()
+            .join(", ");
+        if line != self.last_line {
+            tracing::info!("seats: {line}");
+            self.last_line = line;
+        }
+        Ok(())
     }
 }

@@ -22,11 +22,12 @@
 use crate::rules::supervision::{CrashBudget, Exit, Next};
 use crate::run::dir::LeagueDir;
 use crate::run::open::open_process;
-use crate::run::process::{interrupt, spawn, Ended, Role, Supervised};
+use crate::run::process::{spawn, Ended, Role, Supervised};
+use crate::run::supervisor::{supervise, Pass, Policy};
 use crate::store::{SeatLease, SeatRow, SeatState, Store};
 use anyhow::{bail, Result};
 use std::path::PathBuf;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::AtomicBool;
 use std::time::{Duration, Instant};
 
 /// How a worker runs.
@@ -177,14 +178,6 @@ pub fn run_worker(dir: &LeagueDir, opts: &WorkerOptions, stop: &AtomicBool) -> R
         &crate::run::dir::new_league_id()[..8]
     );
     let lease_ms = opts.lease.as_millis() as i64;
-    let budget = CrashBudget::default();
-    let deadline = opts.run_for.map(|d| Instant::now() + d);
-    let mut held: Vec<Held> = Vec::new();
-    let mut stopping = false;
-    let mut failure: Option<String> = None;
-    let mut last_renewed = Instant::now();
-    let mut last_claim = Instant::now() - Duration::from_secs(60);
-    let mut claims = 0u64;
     tracing::info!(
         "worker {holder}: league {} ({}), pool {}, up to {} seats",
         opened.cfg.name,
@@ -192,68 +185,122 @@ pub fn run_worker(dir: &LeagueDir, opts: &WorkerOptions, stop: &AtomicBool) -> R
         dir.root.display(),
         opts.seats
     );
-    loop {
-        if !stopping
-            && (stop.load(Ordering::SeqCst)
-                || failure.is_some()
-                || deadline.is_some_and(|d| Instant::now() >= d))
-        {
-            stopping = true;
-            for h in &held {
-                if let Some(c) = &h.proc.child {
-                    interrupt(c);
-                }
-            }
+    let mut worker = Worker {
+        dir,
+        opts,
+        store: &store,
+        holder,
+        lease_ms,
+        budget: CrashBudget::default(),
+        held: Vec::new(),
+        every_seat_done: false,
+        last_renewed: Instant::now(),
+        last_claim: Instant::now() - Duration::from_secs(60),
+        claims: 0,
+    };
+    supervise(&mut worker, stop, opts.run_for)
+}
+
+/// A worker: the seats it holds, each a child process under its lease.
+struct Worker<'a> {
+    dir: &'a LeagueDir,
+    opts: &'a WorkerOptions,
+    store: &'a Store,
+    holder: String,
+    lease_ms: i64,
+    budget: CrashBudget,
+    held: Vec<Held>,
+    /// The league has nothing left for any worker.
+    every_seat_done: bool,
+    last_renewed: Instant,
+    last_claim: Instant,
+    claims: u64,
+}
+
+impl Policy for Worker<'_> {
+    fn interrupt(&mut self) {
+        for h in &self.held {
+            h.proc.interrupt();
         }
-        // Renew every third of the lease; a seat taken over, or a store out
-        // of reach for as long as the lease, ends its child here.
-        if last_renewed.elapsed() >= opts.lease / 3 {
-            let mut all_ok = true;
-            for h in &mut held {
-                match store.renew_lease(&h.lease, lease_ms) {
-                    Ok(true) => {}
-                    Ok(false) => {
-                        tracing::warn!(
-                            "worker {holder}: lost the lease of {} ({}); ending its process",
-                            h.lease.seat,
-                            why_lost(&store, &h.lease, &holder)
-                        );
-                        if let Some(mut c) = h.proc.child.take() {
-                            c.kill().ok();
-                            c.wait().ok();
-                        }
-                        h.proc.finished = true;
-                    }
-                    Err(e) => {
-                        all_ok = false;
-                        tracing::warn!("worker {holder}: cannot renew {}: {e}", h.lease.seat);
-                    }
-                }
-            }
-            if all_ok {
-                last_renewed = Instant::now();
-            } else if last_renewed.elapsed() >= opts.lease * 9 / 10 {
-                for h in &mut held {
+    }
+
+    fn pass(&mut self, pass: &mut Pass) -> Result<()> {
+        self.renew();
+        self.reap(pass)?;
+        self.held.retain(|h| !h.proc.finished);
+        if !pass.stopping
+            && self.held.len() < self.opts.seats
+            && self.last_claim.elapsed() >= Duration::from_secs(1)
+        {
+            self.last_claim = Instant::now();
+            self.claim(pass)?;
+        }
+        Ok(())
+    }
+
+    fn through(&self, stopping: bool) -> bool {
+        self.every_seat_done || (stopping && self.held.is_empty())
+    }
+}
+
+impl Worker<'_> {
+    /// Renews every third of the lease; a seat taken over, or a store out
+    /// of reach for as long as the lease, ends its child here.
+    fn renew(&mut self) {
+        let (opts, store, holder) = (self.opts, self.store, &self.holder);
+        if self.last_renewed.elapsed() < opts.lease / 3 {
+            return;
+        }
+        let mut all_ok = true;
+        for h in &mut self.held {
+            match store.renew_lease(&h.lease, self.lease_ms) {
+                Ok(true) => {}
+                Ok(false) => {
+                    tracing::warn!(
+                        "worker {holder}: lost the lease of {} ({}); ending its process",
+                        h.lease.seat,
+                        why_lost(store, &h.lease, holder)
+                    );
                     if let Some(mut c) = h.proc.child.take() {
-                        tracing::warn!(
-                            "worker {holder}: the store was out of reach for the lease's length; ending {} before another worker may take it",
-                            h.lease.seat
-                        );
                         c.kill().ok();
                         c.wait().ok();
                     }
                     h.proc.finished = true;
                 }
+                Err(e) => {
+                    all_ok = false;
+                    tracing::warn!("worker {holder}: cannot renew {}: {e}", h.lease.seat);
+                }
             }
         }
-        for h in &mut held {
+        if all_ok {
+            self.last_renewed = Instant::now();
+        } else if self.last_renewed.elapsed() >= opts.lease * 9 / 10 {
+            for h in &mut self.held {
+                if let Some(mut c) = h.proc.child.take() {
+                    tracing::warn!(
+                        "worker {holder}: the store was out of reach for the lease's length; ending {} before another worker may take it",
+                        h.lease.seat
+                    );
+                    c.kill().ok();
+                    c.wait().ok();
+                }
+                h.proc.finished = true;
+            }
+        }
+    }
+
+    /// Reaps the seats' processes, by the manager's rules, and restarts
+    /// those that crashed once their back-off has passed.
+    fn reap(&mut self, pass: &mut Pass) -> Result<()> {
+        let (dir, opts, store, holder) = (self.dir, self.opts, self.store, &self.holder);
+        for h in &mut self.held {
             let p = &mut h.proc;
-            let asked = stopping || stop.load(Ordering::SeqCst);
             if let Some(Ended {
                 exit,
                 next,
                 crash_text,
-            }) = p.reap(asked, budget)?
+            }) = p.reap(pass.asked, self.budget)?
             {
                 let name = p.role.name();
                 match next {
@@ -283,66 +330,55 @@ pub fn run_worker(dir: &LeagueDir, opts: &WorkerOptions, stop: &AtomicBool) -> R
                         store.finish_seat(&h.lease, SeatState::Failed, Some(&why))?;
                         tracing::info!("worker {holder}: {why}");
                         p.finished = true;
-                        failure.get_or_insert(why);
+                        pass.fail(why);
                     }
                 }
             }
-            if p.child.is_none() && !p.finished && !stopping {
-                if let Some(at) = p.restart_at {
-                    if Instant::now() >= at {
-                        let (child, output) = spawn(dir, p.role, &opts.logs, Some(&opts.host))?;
-                        p.child = Some(child);
-                        p.output = Some(output);
-                        p.started = Instant::now();
-                        p.restart_at = None;
-                    }
-                }
-            }
-            if stopping && p.child.is_none() && !p.finished {
+            p.restart_when_due(pass.stopping, |role| {
+                spawn(dir, role, &opts.logs, Some(&opts.host))
+            })?;
+            if pass.stopping && p.child.is_none() && !p.finished {
                 store.release_seat(&h.lease).ok();
                 p.finished = true;
             }
         }
-        held.retain(|h| !h.proc.finished);
-        if !stopping && held.len() < opts.seats && last_claim.elapsed() >= Duration::from_secs(1) {
-            last_claim = Instant::now();
-            let seats = store.seats()?;
-            if let Some(why) = SeatRow::first_failure(&seats) {
-                failure.get_or_insert(why);
-                continue;
-            }
-            if held.is_empty() && seats.iter().all(|s| s.state == SeatState::Done) {
-                tracing::info!("worker {holder}: every seat of the league is done");
-                return Ok(());
-            }
-            claims += 1;
-            let claim = format!("{holder}/{claims}");
-            if let Some(lease) = store.claim_seat(&claim, &opts.host, lease_ms)? {
-                let Some(role) = Role::from_name(&lease.seat) else {
-                    store.release_seat(&lease)?;
-                    bail!(
-                        "{}: seat {} is not one this build runs (a newer manager?)",
-                        store.url(),
-                        lease.seat
-                    );
-                };
-                tracing::info!(
-                    "worker {holder}: took {} (taken {} times so far)",
-                    lease.seat,
-                    lease.claims
+        Ok(())
+    }
+
+    /// Takes a free seat, if the league has one.
+    fn claim(&mut self, pass: &mut Pass) -> Result<()> {
+        let (store, holder) = (self.store, &self.holder);
+        let seats = store.seats()?;
+        if let Some(why) = SeatRow::first_failure(&seats) {
+            pass.fail(why);
+            return Ok(());
+        }
+        if self.held.is_empty() && seats.iter().all(|s| s.state == SeatState::Done) {
+            tracing::info!("worker {holder}: every seat of the league is done");
+            self.every_seat_done = true;
+            return Ok(());
+        }
+        self.claims += 1;
+        let claim = format!("{holder}/{}", self.claims);
+        if let Some(lease) = store.claim_seat(&claim, &self.opts.host, self.lease_ms)? {
+            let Some(role) = Role::from_name(&lease.seat) else {
+                store.release_seat(&lease)?;
+                bail!(
+                    "{}: seat {} is not one this build runs (a newer manager?)",
+                    store.url(),
+                    lease.seat
                 );
-                held.push(Held {
-                    lease,
-                    proc: Supervised::new(role),
-                });
-            }
-        }
-        if stopping && held.is_empty() {
-            return match failure {
-                Some(why) => bail!("{why}"),
-                None => Ok(()),
             };
+            tracing::info!(
+                "worker {holder}: took {} (taken {} times so far)",
+                lease.seat,
+                lease.claims
+            );
+            self.held.push(Held {
+                lease,
+                proc: Supervised::new(role),
+            });
         }
-        std::thread::sleep(Duration::from_millis(200));
+        Ok(())
     }
 }
