@@ -23,6 +23,7 @@ use crate::store::{BeatState, Kind, MatchRecord, NewPlayer, Player, Store};
 use anyhow::{bail, Context, Result};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
+use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 use t2e_core::env::{Action, Side, VecEnv};
@@ -520,6 +521,7 @@ fn resume_point(
     )
 }
 
+/// Trains the seat's learner to the league's budget, or until `stop`.
 fn train_learner(
     dir: &LeagueDir,
     cfg: &LeagueConfig,
@@ -529,153 +531,259 @@ fn train_learner(
     started: Started,
     stop: &AtomicBool,
 ) -> Result<Outcome> {
-    let side = seat.side;
-    let name = seat.name();
-    let Started {
-        mut trainer,
-        learner_id,
-    } = started;
-    let run_dir = dir.seat_dir(seat);
-    let initial = run_dir.join("initial");
-    let rules = SeatRules::of(cfg, seat);
-    let resets = rules.resets_after_snapshot;
-    if resets && !initial.join("meta.json").is_file() {
-        // What every reset returns to (written once, before any training).
-        trainer.side(side)?.save(&initial)?;
-    }
-    // A snapshot of its own whose row it did not live to add (killed between
-    // the folder and the row): into the pool before anything counts snapshots.
-    for (rel, adopted) in crate::run::pool::adopt_unrecorded(dir, store, league_id, Some(&name))? {
-        match adopted {
-            Ok(()) => {
-                tracing::warn!("{name}: adopted {rel}, a snapshot whose row it did not live to add")
-            }
-            Err(e) => tracing::warn!("{name}: left {rel} out of the pool ({e:#})"),
+    let mut run = LearnerRun::start(dir, cfg, store, league_id, seat, started)?;
+    while run.trainer.env_steps < cfg.env_steps_per_learner && !stop.load(Ordering::SeqCst) {
+        if !run.step(stop)? {
+            break;
         }
     }
-    let mut hooks = LeagueHooks::new(store, dir, cfg, seat, learner_id)?;
-    hooks.vector_steps = trainer.env_steps / cfg.num_envs as u64;
-    let mut last_snapshot = store
-        .players()?
-        .iter()
-        .filter(|p| p.parent == Some(learner_id))
-        .map(|p| p.env_steps)
-        .max()
-        .unwrap_or(0);
-    if resets && last_snapshot == trainer.env_steps && trainer.env_steps > 0 {
-        // Killed between its snapshot and its reset: reset now, or it would
-        // go on training the weights it just added to the pool.
-        trainer.side(side)?.reset_to(&initial)?;
-        save_learner(&trainer, store, dir, seat, learner_id)?;
-        tracing::info!(
-            "{name}: back to its initial weights (its last snapshot is its resume point)"
-        );
+    run.finish()
+}
+
+/// One run of a main learner in its seat, from its process's start to its
+/// end: `start` (the pool and the resets it may have missed), `step` (one
+/// iteration, then a snapshot or a checkpoint), `snapshot`, `reset`,
+/// `finish` (its checkpoint, last heartbeat and figures).
+struct LearnerRun<'a> {
+    dir: &'a LeagueDir,
+    cfg: &'a LeagueConfig,
+    store: &'a Store,
+    league_id: &'a str,
+    seat: Seat,
+    name: String,
+    rules: SeatRules,
+    trainer: Trainer,
+    learner_id: i64,
+    hooks: LeagueHooks<'a>,
+    /// What every reset returns to.
+    initial: PathBuf,
+    /// Env steps, wins and games at the last snapshot.
+    last_snapshot: u64,
+    wins_at_snapshot: u64,
+    games_at_snapshot: u64,
+    segment_start: Instant,
+    steps_at_start: u64,
+    own_inference: f64,
+    waited: f64,
+}
+
+impl<'a> LearnerRun<'a> {
+    fn start(
+        dir: &'a LeagueDir,
+        cfg: &'a LeagueConfig,
+        store: &'a Store,
+        league_id: &'a str,
+        seat: Seat,
+        started: Started,
+    ) -> Result<LearnerRun<'a>> {
+        let name = seat.name();
+        let Started {
+            mut trainer,
+            learner_id,
+        } = started;
+        let initial = dir.seat_dir(seat).join("initial");
+        let rules = SeatRules::of(cfg, seat);
+        if rules.resets_after_snapshot && !initial.join("meta.json").is_file() {
+            // What every reset returns to (written once, before any training).
+            trainer.side(seat.side)?.save(&initial)?;
+        }
+        // A snapshot of its own whose row it did not live to add (killed
+        // between the folder and the row): into the pool before anything
+        // counts snapshots.
+        for (rel, adopted) in
+            crate::run::pool::adopt_unrecorded(dir, store, league_id, Some(&name))?
+        {
+            match adopted {
+                Ok(()) => tracing::warn!(
+                    "{name}: adopted {rel}, a snapshot whose row it did not live to add"
+                ),
+                Err(e) => tracing::warn!("{name}: left {rel} out of the pool ({e:#})"),
+            }
+        }
+        let mut hooks = LeagueHooks::new(store, dir, cfg, seat, learner_id)?;
+        hooks.vector_steps = trainer.env_steps / cfg.num_envs as u64;
+        let last_snapshot = store
+            .players()?
+            .iter()
+            .filter(|p| p.parent == Some(learner_id))
+            .map(|p| p.env_steps)
+            .max()
+            .unwrap_or(0);
+        let mut run = LearnerRun {
+            dir,
+            cfg,
+            store,
+            league_id,
+            seat,
+            name,
+            rules,
+            trainer,
+            learner_id,
+            hooks,
+            initial,
+            last_snapshot,
+            wins_at_snapshot: 0,
+            games_at_snapshot: 0,
+            segment_start: Instant::now(),
+            steps_at_start: 0,
+            own_inference: 0.0,
+            waited: 0.0,
+        };
+        if run.rules.resets_after_snapshot
+            && run.last_snapshot == run.trainer.env_steps
+            && run.trainer.env_steps > 0
+        {
+            // Killed between its snapshot and its reset: reset now, or it
+            // would go on training the weights it just added to the pool.
+            run.reset()?;
+            tracing::info!(
+                "{}: back to its initial weights (its last snapshot is its resume point)",
+                run.name
+            );
+        }
+        run.hooks.assign_all(run.trainer.venv_mut())?;
+        run.store
+            .heartbeat(&run.name, BeatState::Training, run.trainer.env_steps, None)?;
+        (run.segment_start, run.steps_at_start) = (Instant::now(), run.trainer.env_steps);
+        Ok(run)
     }
-    hooks.assign_all(trainer.venv_mut())?;
-    let (mut wins_at_snapshot, mut games_at_snapshot) = (0u64, 0u64);
-    store.heartbeat(&name, BeatState::Training, trainer.env_steps, None)?;
-    let (segment_start, steps_at_start) = (Instant::now(), trainer.env_steps);
-    let mut own_inference = 0.0;
-    let mut waited = 0.0;
-    while trainer.env_steps < cfg.env_steps_per_learner && !stop.load(Ordering::SeqCst) {
-        if seat.keeps_pace() {
-            waited +=
-                wait_for_other_main(store, seat, trainer.env_steps, cfg.pace_env_steps, stop)?;
+
+    /// One iteration (after waiting for the other main learner when it
+    /// keeps pace), then a snapshot when the rule says so, else a
+    /// checkpoint when one is due. False: stopped while waiting.
+    fn step(&mut self, stop: &AtomicBool) -> Result<bool> {
+        if self.seat.keeps_pace() {
+            self.waited += wait_for_other_main(
+                self.store,
+                self.seat,
+                self.trainer.env_steps,
+                self.cfg.pace_env_steps,
+                stop,
+            )?;
             if stop.load(Ordering::SeqCst) {
-                break;
+                return Ok(false);
             }
         }
         let started = Instant::now();
-        let m = trainer.iterate_with(&mut hooks)?;
-        own_inference += m.time_inference;
-        let since = trainer.env_steps.saturating_sub(last_snapshot);
+        let m = self.trainer.iterate_with(&mut self.hooks)?;
+        self.own_inference += m.time_inference;
+        let since = self.trainer.env_steps.saturating_sub(self.last_snapshot);
         let (w, g) = (
-            hooks.wins - wins_at_snapshot,
-            hooks.games - games_at_snapshot,
+            self.hooks.wins - self.wins_at_snapshot,
+            self.hooks.games - self.games_at_snapshot,
         );
-        if should_snapshot(since, w, g, rules.snapshot) {
-            // The learner's own checkpoint first: a restart then resumes at
-            // or after this snapshot, so it never takes one under a name
-            // the pool already holds.
-            save_learner(&trainer, store, dir, seat, learner_id)?;
-            match add_snapshot(
-                &mut trainer,
-                store,
-                dir,
-                league_id,
-                seat,
-                learner_id,
-                hooks.curriculum.stage,
-            )? {
-                SnapshotOutcome::Added(snap) => {
-                    tracing::info!("{name}: snapshot {snap} joins the pool")
-                }
-                SnapshotOutcome::AlreadyInPool(snap) => tracing::info!(
-                    "{name}: {snap} is already in the pool (recorded before a restart); it stays as recorded"
-                ),
-                SnapshotOutcome::Blocked(snap) => tracing::warn!(
-                    "{name}: cannot add the snapshot {snap}: {} exists and is not a recorded member (put there by hand?); left alone, this snapshot is skipped",
-                    dir.players_dir().join(&snap).display()
-                ),
+        if should_snapshot(since, w, g, self.rules.snapshot) {
+            self.snapshot()?;
+            if self.rules.resets_after_snapshot {
+                self.reset()?;
+                tracing::info!("{}: back to its initial weights", self.name);
             }
-            last_snapshot = trainer.env_steps;
-            wins_at_snapshot = hooks.wins;
-            games_at_snapshot = hooks.games;
-            if resets {
-                trainer.side(side)?.reset_to(&initial)?;
-                // The reset is the new resume point: a restart must not
-                // bring back the weights that were just snapshotted.
-                save_learner(&trainer, store, dir, seat, learner_id)?;
-                tracing::info!("{name}: back to its initial weights");
-            }
-        } else if trainer.iteration % cfg.checkpoint_every == 0 {
-            save_learner(&trainer, store, dir, seat, learner_id)?;
+        } else if self.trainer.iteration % self.cfg.checkpoint_every == 0 {
+            self.checkpoint()?;
         }
-        hooks.refresh()?;
-        let steps = (cfg.num_envs * cfg.rollout_steps) as f64;
-        store.heartbeat(
-            &name,
+        self.hooks.refresh()?;
+        let steps = (self.cfg.num_envs * self.cfg.rollout_steps) as f64;
+        self.store.heartbeat(
+            &self.name,
             BeatState::Training,
-            trainer.env_steps,
+            self.trainer.env_steps,
             Some(steps / started.elapsed().as_secs_f64()),
         )?;
+        Ok(true)
     }
-    save_learner(&trainer, store, dir, seat, learner_id)?;
-    let outcome = if trainer.env_steps >= cfg.env_steps_per_learner {
-        Outcome::Done
-    } else {
-        Outcome::Stopped
-    };
-    let state = match outcome {
-        Outcome::Done => BeatState::Done,
-        Outcome::Stopped => BeatState::Stopped,
-    };
-    let secs = segment_start.elapsed().as_secs_f64() - waited;
-    let trained = trainer.env_steps - steps_at_start;
-    let rate = trained as f64 / secs.max(1e-9);
-    // A run that trained no step (a finished league started again) keeps
-    // the rate it reported last.
-    store.heartbeat(
-        &name,
-        state,
-        trainer.env_steps,
-        (trained > 0).then_some(rate),
-    )?;
-    tracing::info!(
-        "{name}: {state} at {} env steps, {} matches recorded; this run {:.1} s training ({waited:.1} s waiting for the other side), {rate:.0} env steps/s",
-        trainer.env_steps, hooks.matches_recorded, secs
-    );
-    let team = side.agents(cfg.num_captors).len() as f64;
-    let own_rows = trained as f64 * team;
-    if own_rows > 0.0 && hooks.nets.rows > 0 {
+
+    /// Its weights now into the pool as a new member.
+    fn snapshot(&mut self) -> Result<()> {
+        // The learner's own checkpoint first: a restart then resumes at or
+        // after this snapshot, so it never takes one under a name the pool
+        // already holds.
+        self.checkpoint()?;
+        let name = &self.name;
+        match add_snapshot(
+            &mut self.trainer,
+            self.store,
+            self.dir,
+            self.league_id,
+            self.seat,
+            self.learner_id,
+            self.hooks.curriculum.stage,
+        )? {
+            SnapshotOutcome::Added(snap) => {
+                tracing::info!("{name}: snapshot {snap} joins the pool")
+            }
+            SnapshotOutcome::AlreadyInPool(snap) => tracing::info!(
+                "{name}: {snap} is already in the pool (recorded before a restart); it stays as recorded"
+            ),
+            SnapshotOutcome::Blocked(snap) => tracing::warn!(
+                "{name}: cannot add the snapshot {snap}: {} exists and is not a recorded member (put there by hand?); left alone, this snapshot is skipped",
+                self.dir.players_dir().join(&snap).display()
+            ),
+        }
+        self.last_snapshot = self.trainer.env_steps;
+        self.wins_at_snapshot = self.hooks.wins;
+        self.games_at_snapshot = self.hooks.games;
+        Ok(())
+    }
+
+    /// Back to its initial weights. The reset is the new resume point: a
+    /// restart must not bring back the weights just snapshotted.
+    fn reset(&mut self) -> Result<()> {
+        self.trainer.side(self.seat.side)?.reset_to(&self.initial)?;
+        self.checkpoint()
+    }
+
+    fn checkpoint(&self) -> Result<()> {
+        save_learner(
+            &self.trainer,
+            self.store,
+            self.dir,
+            self.seat,
+            self.learner_id,
+        )
+    }
+
+    /// Its checkpoint, its last heartbeat (done or stopped) and this run's
+    /// figures.
+    fn finish(self) -> Result<Outcome> {
+        self.checkpoint()?;
+        let (cfg, name, trainer, hooks) = (self.cfg, &self.name, &self.trainer, &self.hooks);
+        let outcome = if trainer.env_steps >= cfg.env_steps_per_learner {
+            Outcome::Done
+        } else {
+            Outcome::Stopped
+        };
+        let state = match outcome {
+            Outcome::Done => BeatState::Done,
+            Outcome::Stopped => BeatState::Stopped,
+        };
+        let waited = self.waited;
+        let secs = self.segment_start.elapsed().as_secs_f64() - waited;
+        let trained = trainer.env_steps - self.steps_at_start;
+        let rate = trained as f64 / secs.max(1e-9);
+        // A run that trained no step (a finished league started again)
+        // keeps the rate it reported last.
+        self.store.heartbeat(
+            name,
+            state,
+            trainer.env_steps,
+            (trained > 0).then_some(rate),
+        )?;
         tracing::info!(
-            "{name}: inference per robot row: own networks (actor + critic, sampling) {:.2} us, opponent networks (actor, batched per opponent) {:.2} us over {} rows",
-            1e6 * own_inference / own_rows,
-            1e6 * hooks.nets.seconds / hooks.nets.rows as f64,
-            hooks.nets.rows
+            "{name}: {state} at {} env steps, {} matches recorded; this run {:.1} s training ({waited:.1} s waiting for the other side), {rate:.0} env steps/s",
+            trainer.env_steps, hooks.matches_recorded, secs
         );
+        let team = self.seat.side.agents(cfg.num_captors).len() as f64;
+        let own_rows = trained as f64 * team;
+        if own_rows > 0.0 && hooks.nets.rows > 0 {
+            tracing::info!(
+                "{name}: inference per robot row: own networks (actor + critic, sampling) {:.2} us, opponent networks (actor, batched per opponent) {:.2} us over {} rows",
+                1e6 * self.own_inference / own_rows,
+                1e6 * hooks.nets.seconds / hooks.nets.rows as f64,
+                hooks.nets.rows
+            );
+        }
+        Ok(outcome)
     }
-    Ok(outcome)
 }
 
 /// The learner's own resume point, and its row pointed at it.
