@@ -139,7 +139,9 @@ pub fn run_with(
                 );
             }
             if set_store_identity {
-                Store::open_existing(&dir.store)?.set_league_id_once(&identity.league_id)?;
+                // A resumed league's store is open already (`early`).
+                let (store, _) = early.as_ref().context("a resumed league's store is open")?;
+                store.set_league_id_once(&identity.league_id)?;
             }
             if write_identity {
                 dir.write_identity(&identity)?;
