@@ -14,6 +14,7 @@ mod heuristics;
 mod inputs;
 mod league;
 mod league_faults;
+mod league_folders;
 mod learn;
 mod protocol;
 mod sight;
