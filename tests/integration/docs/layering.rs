@@ -159,96 +159,28 @@ fn the_league_rules_name_neither_the_store_nor_the_processes() {
 }
 
 /// The modules of `crates/learners/src/learn` (a folder is one module) and
-/// the learn modules each names, read from its source: `super::` paths
-/// resolved from the file's place, and `crate::learn::` paths. Test
-/// modules are left out: they see their parent's names.
+/// the learn modules each names, from the tree's file imports
+/// (imports.rs); "mod" is learn/mod.rs.
 fn learn_imports() -> std::collections::BTreeMap<String, std::collections::BTreeSet<String>> {
     use std::collections::{BTreeMap, BTreeSet};
-    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("crates/learners/src/learn");
-    let ident = |s: &str| -> String {
-        s.chars()
-            .take_while(|c| c.is_ascii_alphanumeric() || *c == '_')
-            .collect()
+    use std::path::Path;
+    let repo = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let learn = Path::new("crates/learners/src/learn");
+    let module = |file: &Path| -> Option<String> {
+        let rel = file.strip_prefix(learn).ok()?;
+        let first = rel.iter().next()?.to_string_lossy().into_owned();
+        Some(first.trim_end_matches(".rs").to_string())
     };
     let mut graph: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();
-    let mut stack = vec![root.clone()];
-    while let Some(dir) = stack.pop() {
-        for entry in std::fs::read_dir(&dir).unwrap() {
-            let path = entry.unwrap().path();
-            if path.is_dir() {
-                stack.push(path);
-                continue;
-            }
-            if path.extension().and_then(|e| e.to_str()) != Some("rs") {
-                continue;
-            }
-            // The file's module path under learn: ["train", "collect"], or
-            // [] for learn/mod.rs.
-            let rel = path.strip_prefix(&root).unwrap();
-            let mut module: Vec<String> = rel
-                .with_extension("")
+    for (file, targets) in super::imports::file_imports(repo) {
+        let Some(from) = module(&file) else { continue };
+        let names = graph.entry(from.clone()).or_default();
+        names.extend(
+            targets
                 .iter()
-                .map(|c| c.to_string_lossy().into_owned())
-                .collect();
-            if module.last().map(String::as_str) == Some("mod") {
-                module.pop();
-            }
-            let node = module.first().cloned().unwrap_or_else(|| "mod".into());
-            let text = std::fs::read_to_string(&path).unwrap();
-            let code = match text.find("#[cfg(test)]\nmod tests") {
-                Some(at) => &text[..at],
-                None => &text[..],
-            };
-            let mut names = BTreeSet::new();
-            let mut add = |resolved: Vec<String>| {
-                if let Some(first) = resolved.first() {
-                    if !first.is_empty() {
-                        names.insert(first.clone());
-                    }
-                } else {
-                    names.insert("mod".into());
-                }
-            };
-            for (at, _) in code.match_indices("crate::learn::") {
-                add(vec![ident(&code[at + "crate::learn::".len()..])]);
-            }
-            let mut rest = code;
-            while let Some(at) = rest.find("super::") {
-                // A whole `super::super::...` chain, not its tail again.
-                if at >= 7 && &rest[at - 7..at] == "super::" {
-                    rest = &rest[at + 7..];
-                    continue;
-                }
-                let mut tail = &rest[at..];
-                let mut ups = 0;
-                while let Some(t) = tail.strip_prefix("super::") {
-                    ups += 1;
-                    tail = t;
-                }
-                let base = &module[..module.len().saturating_sub(ups)];
-                let targets: Vec<String> = if let Some(group) = tail.strip_prefix('{') {
-                    let group = &group[..group.find('}').unwrap()];
-                    group.split(',').map(|s| ident(s.trim())).collect()
-                } else {
-                    vec![ident(tail)]
-                };
-                for target in targets {
-                    let mut resolved = base.to_vec();
-                    resolved.push(target);
-                    add(resolved);
-                }
-                rest = tail;
-            }
-            names.remove(&node);
-            names.remove("");
-            graph.entry(node).or_default().extend(names);
-        }
-    }
-    // Names that are not modules of the floor (items of learn/mod.rs and
-    // the like) are not rooms.
-    let modules: BTreeSet<String> = graph.keys().cloned().collect();
-    for targets in graph.values_mut() {
-        targets.retain(|t| modules.contains(t));
+                .filter_map(|t| module(t))
+                .filter(|t| *t != from),
+        );
     }
     graph
 }

@@ -6,6 +6,7 @@
 mod cli_reference;
 mod config_reference;
 mod configs;
+mod imports;
 mod layering;
 mod links;
 mod quickstart;

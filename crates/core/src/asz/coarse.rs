@@ -8,7 +8,7 @@
 //! thickens walls, a robot hugging one can sit in a blocked coarse cell; its
 //! front then starts from the nearest free neighbour instead (`locate`).
 
-use super::{FastMarching, Lattice, Seeds};
+use super::march::{FastMarching, Lattice, Seeds};
 use crate::map::{PreparedMap, CELL_SIZE};
 
 pub struct CoarseLattice {

@@ -21,7 +21,7 @@
 //! distance over its speed.
 
 use super::field_queue::FieldQueue;
-use super::{Lattice, Source};
+use super::march::{Lattice, Source};
 
 const FAR: u8 = 0;
 const TRIAL: u8 = 1;

@@ -79,7 +79,7 @@ pub struct EnvConfig {
     /// env table: it is a learner's choice of inputs (its `net.sight`),
     /// which whoever builds the env copies here, so a config names it once.
     #[serde(skip)]
-    pub sight: super::Sight,
+    pub sight: super::sight::Sight,
 }
 
 impl Default for EnvConfig {
@@ -92,7 +92,7 @@ impl Default for EnvConfig {
             capture_rule: CaptureRule::Fast,
             drive_force: DriveForce::Squared,
             observations: true,
-            sight: super::Sight::OFF,
+            sight: super::sight::Sight::OFF,
         }
     }
 }

@@ -2,7 +2,7 @@
 //! robots, random ones, and (with the learners) network checkpoints.
 
 use super::action::Action;
-use super::TrapEnv;
+use super::trap_env::TrapEnv;
 use std::ops::Range;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]

@@ -7,21 +7,8 @@ use super::config::*;
 use crate::map::prepared::{ray_dirs, NUM_RAYS};
 use crate::map::PreparedMap;
 
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct Robot {
-    pub pos: [f64; 2],
-    pub vel: [f64; 2],
-    /// Heading (rad) from +x, counter-clockwise, in [0, 2 pi).
-    pub theta: f64,
-    /// Hit a wall this step (repulsion fired or the move was blocked).
-    pub collided: bool,
-}
-
-impl Robot {
-    pub fn heading(&self) -> [f64; 2] {
-        [self.theta.cos(), self.theta.sin()]
-    }
-}
+/// The robots physics moves (their type is a leaf: robot.rs).
+pub use super::robot::Robot;
 
 pub fn wrap_angle(a: f64) -> f64 {
     let two_pi = std::f64::consts::TAU;

@@ -4,7 +4,7 @@
 //! 1999), and the environment's own reward, rules and evaluation never see it.
 
 use super::physics::blocked_probes;
-use super::TrapEnv;
+use super::trap_env::TrapEnv;
 use crate::asz::{AszFields, CoarseLattice, Lattice};
 use serde::{Deserialize, Serialize};
 use std::cell::RefCell;

@@ -14,7 +14,7 @@
 //! the rays first, then the map channel by channel, row by row (north
 //! first). Off (no rays, no map) is the spec's observation, byte for byte.
 
-use super::physics::Robot;
+use super::robot::Robot;
 use crate::error::ConfigError;
 use crate::map::PreparedMap;
 use serde::{Deserialize, Serialize};

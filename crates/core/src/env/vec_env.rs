@@ -4,8 +4,13 @@
 //! Scripted sides (rule-based robots, frozen checkpoints) act inside the same
 //! parallel pass.
 
+use super::action::Action;
+use super::config::EnvConfig;
+use super::controller::{Controller, Side};
+use super::observe::PATCH_LEN;
+use super::placement::PlacementError;
 use super::potential::Potential;
-use super::{Action, Controller, EnvConfig, PlacementError, Side, TrapEnv, PATCH_LEN};
+use super::trap_env::TrapEnv;
 use crate::error::{ConfigError, EnvError};
 use crate::map::PreparedMap;
 use rayon::prelude::*;

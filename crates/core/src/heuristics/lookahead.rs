@@ -10,7 +10,7 @@
 //! It measures how much room there is above the rule-based target before a
 //! learner is trained to fill it, and can teach a learned target.
 
-use super::target_action;
+use super::rule_based::target_action;
 use crate::asz::{AszFields, CoarseLattice};
 use crate::env::{Action, Controller, Side, TrapEnv};
 
