@@ -137,6 +137,21 @@ pub enum ConfigFileError {
     Invalid(#[from] ConfigError),
 }
 
+/// A config file that cannot be used; the message names the file.
+#[derive(Debug, thiserror::Error)]
+pub enum ConfigLoadError {
+    #[error("{}: cannot read: {cause}", .path.display())]
+    Unreadable {
+        path: std::path::PathBuf,
+        cause: std::io::Error,
+    },
+    #[error("{}: {cause}", .path.display())]
+    Invalid {
+        path: std::path::PathBuf,
+        cause: ConfigFileError,
+    },
+}
+
 /// Why an environment cannot be built or changed.
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
 pub enum EnvError {

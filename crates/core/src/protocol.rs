@@ -6,7 +6,7 @@
 //! it (the Gibson maps are recognised by content, `map::testset`), and
 //! checkpoints, eval tables and summaries carry it.
 
-use crate::error::{ConfigError, MapsRefused};
+use crate::error::{ConfigError, ConfigFileError, ConfigLoadError, MapsRefused};
 use crate::map::PreparedMap;
 use serde::{Deserialize, Serialize};
 use std::fmt;
@@ -136,6 +136,28 @@ impl fmt::Display for Protocol {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str(self.name())
     }
+}
+
+/// Reads a config file: its text, the protocol it must name (a user's
+/// file; a run's own `config.toml` from before configs named one reads as
+/// held-out), then `parse`. Every error names the file.
+pub fn read_config<T>(
+    path: &std::path::Path,
+    require_protocol: bool,
+    parse: impl FnOnce(&str) -> Result<T, ConfigFileError>,
+) -> Result<T, ConfigLoadError> {
+    let text = std::fs::read_to_string(path).map_err(|cause| ConfigLoadError::Unreadable {
+        path: path.to_path_buf(),
+        cause,
+    })?;
+    let invalid = |cause: ConfigFileError| ConfigLoadError::Invalid {
+        path: path.to_path_buf(),
+        cause,
+    };
+    if require_protocol {
+        require_named(&text).map_err(|e| invalid(e.into()))?;
+    }
+    parse(&text).map_err(invalid)
 }
 
 /// Refuses a config text (TOML) that does not name its protocol: a default

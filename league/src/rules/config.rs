@@ -7,12 +7,12 @@ use crate::rules::curriculum::CurriculumConfig;
 use crate::rules::evaluator_config::EvaluatorConfig;
 use crate::rules::matchmaking::MatchmakingConfig;
 use crate::rules::members::MembersConfig;
-use anyhow::{anyhow, Context, Result};
+
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 use t2e_core::env::{EnvConfig, Side};
-use t2e_core::error::{in_interval, in_range, ConfigError, ConfigFileError};
-use t2e_core::protocol::Protocol;
+use t2e_core::error::{in_interval, in_range, ConfigError, ConfigFileError, ConfigLoadError};
+use t2e_core::protocol::{read_config, Protocol};
 use t2e_learners::controllers::ControllerSpec;
 use t2e_learners::learn::ppo::PpoConfig;
 use t2e_learners::learn::train::Play;
@@ -202,25 +202,15 @@ impl Default for LeagueConfig {
 
 impl LeagueConfig {
     /// A config file as a user wrote it: it must name its protocol.
-    pub fn load(path: &Path) -> Result<LeagueConfig> {
-        Self::read(path, true)
+    pub fn load(path: &Path) -> Result<LeagueConfig, ConfigLoadError> {
+        read_config(path, true, Self::parse)
     }
 
     /// A league directory's own `config.toml`, written by this program. One
     /// written before configs named their protocol reads as held-out: the
     /// Gibson maps were refused for training then.
-    pub fn load_stored(path: &Path) -> Result<LeagueConfig> {
-        Self::read(path, false)
-    }
-
-    fn read(path: &Path, require_protocol: bool) -> Result<LeagueConfig> {
-        let text = std::fs::read_to_string(path)
-            .with_context(|| format!("{}: cannot read", path.display()))?;
-        if require_protocol {
-            t2e_core::protocol::require_named(&text)
-                .map_err(|e| anyhow!("{}: {e}", path.display()))?;
-        }
-        Self::parse(&text).map_err(|e| anyhow!("{}: {e}", path.display()))
+    pub fn load_stored(path: &Path) -> Result<LeagueConfig, ConfigLoadError> {
+        read_config(path, false, Self::parse)
     }
 
     pub fn parse(text: &str) -> Result<LeagueConfig, ConfigFileError> {

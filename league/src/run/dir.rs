@@ -80,7 +80,7 @@ impl LeagueDir {
     }
 
     pub fn config(&self) -> Result<LeagueConfig> {
-        LeagueConfig::load_stored(&self.config_path())
+        Ok(LeagueConfig::load_stored(&self.config_path())?)
     }
 
     pub fn identity_path(&self) -> PathBuf {

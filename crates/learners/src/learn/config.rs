@@ -9,9 +9,8 @@ use super::settings::is_default;
 pub use super::settings::{Play, SideConfig, SideDefaults, TrainDefaults};
 use crate::algorithm::Algorithm;
 use crate::env::{EnvConfig, Side};
-use crate::error::{in_range, ConfigError};
-use crate::protocol::Protocol;
-use anyhow::{anyhow, Context, Result};
+use crate::error::{in_range, ConfigError, ConfigFileError, ConfigLoadError};
+use crate::protocol::{read_config, Protocol};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 use tch::Device;
@@ -125,28 +124,21 @@ pub fn check_rollout(num_envs: usize, rollout_steps: usize) -> Result<(), Config
 impl TrainConfig {
     /// Reads a TOML config; errors name the file and the field.
     /// A config file as a user wrote it: it must name its protocol.
-    pub fn load(path: &Path) -> Result<TrainConfig> {
-        Self::read(path, true)
+    pub fn load(path: &Path) -> Result<TrainConfig, ConfigLoadError> {
+        read_config(path, true, Self::parse)
     }
 
     /// A run folder's own `config.toml`, written by this program. One written
     /// before configs named their protocol reads as held-out: the Gibson maps
     /// were refused for training then.
-    pub fn load_stored(path: &Path) -> Result<TrainConfig> {
-        Self::read(path, false)
+    pub fn load_stored(path: &Path) -> Result<TrainConfig, ConfigLoadError> {
+        read_config(path, false, Self::parse)
     }
 
-    fn read(path: &Path, require_protocol: bool) -> Result<TrainConfig> {
-        let text = std::fs::read_to_string(path)
-            .with_context(|| format!("{}: cannot read", path.display()))?;
-        if require_protocol {
-            crate::protocol::require_named(&text)
-                .map_err(|e| anyhow!("{}: {e}", path.display()))?;
-        }
-        let cfg: TrainConfig =
-            crate::util::from_toml(&text).map_err(|e| anyhow!("{}: {e}", path.display()))?;
-        cfg.validate()
-            .map_err(|e| anyhow!("{}: {e}", path.display()))?;
+    /// A config's text, checked whole.
+    pub fn parse(text: &str) -> Result<TrainConfig, ConfigFileError> {
+        let cfg: TrainConfig = crate::util::from_toml(text)?;
+        cfg.validate()?;
         Ok(cfg)
     }
 
