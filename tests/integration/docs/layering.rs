@@ -147,6 +147,13 @@ fn the_league_rules_name_neither_the_store_nor_the_processes() {
                 path.display()
             );
         }
+        // A rule's errors are typed (`ConfigError` and the like), so a
+        // caller can tell them apart; anyhow belongs to the command line.
+        assert!(
+            !code.contains("anyhow"),
+            "{} uses anyhow: the rules' errors are typed",
+            path.display()
+        );
         files += 1;
     }
     assert!(files >= 10, "{files} files in {}", root.display());
