@@ -1,6 +1,7 @@
 //! The league's subcommands: `run` (the manager), `status`, `export`, and
 //! the hidden `league-learner` the manager spawns.
 
+use super::flag_error::as_flag;
 use super::progress::Bars;
 use crate::env::Side;
 use crate::league::child::{self, ChildCommand};
@@ -461,7 +462,13 @@ pub fn worker(args: WorkerArgs) -> Result<()> {
         lease: crate::util::parse_duration("--lease", &args.lease).map_err(anyhow::Error::msg)?,
         logs: args.dir.join("logs"),
     };
-    opts.check()?;
+    opts.validate().map_err(as_flag)?;
+    if args.dir.is_file() {
+        bail!(
+            "--dir {}: a file, not a folder; the worker writes its logs under DIR/logs",
+            args.dir.display()
+        );
+    }
     if !args.pool.is_dir() {
         bail!(
             "--pool {}: not a folder; give the league's pool folder, the one every host shares",
@@ -570,6 +577,7 @@ pub fn exploit(args: ExploitArgs) -> Result<()> {
         threads: args.threads,
         progress: !args.quiet,
     };
+    opts.validate().map_err(as_flag)?;
     ctrlc::set_handler(|| {
         if exploit::EVALUATING.load(Ordering::SeqCst) {
             tracing::info!("stopped during the evaluation, nothing recorded; the same command evaluates the trained best response again");

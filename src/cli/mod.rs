@@ -9,6 +9,7 @@ mod bench_store;
 mod csv_rows;
 pub mod docs;
 pub mod eval;
+mod flag_error;
 pub mod league;
 pub mod logging;
 pub mod maps;

@@ -29,6 +29,7 @@ use anyhow::{bail, Result};
 use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
 use std::time::{Duration, Instant};
+use t2e_core::error::ConfigError;
 
 /// How a worker runs.
 #[derive(Clone, Debug)]
@@ -46,18 +47,24 @@ pub struct WorkerOptions {
 }
 
 impl WorkerOptions {
-    pub fn check(&self) -> Result<()> {
+    /// The options a worker cannot run with; the error names the option.
+    pub fn validate(&self) -> Result<(), ConfigError> {
         if self.seats == 0 {
-            bail!("--seats 0: a worker runs at least one seat");
+            return Err(ConfigError::new(
+                "seats",
+                0,
+                "a worker runs at least one seat",
+            ));
         }
         if self.lease < Duration::from_secs(3) {
-            bail!(
-                "--lease {:?}: at least 3 s (it is renewed every third of it)",
-                self.lease
-            );
+            return Err(ConfigError::new(
+                "lease",
+                format!("{:?}", self.lease),
+                "at least 3 s (it is renewed every third of it)",
+            ));
         }
         if self.host.trim().is_empty() {
-            bail!("--host: empty");
+            return Err(ConfigError::about("host", "empty"));
         }
         // Status prints one seat per line, and holders are split on ':'.
         if let Some(c) = self
@@ -65,23 +72,20 @@ impl WorkerOptions {
             .chars()
             .find(|c| c.is_control() || *c == ':' || c.is_whitespace())
         {
-            bail!(
-                "--host {:?}: holds {:?}; a host name is one word without ':' (letters, digits, '-', '.', '_')",
-                self.host,
-                c
-            );
+            return Err(ConfigError::new(
+                "host",
+                format!("{:?}", self.host),
+                format!("holds {c:?}; a host name is one word without ':' (letters, digits, '-', '.', '_')"),
+            ));
         }
         if self.host.len() > 253 {
-            bail!(
-                "--host: {} characters; a host name has at most 253",
-                self.host.len()
-            );
-        }
-        if self.logs.parent().is_some_and(|d| d.is_file()) {
-            bail!(
-                "--dir {}: a file, not a folder; the worker writes its logs under DIR/logs",
-                self.logs.parent().unwrap().display()
-            );
+            return Err(ConfigError::about(
+                "host",
+                format!(
+                    "{} characters; a host name has at most 253",
+                    self.host.len()
+                ),
+            ));
         }
         Ok(())
     }
@@ -157,7 +161,7 @@ fn claim_of(holder: &str) -> Option<&str> {
 /// error naming it), `run_for` passes or `stop` is set (Ok: seats given
 /// back for other workers or a later run).
 pub fn run_worker(dir: &LeagueDir, opts: &WorkerOptions, stop: &AtomicBool) -> Result<()> {
-    opts.check()?;
+    opts.validate()?;
     // The store first: an unreachable server or a wrong password is the
     // error to show, before anything about the pool folder.
     drop(Store::open_existing(&dir.store)?);
