@@ -187,6 +187,25 @@ pub(super) fn file_imports(repo: &Path) -> BTreeMap<PathBuf, BTreeSet<PathBuf>> 
     graph
 }
 
+/// What of `graph` lies on an import circle, or leads only into one:
+/// Kahn's algorithm, whatever cannot be peeled off as a leaf.
+pub(super) fn on_circles<T: Ord + Clone>(
+    graph: &BTreeMap<T, BTreeSet<T>>,
+) -> BTreeMap<T, BTreeSet<T>> {
+    let mut left = graph.clone();
+    while let Some(leaf) = left
+        .iter()
+        .find(|(_, targets)| targets.is_empty())
+        .map(|(f, _)| f.clone())
+    {
+        left.remove(&leaf);
+        for targets in left.values_mut() {
+            targets.remove(&leaf);
+        }
+    }
+    left
+}
+
 #[test]
 fn no_import_circle_in_the_whole_tree() {
     let repo = Path::new(env!("CARGO_MANIFEST_DIR"));
@@ -219,18 +238,7 @@ fn no_import_circle_in_the_whole_tree() {
             graph.get(Path::new(from))
         );
     }
-    // Kahn's algorithm: whatever cannot be peeled off lies on a circle.
-    let mut left = graph.clone();
-    while let Some(leaf) = left
-        .iter()
-        .find(|(_, targets)| targets.is_empty())
-        .map(|(f, _)| f.clone())
-    {
-        left.remove(&leaf);
-        for targets in left.values_mut() {
-            targets.remove(&leaf);
-        }
-    }
+    let left = on_circles(&graph);
     let circle: Vec<String> = left
         .iter()
         .map(|(f, t)| {

@@ -219,18 +219,7 @@ fn the_learn_floor_has_no_import_circle_and_its_settings_are_a_leaf() {
             );
         }
     }
-    // Kahn's algorithm: whatever cannot be peeled off lies on a circle.
-    let mut left = graph.clone();
-    while let Some(leaf) = left
-        .iter()
-        .find(|(_, targets)| targets.is_empty())
-        .map(|(m, _)| m.clone())
-    {
-        left.remove(&leaf);
-        for targets in left.values_mut() {
-            targets.remove(&leaf);
-        }
-    }
+    let left = super::imports::on_circles(&graph);
     assert!(
         left.is_empty(),
         "import circle among learn modules: {left:?}"
