@@ -258,13 +258,16 @@ fn run_league(
     };
     let result = supervise(&mut manager, stop, run_for);
     view.finish();
-    let players = store.players()?.len();
-    tracing::info!(
-        "league {}: {} matches, {players} players; `t2e-league status --dir {}` shows the table",
-        cfg.name,
-        store.match_count()?,
-        dir.root.display()
-    );
+    // A summary only: a store that cannot be read now must not hide why
+    // the league ended.
+    if let (Ok(matches), Ok(players)) = (store.match_count(), store.players()) {
+        tracing::info!(
+            "league {}: {matches} matches, {} players; `t2e-league status --dir {}` shows the table",
+            cfg.name,
+            players.len(),
+            dir.root.display()
+        );
+    }
     result
 }
 

@@ -79,12 +79,15 @@ pub fn supervise_workers(
         last_line: String::new(),
     };
     let result = supervise(&mut seats, stop, run_for);
-    tracing::info!(
-        "league {}: {} matches, {} players; `t2e-league status --store URL` shows the table",
-        cfg.name,
-        store.match_count()?,
-        store.players()?.len()
-    );
+    // A summary only: a store that cannot be read now must not hide why
+    // the league ended.
+    if let (Ok(matches), Ok(players)) = (store.match_count(), store.players()) {
+        tracing::info!(
+            "league {}: {matches} matches, {} players; `t2e-league status --store URL` shows the table",
+            cfg.name,
+            players.len()
+        );
+    }
     result
 }
 
