@@ -43,7 +43,7 @@ impl FieldQueue {
         ((distance * self.inv_width) as usize).min(self.cur + RING - 1)
     }
 
-    #[inline]
+    #[inline(always)]
     pub(super) fn push(&mut self, cell: u32, distance: f64) {
         let b = self.bucket(distance);
         if b <= self.cur {
@@ -56,13 +56,15 @@ impl FieldQueue {
         }
     }
 
-    /// The next (distance, cell); `distance_of` gives a cell's current
-    /// trial distance (None when it is no longer a trial cell), so a
-    /// bucket takes only the cells whose distance still falls in it.
+    /// The next (distance, cell), left in the queue; `distance_of` gives a
+    /// cell's current trial distance (None when it is no longer a trial
+    /// cell), so a bucket takes only the cells whose distance still falls
+    /// in it. A march stopped at a limit looks without taking, so the
+    /// cell it stopped at is not pushed again.
     #[inline]
-    pub(super) fn pop(&mut self, distance_of: impl Fn(u32) -> Option<f64>) -> Option<(f64, u32)> {
+    pub(super) fn peek(&mut self, distance_of: impl Fn(u32) -> Option<f64>) -> Option<(f64, u32)> {
         loop {
-            if let Some(entry) = self.current.pop() {
+            if let Some(&entry) = self.current.last() {
                 return Some(entry);
             }
             if self.ring_len == 0 {
@@ -86,6 +88,12 @@ impl FieldQueue {
             bucket.clear();
             self.ring[slot] = bucket;
         }
+    }
+
+    /// Removes the entry `peek` returned.
+    #[inline]
+    pub(super) fn take(&mut self) {
+        self.current.pop();
     }
 }
 
