@@ -180,18 +180,26 @@ impl DistanceField {
     #[inline]
     fn relax_around(&mut self, cell: usize, h: f64, allowed: Option<&[bool]>) {
         let s = self.stride;
-        for nb in [cell - 1, cell + 1, cell - s, cell + s] {
-            match self.state[nb] {
-                FAR if allowed.is_none_or(|a| a[nb]) => {
-                    if let Some(d) = self.solve(nb, h) {
-                        self.state[nb] = TRIAL;
-                        self.touched.push(nb as u32);
-                        self.distance[nb] = d;
-                        self.queue.push(nb as u32, d);
-                    }
-                }
-                TRIAL => self.update(nb, h),
-                _ => {}
+        let nbs = [cell - 1, cell + 1, cell - s, cell + s];
+        // Solving touches only settled cells, so the four solves are
+        // independent: all four first, then their offers.
+        let open = nbs.map(|nb| match self.state[nb] {
+            FAR => allowed.is_none_or(|a| a[nb]),
+            TRIAL => true,
+            _ => false,
+        });
+        let solved = [0, 1, 2, 3].map(|k| if open[k] { self.solve(nbs[k], h) } else { None });
+        for k in 0..4 {
+            let Some(d) = solved[k] else { continue };
+            let nb = nbs[k];
+            if self.state[nb] == FAR {
+                self.state[nb] = TRIAL;
+                self.touched.push(nb as u32);
+                self.distance[nb] = d;
+                self.queue.push(nb as u32, d);
+            } else if d != self.distance[nb] {
+                self.distance[nb] = d;
+                self.queue.push(nb as u32, d);
             }
         }
     }
