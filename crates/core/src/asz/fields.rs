@@ -288,6 +288,11 @@ pub struct AszFields {
     counts_base: Option<CountKey>,
 }
 
+/// The most counts kept beside one set of own cells: the planner's 12
+/// moves (3 captors) and the state itself; a caller trying more moves
+/// loses the oldest.
+const COUNTS_KEPT: usize = 16;
+
 /// The cells (None off the free cells) and speeds of the robots of one
 /// count, captors first, on one lattice.
 #[derive(Clone, PartialEq)]
@@ -471,6 +476,9 @@ impl AszFields {
         }
         let n = self.search(lattice, target, captors, moved);
         if !self.counts.iter().any(|(k, _)| *k == key) {
+            if self.counts.len() == COUNTS_KEPT {
+                self.counts.remove(0);
+            }
             self.counts.push((key, n));
         }
         n
@@ -748,6 +756,38 @@ mod tests {
             );
         }
         assert!(told_apart > 12, "the moves must change |ASZ|: {told_apart}");
+    }
+
+    /// More moves of one state than the counts kept: every count is still
+    /// a fresh one's, the early moves' asked again after the oldest left.
+    #[test]
+    fn more_moves_than_the_counts_kept_count_as_fresh_ones() {
+        let map = two_rooms();
+        let at = |r: usize, c: usize| map.grid.cell_center(r, c);
+        let captors: Vec<Source> = [(60, 60), (250, 90), (120, 230)]
+            .map(|(r, c)| Source {
+                pos: at(r, c),
+                speed: 1.0,
+            })
+            .to_vec();
+        let target = Source {
+            pos: at(150, 110),
+            speed: 1.0,
+        };
+        let moves: Vec<[f64; 2]> = (0..2 * COUNTS_KEPT + 3)
+            .map(|k| at(60 + 4 * (k / 6), 60 + 4 * (k % 6)))
+            .collect();
+        let mut kept = AszFields::new();
+        for pos in moves.iter().chain(&moves[..4]) {
+            let mut moved = captors.clone();
+            moved[0].pos = *pos;
+            assert_eq!(
+                kept.with_moved_captor(&map, target, &captors, 0, *pos),
+                AszFields::new().asz_cells(&map, target, &moved),
+                "captor 0 moved to {pos:?}"
+            );
+        }
+        assert_eq!(kept.counts.len(), COUNTS_KEPT);
     }
 
     #[test]
