@@ -183,12 +183,18 @@ impl DistanceField {
         let nbs = [cell - 1, cell + 1, cell - s, cell + s];
         // Solving touches only settled cells, so the four solves are
         // independent: all four first, then their offers.
-        let open = nbs.map(|nb| match self.state[nb] {
-            FAR => allowed.is_none_or(|a| a[nb]),
-            TRIAL => true,
-            _ => false,
-        });
-        let solved = [0, 1, 2, 3].map(|k| if open[k] { self.solve(nbs[k], h) } else { None });
+        let mut solved = [None; 4];
+        for k in 0..4 {
+            let nb = nbs[k];
+            let open = match self.state[nb] {
+                FAR => allowed.is_none_or(|a| a[nb]),
+                TRIAL => true,
+                _ => false,
+            };
+            if open {
+                solved[k] = self.solve(nb, h);
+            }
+        }
         for k in 0..4 {
             let Some(d) = solved[k] else { continue };
             let nb = nbs[k];
