@@ -440,13 +440,29 @@ pub fn run(args: BenchArgs) -> Result<()> {
                 reference: reference_ms.map(|ms: f64| 1000.0 / ms),
                 before_us: None,
             });
-            // The planner's case: the other robots' fields kept, one captor moved.
+            // The planner's case: the other robots' fields kept, one captor
+            // moved. The fields keep the counts of the last moves of one
+            // state, so the captor visits more cells around its own in turn
+            // than they keep, and its field is marched every time.
             let (c, t) = &starts[0];
             fields.asz_cells(&*m, *t, c);
+            let moves: Vec<[f64; 2]> = (-6..=6i32)
+                .flat_map(|dr| (-6..=6i32).map(move |dc| (dr, dc)))
+                .filter(|&step| step != (0, 0))
+                .map(|(dr, dc)| {
+                    [
+                        c[0].pos[0] + map::CELL_SIZE * dc as f64,
+                        c[0].pos[1] + map::CELL_SIZE * dr as f64,
+                    ]
+                })
+                .filter(|&p| {
+                    let (r, col) = m.grid.cell_of(p);
+                    m.grid.is_free(r, col)
+                })
+                .collect();
             let per = measure(secs, || {
-                // Alternate between two cells, so that the field is marched every time.
                 i += 1;
-                let moved = [c[0].pos[0] + 0.1 * (i % 2) as f64, c[0].pos[1]];
+                let moved = moves[i % moves.len()];
                 std::hint::black_box(fields.with_moved_captor(&*m, *t, c, 0, moved));
                 1
             });

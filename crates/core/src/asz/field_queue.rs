@@ -21,8 +21,9 @@ pub(super) struct FieldQueue {
     cur: usize,
     ring: Vec<Vec<u32>>,
     ring_len: usize,
-    /// The bucket being settled, sorted with the smallest entry last.
-    current: Vec<(f64, u32)>,
+    /// The bucket being settled, sorted with the smallest entry last, as
+    /// `key`s: integer comparisons in the sort.
+    current: Vec<u128>,
 }
 
 impl FieldQueue {
@@ -43,12 +44,12 @@ impl FieldQueue {
         ((distance * self.inv_width) as usize).min(self.cur + RING - 1)
     }
 
-    #[inline]
+    #[inline(always)]
     pub(super) fn push(&mut self, cell: u32, distance: f64) {
         let b = self.bucket(distance);
         if b <= self.cur {
-            let entry = (distance, cell);
-            let at = self.current.partition_point(|&e| later(e, entry));
+            let entry = key(distance, cell);
+            let at = self.current.partition_point(|&e| e > entry);
             self.current.insert(at, entry);
         } else {
             self.ring[b % RING].push(cell);
@@ -56,14 +57,16 @@ impl FieldQueue {
         }
     }
 
-    /// The next (distance, cell); `distance_of` gives a cell's current
-    /// trial distance (None when it is no longer a trial cell), so a
-    /// bucket takes only the cells whose distance still falls in it.
+    /// The next (distance, cell), left in the queue; `distance_of` gives a
+    /// cell's current trial distance (None when it is no longer a trial
+    /// cell), so a bucket takes only the cells whose distance still falls
+    /// in it. A march stopped at a limit looks without taking, so the
+    /// cell it stopped at is not pushed again.
     #[inline]
-    pub(super) fn pop(&mut self, distance_of: impl Fn(u32) -> Option<f64>) -> Option<(f64, u32)> {
+    pub(super) fn peek(&mut self, distance_of: impl Fn(u32) -> Option<f64>) -> Option<(f64, u32)> {
         loop {
-            if let Some(entry) = self.current.pop() {
-                return Some(entry);
+            if let Some(&entry) = self.current.last() {
+                return Some((f64::from_bits((entry >> 32) as u64), entry as u32));
             }
             if self.ring_len == 0 {
                 return None;
@@ -75,22 +78,28 @@ impl FieldQueue {
             for &cell in &bucket {
                 if let Some(d) = distance_of(cell) {
                     if self.bucket(d) == self.cur {
-                        self.current.push((d, cell));
+                        self.current.push(key(d, cell));
                     }
                 }
             }
-            self.current
-                .sort_unstable_by(|&a, &b| b.0.total_cmp(&a.0).then(b.1.cmp(&a.1)));
+            self.current.sort_unstable_by(|a, b| b.cmp(a));
             // A cell offered twice into this bucket appears twice.
             self.current.dedup();
             bucket.clear();
             self.ring[slot] = bucket;
         }
     }
+
+    /// Removes the entry `peek` returned.
+    #[inline]
+    pub(super) fn take(&mut self) {
+        self.current.pop();
+    }
 }
 
-/// Whether `a` pops after `b`.
+/// (distance, cell) as one integer in the queue's order: distance first,
+/// then cell. Non-negative f64 bits order like the floats.
 #[inline]
-fn later(a: (f64, u32), b: (f64, u32)) -> bool {
-    a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)).is_gt()
+fn key(distance: f64, cell: u32) -> u128 {
+    ((distance.to_bits() as u128) << 32) | cell as u128
 }

@@ -143,15 +143,16 @@ impl DistanceField {
             let (state, field) = (&self.state, &self.distance);
             let (distance, cell) = self
                 .queue
-                .pop(|c| (state[c as usize] == TRIAL).then(|| field[c as usize]))?;
+                .peek(|c| (state[c as usize] == TRIAL).then(|| field[c as usize]))?;
             let cell = cell as usize;
             if self.state[cell] != TRIAL || self.distance[cell] != distance {
+                self.queue.take();
                 continue; // superseded by a later update
             }
             if distance > limit {
-                self.queue.push(cell as u32, distance);
                 return None;
             }
+            self.queue.take();
             self.state[cell] = FROZEN;
             self.relax_around(cell, h, allowed);
             // A cell two steps away, across a settled neighbour, now has
@@ -179,18 +180,32 @@ impl DistanceField {
     #[inline]
     fn relax_around(&mut self, cell: usize, h: f64, allowed: Option<&[bool]>) {
         let s = self.stride;
-        for nb in [cell - 1, cell + 1, cell - s, cell + s] {
-            match self.state[nb] {
-                FAR if allowed.is_none_or(|a| a[nb]) => {
-                    if let Some(d) = self.solve(nb, h) {
-                        self.state[nb] = TRIAL;
-                        self.touched.push(nb as u32);
-                        self.distance[nb] = d;
-                        self.queue.push(nb as u32, d);
-                    }
-                }
-                TRIAL => self.update(nb, h),
-                _ => {}
+        let nbs = [cell - 1, cell + 1, cell - s, cell + s];
+        // Solving touches only settled cells, so the four solves are
+        // independent: all four first, then their offers.
+        let mut solved = [None; 4];
+        for k in 0..4 {
+            let nb = nbs[k];
+            let open = match self.state[nb] {
+                FAR => allowed.is_none_or(|a| a[nb]),
+                TRIAL => true,
+                _ => false,
+            };
+            if open {
+                solved[k] = self.solve(nb, h);
+            }
+        }
+        for k in 0..4 {
+            let Some(d) = solved[k] else { continue };
+            let nb = nbs[k];
+            if self.state[nb] == FAR {
+                self.state[nb] = TRIAL;
+                self.touched.push(nb as u32);
+                self.distance[nb] = d;
+                self.queue.push(nb as u32, d);
+            } else if d != self.distance[nb] {
+                self.distance[nb] = d;
+                self.queue.push(nb as u32, d);
             }
         }
     }
@@ -270,6 +285,39 @@ pub struct AszFields {
     search: RegionSearch,
     /// The captors' speeds of the last call.
     captor_speeds: Vec<f64>,
+    /// The counts made since the robots' own cells last changed: a count
+    /// depends only on the robots' cells and speeds, and the planner's
+    /// moves often land two robots' configurations on the same cells (a
+    /// move that stays in its cell, two turns that end in one cell).
+    counts: Vec<(CountKey, usize)>,
+    /// The robots' own cells those counts were made beside.
+    counts_base: Option<CountKey>,
+}
+
+/// The most counts kept beside one set of own cells: the planner's 12
+/// moves (3 captors) and the state itself; a caller trying more moves
+/// loses the oldest.
+const COUNTS_KEPT: usize = 16;
+
+/// The cells (None off the free cells) and speeds of the robots of one
+/// count, captors first, on one lattice.
+#[derive(Clone, PartialEq)]
+struct CountKey {
+    lattice: u64,
+    robots: Vec<(Option<usize>, u64)>,
+}
+
+impl CountKey {
+    fn new<L: Lattice + ?Sized>(lattice: &L, target: Source, captors: &[Source]) -> CountKey {
+        CountKey {
+            lattice: lattice.lattice_id(),
+            robots: captors
+                .iter()
+                .chain(std::iter::once(&target))
+                .map(|s| (lattice.locate(s.pos).map(|(c, _)| c), s.speed.to_bits()))
+                .collect(),
+        }
+    }
 }
 
 /// The buffers of the search for the target's region.
@@ -287,6 +335,12 @@ struct RegionSearch {
     candidates: std::collections::BinaryHeap<Candidate>,
     /// The ASZ's cells of the last call.
     asz: Vec<u32>,
+    /// The region the confined march last ran in, in the order the search
+    /// found it (the order is a function of the region and the target's
+    /// field): a planner's move that leaves the region as it was keeps
+    /// that march.
+    confined_region: Vec<u32>,
+    confined_lattice: u64,
 }
 
 /// A cell to settle, smallest target time first, then smallest index.
@@ -396,10 +450,50 @@ impl AszFields {
         self.count(lattice, target, captors, Some((captors.len(), pos)))
     }
 
+    /// The count of a moved robot's configuration made already beside the
+    /// same own cells, else `search`'s; a move that stays in its robot's
+    /// cell is no move.
+    fn count<L: Lattice + ?Sized>(
+        &mut self,
+        lattice: &L,
+        target: Source,
+        captors: &[Source],
+        moved: Option<(usize, [f64; 2])>,
+    ) -> usize {
+        let base = CountKey::new(lattice, target, captors);
+        if self.counts_base.as_ref() != Some(&base) {
+            self.counts.clear();
+            self.counts_base = Some(base.clone());
+        }
+        let mut key = base;
+        let mut moved = moved;
+        if let Some((m, pos)) = moved {
+            let cell = lattice.locate(pos).map(|(c, _)| c);
+            if cell == key.robots[m].0 {
+                moved = None;
+            } else {
+                key.robots[m].0 = cell;
+            }
+        }
+        if moved.is_some() {
+            if let Some(&(_, n)) = self.counts.iter().find(|(k, _)| *k == key) {
+                return n;
+            }
+        }
+        let n = self.search(lattice, target, captors, moved);
+        if !self.counts.iter().any(|(k, _)| *k == key) {
+            if self.counts.len() == COUNTS_KEPT {
+                self.counts.remove(0);
+            }
+            self.counts.push((key, n));
+        }
+        n
+    }
+
     /// Brings every field to its robot's cell (kept where the robot stayed
     /// in it), the moved robot's (index K for the target) into `candidate`,
     /// then searches.
-    fn count<L: Lattice + ?Sized>(
+    fn search<L: Lattice + ?Sized>(
         &mut self,
         lattice: &L,
         target: Source,
@@ -564,7 +658,13 @@ impl RegionSearch {
         if !self.region[target_cell] {
             return 0;
         }
-        confined.march(lattice, target_cell, Some(&self.region));
+        if self.confined_lattice != lattice.lattice_id()
+            || self.confined_region != self.region_cells
+        {
+            confined.march(lattice, target_cell, Some(&self.region));
+            self.confined_lattice = lattice.lattice_id();
+            self.confined_region.clone_from(&self.region_cells);
+        }
         for &c in &self.region_cells {
             let c = c as usize;
             if !Self::captor_first(captors, speeds, c, confined.at(c) / target_speed) {
@@ -628,8 +728,15 @@ mod tests {
             if order == 0 {
                 assert_eq!(kept.asz_cells(lattice, target, &captors), now);
             }
-            for step in [[0.1, 0.0], [0.0, -0.15], [-0.1, 0.05]] {
-                let i = rng.gen_range(0..3);
+            // A zero step stays in its cell; the last two repeat earlier
+            // moves, so a count made already is looked up.
+            let mut moves: Vec<(usize, [f64; 2])> =
+                [[0.1, 0.0], [0.0, -0.15], [-0.1, 0.05], [0.0, 0.0]]
+                    .into_iter()
+                    .map(|step| (rng.gen_range(0..3), step))
+                    .collect();
+            moves.extend_from_within(..2);
+            for (i, step) in moves {
                 let pos = [captors[i].pos[0] + step[0], captors[i].pos[1] + step[1]];
                 let mut moved = captors.clone();
                 moved[i].pos = pos;
@@ -655,6 +762,38 @@ mod tests {
             );
         }
         assert!(told_apart > 12, "the moves must change |ASZ|: {told_apart}");
+    }
+
+    /// More moves of one state than the counts kept: every count is still
+    /// a fresh one's, the early moves' asked again after the oldest left.
+    #[test]
+    fn more_moves_than_the_counts_kept_count_as_fresh_ones() {
+        let map = two_rooms();
+        let at = |r: usize, c: usize| map.grid.cell_center(r, c);
+        let captors: Vec<Source> = [(60, 60), (250, 90), (120, 230)]
+            .map(|(r, c)| Source {
+                pos: at(r, c),
+                speed: 1.0,
+            })
+            .to_vec();
+        let target = Source {
+            pos: at(150, 110),
+            speed: 1.0,
+        };
+        let moves: Vec<[f64; 2]> = (0..2 * COUNTS_KEPT + 3)
+            .map(|k| at(60 + 4 * (k / 6), 60 + 4 * (k % 6)))
+            .collect();
+        let mut kept = AszFields::new();
+        for pos in moves.iter().chain(&moves[..4]) {
+            let mut moved = captors.clone();
+            moved[0].pos = *pos;
+            assert_eq!(
+                kept.with_moved_captor(&map, target, &captors, 0, *pos),
+                AszFields::new().asz_cells(&map, target, &moved),
+                "captor 0 moved to {pos:?}"
+            );
+        }
+        assert_eq!(kept.counts.len(), COUNTS_KEPT);
     }
 
     #[test]
