@@ -42,11 +42,6 @@ impl Pass<'_> {
     pub fn fail(&mut self, why: impl Into<String>) {
         self.failure.get_or_insert_with(|| why.into());
     }
-
-    /// Whether the league already ends with a failure.
-    pub fn failed(&self) -> bool {
-        self.failure.is_some()
-    }
 }
 
 /// Runs `policy` until it is through; stops when `stop` is set, after
