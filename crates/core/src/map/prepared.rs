@@ -42,6 +42,10 @@ pub struct PreparedMap {
     pub stride: usize,
     /// (side + 2 PAD)^2 cells, 1 = obstacle; the grid sits at offset (PAD, PAD).
     pub obstacle: Vec<u8>,
+    /// Per padded cell, like `obstacle`: its obstacle bit (bit 0) and how
+    /// far around it every cell is of its kind (bits 1..=7,
+    /// `reach::kind_and_reach`), so the patch fills runs without lookups.
+    pub patch_cells: Vec<u8>,
     /// Per grid cell: distance (m) from its centre to the nearest obstacle cell centre.
     pub clearance: Vec<f32>,
     /// Grid indices of free cells whose centre is more than 0.4 m from any obstacle.
@@ -112,10 +116,12 @@ impl PreparedMap {
                     obstacle[i] | obstacle[i + 1] | obstacle[i + stride] | obstacle[i + stride + 1];
             }
         }
+        let patch_cells = super::reach::kind_and_reach(&obstacle, stride);
         PreparedMap {
             grid,
             stride,
             obstacle,
+            patch_cells,
             clearance,
             spawn_cells,
             ray_steps,
