@@ -274,38 +274,77 @@ impl PreparedMap {
     /// robots follow, so it is kept exactly. Only samples that provably lie
     /// in free cells are skipped (`ray_step_of`).
     pub fn stepped_wall_distance(&self, p: [f64; 2], m: usize, max: f64) -> f64 {
-        let dir = ray_dirs()[m];
-        let samples = (max / WALL_RAY_STEP + 1e-9).floor() as usize;
-        let lim = (self.side() + PAD) as isize;
+        let samples = wall_ray_samples(max);
         let mut k = 1;
         while k <= samples {
-            let s = k as f64 * WALL_RAY_STEP;
-            let q = [p[0] + s * dir[0], p[1] + s * dir[1]];
-            let (row, col) = self.grid.cell_of(q);
-            if row < -(PAD as isize) || col < -(PAD as isize) || row >= lim || col >= lim {
-                return s;
+            match self.wall_ray_sample(p, m, k) {
+                Some(step) => k += step,
+                None => return k as f64 * WALL_RAY_STEP,
             }
-            // One load says both whether the sample is in an obstacle and
-            // which sample could be the next one in an obstacle.
-            let entry = &self.ray_steps[self.padded_index(row, col) * NUM_RAYS + m];
-            let mut step = entry.load(Ordering::Relaxed);
-            if step == 0 {
-                step = self.ray_step_of(row, col, m);
-                entry.store(step, Ordering::Relaxed);
-            }
-            if step == IN_OBSTACLE {
-                return s;
-            }
-            k += step as usize;
         }
         max
+    }
+
+    /// `stepped_wall_distance` of every world ray (`ray_dirs()` order),
+    /// the rays advanced in turn, one sample each: every sample waits on
+    /// the table entry of its ray's last one, so one ray at a time would
+    /// spend most of its time waiting, while twelve rays' samples do not
+    /// wait on each other.
+    pub fn stepped_wall_distances(&self, p: [f64; 2], max: f64) -> [f64; NUM_RAYS] {
+        let samples = wall_ray_samples(max);
+        let mut d = [max; NUM_RAYS];
+        let mut k = [1; NUM_RAYS];
+        let mut pending: u32 = (1 << NUM_RAYS) - 1;
+        while pending != 0 {
+            for m in 0..NUM_RAYS {
+                if pending & 1 << m == 0 {
+                    continue;
+                }
+                if k[m] > samples {
+                    pending &= !(1 << m);
+                    continue;
+                }
+                match self.wall_ray_sample(p, m, k[m]) {
+                    Some(step) => k[m] += step,
+                    None => {
+                        d[m] = k[m] as f64 * WALL_RAY_STEP;
+                        pending &= !(1 << m);
+                    }
+                }
+            }
+        }
+        d
+    }
+
+    /// Sample k of wall ray m from `p`: None when it lies in an obstacle
+    /// cell or outside the padded grid, else the step to the next sample
+    /// that could lie in one.
+    #[inline(always)]
+    fn wall_ray_sample(&self, p: [f64; 2], m: usize, k: usize) -> Option<usize> {
+        let dir = ray_dirs()[m];
+        let s = k as f64 * WALL_RAY_STEP;
+        let q = [p[0] + s * dir[0], p[1] + s * dir[1]];
+        let (row, col) = self.grid.cell_of(q);
+        let lim = (self.side() + PAD) as isize;
+        if row < -(PAD as isize) || col < -(PAD as isize) || row >= lim || col >= lim {
+            return None;
+        }
+        // One load says both whether the sample is in an obstacle and
+        // which sample could be the next one in an obstacle.
+        let entry = &self.ray_steps[self.padded_index(row, col) * NUM_RAYS + m];
+        let mut step = entry.load(Ordering::Relaxed);
+        if step == 0 {
+            step = self.ray_step_of(row, col, m);
+            entry.store(step, Ordering::Relaxed);
+        }
+        (step != IN_OBSTACLE).then_some(step as usize)
     }
 
     /// `stepped_wall_distance` testing every sample (the definition itself,
     /// for tests and for checking the skipping).
     pub fn stepped_wall_distance_naive(&self, p: [f64; 2], m: usize, max: f64) -> f64 {
         let dir = ray_dirs()[m];
-        let samples = (max / WALL_RAY_STEP + 1e-9).floor() as usize;
+        let samples = wall_ray_samples(max);
         for k in 1..=samples {
             let s = k as f64 * WALL_RAY_STEP;
             let (row, col) = self.grid.cell_of([p[0] + s * dir[0], p[1] + s * dir[1]]);
@@ -315,6 +354,11 @@ impl PreparedMap {
         }
         max
     }
+}
+
+/// How many wall-ray samples lie within `max` metres.
+fn wall_ray_samples(max: f64) -> usize {
+    (max / WALL_RAY_STEP + 1e-9).floor() as usize
 }
 
 /// `ray_steps`' mark of a sample in an obstacle cell.
@@ -540,6 +584,18 @@ mod tests {
                 m.stepped_wall_distance_naive(p, ray, 16.0).to_bits(),
                 "{p:?} ray {ray}"
             );
+        }
+        // All rays at once, as the rule-based robots cast them.
+        for _ in 0..5_000 {
+            let p = [rng.gen_range(-6.0..6.0), rng.gen_range(-6.0..6.0)];
+            let all = m.stepped_wall_distances(p, 16.0);
+            for (ray, d) in all.iter().enumerate() {
+                assert_eq!(
+                    d.to_bits(),
+                    m.stepped_wall_distance_naive(p, ray, 16.0).to_bits(),
+                    "{p:?} ray {ray}"
+                );
+            }
         }
     }
 
