@@ -6,6 +6,7 @@ pub mod gibson_source;
 pub mod grid;
 pub mod load;
 pub mod prepared;
+pub mod ray_steps;
 pub mod reach;
 pub mod testset;
 

@@ -2,11 +2,11 @@
 //! over long distances: an obstacle-padded copy of the grid (patch lookups need
 //! no bounds checks), the clearance of every cell (Euclidean distance
 //! transform), and the cells where robots may be placed. The rule-based
-//! robots' long wall rays (spec §7) are sampled per query; the clearance lets
-//! them skip samples that cannot be in an obstacle.
+//! robots' long wall rays (spec §7) are sampled per query; a table per ray
+//! (`RaySteps`) lets them skip samples that cannot be in an obstacle.
 
 use super::grid::{floor_isize, Grid, CELL_SIZE};
-use std::sync::atomic::{AtomicU8, Ordering};
+use super::ray_steps::{RaySteps, IN_OBSTACLE};
 use std::sync::OnceLock;
 
 /// Obstacle border around the grid in the padded copy; covers the corner of a
@@ -50,18 +50,9 @@ pub struct PreparedMap {
     pub clearance: Vec<f32>,
     /// Grid indices of free cells whose centre is more than 0.4 m from any obstacle.
     pub spawn_cells: Vec<u32>,
-    /// Per padded cell, like `obstacle`, times world ray m (index cell *
-    /// NUM_RAYS + m): after a wall-ray sample in this cell, the step to the
-    /// next sample of ray m that could lie in an obstacle (`ray_step_of`),
-    /// or `IN_OBSTACLE`; 0 until a ray first needs it. Filled lazily (most
-    /// cells never hold a robot, and preparing all of them took 80 ms a
-    /// map); any thread may fill an entry, always with the same value.
-    ray_steps: Vec<AtomicU8>,
-    /// Per padded cell (row, col): 1 when any of (row, col), (row, col + 1),
-    /// (row + 1, col), (row + 1, col + 1) is an obstacle, so that one load
-    /// says whether a unit square with its corner in the cell touches one
-    /// (`ray_step_of`). The last row and column are 1.
-    square_blocked: Vec<u8>,
+    /// Per world ray and cell: how many wall-ray samples a ray may skip
+    /// after a sample in the cell (`RaySteps`).
+    ray_steps: RaySteps,
     /// Unique per prepared map, so reusable buffers know when the map changed.
     pub id: u64,
     /// Per coarse-map size n (index n, up to `MAX_COARSE`): the share of
@@ -105,17 +96,7 @@ impl PreparedMap {
             .filter(|&i| clearance[i] as f64 > PLACEMENT_CLEARANCE + 1e-9)
             .map(|i| i as u32)
             .collect();
-        let ray_steps = (0..stride * stride * NUM_RAYS)
-            .map(|_| AtomicU8::new(0))
-            .collect();
-        let mut square_blocked = vec![1u8; stride * stride];
-        for r in 0..stride - 1 {
-            for c in 0..stride - 1 {
-                let i = r * stride + c;
-                square_blocked[i] =
-                    obstacle[i] | obstacle[i + 1] | obstacle[i + stride] | obstacle[i + stride + 1];
-            }
-        }
+        let ray_steps = RaySteps::new(&obstacle, stride);
         let patch_cells = super::reach::kind_and_reach(&obstacle, stride);
         PreparedMap {
             grid,
@@ -125,7 +106,6 @@ impl PreparedMap {
             clearance,
             spawn_cells,
             ray_steps,
-            square_blocked,
             id: fresh_id(),
             coarse_walls: std::array::from_fn(|_| OnceLock::new()),
         }
@@ -272,7 +252,7 @@ impl PreparedMap {
     /// on `p` itself, not only on its cell, and can step over an obstacle
     /// corner thinner than the step: that is the definition the reference's
     /// robots follow, so it is kept exactly. Only samples that provably lie
-    /// in free cells are skipped (`ray_step_of`).
+    /// in free cells are skipped (`RaySteps`).
     pub fn stepped_wall_distance(&self, p: [f64; 2], m: usize, max: f64) -> f64 {
         let samples = wall_ray_samples(max);
         let mut k = 1;
@@ -331,12 +311,7 @@ impl PreparedMap {
         }
         // One load says both whether the sample is in an obstacle and
         // which sample could be the next one in an obstacle.
-        let entry = &self.ray_steps[self.padded_index(row, col) * NUM_RAYS + m];
-        let mut step = entry.load(Ordering::Relaxed);
-        if step == 0 {
-            step = self.ray_step_of(row, col, m);
-            entry.store(step, Ordering::Relaxed);
-        }
+        let step = self.ray_steps.step(m, self.padded_index(row, col));
         (step != IN_OBSTACLE).then_some(step as usize)
     }
 
@@ -359,65 +334,6 @@ impl PreparedMap {
 /// How many wall-ray samples lie within `max` metres.
 fn wall_ray_samples(max: f64) -> usize {
     (max / WALL_RAY_STEP + 1e-9).floor() as usize
-}
-
-/// `ray_steps`' mark of a sample in an obstacle cell.
-const IN_OBSTACLE: u8 = u8::MAX;
-
-impl PreparedMap {
-    /// After a wall-ray sample in grid cell (row, col), padding included:
-    /// the step along ray m to the next sample that could lie in an
-    /// obstacle cell, or `IN_OBSTACLE`. Sample k + i lies in the cell's
-    /// square moved i steps (2i cells) along the ray, wherever in the square
-    /// sample k was; when every cell that moved square touches (closed,
-    /// widened by 1e-6 cells against rounding) is free, sample k + i is in a
-    /// free cell. The clearance gives a bound for every ray at once: a point
-    /// of the cell is at least clearance - 2 half-diagonals from any point
-    /// of an obstacle cell. At least 1 (the next sample is the one to test),
-    /// at most 16 (a shorter step is as exact; longer scans cost more to fill
-    /// than they saved).
-    fn ray_step_of(&self, row: isize, col: isize, m: usize) -> u8 {
-        const MAX: usize = 16;
-        const EPS: f64 = 1e-6;
-        if self.blocked(row, col) {
-            return IN_OBSTACLE;
-        }
-        let clearance = self.clearance[row as usize * self.side() + col as usize];
-        let safe = clearance as f64 - 2.0 * HALF_DIAG - 1e-6;
-        let by_clearance = floor_isize(safe / WALL_RAY_STEP).clamp(1, MAX as isize) as usize;
-        let cells_per_step = WALL_RAY_STEP / CELL_SIZE;
-        // Grid columns grow with x, rows with -y.
-        let dir = ray_dirs()[m];
-        let (dc, dr) = (dir[0] * cells_per_step, -dir[1] * cells_per_step);
-        // Samples after this one known to be free; the clearance's are.
-        let mut known_free = by_clearance - 1;
-        while known_free + 1 < MAX {
-            let i = (known_free + 1) as f64;
-            let (c0, r0) = (col as f64 + i * dc - EPS, row as f64 + i * dr - EPS);
-            let (c1, r1) = (c0 + 1.0 + 2.0 * EPS, r0 + 1.0 + 2.0 * EPS);
-            let (rows, cols) = (
-                floor_isize(r0)..=floor_isize(r1),
-                floor_isize(c0)..=floor_isize(c1),
-            );
-            let lim = (self.side() + PAD - 1) as isize;
-            let all_free = if rows.end() - rows.start() == 1
-                && cols.end() - cols.start() == 1
-                && (-(PAD as isize)..lim).contains(rows.start())
-                && (-(PAD as isize)..lim).contains(cols.start())
-            {
-                // The usual case: the square touches 2 x 2 cells.
-                self.square_blocked[self.padded_index(*rows.start(), *cols.start())] == 0
-            } else {
-                rows.clone()
-                    .all(|r| cols.clone().all(|c| !self.blocked(r, c)))
-            };
-            if !all_free {
-                break;
-            }
-            known_free += 1;
-        }
-        (known_free + 1) as u8
-    }
 }
 
 /// Squared Euclidean distance (in cells) from every cell centre to the nearest
