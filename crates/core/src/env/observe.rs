@@ -80,7 +80,7 @@ const ROUND: i32 = 1 << 15;
 /// Pixels a run of one patch row holds; a run is filled at once when the
 /// cells around its middle pixel are all of one kind.
 const RUN: usize = 8;
-const _: () = assert!(PATCH % RUN == 0);
+const _: () = assert!(PATCH.is_multiple_of(RUN));
 
 /// Where a patch samples the padded grid. The robot's cell (index `base`,
 /// rows `stride` apart) is pixel (24, 24): the patch reaches 24 cells ahead

@@ -7,6 +7,7 @@ pub mod grid;
 pub mod load;
 pub mod prepared;
 pub mod ray_steps;
+pub mod rays;
 pub mod reach;
 pub mod testset;
 

@@ -6,35 +6,20 @@
 //! (`RaySteps`) lets them skip samples that cannot be in an obstacle.
 
 use super::grid::{floor_isize, Grid, CELL_SIZE};
-use super::ray_steps::{RaySteps, IN_OBSTACLE};
+use super::ray_steps::{RaySteps, IN_OBSTACLE, MAX_STEP};
+pub use super::rays::{ray_dirs, NUM_RAYS, WALL_RAY_STEP};
 use std::sync::OnceLock;
 
 /// Obstacle border around the grid in the padded copy; covers the corner of a
 /// rotated 48x48 patch (24 * sqrt 2 < 34 cells) and short rays.
 pub const PAD: usize = 40;
-/// The 12 world ray angles of spec §2 and §7: 0, 30, ..., 330 degrees.
-pub const NUM_RAYS: usize = 12;
 /// Dilation radius for placement (spec §4).
 pub const PLACEMENT_CLEARANCE: f64 = 0.4;
 /// Half the diagonal of a cell: how far a point can be from its cell centre.
 const HALF_DIAG: f64 = CELL_SIZE * std::f64::consts::SQRT_2 / 2.0;
-/// Sample spacing of the rule-based robots' wall rays (spec §7).
-pub const WALL_RAY_STEP: f64 = 0.1;
-
-/// Unit vectors of the 12 world rays, with exact zeros on the axes
-/// (computed once: every robot's wall force reads them each step).
-pub fn ray_dirs() -> [[f64; 2]; NUM_RAYS] {
-    static DIRS: std::sync::OnceLock<[[f64; 2]; NUM_RAYS]> = std::sync::OnceLock::new();
-    *DIRS.get_or_init(|| {
-        let mut dirs = [[0.0; 2]; NUM_RAYS];
-        for (m, d) in dirs.iter_mut().enumerate() {
-            let a = (m as f64 * 30.0).to_radians();
-            let snap = |v: f64| if v.abs() < 1e-12 { 0.0 } else { v };
-            *d = [snap(a.cos()), snap(a.sin())];
-        }
-        dirs
-    })
-}
+// A grid cell's squares moved up to the longest skip along a wall ray (2
+// cells a sample), widened by a cell, stay inside the padding.
+const _: () = assert!(MAX_STEP * 2 + 2 <= PAD);
 
 pub struct PreparedMap {
     pub grid: Grid,
@@ -96,7 +81,7 @@ impl PreparedMap {
             .filter(|&i| clearance[i] as f64 > PLACEMENT_CLEARANCE + 1e-9)
             .map(|i| i as u32)
             .collect();
-        let ray_steps = RaySteps::new(&obstacle, stride);
+        let ray_steps = RaySteps::new(&obstacle, stride, PAD);
         let patch_cells = super::reach::kind_and_reach(&obstacle, stride);
         PreparedMap {
             grid,

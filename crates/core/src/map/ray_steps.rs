@@ -4,7 +4,7 @@
 //! cell the sample was.
 
 use super::grid::CELL_SIZE;
-use super::prepared::{ray_dirs, NUM_RAYS, PAD, WALL_RAY_STEP};
+use super::rays::{ray_dirs, NUM_RAYS, WALL_RAY_STEP};
 
 /// A step's mark of a sample in an obstacle cell.
 pub const IN_OBSTACLE: u8 = u8::MAX;
@@ -15,14 +15,9 @@ pub const MAX_STEP: usize = 16;
 /// samples' coordinates.
 const EPS: f64 = 1e-6;
 
-// A grid cell's squares moved up to MAX_STEP steps of 2 cells, widened by
-// a cell, stay inside the padded grid.
-const _: () = assert!(MAX_STEP * 2 + 2 <= PAD);
-
 /// The steps of every world ray, built for all cells at once.
 pub struct RaySteps {
-    /// Per ray m, per padded cell (`cells` a ray, grid at offset (PAD,
-    /// PAD)): the step to the next sample that could lie in an obstacle
+    /// Per ray m, per padded cell (`cells` a ray): the step to the next sample that could lie in an obstacle
     /// cell (1..=MAX_STEP), or `IN_OBSTACLE`.
     steps: Vec<u8>,
     cells: usize,
@@ -30,7 +25,9 @@ pub struct RaySteps {
 
 impl RaySteps {
     /// The steps over a padded obstacle grid (`stride` cells a row, 1 =
-    /// obstacle; every cell within PAD of its edge is an obstacle).
+    /// obstacle; every cell within `pad` of its edge is an obstacle, and
+    /// `pad` is at least 2 `MAX_STEP` + 2, so that the blocks below of
+    /// every cell inside the padding lie inside the padded grid).
     ///
     /// Sample k + i of a ray lies in the square of sample k's cell moved i
     /// steps (2i cells) along the ray, wherever in the square sample k was;
@@ -39,14 +36,15 @@ impl RaySteps {
     /// the same block of offsets for every cell, so each step length is one
     /// pass over the grid: a cell's step is the first i whose block holds
     /// an obstacle (at most `MAX_STEP`).
-    pub fn new(obstacle: &[u8], stride: usize) -> RaySteps {
+    pub fn new(obstacle: &[u8], stride: usize, pad: usize) -> RaySteps {
         let cells = obstacle.len();
-        let side = stride - 2 * PAD;
+        assert!(pad >= 2 * MAX_STEP + 2, "padding {pad} too thin");
+        let side = stride - 2 * pad;
         let mut steps = vec![IN_OBSTACLE; NUM_RAYS * cells];
         let mut hit = vec![0u8; side];
         for (m, table) in steps.chunks_exact_mut(cells).enumerate() {
-            for r in PAD..PAD + side {
-                let row = r * stride + PAD;
+            for r in pad..pad + side {
+                let row = r * stride + pad;
                 table[row..row + side].fill(MAX_STEP as u8);
                 // Longest first, so the shortest blocked step stays.
                 for i in (1..MAX_STEP).rev() {
