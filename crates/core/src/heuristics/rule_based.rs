@@ -19,8 +19,8 @@ const WALL_WEIGHT: f64 = 0.6;
 /// about 5% of their decisions (tests/integration/conformance.rs).
 pub fn wall_force(map: &PreparedMap, pos: [f64; 2], d: f64) -> [f64; 2] {
     let mut f = [0.0, 0.0];
-    for (m, u) in ray_dirs().iter().enumerate() {
-        let dm = map.stepped_wall_distance(pos, m, d);
+    let distances = map.stepped_wall_distances(pos, d);
+    for (u, dm) in ray_dirs().iter().zip(distances) {
         f[0] -= d / dm * u[0];
         f[1] -= d / dm * u[1];
     }

@@ -6,6 +6,9 @@ pub mod gibson_source;
 pub mod grid;
 pub mod load;
 pub mod prepared;
+pub mod ray_steps;
+pub mod rays;
+pub mod reach;
 pub mod testset;
 
 pub use catalog::{resolve, MapEntry};

@@ -2,39 +2,24 @@
 //! over long distances: an obstacle-padded copy of the grid (patch lookups need
 //! no bounds checks), the clearance of every cell (Euclidean distance
 //! transform), and the cells where robots may be placed. The rule-based
-//! robots' long wall rays (spec §7) are sampled per query; the clearance lets
-//! them skip samples that cannot be in an obstacle.
+//! robots' long wall rays (spec §7) are sampled per query; a table per ray
+//! (`RaySteps`) lets them skip samples that cannot be in an obstacle.
 
 use super::grid::{floor_isize, Grid, CELL_SIZE};
-use std::sync::atomic::{AtomicU8, Ordering};
+use super::ray_steps::{RaySteps, IN_OBSTACLE, MAX_STEP};
+pub use super::rays::{ray_dirs, NUM_RAYS, WALL_RAY_STEP};
 use std::sync::OnceLock;
 
 /// Obstacle border around the grid in the padded copy; covers the corner of a
 /// rotated 48x48 patch (24 * sqrt 2 < 34 cells) and short rays.
 pub const PAD: usize = 40;
-/// The 12 world ray angles of spec §2 and §7: 0, 30, ..., 330 degrees.
-pub const NUM_RAYS: usize = 12;
 /// Dilation radius for placement (spec §4).
 pub const PLACEMENT_CLEARANCE: f64 = 0.4;
 /// Half the diagonal of a cell: how far a point can be from its cell centre.
 const HALF_DIAG: f64 = CELL_SIZE * std::f64::consts::SQRT_2 / 2.0;
-/// Sample spacing of the rule-based robots' wall rays (spec §7).
-pub const WALL_RAY_STEP: f64 = 0.1;
-
-/// Unit vectors of the 12 world rays, with exact zeros on the axes
-/// (computed once: every robot's wall force reads them each step).
-pub fn ray_dirs() -> [[f64; 2]; NUM_RAYS] {
-    static DIRS: std::sync::OnceLock<[[f64; 2]; NUM_RAYS]> = std::sync::OnceLock::new();
-    *DIRS.get_or_init(|| {
-        let mut dirs = [[0.0; 2]; NUM_RAYS];
-        for (m, d) in dirs.iter_mut().enumerate() {
-            let a = (m as f64 * 30.0).to_radians();
-            let snap = |v: f64| if v.abs() < 1e-12 { 0.0 } else { v };
-            *d = [snap(a.cos()), snap(a.sin())];
-        }
-        dirs
-    })
-}
+// A grid cell's squares moved up to the longest skip along a wall ray (2
+// cells a sample), widened by a cell, stay inside the padding.
+const _: () = assert!(MAX_STEP * 2 + 2 <= PAD);
 
 pub struct PreparedMap {
     pub grid: Grid,
@@ -42,22 +27,17 @@ pub struct PreparedMap {
     pub stride: usize,
     /// (side + 2 PAD)^2 cells, 1 = obstacle; the grid sits at offset (PAD, PAD).
     pub obstacle: Vec<u8>,
+    /// Per padded cell, like `obstacle`: its obstacle bit (bit 0) and how
+    /// far around it every cell is of its kind (bits 1..=7,
+    /// `reach::kind_and_reach`), so the patch fills runs without lookups.
+    pub patch_cells: Vec<u8>,
     /// Per grid cell: distance (m) from its centre to the nearest obstacle cell centre.
     pub clearance: Vec<f32>,
     /// Grid indices of free cells whose centre is more than 0.4 m from any obstacle.
     pub spawn_cells: Vec<u32>,
-    /// Per padded cell, like `obstacle`, times world ray m (index cell *
-    /// NUM_RAYS + m): after a wall-ray sample in this cell, the step to the
-    /// next sample of ray m that could lie in an obstacle (`ray_step_of`),
-    /// or `IN_OBSTACLE`; 0 until a ray first needs it. Filled lazily (most
-    /// cells never hold a robot, and preparing all of them took 80 ms a
-    /// map); any thread may fill an entry, always with the same value.
-    ray_steps: Vec<AtomicU8>,
-    /// Per padded cell (row, col): 1 when any of (row, col), (row, col + 1),
-    /// (row + 1, col), (row + 1, col + 1) is an obstacle, so that one load
-    /// says whether a unit square with its corner in the cell touches one
-    /// (`ray_step_of`). The last row and column are 1.
-    square_blocked: Vec<u8>,
+    /// Per world ray and cell: how many wall-ray samples a ray may skip
+    /// after a sample in the cell (`RaySteps`).
+    ray_steps: RaySteps,
     /// Unique per prepared map, so reusable buffers know when the map changed.
     pub id: u64,
     /// Per coarse-map size n (index n, up to `MAX_COARSE`): the share of
@@ -101,25 +81,16 @@ impl PreparedMap {
             .filter(|&i| clearance[i] as f64 > PLACEMENT_CLEARANCE + 1e-9)
             .map(|i| i as u32)
             .collect();
-        let ray_steps = (0..stride * stride * NUM_RAYS)
-            .map(|_| AtomicU8::new(0))
-            .collect();
-        let mut square_blocked = vec![1u8; stride * stride];
-        for r in 0..stride - 1 {
-            for c in 0..stride - 1 {
-                let i = r * stride + c;
-                square_blocked[i] =
-                    obstacle[i] | obstacle[i + 1] | obstacle[i + stride] | obstacle[i + stride + 1];
-            }
-        }
+        let ray_steps = RaySteps::new(&obstacle, stride, PAD);
+        let patch_cells = super::reach::kind_and_reach(&obstacle, stride);
         PreparedMap {
             grid,
             stride,
             obstacle,
+            patch_cells,
             clearance,
             spawn_cells,
             ray_steps,
-            square_blocked,
             id: fresh_id(),
             coarse_walls: std::array::from_fn(|_| OnceLock::new()),
         }
@@ -266,40 +237,74 @@ impl PreparedMap {
     /// on `p` itself, not only on its cell, and can step over an obstacle
     /// corner thinner than the step: that is the definition the reference's
     /// robots follow, so it is kept exactly. Only samples that provably lie
-    /// in free cells are skipped (`ray_step_of`).
+    /// in free cells are skipped (`RaySteps`).
     pub fn stepped_wall_distance(&self, p: [f64; 2], m: usize, max: f64) -> f64 {
-        let dir = ray_dirs()[m];
-        let samples = (max / WALL_RAY_STEP + 1e-9).floor() as usize;
-        let lim = (self.side() + PAD) as isize;
+        let samples = wall_ray_samples(max);
         let mut k = 1;
         while k <= samples {
-            let s = k as f64 * WALL_RAY_STEP;
-            let q = [p[0] + s * dir[0], p[1] + s * dir[1]];
-            let (row, col) = self.grid.cell_of(q);
-            if row < -(PAD as isize) || col < -(PAD as isize) || row >= lim || col >= lim {
-                return s;
+            match self.wall_ray_sample(p, m, k) {
+                Some(step) => k += step,
+                None => return k as f64 * WALL_RAY_STEP,
             }
-            // One load says both whether the sample is in an obstacle and
-            // which sample could be the next one in an obstacle.
-            let entry = &self.ray_steps[self.padded_index(row, col) * NUM_RAYS + m];
-            let mut step = entry.load(Ordering::Relaxed);
-            if step == 0 {
-                step = self.ray_step_of(row, col, m);
-                entry.store(step, Ordering::Relaxed);
-            }
-            if step == IN_OBSTACLE {
-                return s;
-            }
-            k += step as usize;
         }
         max
+    }
+
+    /// `stepped_wall_distance` of every world ray (`ray_dirs()` order),
+    /// the rays advanced in turn, one sample each: every sample waits on
+    /// the table entry of its ray's last one, so one ray at a time would
+    /// spend most of its time waiting, while twelve rays' samples do not
+    /// wait on each other.
+    pub fn stepped_wall_distances(&self, p: [f64; 2], max: f64) -> [f64; NUM_RAYS] {
+        let samples = wall_ray_samples(max);
+        let mut d = [max; NUM_RAYS];
+        let mut k = [1; NUM_RAYS];
+        let mut pending: u32 = (1 << NUM_RAYS) - 1;
+        while pending != 0 {
+            for m in 0..NUM_RAYS {
+                if pending & 1 << m == 0 {
+                    continue;
+                }
+                if k[m] > samples {
+                    pending &= !(1 << m);
+                    continue;
+                }
+                match self.wall_ray_sample(p, m, k[m]) {
+                    Some(step) => k[m] += step,
+                    None => {
+                        d[m] = k[m] as f64 * WALL_RAY_STEP;
+                        pending &= !(1 << m);
+                    }
+                }
+            }
+        }
+        d
+    }
+
+    /// Sample k of wall ray m from `p`: None when it lies in an obstacle
+    /// cell or outside the padded grid, else the step to the next sample
+    /// that could lie in one.
+    #[inline(always)]
+    fn wall_ray_sample(&self, p: [f64; 2], m: usize, k: usize) -> Option<usize> {
+        let dir = ray_dirs()[m];
+        let s = k as f64 * WALL_RAY_STEP;
+        let q = [p[0] + s * dir[0], p[1] + s * dir[1]];
+        let (row, col) = self.grid.cell_of(q);
+        let lim = (self.side() + PAD) as isize;
+        if row < -(PAD as isize) || col < -(PAD as isize) || row >= lim || col >= lim {
+            return None;
+        }
+        // One load says both whether the sample is in an obstacle and
+        // which sample could be the next one in an obstacle.
+        let step = self.ray_steps.step(m, self.padded_index(row, col));
+        (step != IN_OBSTACLE).then_some(step as usize)
     }
 
     /// `stepped_wall_distance` testing every sample (the definition itself,
     /// for tests and for checking the skipping).
     pub fn stepped_wall_distance_naive(&self, p: [f64; 2], m: usize, max: f64) -> f64 {
         let dir = ray_dirs()[m];
-        let samples = (max / WALL_RAY_STEP + 1e-9).floor() as usize;
+        let samples = wall_ray_samples(max);
         for k in 1..=samples {
             let s = k as f64 * WALL_RAY_STEP;
             let (row, col) = self.grid.cell_of([p[0] + s * dir[0], p[1] + s * dir[1]]);
@@ -311,63 +316,9 @@ impl PreparedMap {
     }
 }
 
-/// `ray_steps`' mark of a sample in an obstacle cell.
-const IN_OBSTACLE: u8 = u8::MAX;
-
-impl PreparedMap {
-    /// After a wall-ray sample in grid cell (row, col), padding included:
-    /// the step along ray m to the next sample that could lie in an
-    /// obstacle cell, or `IN_OBSTACLE`. Sample k + i lies in the cell's
-    /// square moved i steps (2i cells) along the ray, wherever in the square
-    /// sample k was; when every cell that moved square touches (closed,
-    /// widened by 1e-6 cells against rounding) is free, sample k + i is in a
-    /// free cell. The clearance gives a bound for every ray at once: a point
-    /// of the cell is at least clearance - 2 half-diagonals from any point
-    /// of an obstacle cell. At least 1 (the next sample is the one to test),
-    /// at most 16 (a shorter step is as exact; longer scans cost more to fill
-    /// than they saved).
-    fn ray_step_of(&self, row: isize, col: isize, m: usize) -> u8 {
-        const MAX: usize = 16;
-        const EPS: f64 = 1e-6;
-        if self.blocked(row, col) {
-            return IN_OBSTACLE;
-        }
-        let clearance = self.clearance[row as usize * self.side() + col as usize];
-        let safe = clearance as f64 - 2.0 * HALF_DIAG - 1e-6;
-        let by_clearance = floor_isize(safe / WALL_RAY_STEP).clamp(1, MAX as isize) as usize;
-        let cells_per_step = WALL_RAY_STEP / CELL_SIZE;
-        // Grid columns grow with x, rows with -y.
-        let dir = ray_dirs()[m];
-        let (dc, dr) = (dir[0] * cells_per_step, -dir[1] * cells_per_step);
-        // Samples after this one known to be free; the clearance's are.
-        let mut known_free = by_clearance - 1;
-        while known_free + 1 < MAX {
-            let i = (known_free + 1) as f64;
-            let (c0, r0) = (col as f64 + i * dc - EPS, row as f64 + i * dr - EPS);
-            let (c1, r1) = (c0 + 1.0 + 2.0 * EPS, r0 + 1.0 + 2.0 * EPS);
-            let (rows, cols) = (
-                floor_isize(r0)..=floor_isize(r1),
-                floor_isize(c0)..=floor_isize(c1),
-            );
-            let lim = (self.side() + PAD - 1) as isize;
-            let all_free = if rows.end() - rows.start() == 1
-                && cols.end() - cols.start() == 1
-                && (-(PAD as isize)..lim).contains(rows.start())
-                && (-(PAD as isize)..lim).contains(cols.start())
-            {
-                // The usual case: the square touches 2 x 2 cells.
-                self.square_blocked[self.padded_index(*rows.start(), *cols.start())] == 0
-            } else {
-                rows.clone()
-                    .all(|r| cols.clone().all(|c| !self.blocked(r, c)))
-            };
-            if !all_free {
-                break;
-            }
-            known_free += 1;
-        }
-        (known_free + 1) as u8
-    }
+/// How many wall-ray samples lie within `max` metres.
+fn wall_ray_samples(max: f64) -> usize {
+    (max / WALL_RAY_STEP + 1e-9).floor() as usize
 }
 
 /// Squared Euclidean distance (in cells) from every cell centre to the nearest
@@ -534,6 +485,18 @@ mod tests {
                 m.stepped_wall_distance_naive(p, ray, 16.0).to_bits(),
                 "{p:?} ray {ray}"
             );
+        }
+        // All rays at once, as the rule-based robots cast them.
+        for _ in 0..5_000 {
+            let p = [rng.gen_range(-6.0..6.0), rng.gen_range(-6.0..6.0)];
+            let all = m.stepped_wall_distances(p, 16.0);
+            for (ray, d) in all.iter().enumerate() {
+                assert_eq!(
+                    d.to_bits(),
+                    m.stepped_wall_distance_naive(p, ray, 16.0).to_bits(),
+                    "{p:?} ray {ray}"
+                );
+            }
         }
     }
 
