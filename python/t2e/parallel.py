@@ -46,7 +46,7 @@ class T2EParallelEnv(ParallelEnv):
     ``flat`` (those two in one float32 vector, for MLP policies;
     t2e/observations.py); ``asz_info``
     whether every step computes the exact ASZ (per-robot arrival fields,
-    about 7 ms a step on the shipped maps;
+    about 3.5 ms a step on the shipped maps;
     off by default); ``captors`` or ``target`` a built-in opponent that
     plays that side inside the env (``heuristic``, ``greedy``,
     ``greedy:K``, ``random``, ``still``, ``ckpt:FOLDER`` for an exported
