@@ -81,6 +81,12 @@ const ROUND: i32 = 1 << 15;
 /// cells around its middle pixel are all of one kind.
 const RUN: usize = 8;
 const _: () = assert!(PATCH.is_multiple_of(RUN));
+/// The reach that makes a block of `RUN` x `RUN` pixels one value, from
+/// its middle pixel's cell (rows and pixels `RUN / 2` before it to
+/// `RUN / 2 - 1` after): a pixel lies within (RUN / 2)(|sin| + |cos|) <=
+/// 4 sqrt 2 < 5.7 cells of it along either axis, and flooring adds less
+/// than a cell.
+const BLOCK_REACH: usize = 6;
 
 /// Where a patch samples the padded grid. The robot's cell (index `base`,
 /// rows `stride` apart) is pixel (24, 24): the patch reaches 24 cells ahead
@@ -228,15 +234,14 @@ unsafe fn patch_rows_avx2(cells: &[u8], at: &PatchAt, out: &mut [u8]) {
         _mm_setr_epi8(4, 4, 4, 4, 4, 4, 4, 4, 5, 5, 5, 5, 5, 5, 5, 5),
     ];
     // A cell byte is obstacle bit | reach << 1: reach >= RUN / 2 when the
-    // byte is at least RUN.
+    // byte is at least RUN, and reach >= BLOCK_REACH when it is at least
+    // 2 BLOCK_REACH.
     let below_run = _mm256_set1_epi32(RUN as i32 - 1);
+    let below_block = _mm256_set1_epi32(2 * BLOCK_REACH as i32 - 1);
     let (byte, obstacle_bit) = (_mm256_set1_epi32(0xff), _mm256_set1_epi32(1));
     let ptr = cells.as_ptr() as *const i32;
-    // Per row, a bit per run to look up. The rows' gathers come first, all
-    // of them: each row's mask goes to a fixed place, so no store waits on
-    // a gather before the next row's gather may start.
-    let mut to_look_up = [0u8; PATCH];
-    for (a, row_out) in out.chunks_exact_mut(PATCH).enumerate() {
+    // The cell bytes at the middle pixels of the runs of row a.
+    let middles_of_row = |a: usize| {
         let (dc0, dr0) = at.row_start(a);
         let idx = index(
             _mm256_add_epi32(_mm256_set1_epi32(dc0), middle_dc),
@@ -244,10 +249,10 @@ unsafe fn patch_rows_avx2(cells: &[u8], at: &PatchAt, out: &mut [u8]) {
         );
         // SAFETY: each index is one the scalar loop reads, and at least
         // 5 rows of padding follow it, so the 4 bytes read stay inside.
-        let middle = _mm256_and_si256(unsafe { _mm256_i32gather_epi32::<1>(ptr, idx) }, byte);
-        let uniform =
-            _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpgt_epi32(middle, below_run)));
-        let kinds = low_byte_of_each(_mm256_and_si256(middle, obstacle_bit));
+        _mm256_and_si256(unsafe { _mm256_i32gather_epi32::<1>(ptr, idx) }, byte)
+    };
+    // Writes a row from the kinds of its runs (byte l: run l's).
+    let write_row = |row_out: &mut [u8], kinds: __m128i| {
         for (k, spread) in spread.iter().enumerate() {
             // SAFETY: the row holds 48 bytes, 16 from 16 k.
             unsafe {
@@ -257,7 +262,40 @@ unsafe fn patch_rows_avx2(cells: &[u8], at: &PatchAt, out: &mut [u8]) {
                 )
             };
         }
-        to_look_up[a] = !uniform as u8 & ((1 << RUNS) - 1);
+    };
+    let all_runs = (1 << RUNS) - 1;
+    // Per row, a bit per run to look up. The patch is first taken in
+    // blocks of RUN x RUN pixels, whose middle pixels are the runs'
+    // middle pixels of the block row's row RUN / 2: a block is one value
+    // when that cell reaches `BLOCK_REACH`, and a row of blocks that are
+    // all so is written without looking at its rows. In the other block
+    // rows, each row's gathers come first, all of them: each row's mask
+    // goes to a fixed place, so no store waits on a gather before the
+    // next row's gather may start; a run inside a uniform block needs no
+    // lookup (its middle pixel's kind is the block's).
+    let mut to_look_up = [0u8; PATCH];
+    for (b, block_row) in out.chunks_exact_mut(RUN * PATCH).enumerate() {
+        let middle = middles_of_row(b * RUN + RUN / 2);
+        let blocks_uniform =
+            _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpgt_epi32(middle, below_block)))
+                & all_runs;
+        if blocks_uniform == all_runs {
+            let kinds = low_byte_of_each(_mm256_and_si256(middle, obstacle_bit));
+            for row_out in block_row.chunks_exact_mut(PATCH) {
+                write_row(row_out, kinds);
+            }
+            continue;
+        }
+        for (k, row_out) in block_row.chunks_exact_mut(PATCH).enumerate() {
+            let middle = middles_of_row(b * RUN + k);
+            let uniform =
+                _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpgt_epi32(middle, below_run)));
+            write_row(
+                row_out,
+                low_byte_of_each(_mm256_and_si256(middle, obstacle_bit)),
+            );
+            to_look_up[b * RUN + k] = !(uniform | blocks_uniform) as u8 & all_runs as u8;
+        }
     }
     // The runs to look up as a list (row * RUNS + run), so that their loop
     // branches once at its end, not once a row.

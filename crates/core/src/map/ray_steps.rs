@@ -5,6 +5,7 @@
 
 use super::grid::CELL_SIZE;
 use super::rays::{ray_dirs, NUM_RAYS, WALL_RAY_STEP};
+use std::ops::Range;
 
 /// A step's mark of a sample in an obstacle cell.
 pub const IN_OBSTACLE: u8 = u8::MAX;
@@ -33,39 +34,61 @@ impl RaySteps {
     /// steps (2i cells) along the ray, wherever in the square sample k was;
     /// when every cell that moved square touches (closed, widened by `EPS`)
     /// is free, sample k + i lies in a free cell. The cells it touches are
-    /// the same block of offsets for every cell, so each step length is one
-    /// pass over the grid: a cell's step is the first i whose block holds
-    /// an obstacle (at most `MAX_STEP`).
+    /// the same block of offsets for every cell, and the blocks come in a
+    /// few shapes (2 or 3 cells a side), so a table per shape says whether
+    /// the block at each cell holds an obstacle; a cell's step is then the
+    /// first i whose block, read from its shape's table, does (at most
+    /// `MAX_STEP`). Obstacle cells need no step, so each row is built
+    /// only between its first and last free cell.
     pub fn new(obstacle: &[u8], stride: usize, pad: usize) -> RaySteps {
         let cells = obstacle.len();
         assert!(pad >= 2 * MAX_STEP + 2, "padding {pad} too thin");
         let side = stride - 2 * pad;
+        // Per block shape (rows, columns), whether the block whose first
+        // cell is at each index holds an obstacle.
+        let mut blocked_by_shape: Vec<((usize, usize), Vec<u8>)> = Vec::new();
+        // Per ray and step i (index i - 1): the shape's place in
+        // `blocked_by_shape` and the index offset of the block's first
+        // cell from the cell the sample was in.
+        let mut blocks = [[(0usize, 0isize); MAX_STEP - 1]; NUM_RAYS];
+        for (m, ray_blocks) in blocks.iter_mut().enumerate() {
+            for (i, block) in (1..MAX_STEP).zip(ray_blocks.iter_mut()) {
+                let (rows, cols) = moved_block(m, i);
+                let shape = (rows.clone().count(), cols.clone().count());
+                let known = blocked_by_shape.iter().position(|(s, _)| *s == shape);
+                let table = known.unwrap_or_else(|| {
+                    let table = block_holds_obstacle(obstacle, stride, shape);
+                    blocked_by_shape.push((shape, table));
+                    blocked_by_shape.len() - 1
+                });
+                *block = (table, rows.start() * stride as isize + cols.start());
+            }
+        }
+        // Per grid row with a free cell: the indices from its first free
+        // cell to its last.
+        let free_spans: Vec<Range<usize>> = (pad..pad + side)
+            .filter_map(|r| {
+                let start = r * stride + pad;
+                let row = &obstacle[start..start + side];
+                let first = row.iter().position(|&o| o == 0)?;
+                let last = row.iter().rposition(|&o| o == 0)?;
+                Some(start + first..start + last + 1)
+            })
+            .collect();
         let mut steps = vec![IN_OBSTACLE; NUM_RAYS * cells];
-        let mut hit = vec![0u8; side];
-        for (m, table) in steps.chunks_exact_mut(cells).enumerate() {
-            for r in pad..pad + side {
-                let row = r * stride + pad;
-                table[row..row + side].fill(MAX_STEP as u8);
+        for (table, ray_blocks) in steps.chunks_exact_mut(cells).zip(&blocks) {
+            for span in &free_spans {
+                let row_steps = &mut table[span.clone()];
+                row_steps.fill(MAX_STEP as u8);
                 // Longest first, so the shortest blocked step stays.
-                for i in (1..MAX_STEP).rev() {
-                    let (rows, cols) = moved_block(m, i);
-                    hit.fill(0);
-                    for dr in rows {
-                        for dc in cols.clone() {
-                            let from = (row as isize + dr * stride as isize + dc) as usize;
-                            for (h, &o) in hit.iter_mut().zip(&obstacle[from..from + side]) {
-                                *h |= o;
-                            }
-                        }
-                    }
-                    for (s, &h) in table[row..row + side].iter_mut().zip(&hit) {
-                        *s = if h != 0 { i as u8 } else { *s };
+                for (i, &(shape, offset)) in (1..MAX_STEP).zip(ray_blocks).rev() {
+                    let first = (span.start as isize + offset) as usize;
+                    let blocked = &blocked_by_shape[shape].1[first..first + span.len()];
+                    for (s, &b) in row_steps.iter_mut().zip(blocked) {
+                        *s = if b != 0 { i as u8 } else { *s };
                     }
                 }
-                for (s, &o) in table[row..row + side]
-                    .iter_mut()
-                    .zip(&obstacle[row..row + side])
-                {
+                for (s, &o) in row_steps.iter_mut().zip(&obstacle[span.clone()]) {
                     *s = if o != 0 { IN_OBSTACLE } else { *s };
                 }
             }
@@ -98,4 +121,25 @@ fn moved_block(
     );
     let span = |d: f64| (d - EPS).floor() as isize..=(d + 1.0 + EPS).floor() as isize;
     (span(dr), span(dc))
+}
+
+/// Per cell index p of the grid (`stride` cells a row), whether the block
+/// of `shape` (rows, columns) whose first cell is p holds an obstacle;
+/// only for the indices whose block lies inside the grid. The rows of
+/// each block first, then the columns of those.
+fn block_holds_obstacle(obstacle: &[u8], stride: usize, shape: (usize, usize)) -> Vec<u8> {
+    let (rows, cols) = shape;
+    let mut along_row = obstacle[..obstacle.len() - (cols - 1)].to_vec();
+    for k in 1..cols {
+        for (a, &o) in along_row.iter_mut().zip(&obstacle[k..]) {
+            *a |= o;
+        }
+    }
+    let mut block = along_row[..along_row.len() - (rows - 1) * stride].to_vec();
+    for k in 1..rows {
+        for (b, &a) in block.iter_mut().zip(&along_row[k * stride..]) {
+            *b |= a;
+        }
+    }
+    block
 }
