@@ -50,17 +50,9 @@ pub fn write_vector(robots: &[Robot], i: usize, target: usize, out: &mut [f32]) 
 /// rotated square, so it stays binary; outside the map is obstacle.
 pub fn write_patch(map: &PreparedMap, pos: [f64; 2], theta: f64, out: &mut [u8]) {
     debug_assert_eq!(out.len(), PATCH_LEN);
-    let (r0, c0) = map.grid.cell_of(pos);
-    let side = map.side() as isize;
-    if r0 < 0 || c0 < 0 || r0 >= side || c0 >= side {
+    let Some(at) = PatchAt::of(map, pos, theta) else {
         out.fill(1);
         return;
-    }
-    let at = PatchAt {
-        base: map.padded_index(r0, c0) as isize,
-        stride: map.stride as isize,
-        sf: (theta.sin() * ONE).round() as i32,
-        cf: (theta.cos() * ONE).round() as i32,
     };
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") {
@@ -106,6 +98,22 @@ struct PatchAt {
 }
 
 impl PatchAt {
+    /// The patch of a robot at `pos` heading `theta`; None off the map,
+    /// where the whole patch is obstacle.
+    fn of(map: &PreparedMap, pos: [f64; 2], theta: f64) -> Option<PatchAt> {
+        let (r0, c0) = map.grid.cell_of(pos);
+        let side = map.side() as isize;
+        if r0 < 0 || c0 < 0 || r0 >= side || c0 >= side {
+            return None;
+        }
+        Some(PatchAt {
+            base: map.padded_index(r0, c0) as isize,
+            stride: map.stride as isize,
+            sf: (theta.sin() * ONE).round() as i32,
+            cf: (theta.cos() * ONE).round() as i32,
+        })
+    }
+
     /// The 16.16 offsets (column, row) of pixel 0 of patch row `a`.
     #[inline(always)]
     fn row_start(&self, a: usize) -> (i32, i32) {
@@ -337,17 +345,9 @@ mod tests {
 
     /// The patch as defined: every pixel looked up in `obstacle` on its own.
     fn patch_by_pixel(map: &PreparedMap, pos: [f64; 2], theta: f64, out: &mut [u8]) {
-        let (r0, c0) = map.grid.cell_of(pos);
-        let side = map.side() as isize;
-        if r0 < 0 || c0 < 0 || r0 >= side || c0 >= side {
+        let Some(at) = PatchAt::of(map, pos, theta) else {
             out.fill(1);
             return;
-        }
-        let at = PatchAt {
-            base: map.padded_index(r0, c0) as isize,
-            stride: map.stride as isize,
-            sf: (theta.sin() * ONE).round() as i32,
-            cf: (theta.cos() * ONE).round() as i32,
         };
         for (a, row_out) in out.chunks_exact_mut(PATCH).enumerate() {
             let (mut dc, mut dr) = at.row_start(a);
@@ -384,16 +384,8 @@ mod tests {
             write_patch(&map, pos, theta, &mut fast);
             patch_by_pixel(&map, pos, theta, &mut want);
             assert_eq!(fast, want, "pos {pos:?}, theta {theta}");
-            let (r0, c0) = map.grid.cell_of(pos);
-            let side = map.side() as isize;
-            if r0 < 0 || c0 < 0 || r0 >= side || c0 >= side {
+            let Some(at) = PatchAt::of(&map, pos, theta) else {
                 continue;
-            }
-            let at = PatchAt {
-                base: map.padded_index(r0, c0) as isize,
-                stride: map.stride as isize,
-                sf: (theta.sin() * ONE).round() as i32,
-                cf: (theta.cos() * ONE).round() as i32,
             };
             patch_rows(&map.patch_cells, &at, &mut scalar);
             assert_eq!(scalar, want, "pos {pos:?}, theta {theta}");
