@@ -36,6 +36,8 @@ pub struct DistanceField {
     stride: usize,
     /// The cell an unconfined march started from (padded index).
     origin: Option<usize>,
+    /// That cell's (row, column) in the padded grid.
+    origin_at: [f64; 2],
     distance: Vec<f64>,
     state: Vec<u8>,
     touched: Vec<u32>,
@@ -128,6 +130,7 @@ impl DistanceField {
             return;
         }
         self.origin = allowed.is_none().then_some(start);
+        self.origin_at = grid_at(start, self.stride);
         self.cell_size = lattice.cell_size();
         self.distance[start] = 0.0;
         self.state[start] = FROZEN;
@@ -171,16 +174,15 @@ impl DistanceField {
         }
     }
 
-    /// Whether `cell` lies so far from this field's origin in a straight
-    /// line that its distance must exceed `limit`.
+    /// Whether the cell at `at` (`grid_at`) lies so far from this field's
+    /// origin in a straight line that its distance must exceed `limit`.
     #[inline]
-    fn beyond(&self, cell: usize, limit: f64) -> bool {
-        let Some(origin) = self.origin else {
+    fn beyond(&self, at: [f64; 2], limit: f64) -> bool {
+        if self.origin.is_none() {
             return false;
-        };
-        let s = self.stride;
-        let dr = (cell / s) as f64 - (origin / s) as f64;
-        let dc = (cell % s) as f64 - (origin % s) as f64;
+        }
+        let dr = at[0] - self.origin_at[0];
+        let dc = at[1] - self.origin_at[1];
         let reach = (limit / self.cell_size + 2.0) / 0.97;
         dr * dr + dc * dc > reach * reach
     }
@@ -555,6 +557,12 @@ impl AszFields {
     }
 }
 
+/// A padded cell's (row, column), as numbers to measure straight lines by.
+#[inline]
+fn grid_at(cell: usize, stride: usize) -> [f64; 2] {
+    [(cell / stride) as f64, (cell % stride) as f64]
+}
+
 /// Keeps `field` if it already starts from `pos`'s cell (marched as far as
 /// it was), else starts it there.
 fn refresh<L: Lattice + ?Sized>(field: &mut DistanceField, lattice: &L, pos: [f64; 2]) {
@@ -591,12 +599,14 @@ impl RegionSearch {
     fn captor_first(
         captors: &mut [&mut DistanceField],
         speeds: &[f64],
+        stride: usize,
         cell: usize,
         time: f64,
     ) -> bool {
+        let at = grid_at(cell, stride);
         captors.iter_mut().zip(speeds).any(|(field, &speed)| {
             let limit = time * speed;
-            if field.beyond(cell, limit) {
+            if field.beyond(at, limit) {
                 return false;
             }
             field.advance(limit);
@@ -651,7 +661,7 @@ impl RegionSearch {
                 break;
             };
             let cell = cell as usize;
-            if Self::captor_first(captors, speeds, cell, distance / target_speed) {
+            if Self::captor_first(captors, speeds, stride, cell, distance / target_speed) {
                 continue;
             }
             self.region[cell] = true;
@@ -686,7 +696,7 @@ impl RegionSearch {
         }
         for &c in &self.region_cells {
             let c = c as usize;
-            if !Self::captor_first(captors, speeds, c, confined.at(c) / target_speed) {
+            if !Self::captor_first(captors, speeds, stride, c, confined.at(c) / target_speed) {
                 self.asz.push(c as u32);
             }
         }
@@ -813,7 +823,7 @@ mod tests {
                     let dc = (cell % map.stride) as f64 - (start % map.stride) as f64;
                     let straight = dr.hypot(dc) * map.cell_size();
                     assert!(
-                        !field.beyond(cell, d),
+                        !field.beyond(grid_at(cell, map.stride), d),
                         "cell {cell}: distance {d} m, straight line {straight} m"
                     );
                     checked += 1;
