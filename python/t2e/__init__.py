@@ -4,24 +4,35 @@
 environment of t2e-league: K captor robots try to trap one target robot on
 real indoor maps. Observations per agent are a dict of the 48 x 48 obstacle
 patch around the robot (uint8, 1 = obstacle) and its vector (float32,
-5 + 5 K numbers); actions are integers in 0..5. ``t2e.vector_env(n, ...)``
+5 + 5 K numbers); actions are integers from 0 to 4. ``t2e.vector_env(n, ...)``
 steps n worlds at once in Rust, with numpy arrays in and out. See
 docs/guide/python.md.
 """
 
 from ._core import ACTIONS, Env, Policy, VectorEnv, asz_area
-from .parallel import T2EParallelEnv, env, parallel_env
+from .parallel import T2EParallelEnv, check_settings, env, parallel_env
 from . import torch_policy  # noqa: F401  (torch is imported when a policy loads)
 from .policies import ScriptedPolicy, expert_captors, greedy_captors, rule_based_target
 
 
-def load_policy(folder):
-    """An exported player (``t2e-league export``, or a training run's
-    checkpoint folder) as a PyTorch actor playing its side; see
-    ``t2e.torch_policy``. Needs torch installed."""
+def load_policy(folder, side: str = None):
+    """An exported player (``t2e-league export``, a training run's
+    checkpoint folder, or the run's folder: the checkpoint of ``side`` its
+    state.json names, as ``ckpt:`` reads it) as a PyTorch actor playing
+    its side; see ``t2e.torch_policy``. Needs torch installed."""
     from .torch_policy import load_policy as load
 
-    return load(folder)
+    return load(folder, side)
+
+
+def _scripted_name(side: str, policy: ScriptedPolicy) -> str:
+    if policy.side != side:
+        raise ValueError(f"{side} = {policy!r}: a policy of the {policy.side} side")
+    return policy.name
+
+
+# Worlds one vector env holds (python/src/lib.rs).
+MAX_VECTOR_ENVS = 65_536
 
 
 def vector_env(
@@ -54,17 +65,19 @@ def vector_env(
     map_cells**2 numbers (walls, captors, target, self)."""
     import numbers
 
-    for name, value in (
-        ("num_envs", num_envs),
-        ("num_captors", num_captors),
-        ("episode_length", episode_length),
-        ("wall_rays", wall_rays),
-        ("map_cells", map_cells),
-    ):
-        if isinstance(value, bool) or not isinstance(value, numbers.Integral):
-            raise TypeError(f"{name} = {value!r}: must be an integer")
-    if isinstance(speed_ratio, bool) or not isinstance(speed_ratio, numbers.Real):
-        raise TypeError(f"speed_ratio = {speed_ratio!r}: must be a number (v_e / v_p)")
+    if isinstance(num_envs, bool) or not isinstance(num_envs, numbers.Integral):
+        raise TypeError(f"num_envs = {num_envs!r}: must be an integer")
+    if not 1 <= num_envs <= MAX_VECTOR_ENVS:
+        raise ValueError(f"num_envs = {num_envs}: must be between 1 and {MAX_VECTOR_ENVS}")
+    check_settings(num_captors, speed_ratio, episode_length, wall_rays, map_cells)
+    # A scripted policy is its controller, which Rust plays by name.
+    if isinstance(captors, ScriptedPolicy):
+        captors = _scripted_name("captors", captors)
+    if isinstance(target, ScriptedPolicy):
+        target = _scripted_name("target", target)
+    for name, value in (("maps", maps), ("protocol", protocol), ("captors", captors), ("target", target)):
+        if value is not None and not isinstance(value, str):
+            raise TypeError(f"{name} = {value!r}: must be a string" + (" (a controller name; vector_env plays controllers in Rust)" if name in ("captors", "target") else ""))
     if seed is None:
         import secrets
 

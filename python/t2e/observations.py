@@ -12,6 +12,11 @@
   target, self), 4 * map_cells**2 numbers, row by row.
 - ``flat``: the egocentric vector followed by the pooled patch as 0/1
   floats, one float32 Box, for off-the-shelf MLP policies.
+- ``image``: the spec's vector beside the whole patch as a one-channel
+  image, 48 x 48 x 1 uint8, obstacle 255 and free 0: image bounds with
+  the channel last are what Stable-Baselines3's ``is_image_space`` and
+  the CNN encoders of RLlib and BenchMARL take without a wrapper.
+  ``patch_pool`` does not apply (a CNN does its own pooling).
 
 The arrays are made in Rust (``t2e._core.shaped_observations``, over
 crates/core/src/env/features.rs), with the numbers of the learners'
@@ -29,7 +34,7 @@ from gymnasium import spaces
 
 from ._core import shaped_observations
 
-KINDS = ("spec", "egocentric", "flat")
+KINDS = ("spec", "egocentric", "flat", "image")
 PATCH_POOLS = (1, 2, 3, 4, 6)
 PATCH = 48
 
@@ -61,6 +66,13 @@ def space(kind: str, patch_pool: int, vector_len: int, wall_rays: int = 0, map_c
                 "vector": spaces.Box(-np.inf, np.inf, shape=(vector_len,), dtype=np.float32),
             }
         )
+    if kind == "image":
+        return spaces.Dict(
+            {
+                "patch": spaces.Box(0, 255, shape=(PATCH, PATCH, 1), dtype=np.uint8),
+                "vector": spaces.Box(-np.inf, np.inf, shape=(vector_len,), dtype=np.float32),
+            }
+        )
     side = PATCH // patch_pool
     width = egocentric_width(vector_len, wall_rays, map_cells)
     if kind == "egocentric":
@@ -88,6 +100,10 @@ def build(
     they are)."""
     if kind == "spec":
         return [{"patch": patches[i], "vector": vectors[i]} for i in range(len(vectors))]
+    if kind == "image":
+        # One multiply over the whole [A, 48, 48] block; 0/1 * 255 fits uint8.
+        images = np.multiply(patches, np.uint8(255))[..., None]
+        return [{"patch": images[i], "vector": vectors[i]} for i in range(len(vectors))]
     shaped, pooled = shaped_observations(vectors, patches, patch_pool, kind == "flat", wall_rays, map_cells)
     if kind == "egocentric":
         return [{"patch": pooled[i], "vector": shaped[i]} for i in range(len(vectors))]

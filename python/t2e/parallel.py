@@ -2,15 +2,21 @@
 
 from __future__ import annotations
 
+import math
 import numbers
+import os
 from typing import Any, Dict, Optional
 
 import numpy as np
 from gymnasium import spaces
 from pettingzoo import ParallelEnv
+from pettingzoo.utils.conversions import parallel_to_aec_wrapper
+from pettingzoo.utils.wrappers import OrderEnforcingWrapper
 
 from . import observations as obs
 from ._core import ACTIONS, Env, Policy
+from .policies import ScriptedPolicy
+from .torch_policy import TorchPolicy
 
 # Episode seeds are those of the Rust side: integers in 0..2**64.
 _SEED_LIMIT = 2**64
@@ -42,9 +48,11 @@ class T2EParallelEnv(ParallelEnv):
     returns the frame) or ``human`` (``render()`` shows it in a matplotlib
     window and returns None); ``observation`` ``spec`` (the paper's patch
     and vector), ``egocentric`` (the Rust learners' inputs: the vector in
-    the robot's frame and the patch max-pooled by ``patch_pool``) or
-    ``flat`` (those two in one float32 vector, for MLP policies;
-    t2e/observations.py); ``asz_info``
+    the robot's frame and the patch max-pooled by ``patch_pool``),
+    ``flat`` (those two in one float32 vector, for MLP policies) or
+    ``image`` (the spec's vector and the whole patch as a 48 x 48 x 1
+    uint8 image, obstacle 255, for CNN policies; t2e/observations.py);
+    ``asz_info``
     whether every step computes the exact ASZ (per-robot arrival fields,
     about 3.5 ms a step on the shipped maps;
     off by default); ``captors`` or ``target`` a built-in opponent that
@@ -83,7 +91,7 @@ class T2EParallelEnv(ParallelEnv):
         map_cells: int = 0,
     ):
         if max_cycles is not None:
-            _check_int("max_cycles", max_cycles)
+            _check_range("max_cycles", max_cycles, 1, MAX_EPISODE_LENGTH)
             if episode_length not in (500, max_cycles):
                 raise ValueError(
                     f"max_cycles = {max_cycles} and episode_length = {episode_length}: the same number by two names; give one"
@@ -104,12 +112,7 @@ class T2EParallelEnv(ParallelEnv):
             wall_rays=wall_rays,
             map_cells=map_cells,
         )
-        _check_int("num_captors", num_captors)
-        _check_int("episode_length", episode_length)
-        _check_int("wall_rays", wall_rays)
-        _check_int("map_cells", map_cells)
-        if not isinstance(speed_ratio, numbers.Real) or isinstance(speed_ratio, bool):
-            raise TypeError(f"speed_ratio = {speed_ratio!r}: must be a number (v_e / v_p)")
+        check_settings(num_captors, speed_ratio, episode_length, wall_rays, map_cells)
         if not isinstance(maps, str):
             raise TypeError(f"maps = {maps!r}: must be a string such as 'shipped', 'generated:20' or 'small,medium,large'")
         if not isinstance(protocol, str):
@@ -144,17 +147,14 @@ class T2EParallelEnv(ParallelEnv):
         self._opponents = {}
         for name, spec in (("captors", captors), ("target", target)):
             if spec is not None:
-                self._opponents[name] = _opponent(name, spec)
+                self._opponents[name] = opponent = _opponent(name, spec)
+                # A copy loads the very folder this env loaded, wherever it runs.
+                self._kwargs[name] = _picklable(opponent) if isinstance(opponent, TorchPolicy) else _picklable(spec)
         for name, opponent in self._opponents.items():
             # A loaded policy reads this env's vectors as they are.
-            for field in ("wall_rays", "map_cells"):
-                theirs = getattr(opponent, field, None)
-                ours = getattr(self, field)
-                if theirs is not None and theirs != ours:
-                    raise ValueError(
-                        f"{name} = {_picklable(opponent)!r}: trained with {field} = {theirs} (net.sight in its meta.json), "
-                        f"this env has {field} = {ours}; make the env with {field}={theirs}"
-                    )
+            wrong = opponent.mismatch(self) if isinstance(opponent, TorchPolicy) else None
+            if wrong:
+                raise ValueError(f"{name} = {opponent!r}: {wrong}")
         if len(self._opponents) == 2:
             raise ValueError("captors and target: both sides played by built-in opponents leaves no agent to act")
         self.possible_agents = [a for a in self._all_agents if _side(a) not in self._opponents]
@@ -168,6 +168,7 @@ class T2EParallelEnv(ParallelEnv):
         self.action_spaces = {a: spaces.Discrete(ACTIONS) for a in self.possible_agents}
         self.state_space = spaces.Box(-np.inf, np.inf, shape=(5 * len(self._all_agents) + 1,), dtype=np.float32)
         self._rng = np.random.default_rng()
+        self._started = False
 
     def __reduce__(self):
         return (_rebuild, (self._kwargs, self._rng.bit_generator.state))
@@ -176,6 +177,7 @@ class T2EParallelEnv(ParallelEnv):
         """Every robot's x, y (m, world frame), vx, vy (m/s) and heading
         (rad), captors first, then the share of the episode left: what a
         centralised critic reads (``state_space``)."""
+        self._need_reset("state")
         return self._env.state()
 
     @property
@@ -209,9 +211,13 @@ class T2EParallelEnv(ParallelEnv):
             episode = int(seed)
             self._rng = np.random.default_rng(episode)
         vectors, patches = self._env.reset(episode)
+        self._started = True
         self.agents = list(self.possible_agents)
         for opponent in self._opponents.values():
-            if hasattr(opponent, "reset") and not isinstance(opponent, Policy):
+            if isinstance(opponent, TorchPolicy):
+                # This env's state alone: the same policy may play other envs.
+                opponent.reset(self)
+            elif hasattr(opponent, "reset") and not isinstance(opponent, Policy):
                 opponent.reset()
         observations = self._observations(vectors, patches)
         return observations, self._infos()
@@ -247,14 +253,21 @@ class T2EParallelEnv(ParallelEnv):
             self.agents = []
         return observations, reward, terminations, truncations, infos
 
-    def render(self):
+    def render(self, mode: Optional[str] = None):
         """The current state as an RGB frame [H, W, 3] uint8 (``render_mode
         = "rgb_array"``): the map, the ASZ shaded, the robots and their
         trails, as ``t2e-league render`` draws them. With ``"human"`` the
         frame is shown in a window and None returned; None without a render
-        mode."""
+        mode. ``mode``, where given (RLlib passes ``render_mode``), must be
+        the env's ``render_mode``: it is chosen when the env is made."""
+        if mode is not None and mode != self.render_mode:
+            raise ValueError(
+                f"render(mode={mode!r}): this env renders {self.render_mode!r}, chosen when it was made; "
+                f"make it with render_mode={mode!r}"
+            )
         if self.render_mode is None:
             return None
+        self._need_reset("render")
         frame = self._env.render()
         if self._window is not None:
             self._window.show(frame, self.metadata["render_fps"])
@@ -263,7 +276,12 @@ class T2EParallelEnv(ParallelEnv):
 
     def asz_area(self) -> float:
         """|ASZ| of the current state in m^2."""
+        self._need_reset("asz_area")
         return self._env.asz_area()
+
+    def _need_reset(self, what: str) -> None:
+        if not self._started:
+            raise RuntimeError(f"{what}() before reset(): there is no state yet; call reset() first")
 
     def close(self):
         if self._window is not None:
@@ -284,8 +302,10 @@ class T2EParallelEnv(ParallelEnv):
         mine = [a for a in self._all_agents if _side(a) == side]
         if isinstance(opponent, Policy):
             return dict(zip(mine, opponent.act(self._env).tolist()))
-        # A loaded policy reads its side's observations, as it would outside.
-        return opponent({a: self._last[a] for a in mine}, self)
+        # A loaded policy reads its side's spec observations, as it would
+        # outside, whatever this env hands its own agents.
+        seen = {a: self._last[a] for a in mine}
+        return opponent._play(seen, self) if isinstance(opponent, TorchPolicy) else opponent(seen, self)
 
     def _infos(self):
         info = {"map_index": self._env.map_index, "captured": self._captured}
@@ -333,28 +353,47 @@ def _side(agent: str) -> str:
 
 def _opponent(side: str, spec: Any):
     """A built-in opponent for ``side``: a controller by name, ``ckpt:FOLDER``
-    (an exported player), or a policy from ``t2e.load_policy``."""
+    (an exported player, or a training run's folder), a ``ScriptedPolicy``,
+    or a policy from ``t2e.load_policy``."""
     if isinstance(spec, str):
         if spec.startswith("ckpt:"):
-            from .torch_policy import load_policy
+            from .torch_policy import PolicyError, load_policy
 
-            spec = load_policy(spec[len("ckpt:") :])
-        else:
-            return Policy(spec, side)
-    if callable(spec) and getattr(spec, "side", None) is not None:
+            try:
+                return load_policy(spec[len("ckpt:") :], side)
+            except PolicyError as e:
+                raise PolicyError(f"{side} = {spec!r}: {e}") from None
+        return Policy(spec, side)
+    if isinstance(spec, (ScriptedPolicy, TorchPolicy)):
+        if spec.side != side:
+            raise ValueError(
+                f"{side} = {spec!r}: a policy of the {spec.side} side; give it as {spec.side}=, "
+                f"or a {side} policy as {side}="
+            )
+        # The controller it wraps, played in Rust from the env's state.
+        return Policy(spec.name, side) if isinstance(spec, ScriptedPolicy) else spec
+    if callable(spec) and getattr(spec, "side", None) in ("captors", "target"):
+        # A policy of one's own, called as a loaded one is: (observations, env).
         if spec.side != side:
             raise ValueError(f"{side} = {spec!r}: a policy of the {spec.side} side")
         return spec
     raise TypeError(
         f"{side} = {spec!r}: a controller name (heuristic, greedy, greedy:K, random, still), "
-        "'ckpt:FOLDER', or a policy from t2e.load_policy"
+        "'ckpt:FOLDER', a t2e.ScriptedPolicy (t2e.rule_based_target() and the like), or a policy from t2e.load_policy"
     )
 
 
 def _picklable(spec: Any) -> Any:
-    """A loaded policy is pickled as the folder it came from."""
-    folder = getattr(spec, "folder", None)
-    return f"ckpt:{folder}" if folder is not None and not isinstance(spec, str) else spec
+    """A loaded policy is pickled as the folder it came from, a scripted one
+    as its controller's name, a ``ckpt:`` path made absolute (a copy may be
+    made in another working folder)."""
+    if isinstance(spec, TorchPolicy):
+        return f"ckpt:{spec.folder}"
+    if isinstance(spec, ScriptedPolicy):
+        return spec.name
+    if isinstance(spec, str) and spec.startswith("ckpt:"):
+        return "ckpt:" + os.path.abspath(spec[len("ckpt:") :])
+    return spec
 
 
 def _rebuild(kwargs: dict, rng_state: dict) -> "T2EParallelEnv":
@@ -366,6 +405,39 @@ def _rebuild(kwargs: dict, rng_state: dict) -> "T2EParallelEnv":
 def _check_int(name: str, value: Any) -> None:
     if isinstance(value, bool) or not isinstance(value, numbers.Integral):
         raise TypeError(f"{name} = {value!r}: must be an integer")
+
+
+MAX_CAPTORS = 8
+MAX_EPISODE_LENGTH = 1_000_000
+WALL_RAYS = (4, 72)
+MAP_CELLS = (8, 32)
+
+
+def _check_range(name: str, value: Any, low: int, high: int, zero: str = "") -> None:
+    """An integer from ``low`` to ``high`` (or 0, where ``zero`` says what 0
+    means), checked here so that a huge one is named, not an OverflowError
+    of the Rust side's."""
+    _check_int(name, value)
+    if not (low <= value <= high or (zero and value == 0)):
+        allowed = f"0 ({zero}) or an integer from {low} to {high}" if zero else f"an integer from {low} to {high}"
+        raise ValueError(f"{name} = {value}: must be {allowed}")
+
+
+def check_settings(num_captors, speed_ratio, episode_length, wall_rays, map_cells) -> None:
+    """The settings ``parallel_env`` and ``vector_env`` share, each refused
+    by name."""
+    _check_range("num_captors", num_captors, 1, MAX_CAPTORS)
+    if isinstance(speed_ratio, bool) or not isinstance(speed_ratio, numbers.Real):
+        raise TypeError(f"speed_ratio = {speed_ratio!r}: must be a number (v_e / v_p)")
+    try:
+        ratio = float(speed_ratio)
+    except OverflowError:
+        ratio = math.inf
+    if not (math.isfinite(ratio) and 0 < ratio <= 10):
+        raise ValueError(f"speed_ratio = {speed_ratio!r}: must be a number in (0, 10]: v_e / v_p, 1.0 to 1.4 in the paper")
+    _check_range("episode_length", episode_length, 1, MAX_EPISODE_LENGTH)
+    _check_range("wall_rays", wall_rays, *WALL_RAYS, zero="the spec's observation")
+    _check_range("map_cells", map_cells, *MAP_CELLS, zero="no map")
 
 
 def _action(agent: str, value: Any) -> int:
@@ -388,7 +460,20 @@ parallel_env = T2EParallelEnv
 
 def env(**kwargs):
     """The same env with PettingZoo's AEC API (agents act in turn, the
-    step resolved once all have); arguments as ``parallel_env``."""
-    from pettingzoo.utils.conversions import parallel_to_aec
+    step resolved once all have); arguments as ``parallel_env``. Pickled
+    or copied, it is a new env without an episode, as the parallel env
+    is: ``reset`` it."""
+    return _aec(parallel_env(**kwargs))
 
-    return parallel_to_aec(parallel_env(**kwargs))
+
+class _AEC(OrderEnforcingWrapper):
+    """PettingZoo's AEC wrappers over a parallel env, copied as a new env."""
+
+    # A copy of the wrappers' dicts would keep the turn order and the live
+    # agents of an episode that the copied parallel env does not have.
+    def __reduce__(self):
+        return (_aec, (self.unwrapped,))
+
+
+def _aec(parallel: T2EParallelEnv) -> _AEC:
+    return _AEC(parallel_to_aec_wrapper(parallel))

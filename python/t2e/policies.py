@@ -17,6 +17,9 @@ class ScriptedPolicy:
         self._policy = Policy(name, side)
         self.side = side
 
+    def __repr__(self) -> str:
+        return f"ScriptedPolicy({self.name!r}, {self.side!r})"
+
     @property
     def name(self) -> str:
         return self._policy.name

@@ -9,7 +9,10 @@ from __future__ import annotations
 import hashlib
 import json
 import math
+import os
+import stat
 import struct
+import weakref
 from pathlib import Path
 from typing import Dict, Optional
 
@@ -21,6 +24,10 @@ PATCH = 48
 POSITION_SCALE = 8.0
 MIN_DISTANCE = 1e-3
 VECTOR_INPUTS = ("layer_norm", "scaled", "egocentric")
+# How far a wall ray reads: a ray's number is its distance over this, at
+# most 1 (WALL_RAY_RANGE_M in crates/core/src/env/sight.rs).
+WALL_RAY_RANGE_M = 16.0
+SIDES = ("captors", "target")
 
 
 class PolicyError(ValueError):
@@ -106,19 +113,32 @@ def _sight_len(net: dict) -> int:
     return _wall_rays(net) + MAP_CHANNELS * cells * cells
 
 
+def _regular(path: Path, listed_by: str) -> None:
+    """Refuses a listed file that is missing or not a regular file, from
+    its stat alone: a FIFO is never opened (reading one would block)."""
+    try:
+        mode = os.stat(path).st_mode
+    except FileNotFoundError:
+        raise _refuse(path, f"missing, though {listed_by} lists it") from None
+    except OSError as e:
+        raise _refuse(path, f"unreadable ({e})") from None
+    if not stat.S_ISREG(mode):
+        raise _refuse(path, f"not a regular file, though {listed_by} lists it")
+
+
 def _verify_manifest(folder: Path) -> None:
-    """An exported folder's SHA256SUMS (meta.json included) against its
-    files; a training checkpoint has none (meta.json's hashes cover it)."""
+    """The folder's SHA256SUMS (meta.json included) against its files,
+    before meta.json is believed: every checkpoint folder, exported or
+    written by training, carries one."""
     manifest = folder / "SHA256SUMS"
-    if manifest.exists() and not manifest.is_file():
-        raise _refuse(manifest, "not a file: an export's manifest is a file listing `<sha256>  <file>`")
-    if not manifest.is_file():
-        # An export always carries its manifest; without it, nothing would
-        # cover meta.json's side or prior.
-        marks = [m for m in ("player.json", "league-config.toml") if (folder / m).exists()]
-        if marks:
-            raise _refuse(manifest, f"missing, though the folder is an export ({', '.join(marks)}): its meta.json cannot be verified")
-        return
+    if not manifest.exists():
+        raise _refuse(
+            manifest,
+            f"SHA256SUMS missing: every checkpoint folder carries a manifest (written since 0.2.0); "
+            f"re-export it or retrain (a training checkpoint of your own that you trust: `t2e-league seal {folder}`)",
+        )
+    if not stat.S_ISREG(os.stat(manifest).st_mode):
+        raise _refuse(manifest, "not a regular file: a checkpoint's manifest is a file listing `<sha256>  <file>`")
     try:
         text = manifest.read_text()
     except (OSError, UnicodeDecodeError) as e:
@@ -131,16 +151,41 @@ def _verify_manifest(folder: Path) -> None:
         if not sep or "/" in name or "\\" in name or name in ("", ".", ".."):
             raise _refuse(manifest, f"line {number} is not `<sha256>  <file>`")
         file = folder / name
-        if not file.is_file():
-            raise _refuse(file, "missing, though SHA256SUMS lists it")
-        if not file.is_file():
-            raise _refuse(file, "not a file, though SHA256SUMS lists it")
+        _regular(file, "SHA256SUMS")
         actual = hashlib.sha256(file.read_bytes()).hexdigest()
         if actual != want.strip().lower():
-            raise _refuse(file, f"SHA-256 {actual[:12]}... is not the {want.strip()[:12]}... SHA256SUMS lists: the folder changed after it was exported")
+            raise _refuse(file, f"SHA-256 {actual[:12]}... is not the {want.strip()[:12]}... SHA256SUMS lists: the folder changed after it was written")
         listed.add(name)
     if "meta.json" not in listed:
         raise _refuse(manifest, "does not list meta.json")
+
+
+def _check_player(folder: Path, meta: dict) -> None:
+    """An export's player.json names the side meta.json plays."""
+    path = folder / "player.json"
+    if not path.exists():
+        return
+    try:
+        player = json.loads(path.read_text())
+    except (OSError, ValueError, UnicodeDecodeError) as e:
+        raise _refuse(path, f"not JSON ({e})") from None
+    side = player.get("side") if isinstance(player, dict) else None
+    if side != meta["side"]:
+        raise _refuse(path, f"side {side!r}, but {folder / 'meta.json'} says {meta['side']!r}: the folder was edited")
+
+
+def _check_ray_range(path: Path, meta: dict, rays: int) -> None:
+    if rays == 0:
+        return
+    if "wall_ray_range_m" not in meta:
+        raise _refuse(
+            path,
+            f"net.sight.wall_rays = {rays}, but no wall_ray_range_m: the checkpoint was trained when wall rays were "
+            f"divided by each map's extent; this version reads them out to a fixed {WALL_RAY_RANGE_M:g} m; retrain it",
+        )
+    value = meta["wall_ray_range_m"]
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or value != WALL_RAY_RANGE_M:
+        raise _refuse(path, f"wall_ray_range_m = {value!r}: this version's wall rays read out to {WALL_RAY_RANGE_M:g} m; retrain it")
 
 
 def _int_field(path: Path, meta: dict, key: str, low: int, high: int, default=None) -> int:
@@ -153,12 +198,12 @@ def _int_field(path: Path, meta: dict, key: str, low: int, high: int, default=No
 def _read_meta(folder: Path) -> dict:
     if not folder.is_dir():
         raise PolicyError(f"{folder}: not a folder (a checkpoint folder holds meta.json and actor.safetensors)")
-    _verify_manifest(folder)
     path = folder / "meta.json"
     if path.exists() and not path.is_file():
-        raise _refuse(path, "a folder, not a file: not a checkpoint folder")
-    if not path.is_file():
+        raise _refuse(path, "not a regular file: not a checkpoint folder")
+    if not path.exists() and not (folder / "SHA256SUMS").exists():
         raise _refuse(path, "missing: not a checkpoint folder (export one with `t2e-league export`)")
+    _verify_manifest(folder)
 
     def no_constant(name):
         # NaN and Infinity are not JSON; Python's parser takes them, Rust's does not.
@@ -172,8 +217,9 @@ def _read_meta(folder: Path) -> dict:
         raise _refuse(path, "not a JSON object")
     if meta.get("format") != FORMAT:
         raise _refuse(path, f"format {meta.get('format')!r}; this package reads format {FORMAT}")
-    if meta.get("side") not in ("captors", "target"):
+    if meta.get("side") not in SIDES:
         raise _refuse(path, f"side {meta.get('side')!r} is neither captors nor target")
+    _check_player(folder, meta)
     _int_field(path, meta, "num_captors", 1, MAX_CAPTORS)
     net = meta.get("net", {})
     if not isinstance(net, dict):
@@ -202,6 +248,7 @@ def _read_meta(folder: Path) -> dict:
     rays = sight.get("wall_rays", 0)
     if isinstance(rays, bool) or not isinstance(rays, int) or not (rays == 0 or 4 <= rays <= MAX_WALL_RAYS):
         raise _refuse(path, f"net.sight.wall_rays = {rays!r}: must be 0 or an integer from 4 to {MAX_WALL_RAYS}")
+    _check_ray_range(path, meta, rays)
     cells = sight.get("map_cells", 0)
     low, high = MAP_CELLS
     if isinstance(cells, bool) or not isinstance(cells, int) or not (cells == 0 or low <= cells <= high):
@@ -216,8 +263,7 @@ def _read_meta(folder: Path) -> dict:
         if not isinstance(name, str) or "/" in name or name in ("", ".", ".."):
             raise _refuse(path, f"files names {name!r}, not a file of the folder")
         file = folder / name
-        if not file.is_file():
-            raise _refuse(file, "missing, though meta.json lists it")
+        _regular(file, "meta.json")
         actual = hashlib.sha256(file.read_bytes()).hexdigest()
         if actual != digest:
             raise _refuse(file, f"SHA-256 {actual[:12]}... is not the {str(digest)[:12]}... meta.json records: the file changed")
@@ -343,21 +389,119 @@ def _pool(patches: np.ndarray, pool: int) -> np.ndarray:
     return patches.reshape(b, s, pool, s, pool).max(axis=(2, 4))
 
 
+def _latest(checkpoints: Path, side: str) -> Optional[Path]:
+    """The newest complete checkpoint of ``side`` in a ``checkpoints``
+    folder (``latest_in`` in crates/learners/src/nn/run_dir.rs)."""
+    try:
+        names = sorted(n for n in os.listdir(checkpoints) if n.startswith(f"{side}-"))
+    except OSError:
+        return None
+    for name in reversed(names):
+        if (checkpoints / name / "meta.json").is_file():
+            return checkpoints / name
+    return None
+
+
+def _resolve(path: Path, side: Optional[str]) -> Path:
+    """The checkpoint folder ``path`` names, as ``ckpt:PATH`` resolves it
+    (``resolve_checkpoint`` in crates/learners/src/nn/policy.rs): a
+    checkpoint folder, a file in one, or a training run's folder (the
+    checkpoint its state.json names, else its newest) or its
+    ``checkpoints``. ``side`` None: the one side the run trained."""
+    if path.is_file() and (path.parent / "meta.json").is_file():
+        return path.parent
+    if not path.is_dir():
+        raise PolicyError(f"{path}: not a folder (a checkpoint folder holds meta.json and actor.safetensors)")
+    if any((path / name).exists() for name in ("meta.json", "SHA256SUMS", "actor.safetensors")):
+        return path
+    sides = (side,) if side else SIDES
+    if any(path.name.startswith(f"{s}-") for s in sides):
+        raise _refuse(path / "meta.json", "missing: an incomplete checkpoint (a write that did not finish)")
+    found = {}
+    state = path / "state.json"
+    if state.is_file():
+        try:
+            named = dict(json.loads(state.read_text()).get("checkpoints", []))
+        except (OSError, ValueError, TypeError, AttributeError, UnicodeDecodeError) as e:
+            raise _refuse(state, f"not a run's state ({e})") from None
+        for s in sides:
+            if s in named:
+                folder = path / "checkpoints" / str(named[s])
+                if not (folder / "meta.json").is_file():
+                    raise _refuse(state, f"names the {s} checkpoint {folder}, which is gone")
+                found[s] = folder
+    else:
+        checkpoints = path / "checkpoints" if (path / "checkpoints").is_dir() else path
+        for s in sides:
+            latest = _latest(checkpoints, s)
+            if latest is not None:
+                found[s] = latest
+    if len(found) == 2:
+        raise PolicyError(f"{path}: a run of both sides; say which: load_policy({str(path)!r}, side='captors' or 'target')")
+    if not found:
+        what = f"no {side} checkpoint" if side else "no checkpoint"
+        raise PolicyError(
+            f"{path}: no meta.json, and {what} inside (a checkpoint folder holds meta.json and actor.safetensors; "
+            "a training run's folder holds checkpoints/)"
+        )
+    return next(iter(found.values()))
+
+
+_FORK_HOOKED = False
+
+
+def _one_thread_after_fork() -> None:
+    """A forked child cannot use the thread pools of its parent's torch
+    (the OpenMP workers are not copied, and the first parallel kernel
+    waits for them forever): the child runs torch on its own thread."""
+    global _FORK_HOOKED
+    if _FORK_HOOKED or not hasattr(os, "register_at_fork"):
+        return
+
+    def child():
+        import torch
+
+        torch.set_num_threads(1)
+        try:
+            torch.set_num_interop_threads(1)
+        except RuntimeError:
+            pass  # set once already, or after the parent's inter-op work: intra-op is what hangs
+
+    os.register_at_fork(after_in_child=child)
+    _FORK_HOOKED = True
+
+
+class _State:
+    """One env's recurrent state and the episode it belongs to."""
+
+    __slots__ = ("hidden", "episode")
+
+    def __init__(self):
+        self.hidden = None
+        self.episode = None
+
+
 class TorchPolicy:
     """An exported player's actor in PyTorch, playing its side greedily.
 
-    Call it with the observations ``reset``/``step`` returned (and the env,
-    for a target whose checkpoint leans on the rule-based target's action);
-    it returns the side's actions. The recurrent state starts over at each
-    new episode of the env (or after ``reset()``)."""
+    Call it with the spec observations ``reset``/``step`` returned and the
+    env they came from (needed by a target whose checkpoint leans on the
+    rule-based target's action); it returns the side's actions. Given the
+    env, it checks that the env is one it can play (its K, its sight, its
+    side, spec observations) and keeps one recurrent state per env, which
+    starts over at each new episode of that env; without it, one state for
+    all calls. ``reset()`` starts every state over."""
 
-    def __init__(self, folder):
+    def __init__(self, folder, side: Optional[str] = None):
         import torch
 
-        folder = Path(folder)
+        _one_thread_after_fork()
+        folder = _resolve(Path(os.path.abspath(folder)), side)
         self.folder = folder
         self.meta = _read_meta(folder)
         self.side = self.meta["side"]
+        if side is not None and side != self.side:
+            raise _refuse(folder / "meta.json", f"a {self.side} checkpoint, not a {side} one")
         self.num_captors = int(self.meta["num_captors"])
         self.net = self.meta["net"]
         self.wall_rays = _wall_rays(self.net)
@@ -374,56 +518,146 @@ class TorchPolicy:
                 raise _refuse(folder / "actor.safetensors", f"tensor {name} has shape {tuple(t.shape)}, the actor {tuple(own[name].shape)}")
         self.actor.load_state_dict(weights)
         self.actor.eval()
-        self._hidden = None
-        self._episode = None
         self._torch = torch
+        # The state of calls without an env (and of `logits`), then each env's.
+        self._free = _State()
+        self._states = weakref.WeakKeyDictionary()
         # The rule-based target's action, for a checkpoint that leans on it.
         self._hint = None
+
+    def __repr__(self) -> str:
+        return f"load_policy({str(self.folder)!r})"
+
+    def __reduce__(self):
+        return (load_policy, (str(self.folder), self.side))
 
     def agents(self, env) -> list:
         return [a for a in env.possible_agents if (a == "target") == (self.side == "target")]
 
-    def reset(self):
-        self._hidden = None
+    def reset(self, env=None):
+        """Starts the recurrent state over: ``env``'s, or every one."""
+        if env is None:
+            self._free = _State()
+            self._states.clear()
+        else:
+            self._states.pop(_unwrap(env), None)
 
-    def logits(self, patches: np.ndarray, vectors: np.ndarray):
-        """Logits [B, 5] of one step for rows of observations (patches
-        [B, 48, 48] uint8, vectors [B, 5 + 5 K + sight] float32), advancing the
-        recurrent state."""
+    def _sight(self) -> str:
+        if self.map_cells:
+            return f"wall_rays={self.wall_rays}, map_cells={self.map_cells}"
+        return f"wall_rays={self.wall_rays}"
+
+    def mismatch(self, env) -> Optional[str]:
+        """What of ``env`` (a ``t2e.parallel_env``) this player was not
+        trained for, K or sight, in a sentence; None when it fits."""
+        k = len(env._all_agents) - 1
+        theirs = dict(num_captors=k, wall_rays=env.wall_rays, map_cells=env.map_cells)
+        ours = dict(num_captors=self.num_captors, wall_rays=self.wall_rays, map_cells=self.map_cells)
+        wrong = [f"{name} = {theirs[name]}" for name in ours if ours[name] != theirs[name]]
+        if not wrong:
+            return None
+        return (
+            f"the env has {', '.join(wrong)}; {self!r} was trained with num_captors={self.num_captors}, "
+            f"{self._sight()} (meta.json): make the env with num_captors={self.num_captors}, {self._sight()}"
+        )
+
+    def _check_env(self, env):
+        env = _unwrap(env)
+        wrong = self.mismatch(env)
+        if wrong:
+            raise ValueError(wrong)
+        if not self.agents(env):
+            raise ValueError(
+                f"the env plays the {self.side} itself ({self.side}={env._kwargs.get(self.side)!r}), "
+                f"so {self!r}, a {self.side} policy, has no agent there"
+            )
+        if env.observation != "spec":
+            raise ValueError(
+                f"pass spec observations: make the env with observation='spec' (this env has observation={env.observation!r})"
+            )
+        return env
+
+    def _rows(self, observations):
+        """The side's agents in ``observations``, and their patches and
+        vectors stacked, each shape checked."""
+        if not isinstance(observations, dict):
+            raise TypeError(
+                f"observations = {type(observations).__name__}: pass the dict reset() or step() returned "
+                "(agent name -> spec observation)"
+            )
+        agents = [a for a in observations if (a == "target") == (self.side == "target")]
+        if not agents:
+            raise ValueError(f"observations hold no {self.side} agent (they name {list(observations)}); {self!r} plays the {self.side}")
+        for a in agents:
+            o = observations[a]
+            if not isinstance(o, dict) or "patch" not in o or "vector" not in o:
+                raise ValueError(
+                    f"observations[{a!r}] is {type(o).__name__}: pass spec observations (dict with patch and vector); "
+                    "make the env with observation='spec'"
+                )
+            if np.shape(o["patch"]) != (PATCH, PATCH):
+                raise ValueError(
+                    f"observations[{a!r}]['patch'] has shape {np.shape(o['patch'])}: pass spec observations "
+                    f"(a {PATCH} x {PATCH} patch); make the env with observation='spec'"
+                )
+        patches = np.stack([observations[a]["patch"] for a in agents])
+        vectors = np.stack([np.asarray(observations[a]["vector"]).reshape(-1) for a in agents])
+        if vectors.shape[1] != self.vector_len:
+            raise ValueError(
+                f"observations: vectors of {vectors.shape[1]} numbers; {self!r} was trained with "
+                f"{self.num_captors} captors and {self._sight()} (net.sight in meta.json): "
+                f"{self.vector_len} numbers; make the env with num_captors={self.num_captors}, {self._sight()}"
+            )
+        return agents, patches, vectors
+
+    def _step(self, state: _State, patches: np.ndarray, vectors: np.ndarray):
         torch = self._torch
         pooled = _pool(np.asarray(patches, dtype=np.uint8), int(self.net.get("patch_pool", 2)))
         p = torch.from_numpy(np.ascontiguousarray(pooled)).unsqueeze(1)
         v = torch.from_numpy(np.ascontiguousarray(vectors, dtype=np.float32))
-        if self._hidden is None or self._hidden.shape[0] != v.shape[0]:
-            self._hidden = torch.zeros(v.shape[0], self.actor.gru.hidden_size)
+        if state.hidden is None or state.hidden.shape[0] != v.shape[0]:
+            state.hidden = torch.zeros(v.shape[0], self.actor.gru.hidden_size)
         with torch.no_grad():
-            logits, self._hidden = self.actor(p, v, self._hidden)
+            logits, state.hidden = self.actor(p, v, state.hidden)
         return logits
 
-    def __call__(self, observations: dict, env=None) -> Dict[str, int]:
-        torch = self._torch
-        if env is not None:
-            episode = (env._env.seed, env._env.map_name)
-            if env._env.steps == 0 or episode != self._episode:
-                self.reset()
-                self._episode = episode
-        agents = [a for a in observations if (a == "target") == (self.side == "target")]
-        if not agents:
-            raise ValueError(f"observations hold no {self.side} agent")
-        patches = np.stack([observations[a]["patch"] for a in agents])
-        vectors = np.stack([observations[a]["vector"] for a in agents])
-        if vectors.shape[1] != self.vector_len:
-            if self.map_cells:
-                seen = f"{self.wall_rays} wall rays and a {self.map_cells} x {self.map_cells} map"
-                make = f"wall_rays={self.wall_rays}, map_cells={self.map_cells}"
-            else:
-                seen, make = f"{self.wall_rays} wall rays", f"wall_rays={self.wall_rays}"
+    def logits(self, patches: np.ndarray, vectors: np.ndarray):
+        """Logits [B, 5] of one step for rows of observations (patches
+        [B, 48, 48] uint8, vectors [B, 5 + 5 K + sight] float32), advancing the
+        recurrent state of calls without an env."""
+        patches, vectors = np.asarray(patches), np.asarray(vectors)
+        if vectors.ndim != 2 or vectors.shape[1] != self.vector_len:
             raise ValueError(
-                f"observations: vectors of {vectors.shape[1]} numbers; {self.folder} was trained with "
-                f"{self.num_captors} captors and {seen} (net.sight in meta.json): "
-                f"{self.vector_len} numbers; make the env with num_captors={self.num_captors}, {make}"
+                f"vectors of shape {vectors.shape}: {self!r} reads [B, {self.vector_len}] "
+                f"({self.vector_len} numbers a row: 5 + 5 x {self.num_captors} captors"
+                + (f" + {_sight_len(self.net)} of sight" if _sight_len(self.net) else "")
+                + ")"
             )
-        logits = self.logits(patches, vectors)
+        if patches.shape != (len(vectors), PATCH, PATCH):
+            raise ValueError(f"patches of shape {patches.shape}: {self!r} reads [B, {PATCH}, {PATCH}], B = {len(vectors)} as the vectors")
+        return self._step(self._free, patches, vectors)
+
+    def __call__(self, observations: dict, env=None) -> Dict[str, int]:
+        if env is not None:
+            env = self._check_env(env)
+        return self._play(observations, env)
+
+    def _play(self, observations: dict, env) -> Dict[str, int]:
+        """The actions for ``observations`` of ``env`` (checked, or the env
+        this policy plays inside), which may be None."""
+        torch = self._torch
+        agents, patches, vectors = self._rows(observations)
+        if env is None:
+            state = self._free
+        else:
+            state = self._states.get(env)
+            if state is None:
+                state = self._states[env] = _State()
+            episode = (env._env.seed, env._env.map_name)
+            if env._env.steps == 0 or episode != state.episode:
+                state.hidden = None
+                state.episode = episode
+        logits = self._step(state, patches, vectors)
         if self.prior > 0 and self.side == "target":
             if env is None:
                 raise ValueError(f"{self.folder / 'meta.json'}: this target leans on the rule-based target's action; pass the env")
@@ -436,11 +670,32 @@ class TorchPolicy:
         return {a: int(i) for a, i in zip(agents, logits.argmax(1).tolist())}
 
 
-def load_policy(folder) -> TorchPolicy:
+def _unwrap(env):
+    """The ``t2e.parallel_env`` under ``env`` (``t2e.env()``'s AEC
+    wrappers included), or a TypeError naming what was given."""
+    from .parallel import T2EParallelEnv
+
+    inner = getattr(env, "unwrapped", env)
+    if not isinstance(inner, T2EParallelEnv):
+        raise TypeError(
+            f"env = {type(env).__name__}: a loaded policy plays a t2e.parallel_env or t2e.env; "
+            "for arrays (t2e.vector_env), call policy.logits(patches, vectors)"
+        )
+    return inner
+
+
+def load_policy(folder, side: Optional[str] = None) -> TorchPolicy:
     """The actor of a checkpoint folder in PyTorch; refuses a corrupted or
-    mismatched folder with the file and the reason (``PolicyError``)."""
+    mismatched folder with the file and the reason (``PolicyError``).
+    ``folder`` may be a training run's folder: the checkpoint of ``side``
+    its state.json names (``side`` may be left out when the run trained
+    one side), as ``ckpt:`` reads it."""
+    if not isinstance(folder, (str, os.PathLike)):
+        raise TypeError(f"folder = {folder!r}: the path of a checkpoint folder (a str or a Path)")
+    if side is not None and side not in SIDES:
+        raise ValueError(f"side = {side!r}: must be 'captors', 'target' or None (the side a run folder's checkpoint plays)")
     try:
-        return TorchPolicy(folder)
+        return TorchPolicy(folder, side)
     except PolicyError:
         raise
     except (KeyError, AttributeError, TypeError, ValueError, ZeroDivisionError, RuntimeError, OSError) as e:

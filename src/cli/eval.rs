@@ -137,6 +137,62 @@ fn finished_setting(dir: &Path, identity: &SettingIdentity) -> Option<Summary> {
     (rows == summary.episodes).then_some(summary)
 }
 
+/// Why `--resume` plays a setting again: the folders in `out` of the same
+/// setting name (captors, target, K, ratio, maps) whose recorded identity
+/// differs, each with the fields that changed; or that `dir` itself holds
+/// an unfinished run. None where nothing of this setting is there.
+fn why_not_resumed(out: &Path, dir: &Path, identity: &SettingIdentity) -> Option<String> {
+    let name = dir.file_name()?.to_string_lossy().into_owned();
+    let stem = name.rsplit_once('_')?.0.to_string();
+    if dir.join("setting.json").is_file() {
+        return Some(format!(
+            "{} was left unfinished (its episodes.csv does not hold every episode); playing it again",
+            dir.display()
+        ));
+    }
+    let now = serde_json::to_value(identity).ok()?;
+    let mut reasons = Vec::new();
+    let mut others: Vec<PathBuf> = std::fs::read_dir(out)
+        .ok()?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| {
+            p.file_name()
+                .and_then(|n| n.to_str())
+                .and_then(|n| n.rsplit_once('_'))
+                .is_some_and(|(s, _)| s == stem)
+                && *p != dir
+        })
+        .collect();
+    others.sort();
+    for other in others {
+        let Ok(text) = std::fs::read_to_string(other.join("setting.json")) else {
+            continue;
+        };
+        let Ok(then) = serde_json::from_str::<serde_json::Value>(&text) else {
+            continue;
+        };
+        let (Some(then), Some(now)) = (then.as_object(), now.as_object()) else {
+            continue;
+        };
+        let changed: Vec<String> = now
+            .iter()
+            .filter(|(k, v)| then.get(*k) != Some(*v))
+            .map(|(k, v)| match (then.get(k), v) {
+                (Some(a), b) if !a.is_object() && !a.is_array() && !b.is_array() => {
+                    format!("{k} {a} -> {b}")
+                }
+                _ => format!("{k} changed"),
+            })
+            .collect();
+        reasons.push(format!(
+            "{} was played with other settings ({}); it is left as it is",
+            other.display(),
+            changed.join(", ")
+        ));
+    }
+    (!reasons.is_empty()).then(|| reasons.join("; "))
+}
+
 fn write_setting(
     dir: &Path,
     identity: &SettingIdentity,
@@ -270,6 +326,11 @@ pub fn run(args: EvalArgs) -> Result<()> {
                 let summary = match finished_setting(&dir, &identity).filter(|_| args.resume) {
                     Some(done) => done,
                     None => {
+                        if args.resume {
+                            if let Some(why) = why_not_resumed(&args.out, &dir, &identity) {
+                                eprintln!("--resume: {spec}, K = {k}, ratio {ratio}: starts again: {why}");
+                            }
+                        }
                         let (summary, records) =
                             eval::run(&setting, &sets[spec], spec, !args.quiet)?;
                         write_setting(&dir, &identity, &summary, &records)?;

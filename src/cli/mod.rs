@@ -66,6 +66,10 @@ pub enum Command {
     /// Train a fresh best response against one frozen league player for a
     /// fixed budget; its win rate (95% interval) goes to the store and `status`.
     Exploit(league::ExploitArgs),
+    /// Write the manifest (SHA256SUMS) that a checkpoint folder written
+    /// before 0.2.0 lacks, after checking its files against meta.json: it
+    /// vouches for meta.json as it is now, so seal only folders you trust.
+    Seal(SealArgs),
     /// Run a league's seats on this host, taken from its store (a league
     /// started with `run --store URL --pool DIR`).
     Worker(league::WorkerArgs),
@@ -99,6 +103,7 @@ pub fn main() -> anyhow::Result<()> {
     match cli.command {
         Command::Maps(a) => maps::run(a),
         Command::Eval(a) => eval::run(a),
+        Command::Seal(a) => seal(a),
         Command::Render(a) => render::run(a),
         Command::Bench(a) => bench::run(a),
         Command::Table(a) => table::run(a),
@@ -112,4 +117,19 @@ pub fn main() -> anyhow::Result<()> {
         Command::LeagueEvaluator(a) => league::evaluator(a),
         Command::GenerateDocs(a) => docs::run::<Cli>(a),
     }
+}
+
+#[derive(clap::Args, Debug)]
+pub struct SealArgs {
+    /// Checkpoint folders (each holding meta.json).
+    #[arg(required = true)]
+    pub folders: Vec<std::path::PathBuf>,
+}
+
+fn seal(args: SealArgs) -> anyhow::Result<()> {
+    for folder in &args.folders {
+        t2e_learners::nn::checkpoint::seal(folder)?;
+        println!("{}: sealed (SHA256SUMS written)", folder.display());
+    }
+    Ok(())
 }

@@ -285,3 +285,98 @@ fn fetch_gibson_extracts_the_reference_layout() {
     );
     assert!(!bad_out.exists());
 }
+
+/// Where `maps fetch-gibson` cannot write, or reads something that is no
+/// map file, it says so once, names the folder the user gave, and leaves
+/// nothing behind (no hidden `.NAME.partial-<pid>/`); a FIFO in a map's
+/// place is refused without being opened, so the command cannot block.
+#[test]
+fn fetch_gibson_refuses_bad_folders_and_fifos_by_name_and_leaves_nothing() {
+    use std::process::Command;
+    use t2e::map::gibson_source::CLASS_FOLDERS;
+    let Some(gibson) = gibson_or_skip() else {
+        return;
+    };
+    let tmp = tempfile::tempdir().unwrap();
+    let checkout = tmp.path().join("T2E");
+    let folder_of = |class: SizeClass| CLASS_FOLDERS.iter().find(|(_, c)| *c == class).unwrap().0;
+    for e in &list_dir(&gibson).unwrap() {
+        let dir = checkout.join("scene/val").join(folder_of(e.listed_class.unwrap()));
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::copy(&e.path, dir.join(format!("{}.png", e.name))).unwrap();
+    }
+    let fetch = |out: &std::path::Path| {
+        let o = Command::new(env!("CARGO_BIN_EXE_t2e-league"))
+            .args(["maps", "fetch-gibson", "--from"])
+            .arg(&checkout)
+            .arg("--out")
+            .arg(out)
+            .output()
+            .unwrap();
+        assert!(!o.status.success(), "{} was accepted", out.display());
+        String::from_utf8_lossy(&o.stderr).into_owned()
+    };
+    let leftovers = |dir: &std::path::Path| -> Vec<String> {
+        std::fs::read_dir(dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .filter(|n| n.contains("partial"))
+            .collect()
+    };
+    let once = |err: &str, text: &str| {
+        assert_eq!(err.matches(text).count(), 1, "{text:?} not said exactly once: {err}");
+    };
+    // A dangling symbolic link.
+    let link = tmp.path().join("LINK");
+    std::os::unix::fs::symlink(tmp.path().join("nowhere"), &link).unwrap();
+    let err = fetch(&link);
+    assert!(err.contains("LINK") && err.contains("does not exist"), "{err}");
+    assert_eq!(leftovers(tmp.path()), Vec::<String>::new());
+    // Under a file.
+    let file = tmp.path().join("a-file");
+    std::fs::write(&file, b"x").unwrap();
+    let err = fetch(&file.join("gibson"));
+    assert!(err.contains("a-file is a file"), "{err}");
+    assert!(!err.contains("os error 17"), "{err}");
+    // An empty folder that exists.
+    let empty = tmp.path().join("empty");
+    std::fs::create_dir(&empty).unwrap();
+    let err = fetch(&empty);
+    once(&err, "an empty folder");
+    // Where nothing can be created: the message names the folder given,
+    // not the program's staging folder.
+    let err = fetch(std::path::Path::new("/proc/t2e-no-such/gibson"));
+    assert!(err.contains("/proc/t2e-no-such/gibson") && !err.contains("partial"), "{err}");
+    // A FIFO in a map's place, under a time limit: a blocked open fails
+    // the test instead of hanging it.
+    let victim = checkout.join("scene/val/easy").join(
+        list_dir(&gibson)
+            .unwrap()
+            .iter()
+            .find(|e| e.listed_class == Some(SizeClass::Small))
+            .map(|e| format!("{}.png", e.name))
+            .unwrap(),
+    );
+    std::fs::remove_file(&victim).unwrap();
+    assert!(Command::new("mkfifo").arg(&victim).status().unwrap().success());
+    let mut child = Command::new(env!("CARGO_BIN_EXE_t2e-league"))
+        .args(["maps", "fetch-gibson", "--from"])
+        .arg(&checkout)
+        .arg("--out")
+        .arg(tmp.path().join("fifo-out"))
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let start = std::time::Instant::now();
+    while child.try_wait().unwrap().is_none() {
+        if start.elapsed() > std::time::Duration::from_secs(60) {
+            let _ = child.kill();
+            panic!("fetch-gibson blocked on a FIFO in a map's place");
+        }
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+    let o = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("not a regular file"), "{err}");
+    assert!(!tmp.path().join("fifo-out").exists());
+}

@@ -335,7 +335,7 @@ fn tiny_run(dir: &Path) -> PathBuf {
 }
 
 #[test]
-fn an_edited_meta_json_is_another_setting_and_is_not_resumed_as_the_old_one() {
+fn an_edited_meta_json_of_a_training_checkpoint_is_refused_by_its_manifest() {
     let run = tempfile::tempdir().unwrap();
     let ckpt = tiny_run(run.path());
     let spec = || -> ControllerSpec { format!("ckpt:{}", ckpt.display()).parse().unwrap() };
@@ -348,52 +348,62 @@ fn an_edited_meta_json_is_another_setting_and_is_not_resumed_as_the_old_one() {
         soa_every: 0,
         ..EvalSetting::default()
     };
-    let before = SettingIdentity::of(&setting(spec()), "shipped:small", &maps).unwrap();
+    SettingIdentity::of(&setting(spec()), "shipped:small", &maps).unwrap();
+    assert!(ckpt.join("SHA256SUMS").is_file(), "a training checkpoint carries a manifest");
 
     // Relabel the protocol by hand: the weights are untouched, so their
-    // hashes still match, but the rows it labels would lie.
+    // hashes in meta.json still match, but the rows it labels would lie.
     let meta = ckpt.join("meta.json");
     let text = std::fs::read_to_string(&meta).unwrap();
     assert!(text.contains("\"held-out\""));
     std::fs::write(&meta, text.replace("\"held-out\"", "\"paper\"")).unwrap();
-    let after = SettingIdentity::of(&setting(spec()), "shipped:small", &maps).unwrap();
-    assert_eq!(before.captors_sha256, after.captors_sha256);
-    assert_ne!(before, after, "an edited sidecar must be another setting");
-    assert_ne!(before.short_hash(), after.short_hash());
+    let err = SettingIdentity::of(&setting(spec()), "shipped:small", &maps)
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("meta.json") && err.contains("SHA256SUMS"), "{err}");
 
-    // Through `eval --resume`: the first result is not reused under the
-    // new label; the edited checkpoint is played again in its own folder.
+    // Without the manifest it is refused too, and `seal` names the way.
     std::fs::write(&meta, &text).unwrap();
+    std::fs::remove_file(ckpt.join("SHA256SUMS")).unwrap();
+    let err = SettingIdentity::of(&setting(spec()), "shipped:small", &maps)
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("SHA256SUMS: missing") && err.contains("t2e-league seal"), "{err}");
+    let o = Command::new(BIN).arg("seal").arg(&ckpt).output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    SettingIdentity::of(&setting(spec()), "shipped:small", &maps).unwrap();
+}
+
+/// `eval --resume` with another --episodes plays the setting again, in a
+/// folder of its own, and says why, naming the old folder and the field.
+#[test]
+fn eval_resume_says_why_it_plays_a_setting_again() {
     let out = tempfile::tempdir().unwrap();
-    let args = || EvalArgs {
-        captors: spec(),
-        target: ControllerSpec::Heuristic,
-        maps: vec!["shipped:small".into()],
-        k: vec![2],
-        speed_ratio: vec![1.0],
-        episodes: 2,
-        episode_length: 20,
-        seed: 0,
-        capture_rule: CaptureRule::Fast,
-        soa_every: 0,
-        out: out.path().to_path_buf(),
-        quiet: true,
-        resume: true,
+    let eval = |episodes: &str| {
+        Command::new(BIN)
+            .args(["eval", "--captors", "heuristic", "--target", "heuristic", "--k", "2"])
+            .args(["--maps", "shipped:small", "--episodes", episodes, "--episode-length", "20"])
+            .args(["--soa-every", "0", "--quiet", "--resume", "--out"])
+            .arg(out.path())
+            .output()
+            .unwrap()
     };
-    t2e::cli::eval::run(args()).unwrap();
-    std::fs::write(&meta, text.replace("\"held-out\"", "\"paper\"")).unwrap();
-    t2e::cli::eval::run(args()).unwrap();
-    let folders: Vec<Summary> = std::fs::read_dir(out.path())
+    let first = eval("2");
+    assert!(first.status.success(), "{}", String::from_utf8_lossy(&first.stderr));
+    assert!(!String::from_utf8_lossy(&first.stderr).contains("starts again"));
+    let again = eval("2");
+    assert!(!String::from_utf8_lossy(&again.stderr).contains("starts again"));
+    let changed = eval("3");
+    let err = String::from_utf8_lossy(&changed.stderr);
+    assert!(changed.status.success(), "{err}");
+    assert!(err.contains("starts again") && err.contains("episodes 2 -> 3"), "{err}");
+    let old: Vec<_> = std::fs::read_dir(out.path())
         .unwrap()
         .map(|e| e.unwrap().path())
         .filter(|p| p.is_dir())
-        .map(|p| {
-            serde_json::from_str(&std::fs::read_to_string(p.join("summary.json")).unwrap()).unwrap()
-        })
         .collect();
-    let mut protocols: Vec<&str> = folders.iter().map(|s| s.protocol.as_str()).collect();
-    protocols.sort();
-    assert_eq!(protocols, ["held-out", "paper"], "one folder per sidecar");
+    assert_eq!(old.len(), 2, "{old:?}");
+    assert!(old.iter().any(|p| err.contains(&p.display().to_string())), "{err}");
 }
 
 #[test]

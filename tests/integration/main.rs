@@ -18,6 +18,7 @@ mod league_folders;
 mod learn;
 mod protocol;
 mod sight;
+mod slurm;
 mod store;
 mod stored_runs;
 mod tch_smoke;

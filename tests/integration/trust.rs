@@ -378,13 +378,16 @@ fn checkpoints_are_never_lost_and_never_silently_replaced() {
     assert!(err.contains("missing"), "{err}");
 }
 
-/// Rewrites `meta.json` of a checkpoint through `edit`.
+/// Rewrites `meta.json` of a checkpoint through `edit`, and its manifest
+/// after it, as a forger would: what is checked then is what lies past
+/// the manifest.
 fn edit_meta(dir: &Path, edit: impl FnOnce(&mut serde_json::Value)) {
     let path = dir.join("meta.json");
     let mut v: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
     edit(&mut v);
     std::fs::write(&path, serde_json::to_string_pretty(&v).unwrap()).unwrap();
+    t2e::nn::checkpoint::write_manifest(dir).unwrap();
 }
 
 #[test]
@@ -738,4 +741,78 @@ fn a_reset_learner_is_back_to_its_initial_weights() {
     );
     // Training goes on from there.
     t.iterate().unwrap();
+}
+
+/// Every checkpoint folder is verified as an export is: its manifest covers
+/// meta.json, an export's player.json names meta.json's side, a folder
+/// without a manifest is refused (whether it was a training checkpoint or
+/// an export stripped of its marks), and a network reading wall rays must
+/// record the rays' range.
+#[test]
+fn every_checkpoint_is_verified_by_its_manifest_and_its_sides_agree() {
+    tch::set_num_threads(1);
+    let run = tempfile::tempdir().unwrap();
+    let mut t = Trainer::new(tiny_config(), tiny_maps()).unwrap();
+    t.iterate().unwrap();
+    let ckpt = t.save(run.path()).unwrap().remove(0);
+    let manifest = std::fs::read_to_string(ckpt.join("SHA256SUMS")).unwrap();
+    for file in ["meta.json", "actor.safetensors", "critic.safetensors"] {
+        assert!(manifest.contains(&format!("  {file}\n")), "{manifest}");
+    }
+    // An export's shape: player.json and the league's config beside the
+    // checkpoint's files, all in the manifest.
+    let export = run.path().join("export");
+    std::fs::create_dir(&export).unwrap();
+    for e in std::fs::read_dir(&ckpt).unwrap() {
+        let p = e.unwrap().path();
+        std::fs::copy(&p, export.join(p.file_name().unwrap())).unwrap();
+    }
+    std::fs::write(export.join("player.json"), r#"{"player": "captors-main", "side": "captors"}"#).unwrap();
+    std::fs::write(export.join("league-config.toml"), "").unwrap();
+    t2e::nn::checkpoint::write_manifest(&export).unwrap();
+    PolicySnapshot::load(&export, Side::Captors).unwrap();
+    let eval_target = |dir: &Path| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_t2e-league"))
+            .args(["eval", "--captors", "heuristic", "--k", "2", "--maps", "shipped:small"])
+            .args(["--episodes", "1", "--episode-length", "10", "--quiet", "--out"])
+            .arg(run.path().join("eval"))
+            .arg("--target")
+            .arg(format!("ckpt:{}", dir.display()))
+            .output()
+            .unwrap()
+    };
+
+    // meta.json's side turned to the target, the manifest made again.
+    edit_meta(&export, |v| v["side"] = "target".into());
+    let err = format!("{:#}", PolicySnapshot::load(&export, Side::Target).unwrap_err());
+    assert!(err.contains("player.json") && err.contains("\"captors\""), "{err}");
+    let o = eval_target(&export);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && stderr.contains("player.json"), "{stderr}");
+
+    // The export stripped of its manifest and its marks.
+    edit_meta(&export, |v| v["side"] = "captors".into());
+    for mark in ["SHA256SUMS", "player.json", "league-config.toml"] {
+        std::fs::remove_file(export.join(mark)).unwrap();
+    }
+    let err = format!("{:#}", PolicySnapshot::load(&export, Side::Captors).unwrap_err());
+    assert!(err.contains("SHA256SUMS: missing"), "{err}");
+
+    // A training checkpoint's meta.json edited without its manifest.
+    let meta = ckpt.join("meta.json");
+    let text = std::fs::read_to_string(&meta).unwrap();
+    std::fs::write(&meta, text.replace("\"env_steps\"", "\"env_steps\" ").replacen("\"iteration\": 1", "\"iteration\": 7", 1)).unwrap();
+    let err = format!("{:#}", PolicySnapshot::load(&ckpt, Side::Captors).unwrap_err());
+    assert!(err.contains("meta.json") && err.contains("SHA256SUMS"), "{err}");
+    std::fs::write(&meta, &text).unwrap();
+    PolicySnapshot::load(&ckpt, Side::Captors).unwrap();
+
+    // Rays without their range: written when a ray was divided by each
+    // map's extent.
+    edit_meta(&ckpt, |v| v["net"]["sight"] = serde_json::json!({"wall_rays": 12}));
+    let err = format!("{:#}", PolicySnapshot::load(&ckpt, Side::Captors).unwrap_err());
+    assert!(err.contains("wall_ray_range_m") && err.contains("16 m"), "{err}");
+    edit_meta(&ckpt, |v| v["wall_ray_range_m"] = 24.0.into());
+    let err = format!("{:#}", PolicySnapshot::load(&ckpt, Side::Captors).unwrap_err());
+    assert!(err.contains("wall_ray_range_m = 24"), "{err}");
 }

@@ -132,7 +132,7 @@ impl OpponentNets {
                 dir.display()
             );
         }
-        let snapshot = Arc::new(PolicySnapshot::load(&dir, self.side)?);
+        let snapshot = Arc::new(PolicySnapshot::load_recorded(&dir, self.side, &meta_sha)?);
         let (vs, actor) = snapshot.build_actor(Device::Cpu)?;
         if self.cache.len() >= self.capacity {
             if let Some(evict) = self

@@ -191,9 +191,18 @@ pub fn reconcile(dir: &LeagueDir, store: &Store, league_id: &str) -> Result<Reco
         let Some((rel, sha)) = &p.checkpoint else {
             continue;
         };
-        let meta = dir.root.join(rel).join("meta.json");
-        let ok = t2e_core::util::sha256_file(&meta).is_ok_and(|got| &got == sha)
-            && PolicySnapshot::load(&dir.root.join(rel), p.side).is_ok();
+        let folder = dir.root.join(rel);
+        let meta = folder.join("meta.json");
+        let recorded = t2e_core::util::sha256_file(&meta).is_ok_and(|got| &got == sha);
+        if recorded && !folder.join("SHA256SUMS").exists() {
+            // Written before checkpoints carried a manifest: the store's
+            // record vouches for its meta.json, so the manifest is made
+            // once here, after its weights verify against meta.json.
+            if let Err(e) = t2e_learners::nn::checkpoint::seal(&folder) {
+                tracing::warn!("{}: cannot write its manifest: {e}", folder.display());
+            }
+        }
+        let ok = recorded && PolicySnapshot::load_recorded(&folder, p.side, sha).is_ok();
         match (ok, p.quarantined.is_some()) {
             (false, false) => {
                 store.quarantine(p.id, "checkpoint files missing or corrupt at league start")?;

@@ -4,8 +4,8 @@
 //! positions, while the rule-based robots cast 12 wall rays across the
 //! whole 16 m map. `Sight` gives a learner what the rule-based robots
 //! read, and more:
-//! - wall distances along rays in the robot's own frame, out to the map's
-//!   extent (`wall_rays`);
+//! - wall distances along rays in the robot's own frame, out to a fixed
+//!   16 m (`wall_rays`, `WALL_RAY_RANGE_M`);
 //! - a coarse north-up map of the whole map (`map_cells` across), with one
 //!   channel each for walls, captors, the target and the robot itself, so
 //!   a network can learn where rooms, loops and dead ends are.
@@ -22,6 +22,13 @@ use serde::{Deserialize, Serialize};
 /// The most rays a robot may cast (every 5 degrees).
 pub const MAX_WALL_RAYS: usize = 72;
 
+/// How far a wall ray reads, in metres; a reading is the distance over this
+/// and 1.0 past it. Fixed rather than each map's extent, so that one wall
+/// distance reads the same number on every map: a learner trained on 16 m
+/// generated maps is tested on Gibson maps of other extents. Checkpoints
+/// record it (`wall_ray_range_m` in meta.json).
+pub const WALL_RAY_RANGE_M: f64 = 16.0;
+
 /// Coarse map sizes, in cells across the map: 8 (2 m cells on a 16 m map)
 /// to 32 (0.5 m cells; 4 x 32 x 32 = 4096 numbers per robot).
 pub const MAP_CELLS: std::ops::RangeInclusive<usize> = 8..=32;
@@ -35,8 +42,9 @@ pub const MAP_CHANNELS: [&str; 4] = ["walls", "captors", "target", "self"];
 pub struct Sight {
     /// Wall rays in the robot's frame, evenly spaced from straight ahead
     /// turning left (counter-clockwise); each reads the exact distance to
-    /// the first obstacle cell divided by the map's extent (16 m), so 1.0
-    /// is "no wall on this map". 0: off; the rule-based robots cast 12.
+    /// the first obstacle cell divided by `WALL_RAY_RANGE_M` (16 m) and
+    /// capped at 1, so 1.0 is "no wall within 16 m". 0: off; the
+    /// rule-based robots cast 12.
     pub wall_rays: usize,
     /// A north-up map of the whole map, `map_cells` x `map_cells` cells, in
     /// four channels (`MAP_CHANNELS`): the share of the cell that is
@@ -204,9 +212,9 @@ pub fn write_coarse_map(
 }
 
 /// `out.len()` wall distances from `pos`, ray m at heading `theta + 2 pi m /
-/// out.len()`, each divided by the map's extent and capped at 1.
+/// out.len()`, each divided by `WALL_RAY_RANGE_M` and capped at 1.
 pub fn write_wall_rays(map: &PreparedMap, pos: [f64; 2], theta: f64, out: &mut [f32]) {
-    let reach = map.long_ray_max();
+    let reach = WALL_RAY_RANGE_M;
     let n = out.len();
     for (m, o) in out.iter_mut().enumerate() {
         let a = theta + std::f64::consts::TAU * m as f64 / n as f64;
@@ -229,7 +237,7 @@ mod tests {
         // Free cells rows 150..170 (1 m wide), columns 20..300 (14 m long).
         let g = Grid::with_free_rects("corridor", 320, &[(150..170, 20..300)]);
         let map = PreparedMap::new(g);
-        let extent = map.long_ray_max();
+        let extent = WALL_RAY_RANGE_M;
         // The centre of row 160, column 100 in world coordinates.
         let pos = map.grid.cell_center(160, 100);
         let mut ahead = [0f32; 4];
@@ -254,6 +262,34 @@ mod tests {
             );
         }
         assert!(ahead.iter().all(|&x| x > 0.0 && x <= 1.0));
+    }
+
+    /// The same wall reads the same number on a 16 m map and a 24 m one,
+    /// and a ray with no wall within 16 m reads 1.0 even where a wall lies
+    /// beyond: a reading is metres, not a share of the map.
+    #[test]
+    fn a_wall_ray_reads_metres_whatever_the_maps_extent() {
+        // A room 4 m east of the robot's cell on both maps.
+        let small = PreparedMap::new(Grid::with_free_rects("16m", 320, &[(100..220, 20..120)]));
+        let large = PreparedMap::new(Grid::with_free_rects("24m", 480, &[(100..220, 20..120)]));
+        assert!((large.long_ray_max() - 1.5 * small.long_ray_max()).abs() < 1e-9);
+        let read = |map: &PreparedMap| {
+            let mut rays = [0f32; 4];
+            write_wall_rays(map, map.grid.cell_center(160, 40), 0.0, &mut rays);
+            rays
+        };
+        let (a, b) = (read(&small), read(&large));
+        for k in 0..4 {
+            assert!((a[k] - b[k]).abs() < 1e-6, "ray {k}: {a:?} on 16 m, {b:?} on 24 m");
+        }
+        // East: from column 40.5 to 120 is 79.5 cells, 3.975 m.
+        assert!((a[0] as f64 * WALL_RAY_RANGE_M - 79.5 * 0.05).abs() < 0.06, "{a:?}");
+        // A corridor 20 m long: the ray east sees no wall within 16 m.
+        let long = PreparedMap::new(Grid::with_free_rects("corridor", 480, &[(150..170, 10..470)]));
+        let mut rays = [0f32; 4];
+        write_wall_rays(&long, long.grid.cell_center(160, 20), 0.0, &mut rays);
+        assert_eq!(rays[0], 1.0, "{rays:?}");
+        assert!(rays[1] < 0.05, "{rays:?}");
     }
 
     /// A 320-cell map (16 m) whose left half is blocked, on a 16 x 16

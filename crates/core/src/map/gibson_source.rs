@@ -41,11 +41,15 @@ pub enum GibsonSourceError {
         folder: PathBuf,
         missing: Vec<String>,
     },
-    #[error("{}: cannot write: {source}", path.display())]
+    /// `cause` is no `#[source]`: the message holds it once, so a chain
+    /// printed whole does not repeat it.
+    #[error("{}: cannot write: {cause}", path.display())]
     Write {
         path: PathBuf,
-        source: std::io::Error,
+        cause: std::io::Error,
     },
+    #[error("{}: {reason}", out.display())]
+    Out { out: PathBuf, reason: String },
 }
 
 /// One map of a checked copy.
@@ -97,6 +101,7 @@ pub fn read_checkout(checkout: &Path) -> Result<Vec<(ImportedMap, PathBuf)>, Gib
                         .into(),
                 ));
             };
+            refuse_unless_regular(&path).map_err(refuse)?;
             let grid = load_png(&path).map_err(|e| refuse(e.reason))?;
             let hash = grid.content_hash();
             if hash != *want_hash {
@@ -155,47 +160,92 @@ pub fn read_checkout(checkout: &Path) -> Result<Vec<(ImportedMap, PathBuf)>, Gib
 /// existing `out` is refused unless it already holds this very set.
 pub fn import_checkout(checkout: &Path, out: &Path) -> Result<Vec<ImportedMap>, GibsonSourceError> {
     let maps = read_checkout(checkout)?;
-    let write_err = |path: &Path| {
-        let path = path.to_path_buf();
-        move |source| GibsonSourceError::Write { path, source }
+    let refuse = |reason: String| GibsonSourceError::Out {
+        out: out.to_path_buf(),
+        reason,
     };
+    if let Ok(link) = std::fs::read_link(out) {
+        if !out.exists() {
+            return Err(refuse(format!(
+                "a symbolic link to {}, which does not exist; remove the link or give the folder it should name",
+                link.display()
+            )));
+        }
+    }
     if out.exists() {
+        if !out.is_dir() {
+            return Err(refuse("exists and is not a folder; choose another --out".into()));
+        }
         // Idempotent: a second fetch into a finished folder is not an error.
         if let Ok(existing) = read_flat(out) {
             if existing == maps.iter().map(|(m, _)| m.clone()).collect::<Vec<_>>() {
                 return Ok(existing);
             }
         }
-        return Err(GibsonSourceError::Write {
-            path: out.to_path_buf(),
-            source: std::io::Error::new(
-                std::io::ErrorKind::AlreadyExists,
-                "exists and is not this set of maps; choose another folder or remove it",
-            ),
-        });
+        let empty = std::fs::read_dir(out).is_ok_and(|mut d| d.next().is_none());
+        return Err(refuse(if empty {
+            "exists (an empty folder); remove it, or choose a folder that does not exist yet".into()
+        } else {
+            "exists and is not this set of maps; choose another folder or remove it".into()
+        }));
     }
     let parent = match out.parent() {
         Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
         _ => PathBuf::from("."),
     };
-    std::fs::create_dir_all(&parent).map_err(write_err(&parent))?;
+    if let Some(file) = parent.ancestors().find(|a| a.exists() && !a.is_dir()) {
+        return Err(refuse(format!(
+            "{} is a file, not a folder, so nothing can be written under it",
+            file.display()
+        )));
+    }
+    std::fs::create_dir_all(&parent).map_err(|e| refuse(format!("cannot create its parent folder: {e}")))?;
     let staging = parent.join(format!(
         ".{}.partial-{}",
         out.file_name().and_then(|s| s.to_str()).unwrap_or("gibson"),
         std::process::id()
     ));
     let _ = std::fs::remove_dir_all(&staging);
-    std::fs::create_dir_all(&staging).map_err(write_err(&staging))?;
+    let filled = fill_staging(&staging, &maps).and_then(|()| {
+        std::fs::rename(&staging, out).map_err(|e| refuse(format!("cannot move the maps into place: {e}")))
+    });
+    if filled.is_err() {
+        // Nothing half-written is left behind, hidden or not.
+        let _ = std::fs::remove_dir_all(&staging);
+    }
+    filled.map_err(|e| match e {
+        // The staging folder is the program's business; the user gave `out`.
+        GibsonSourceError::Write { cause, .. } => refuse(format!("cannot write: {cause}")),
+        other => other,
+    })?;
+    Ok(maps.into_iter().map(|(m, _)| m).collect())
+}
+
+/// The 26 PNGs, byte for byte, and `splits.csv` into `staging`.
+fn fill_staging(staging: &Path, maps: &[(ImportedMap, PathBuf)]) -> Result<(), GibsonSourceError> {
+    let write_err = |path: &Path| {
+        let path = path.to_path_buf();
+        move |cause| GibsonSourceError::Write { path, cause }
+    };
+    std::fs::create_dir_all(staging).map_err(write_err(staging))?;
     let mut splits = String::from("map,split\n");
-    for (map, source) in &maps {
+    for (map, source) in maps {
         let dest = staging.join(format!("{}.png", map.name));
         std::fs::copy(source, &dest).map_err(write_err(&dest))?;
         splits.push_str(&format!("{},{}\n", map.name, map.class.name()));
     }
     let splits_path = staging.join("splits.csv");
-    std::fs::write(&splits_path, splits).map_err(write_err(&splits_path))?;
-    std::fs::rename(&staging, out).map_err(write_err(out))?;
-    Ok(maps.into_iter().map(|(m, _)| m).collect())
+    std::fs::write(&splits_path, splits).map_err(write_err(&splits_path))
+}
+
+/// A map file must be a regular file (a symbolic link to one is): reading
+/// a FIFO or a device in its place would block or never end.
+fn refuse_unless_regular(path: &Path) -> Result<(), String> {
+    match std::fs::metadata(path) {
+        Ok(m) if m.is_file() => Ok(()),
+        Ok(_) => Err("not a regular file (a FIFO, device or folder in a map's place)".into()),
+        Err(e) => Err(format!("cannot read: {e}")),
+    }
 }
 
 /// The maps of a flat folder as `import_checkout` writes it, checked the
@@ -212,6 +262,7 @@ pub fn read_flat(dir: &Path) -> Result<Vec<ImportedMap>, GibsonSourceError> {
             path: entry.path.clone(),
             reason,
         };
+        refuse_unless_regular(&entry.path).map_err(refuse)?;
         let grid = load_png(&entry.path).map_err(|e| refuse(e.reason))?;
         let hash = grid.content_hash();
         if expected.get(entry.name.as_str()) != Some(&hash.as_str()) {

@@ -40,6 +40,11 @@ pub fn save_new_learner(
 /// against its recorded hash, and its state. A checkpoint of another
 /// algorithm is refused before anything is loaded.
 pub fn load_learner(dir: &Path, learner: &mut dyn Learner) -> Result<CheckpointMeta> {
+    // A run's own checkpoint, named by its state.json; one written before
+    // checkpoints carried a manifest resumes, and the next one has it.
+    if dir.join("SHA256SUMS").exists() {
+        crate::nn::checkpoint::verify_manifest(dir)?;
+    }
     let meta = read_meta(dir)?;
     let algorithm = learner.algorithm();
     if meta.algorithm != algorithm {

@@ -8,6 +8,7 @@
 //!     actor.safetensors    the policy (all a controller needs)
 //!     critic.safetensors   the value function   (to resume training)
 //!     optimizer.safetensors Adam moments        (to resume training)
+//!     SHA256SUMS           the SHA-256 of every other file, meta.json included
 //! ```
 //!
 //! Invariants:
@@ -16,9 +17,14 @@
 //!   place, and an identical one is not rewritten.
 //! - Loading verifies each weight file against its hash in `meta.json` and
 //!   refuses non-finite weights: a flipped byte or a NaN never plays.
+//! - Every folder carries `SHA256SUMS`, which covers `meta.json` too: an
+//!   edited side, sight or protocol is refused, not played. A folder
+//!   without one is refused, unless its `meta.json` is the one a league's
+//!   store recorded (`verify_recorded`).
 
 use super::config::NetConfig;
 use crate::algorithm::Algorithm;
+use crate::env::sight::WALL_RAY_RANGE_M;
 use crate::env::{EnvConfig, Side, Sight};
 use crate::fs::{write_dir_atomically, write_new_dir_atomically, FsError, Written};
 use crate::util::sha256_file;
@@ -71,6 +77,12 @@ pub struct CheckpointMeta {
     /// the name it has always had there.
     #[serde(rename = "league", default, skip_serializing_if = "Option::is_none")]
     pub pool_label: Option<serde_json::Value>,
+    /// How far the wall rays of `net.sight` read, in metres
+    /// (`WALL_RAY_RANGE_M`); written by the checkpoint writer whenever the
+    /// network reads rays. Absent on a network with rays, it was trained
+    /// when a ray was divided by each map's extent, and is refused.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub wall_ray_range_m: Option<f64>,
 }
 
 impl CheckpointMeta {
@@ -179,6 +191,17 @@ pub enum CheckpointError {
         path: PathBuf,
         manifest: PathBuf,
         what: String,
+    },
+    /// A folder without `SHA256SUMS`: nothing covers its `meta.json`.
+    #[error("{}: missing: every checkpoint folder carries a manifest of its files, meta.json included (written by t2e-league 0.2.0 and later); without it an edited meta.json (its side, sight or protocol) cannot be told. A folder you trust that was written before: `t2e-league seal {}`", .manifest.display(), .dir.display())]
+    NoManifest { manifest: PathBuf, dir: PathBuf },
+    /// `player.json` (an export's) and `meta.json` name different sides.
+    #[error("{}: side \"{player}\", but {} says \"{meta}\": the folder was edited", .player_json.display(), .meta_json.display())]
+    SideDisagrees {
+        player_json: PathBuf,
+        meta_json: PathBuf,
+        player: String,
+        meta: String,
     },
     #[error(transparent)]
     Fs(#[from] FsError),
@@ -363,6 +386,7 @@ fn fill_checkpoint(
         };
         meta.files.insert(file.to_string(), sha);
     }
+    meta.wall_ray_range_m = (meta.net.sight.wall_rays > 0).then_some(WALL_RAY_RANGE_M);
     let text = serde_json::to_string_pretty(&meta).expect("a checkpoint's sidecar serialises");
     let path = tmp.join("meta.json");
     std::fs::write(&path, text).map_err(|cause| {
@@ -371,7 +395,62 @@ fn fill_checkpoint(
             cause,
         })
     })?;
-    Ok(())
+    write_manifest(tmp)
+}
+
+/// Writes the manifest a checkpoint folder written before manifests
+/// existed lacks, once its meta.json parses and every file it lists
+/// matches its hash: from then on an edit to meta.json is refused. It
+/// vouches for meta.json as it is now, so it is for folders one trusts (a
+/// training run of one's own), and refuses an export, which carries its
+/// manifest from `export` and is exported again instead.
+pub fn seal(dir: &Path) -> Result<(), CheckpointError> {
+    let manifest = dir.join("SHA256SUMS");
+    if manifest.exists() {
+        return Err(CheckpointError::Manifest {
+            path: manifest.clone(),
+            manifest,
+            what: "already there: the folder is sealed".into(),
+        });
+    }
+    if let Some(mark) = ["player.json", "league-config.toml"]
+        .into_iter()
+        .find(|m| dir.join(m).exists())
+    {
+        return Err(CheckpointError::Manifest {
+            path: manifest.clone(),
+            manifest,
+            what: format!("missing from an export (it holds {mark}): an export's manifest is written by `export` and covers player.json; export the player again"),
+        });
+    }
+    let meta = read_meta(dir)?;
+    for file in meta.files.keys() {
+        verify_file(dir, &meta, file)?;
+    }
+    write_manifest(dir)
+}
+
+/// Writes `dir/SHA256SUMS`: `<sha256>  <file>` for every other file of the
+/// folder, sorted by name (the `sha256sum -c` format).
+pub fn write_manifest(dir: &Path) -> Result<(), CheckpointError> {
+    let io = |what: String, cause| CheckpointError::Fs(FsError::Io { what, cause });
+    let mut names = Vec::new();
+    for entry in std::fs::read_dir(dir).map_err(|e| io(format!("cannot list {}", dir.display()), e))? {
+        let entry = entry.map_err(|e| io(format!("cannot list {}", dir.display()), e))?;
+        let name = entry.file_name().to_string_lossy().into_owned();
+        if name != "SHA256SUMS" && entry.path().is_file() {
+            names.push(name);
+        }
+    }
+    names.sort();
+    let mut text = String::new();
+    for name in names {
+        let path = dir.join(&name);
+        let sha = sha256_file(&path).map_err(|cause| CheckpointError::Unreadable { path, cause })?;
+        text.push_str(&format!("{sha}  {name}\n"));
+    }
+    let path = dir.join("SHA256SUMS");
+    std::fs::write(&path, text).map_err(|e| io(format!("cannot write {}", path.display()), e))
 }
 
 pub fn read_meta(dir: &Path) -> Result<CheckpointMeta, CheckpointError> {
@@ -443,36 +522,73 @@ pub fn read_meta_hashed(dir: &Path) -> Result<(CheckpointMeta, String), Checkpoi
     meta.net
         .validate()
         .map_err(|e| invalid(format!("net.{e}")))?;
+    if meta.net.sight.wall_rays > 0 {
+        match meta.wall_ray_range_m {
+            None => {
+                return Err(invalid(format!(
+                    "net.sight.wall_rays = {}, but no wall_ray_range_m: the network was trained when a wall ray was divided by each map's extent; this build reads rays out to a fixed {WALL_RAY_RANGE_M} m, so its inputs would mean other distances. Train it again",
+                    meta.net.sight.wall_rays
+                )))
+            }
+            Some(range) if range != WALL_RAY_RANGE_M => {
+                return Err(invalid(format!(
+                    "wall_ray_range_m = {range}: this build's wall rays read out to {WALL_RAY_RANGE_M} m"
+                )))
+            }
+            Some(_) => {}
+        }
+    }
     Ok((meta, sha256))
 }
 
-/// Checks an exported folder against its `SHA256SUMS` (written by
-/// `export`, meta.json included), when it has one: every file it lists is
-/// present with that hash, and meta.json is among them. A training run's
-/// checkpoint folder has none; meta.json's own hashes cover its weights.
+/// Checks a checkpoint folder against its `SHA256SUMS`: every file it
+/// lists is a regular file with that hash, and meta.json is among them; an
+/// export's `player.json` names meta.json's side. A folder without a
+/// manifest is refused (`CheckpointError::NoManifest`).
 pub fn verify_manifest(dir: &Path) -> Result<(), CheckpointError> {
+    verify_folder(dir, None)
+}
+
+/// `verify_manifest` for a folder whose `meta.json` SHA-256 a league's store
+/// recorded when the folder became a player: that record covers meta.json,
+/// so a folder written before manifests existed plays if its meta.json is
+/// the recorded one, byte for byte.
+pub fn verify_recorded(dir: &Path, meta_sha256: &str) -> Result<(), CheckpointError> {
+    verify_folder(dir, Some(meta_sha256))
+}
+
+fn verify_folder(dir: &Path, recorded: Option<&str>) -> Result<(), CheckpointError> {
+    check_player_side(dir)?;
     let manifest = dir.join("SHA256SUMS");
     if manifest.exists() && !manifest.is_file() {
         return Err(CheckpointError::Manifest {
             path: manifest.clone(),
             manifest,
-            what: "not a file: an export's manifest lists `<sha256>  <file>`".into(),
+            what: "not a regular file: a checkpoint's manifest lists `<sha256>  <file>`".into(),
         });
     }
     if !manifest.is_file() {
-        // An export always carries its manifest; without it nothing covers
-        // meta.json (its side, its prior).
-        if let Some(mark) = ["player.json", "league-config.toml"]
-            .into_iter()
-            .find(|m| dir.join(m).exists())
-        {
-            return Err(CheckpointError::Manifest {
-                path: manifest.clone(),
-                manifest,
-                what: format!("missing, though the folder is an export (it holds {mark}): its meta.json cannot be verified"),
-            });
+        let meta = dir.join("meta.json");
+        match recorded {
+            Some(want) if meta.is_file() => {
+                let got = sha256_file(&meta)
+                    .map_err(|cause| CheckpointError::Unreadable { path: meta.clone(), cause })?;
+                if got != want {
+                    return Err(CheckpointError::HashMismatch {
+                        path: meta,
+                        got,
+                        want: want.to_string(),
+                    });
+                }
+                return Ok(());
+            }
+            _ => {
+                return Err(CheckpointError::NoManifest {
+                    manifest,
+                    dir: dir.to_path_buf(),
+                })
+            }
         }
-        return Ok(());
     }
     let refuse = |path: PathBuf, what: String| CheckpointError::Manifest {
         path,
@@ -502,8 +618,13 @@ pub fn verify_manifest(dir: &Path) -> Result<(), CheckpointError> {
             ));
         }
         let path = dir.join(name);
-        if !path.is_file() {
-            return Err(refuse(path, "listed, but not a file".into()));
+        // Asked before reading, so a FIFO listed here cannot block the read.
+        match std::fs::metadata(&path) {
+            Err(_) => return Err(refuse(path, "listed, but missing".into())),
+            Ok(m) if !m.is_file() => {
+                return Err(refuse(path, "listed, but not a regular file".into()))
+            }
+            Ok(_) => {}
         }
         let got = crate::util::sha256_file(&path)
             .map_err(|e| refuse(path.clone(), format!("listed but unreadable ({e})")))?;
@@ -520,6 +641,43 @@ pub fn verify_manifest(dir: &Path) -> Result<(), CheckpointError> {
     }
     if !listed_meta {
         return Err(refuse(dir.join("meta.json"), "not listed".into()));
+    }
+    Ok(())
+}
+
+/// An export's `player.json` and its `meta.json` must name one side: the
+/// side a player is listed as is the side its weights play.
+fn check_player_side(dir: &Path) -> Result<(), CheckpointError> {
+    let player_json = dir.join("player.json");
+    if !player_json.is_file() {
+        return Ok(());
+    }
+    let meta_json = dir.join("meta.json");
+    let side_of = |path: &Path| -> Result<Option<String>, CheckpointError> {
+        let text = std::fs::read_to_string(path).map_err(|cause| CheckpointError::Unreadable {
+            path: path.to_path_buf(),
+            cause,
+        })?;
+        let value: serde_json::Value =
+            serde_json::from_str(&text).map_err(|cause| CheckpointError::NotASidecar {
+                path: path.to_path_buf(),
+                cause,
+            })?;
+        Ok(value.get("side").and_then(|s| s.as_str()).map(str::to_string))
+    };
+    let player = side_of(&player_json)?.unwrap_or_default();
+    let meta = if meta_json.is_file() {
+        side_of(&meta_json)?.unwrap_or_default()
+    } else {
+        return Ok(());
+    };
+    if player != meta {
+        return Err(CheckpointError::SideDisagrees {
+            player_json,
+            meta_json,
+            player,
+            meta,
+        });
     }
     Ok(())
 }

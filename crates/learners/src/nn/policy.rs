@@ -6,7 +6,8 @@
 //! know nothing of each other's callers.
 
 use super::checkpoint::{
-    load_into, read_checked, read_meta_hashed, verify_manifest, CheckpointError, CheckpointMeta,
+    load_into, read_checked, read_meta_hashed, verify_manifest, verify_recorded, CheckpointError,
+    CheckpointMeta,
 };
 use super::net::{obs_tensors, Actor};
 use super::run_dir::{latest_checkpoint, RunDir, RunDirError};
@@ -77,10 +78,42 @@ pub struct PolicySnapshot {
 }
 
 impl PolicySnapshot {
+    /// The checkpoint at `path` (resolved as `ckpt:` resolves it), its
+    /// manifest verified.
     pub fn load(path: &Path, side: Side) -> Result<PolicySnapshot, PolicyError> {
+        Self::load_checked(path, side, None)
+    }
+
+    /// A league player's checkpoint, whose meta.json SHA-256 the store
+    /// recorded: that record stands for the manifest a folder written
+    /// before manifests existed lacks, and meta.json must match it.
+    pub fn load_recorded(
+        path: &Path,
+        side: Side,
+        meta_sha256: &str,
+    ) -> Result<PolicySnapshot, PolicyError> {
+        Self::load_checked(path, side, Some(meta_sha256))
+    }
+
+    fn load_checked(
+        path: &Path,
+        side: Side,
+        recorded: Option<&str>,
+    ) -> Result<PolicySnapshot, PolicyError> {
         let dir = resolve_checkpoint(path, side)?;
-        verify_manifest(&dir)?;
+        match recorded {
+            None => verify_manifest(&dir)?,
+            Some(sha) => verify_recorded(&dir, sha)?,
+        }
         let (meta, meta_sha256) = read_meta_hashed(&dir)?;
+        if let Some(want) = recorded.filter(|want| *want != meta_sha256) {
+            return Err(CheckpointError::HashMismatch {
+                path: dir.join("meta.json"),
+                got: meta_sha256,
+                want: want.to_string(),
+            }
+            .into());
+        }
         let tensors = read_checked(&dir, &meta, "actor.safetensors")?;
         let weights = tensors
             .into_iter()

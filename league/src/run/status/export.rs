@@ -38,7 +38,7 @@ pub fn export(dir: &LeagueDir, player: &str, out: &Path) -> Result<()> {
         bail!("{}: meta.json does not match the store's sha256: refusing to export a corrupt checkpoint", src.display());
     }
     // Loading verifies every weight file against meta.json and refuses NaN.
-    t2e_learners::nn::PolicySnapshot::load(&src, p.side)?;
+    t2e_learners::nn::PolicySnapshot::load_recorded(&src, p.side, meta_sha)?;
     if let Some(why) = &p.quarantined {
         tracing::info!(
             "note: {} is quarantined ({why}); its files verify against the hashes recorded with it, so they are exported",
@@ -56,7 +56,6 @@ pub fn export(dir: &LeagueDir, player: &str, out: &Path) -> Result<()> {
         );
     }
     t2e_core::fs::write_dir_atomically(out, |tmp| {
-        let mut manifest = String::new();
         t2e_core::fs::copy_files(&src, tmp)?;
         // The config as the store holds it, byte for byte: what the league
         // ran with, in the words it was written in.
@@ -85,18 +84,9 @@ pub fn export(dir: &LeagueDir, player: &str, out: &Path) -> Result<()> {
             tmp.join("player.json"),
             serde_json::to_string_pretty(&info)?,
         )?;
-        let mut names: Vec<_> = std::fs::read_dir(tmp)?
-            .map(|e| e.map(|e| e.file_name().to_string_lossy().into_owned()))
-            .collect::<std::io::Result<_>>()?;
-        names.sort();
-        for n in names {
-            let _ = writeln!(
-                manifest,
-                "{}  {n}",
-                t2e_core::util::sha256_file(&tmp.join(&n))?
-            );
-        }
-        std::fs::write(tmp.join("SHA256SUMS"), manifest)?;
+        // Over the copied files, player.json and the config: the snapshot's
+        // own manifest, copied with it, is replaced.
+        t2e_learners::nn::checkpoint::write_manifest(tmp)?;
         Ok::<(), anyhow::Error>(())
     })?;
     Ok(())

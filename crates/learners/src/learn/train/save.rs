@@ -28,6 +28,7 @@ impl Trainer {
             learner_state: None,
             files: Default::default(),
             pool_label: None,
+            wall_ray_range_m: None,
         }
     }
 
