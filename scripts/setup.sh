@@ -13,8 +13,14 @@ PYTHON=${PYTHON:-python3}
 # The Python side: the build backend, the env's dependencies, the test runner.
 PY_PACKAGES="maturin==1.16.0 numpy==2.4.6 gymnasium==1.4.0 pettingzoo==1.27.0 pytest==9.2.0"
 # The trainers the Python tests run the env with (python/pyproject.toml's
-# `trainers` group), pinned with what they pull in.
-TRAINER_PACKAGES="supersuit==3.11.0 tinyscaler==1.2.8 stable-baselines3==2.9.2 torchrl==0.14.1 tensordict==0.14.3 matplotlib==3.11.2 cloudpickle==3.1.3"
+# `trainers` group), pinned with what they pull in. TorchRL is BenchMARL's
+# (benchmarl 1.5.2 imports SyncDataCollector, gone from torchrl 0.14).
+# Ray comes without its `rllib` extra, whose packages are listed instead:
+# the extra pins gymnasium 1.2.2, and RLlib's PPO runs on our 1.4.0.
+TRAINER_PACKAGES="supersuit==3.11.0 tinyscaler==1.2.8 stable-baselines3==2.9.2 matplotlib==3.11.2 cloudpickle==3.1.3 \
+  torchrl==0.11.1 tensordict==0.11.0 benchmarl==1.5.2 torchvision==0.26.0 hydra-core==1.3.8 av==13.1.0 \
+  ray==2.60.0 pandas==3.1.1 pyarrow==26.0.1 scipy==1.17.1 dm-tree==0.1.10 lz4==4.4.5 ormsgpack==1.13.1 \
+  tensorboardX==2.6.5 pydantic==2.14.4 pyyaml==6.0.4 requests==2.34.2 fsspec==2026.9.0"
 
 if [ ! -x .venv/bin/python ]; then
   echo "== creating .venv"

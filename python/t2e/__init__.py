@@ -75,6 +75,12 @@ def vector_env(
         captors = _scripted_name("captors", captors)
     if isinstance(target, ScriptedPolicy):
         target = _scripted_name("target", target)
+    for name, value in (("captors", captors), ("target", target)):
+        if isinstance(value, str) and value.startswith("ckpt:"):
+            raise ValueError(
+                f"{name} = {value!r}: vector_env plays only the controllers Rust steps without Python "
+                f"(heuristic, greedy, greedy:K, random, still); for a checkpoint, use parallel_env({name}={value!r})"
+            )
     for name, value in (("maps", maps), ("protocol", protocol), ("captors", captors), ("target", target)):
         if value is not None and not isinstance(value, str):
             raise TypeError(f"{name} = {value!r}: must be a string" + (" (a controller name; vector_env plays controllers in Rust)" if name in ("captors", "target") else ""))

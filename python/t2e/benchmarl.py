@@ -62,9 +62,6 @@ class T2EClass(TaskClass):
     def supports_discrete_actions(self) -> bool:
         return True
 
-    def has_state(self) -> bool:
-        return True
-
     def has_render(self, env: EnvBase) -> bool:
         return self.config.get("render_mode") == "rgb_array"
 

@@ -419,7 +419,7 @@ def _check_range(name: str, value: Any, low: int, high: int, zero: str = "") -> 
     of the Rust side's."""
     _check_int(name, value)
     if not (low <= value <= high or (zero and value == 0)):
-        allowed = f"0 ({zero}) or an integer from {low} to {high}" if zero else f"an integer from {low} to {high}"
+        allowed = f"0 ({zero}) or between {low} and {high}" if zero else f"between {low} and {high}"
         raise ValueError(f"{name} = {value}: must be {allowed}")
 
 

@@ -556,9 +556,12 @@ class TorchPolicy:
         wrong = [f"{name} = {theirs[name]}" for name in ours if ours[name] != theirs[name]]
         if not wrong:
             return None
+        shown = [name for name in ours if name == "num_captors" or ours[name] or theirs[name]]
+        trained = ", ".join(f"{name} = {ours[name]}" for name in shown)
+        want = ", ".join(f"{name}={ours[name]}" for name in shown)
         return (
-            f"the env has {', '.join(wrong)}; {self!r} was trained with num_captors={self.num_captors}, "
-            f"{self._sight()} (meta.json): make the env with num_captors={self.num_captors}, {self._sight()}"
+            f"trained with {trained} (num_captors and net.sight in its meta.json), this env has {', '.join(wrong)}; "
+            f"make the env with {want}"
         )
 
     def _check_env(self, env):
@@ -591,8 +594,9 @@ class TorchPolicy:
         for a in agents:
             o = observations[a]
             if not isinstance(o, dict) or "patch" not in o or "vector" not in o:
+                what = f"a dict of {sorted(o)}" if isinstance(o, dict) else f"a {type(o).__name__}"
                 raise ValueError(
-                    f"observations[{a!r}] is {type(o).__name__}: pass spec observations (dict with patch and vector); "
+                    f"observations[{a!r}] is {what}: pass spec observations (dict with patch and vector); "
                     "make the env with observation='spec'"
                 )
             if np.shape(o["patch"]) != (PATCH, PATCH):
@@ -692,6 +696,8 @@ def load_policy(folder, side: Optional[str] = None) -> TorchPolicy:
     one side), as ``ckpt:`` reads it."""
     if not isinstance(folder, (str, os.PathLike)):
         raise TypeError(f"folder = {folder!r}: the path of a checkpoint folder (a str or a Path)")
+    if not str(folder):
+        raise ValueError("folder = '': the path of a checkpoint folder, not an empty string")
     if side is not None and side not in SIDES:
         raise ValueError(f"side = {side!r}: must be 'captors', 'target' or None (the side a run folder's checkpoint plays)")
     try:

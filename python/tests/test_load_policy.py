@@ -65,7 +65,7 @@ def write_checkpoint(folder, side="captors", num_captors=3, net=None, seed=0, **
     SHA256SUMS."""
     from t2e.torch_policy import _build_actor, _sight_len
 
-    net = dict(hidden=8, conv_channels=[2, 4], patch_pool=4, vector_input="egocentric", **(net or {}))
+    net = {**dict(hidden=8, conv_channels=[2, 4], patch_pool=4, vector_input="egocentric"), **(net or {})}
     torch.manual_seed(seed)
     actor = _build_actor(net, 5 + 5 * num_captors + _sight_len(net))
     header, blobs, offset = {}, [], 0
@@ -144,8 +144,10 @@ def test_a_corrupted_or_mismatched_folder_is_refused_with_the_file_and_the_reaso
     policy = t2e.load_policy(good)
     env = t2e.parallel_env(maps="shipped", num_captors=3)
     observations, _ = env.reset(seed=0)
-    with pytest.raises(ValueError, match="2 captors"):
+    with pytest.raises(ValueError, match="trained with num_captors = 2 .*this env has num_captors = 3; make the env with num_captors=2"):
         policy(observations, env)
+    with pytest.raises(ValueError, match="2 captors"):
+        policy(observations)
 
 
 def test_an_export_is_checked_against_its_sha256sums_before_meta_json_is_believed(tmp_path):

@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 import t2e
+from test_load_policy import reseal
 
 ROOT = Path(__file__).resolve().parents[2]
 BINARY = ROOT / "target" / "release" / "t2e-league"
@@ -310,5 +311,7 @@ def test_a_meta_json_with_a_map_size_outside_the_range_is_refused(mapped, tmp_pa
         meta = json.loads((folder / "meta.json").read_text())
         meta["net"]["sight"]["map_cells"] = cells
         (folder / "meta.json").write_text(json.dumps(meta))
+        # Resealed, as a forger would: the range check behind the manifest answers.
+        reseal(folder)
         with pytest.raises(t2e.torch_policy.PolicyError, match="net.sight.map_cells"):
             t2e.load_policy(folder)

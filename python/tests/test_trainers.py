@@ -1,8 +1,10 @@
 """The env with the trainers people use, as they are: SuperSuit's vector
 envs (in-process and in worker processes), Stable-Baselines3's PPO through
-them, TorchRL's PettingZooWrapper with its spec check and the global state,
+them (an MLP on the flat observation, its CNN policies on the image),
+TorchRL's PettingZooWrapper with its spec check and the global state,
 and PettingZoo's own render test, unedited (its API, max_cycles and state
-tests are in test_portable.py and test_pettingzoo.py).
+tests are in test_portable.py and test_pettingzoo.py). RLlib and
+BenchMARL are in test_marl_trainers.py.
 
 They are the optional `trainers` group (python/pyproject.toml), which
 scripts/setup.sh installs at pinned versions; the test command sets
@@ -107,6 +109,45 @@ def test_stable_baselines3_ppo_learns_from_it():
         assert actions.shape == (6,) and set(actions.tolist()) <= set(range(t2e.ACTIONS))
     finally:
         venv.close()
+
+
+def test_stable_baselines3_cnn_policies_learn_from_the_image():
+    ss = need("supersuit")
+    sb3 = need("stable_baselines3")
+    torch = need("torch")
+    from stable_baselines3.common.preprocessing import is_image_space
+    from stable_baselines3.common.torch_layers import NatureCNN
+    from stable_baselines3.common.vec_env import VecTransposeImage
+
+    torch.set_num_threads(1)
+    env = t2e.parallel_env(maps="shipped", target="heuristic", observation="image", episode_length=100)
+    assert is_image_space(env.observation_space("captor_0")["patch"])
+    # The patch alone, for CnnPolicy: one SuperSuit wrapper.
+    patch_only = ss.observation_lambda_v0(env, lambda observation, _: observation["patch"], lambda space: space["patch"])
+
+    def vec(parallel):
+        return ss.concat_vec_envs_v1(ss.pettingzoo_env_to_vec_env_v1(parallel), 2, num_cpus=0, base_class="stable_baselines3")
+
+    # CnnPolicy takes a Box only; for the Dict, SB3's CNN policy is
+    # MultiInputPolicy, whose CombinedExtractor runs NatureCNN on "patch".
+    with pytest.raises(ValueError, match="MultiInputPolicy"):
+        sb3.PPO("CnnPolicy", vec(env), device="cpu")
+    for policy, parallel in (("MultiInputPolicy", env), ("CnnPolicy", patch_only)):
+        venv = vec(parallel)
+        try:
+            sb3.common.utils.set_random_seed(0)
+            model = sb3.PPO(policy, venv, n_steps=64, batch_size=128, n_epochs=2, device="cpu", verbose=0)
+            # Taken as an image: channel-last moved first, NatureCNN on it.
+            assert isinstance(model.get_env(), VecTransposeImage)
+            assert any(isinstance(m, NatureCNN) for m in model.policy.modules())
+            before = [p.detach().clone() for p in model.policy.parameters()]
+            model.learn(total_timesteps=3 * 6 * 64)
+            after = list(model.policy.parameters())
+            assert model.num_timesteps >= 3 * 6 * 64
+            assert any(not torch.equal(a, b) for a, b in zip(before, after))
+            assert all(torch.isfinite(p).all() for p in after)
+        finally:
+            venv.close()
 
 
 @pytest.mark.parametrize("kwargs", [{}, {"target": "heuristic", "observation": "egocentric"}])

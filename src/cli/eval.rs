@@ -118,38 +118,68 @@ fn setting_dir(out: &Path, s: &EvalSetting, maps: &str, identity: &SettingIdenti
     ))
 }
 
-/// The summary a previous run left for this setting, if every part of its
-/// identity (`setting.json`) matches.
-fn finished_setting(dir: &Path, identity: &SettingIdentity) -> Option<Summary> {
-    let written: SettingIdentity =
-        serde_json::from_str(&std::fs::read_to_string(dir.join("setting.json")).ok()?).ok()?;
-    if &written != identity {
-        return None;
+/// A file of a setting folder, read only if it is a regular file: a FIFO
+/// in its place would block the read for ever.
+fn read_regular(path: &Path) -> Result<String, String> {
+    match std::fs::symlink_metadata(path).and_then(|_| std::fs::metadata(path)) {
+        Err(_) => return Err(format!("{} is missing", path.display())),
+        Ok(m) if !m.is_file() => return Err(format!("{} is not a regular file", path.display())),
+        Ok(_) => {}
     }
-    let text = std::fs::read_to_string(dir.join("summary.json")).ok()?;
-    let summary: Summary = serde_json::from_str(&text).ok()?;
+    std::fs::read_to_string(path).map_err(|e| format!("{} cannot be read ({e})", path.display()))
+}
+
+/// The summary a previous run left for this setting, if every part of its
+/// identity (`setting.json`) matches; else why not, or None where the
+/// folder holds no run at all.
+fn finished_setting(dir: &Path, identity: &SettingIdentity) -> Result<Summary, Option<String>> {
+    let identity_file = dir.join("setting.json");
+    if std::fs::symlink_metadata(&identity_file).is_err() {
+        // Written last: without it the folder was never finished.
+        return Err(dir.is_dir().then(|| format!("{} was left unfinished (no setting.json)", dir.display())));
+    }
+    let text = read_regular(&identity_file)?;
+    let written: SettingIdentity = serde_json::from_str(&text)
+        .map_err(|e| format!("{} is not a setting's identity ({e})", identity_file.display()))?;
+    if &written != identity {
+        return Err(Some(format!("{} records another setting", identity_file.display())));
+    }
+    let summary_file = dir.join("summary.json");
+    let summary: Summary = serde_json::from_str(&read_regular(&summary_file)?)
+        .map_err(|e| format!("{} is not a summary ({e})", summary_file.display()))?;
     // The per-episode file must hold every episode the summary counts.
-    let rows = csv::Reader::from_path(dir.join("episodes.csv"))
-        .ok()?
+    let episodes_file = dir.join("episodes.csv");
+    let text = read_regular(&episodes_file)?;
+    let rows = csv::Reader::from_reader(text.as_bytes())
         .records()
         .filter(|r| r.is_ok())
         .count();
-    (rows == summary.episodes).then_some(summary)
+    if rows != summary.episodes {
+        return Err(Some(format!(
+            "{} holds {rows} episodes, its summary.json counts {}",
+            episodes_file.display(),
+            summary.episodes
+        )));
+    }
+    Ok(summary)
 }
 
-/// Why `--resume` plays a setting again: the folders in `out` of the same
-/// setting name (captors, target, K, ratio, maps) whose recorded identity
-/// differs, each with the fields that changed; or that `dir` itself holds
-/// an unfinished run. None where nothing of this setting is there.
-fn why_not_resumed(out: &Path, dir: &Path, identity: &SettingIdentity) -> Option<String> {
+/// Why `--resume` plays a setting again: what is wrong with `dir` itself
+/// (`finished`), else the folders in `out` of the same setting name
+/// (captors, target, K, ratio, maps) whose recorded identity differs,
+/// each with the fields that changed. None where nothing of this setting
+/// is there.
+fn why_not_resumed(
+    out: &Path,
+    dir: &Path,
+    identity: &SettingIdentity,
+    finished: Option<String>,
+) -> Option<String> {
+    if let Some(why) = finished {
+        return Some(format!("{why}; playing it again"));
+    }
     let name = dir.file_name()?.to_string_lossy().into_owned();
     let stem = name.rsplit_once('_')?.0.to_string();
-    if dir.join("setting.json").is_file() {
-        return Some(format!(
-            "{} was left unfinished (its episodes.csv does not hold every episode); playing it again",
-            dir.display()
-        ));
-    }
     let now = serde_json::to_value(identity).ok()?;
     let mut reasons = Vec::new();
     let mut others: Vec<PathBuf> = std::fs::read_dir(out)
@@ -165,7 +195,7 @@ fn why_not_resumed(out: &Path, dir: &Path, identity: &SettingIdentity) -> Option
         .collect();
     others.sort();
     for other in others {
-        let Ok(text) = std::fs::read_to_string(other.join("setting.json")) else {
+        let Ok(text) = read_regular(&other.join("setting.json")) else {
             continue;
         };
         let Ok(then) = serde_json::from_str::<serde_json::Value>(&text) else {
@@ -202,6 +232,14 @@ fn write_setting(
     std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
     // The identity goes last: a folder without it is never taken as finished.
     let _ = std::fs::remove_file(dir.join("setting.json"));
+    // Opening a FIFO left in a file's place to write would block.
+    for name in ["summary.json", "episodes.csv", "soa.csv", "soa.png"] {
+        let path = dir.join(name);
+        if std::fs::symlink_metadata(&path).is_ok_and(|m| !m.is_file()) {
+            std::fs::remove_file(&path)
+                .with_context(|| format!("{}: not a regular file, and cannot be removed", path.display()))?;
+        }
+    }
     let episodes = dir.join("episodes.csv");
     let mut w = csv::Writer::from_path(&episodes)
         .with_context(|| format!("cannot write {}", episodes.display()))?;
@@ -323,11 +361,16 @@ pub fn run(args: EvalArgs) -> Result<()> {
                 let identity =
                     SettingIdentity::of(&setting, spec, &sets[spec]).map_err(anyhow::Error::msg)?;
                 let dir = setting_dir(&args.out, &setting, spec, &identity);
-                let summary = match finished_setting(&dir, &identity).filter(|_| args.resume) {
-                    Some(done) => done,
-                    None => {
+                let finished = if args.resume {
+                    finished_setting(&dir, &identity)
+                } else {
+                    Err(None)
+                };
+                let summary = match finished {
+                    Ok(done) => done,
+                    Err(finished) => {
                         if args.resume {
-                            if let Some(why) = why_not_resumed(&args.out, &dir, &identity) {
+                            if let Some(why) = why_not_resumed(&args.out, &dir, &identity, finished) {
                                 eprintln!("--resume: {spec}, K = {k}, ratio {ratio}: starts again: {why}");
                             }
                         }
@@ -430,9 +473,9 @@ mod tests {
         let summary = eval::summarise(&setting, "m", &records);
         let id = identity(&setting);
         let dir = setting_dir(out.path(), &setting, "m", &id);
-        assert!(finished_setting(&dir, &id).is_none(), "nothing written yet");
+        assert!(finished_setting(&dir, &id).is_err(), "nothing written yet");
         write_setting(&dir, &id, &summary, &records).unwrap();
-        assert_eq!(finished_setting(&dir, &id), Some(summary));
+        assert_eq!(finished_setting(&dir, &id), Ok(summary));
         // Each of these changes the numbers: none may reuse the result or share its folder.
         let variants = [
             EvalSetting {
@@ -467,7 +510,7 @@ mod tests {
         let mut dirs = vec![dir.clone()];
         for v in &variants {
             let vid = identity(v);
-            assert!(finished_setting(&dir, &vid).is_none(), "{v:?} reused");
+            assert!(finished_setting(&dir, &vid).is_err(), "{v:?} reused");
             let vdir = setting_dir(out.path(), v, "m", &vid);
             assert!(!dirs.contains(&vdir), "{v:?} shares {}", vdir.display());
             dirs.push(vdir);
@@ -476,7 +519,7 @@ mod tests {
         let grid = crate::map::Grid::with_free_rects("m", 320, &[(100..200, 100..201)]);
         let other =
             SettingIdentity::of(&setting, "m", &[Arc::new(PreparedMap::new(grid))]).unwrap();
-        assert!(finished_setting(&dir, &other).is_none());
+        assert!(finished_setting(&dir, &other).is_err());
         // A folder name never leaves --out, whatever the controller's path says.
         let sneaky = EvalSetting {
             captors: "ckpt:../../../etc".parse().unwrap(),

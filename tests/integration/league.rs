@@ -478,6 +478,8 @@ fn a_trained_team_joins_the_pool_as_a_frozen_member_and_a_paper_one_is_refused()
         .unwrap()
         .replace("\"held-out\"", "\"paper\"");
     std::fs::write(&meta, edited).unwrap();
+    // As if trained so: the manifest made again over the edit.
+    t2e::nn::checkpoint::write_manifest(&paper).unwrap();
     let config = tmp.path().join("paper.toml");
     std::fs::write(
         &config,

@@ -484,6 +484,7 @@ fn unrecorded_snapshot_folders_are_adopted_or_kept_never_deleted() {
     meta["league"]["player"] = "captors-snap-000000999999".into();
     meta["env_steps"] = 999_999.into();
     std::fs::write(&meta_path, serde_json::to_string_pretty(&meta).unwrap()).unwrap();
+    t2e::nn::checkpoint::write_manifest(&adoptable).unwrap();
     // A folder that verifies but names no league pool (copied by hand): kept.
     let foreign = l.dir.players_dir().join("hand-copied");
     copy_dir(&src, &foreign);
@@ -492,6 +493,7 @@ fn unrecorded_snapshot_folders_are_adopted_or_kept_never_deleted() {
         serde_json::from_str(&std::fs::read_to_string(&m).unwrap()).unwrap();
     meta.as_object_mut().unwrap().remove("league");
     std::fs::write(&m, serde_json::to_string_pretty(&meta).unwrap()).unwrap();
+    t2e::nn::checkpoint::write_manifest(&foreign).unwrap();
     // A temporary of a dead writer: removed.
     let temporary = l
         .dir

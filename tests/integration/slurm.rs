@@ -123,7 +123,10 @@ fn an_array_runs_the_manager_and_a_worker_sized_by_their_cpus() {
         }
         for (what, child) in [("task 0", &mut manager), ("task 1", &mut worker)] {
             if let Some(s) = child.try_wait().unwrap() {
-                panic!("{what} exited ({s}) before the league ran:\n{}", tasks_log());
+                panic!(
+                    "{what} exited ({s}) before the league ran:\n{}",
+                    tasks_log()
+                );
             }
         }
         assert!(
@@ -141,20 +144,33 @@ fn an_array_runs_the_manager_and_a_worker_sized_by_their_cpus() {
     );
     for child in [&manager, &worker] {
         // exec: the task's shell is the program, as Slurm signals it.
-        unsafe { libc::kill(child.id() as i32, libc::SIGINT) };
+        // SAFETY: signalling a process this test started.
+        unsafe {
+            libc::kill(child.id() as i32, libc::SIGINT);
+        }
     }
     for (what, child) in [("task 1", &mut worker), ("task 0", &mut manager)] {
         let status = wait_exit(child, what, Duration::from_secs(120));
         assert!(status.success(), "{what}: {status}\n{}", tasks_log());
     }
     let log = tasks_log();
-    assert!(log.contains("task 0 of job 4242 on node-0-4242-0, 1 CPUs, 1 seats"), "{log}");
-    assert!(log.contains("task 1 of job 4242 on node-1-4242-1, 2 CPUs, 2 seats"), "{log}");
+    assert!(
+        log.contains("task 0 of job 4242 on node-0-4242-0, 1 CPUs, 1 seats"),
+        "{log}"
+    );
+    assert!(
+        log.contains("task 1 of job 4242 on node-1-4242-1, 2 CPUs, 2 seats"),
+        "{log}"
+    );
     let out = Command::new(env!("CARGO_BIN_EXE_t2e-league"))
         .args(["status", "--json", "--store", &raw])
         .output()
         .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     let seats = json["seats"].as_array().unwrap();
     assert_eq!(seats.len(), 3, "{seats:?}");
@@ -169,9 +185,19 @@ fn an_array_runs_the_manager_and_a_worker_sized_by_their_cpus() {
         .iter()
         .filter_map(|l| l["host"].as_str())
         .collect();
-    assert_eq!(hosts.len(), 2, "{}", json["learners"]);
-    assert!(hosts.iter().all(|h| [host(0), host(1)].contains(&h.to_string())), "{hosts:?}");
-    assert!(json["matches"].as_u64().unwrap_or(0) > 0, "no match recorded: {json}");
+    // The two learners and the evaluator, each under its task's name.
+    assert_eq!(hosts.len(), 3, "{}", json["learners"]);
+    for h in [host(0), host(1)] {
+        assert_eq!(
+            hosts.iter().filter(|x| **x == h).count(),
+            on(&h),
+            "{hosts:?}"
+        );
+    }
+    assert!(
+        json["matches"].as_u64().unwrap_or(0) > 0,
+        "no match recorded: {json}"
+    );
 }
 
 /// What the script needs and Slurm does not give is named before anything

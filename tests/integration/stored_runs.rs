@@ -527,6 +527,25 @@ fn evaluates_as_stored(out: &str, fixtures: &[&str], args: &[&str]) {
     for f in fixtures {
         copy_fixture(f, tmp.path());
     }
+    // A training checkpoint written before checkpoints carried a manifest
+    // is refused, naming `seal`; sealed, it plays as it did.
+    let checkpoints = tmp.path().join("train-run/checkpoints");
+    if checkpoints.is_dir() {
+        for ckpt in std::fs::read_dir(&checkpoints).unwrap() {
+            let ckpt = ckpt.unwrap().path();
+            assert!(!ckpt.join("SHA256SUMS").exists(), "{}", ckpt.display());
+            let refused = Command::new(bin())
+                .args(["eval", "--captors"])
+                .arg(format!("ckpt:{}", ckpt.display()))
+                .args(["--k", "3", "--episodes", "1", "--quiet", "--out", "refused"])
+                .current_dir(tmp.path())
+                .output()
+                .unwrap();
+            let err = String::from_utf8_lossy(&refused.stderr);
+            assert!(!refused.status.success() && err.contains("t2e-league seal"), "{err}");
+            t2e(tmp.path(), &["seal", ckpt.to_str().unwrap()]);
+        }
+    }
     let mut full = vec!["eval"];
     full.extend_from_slice(args);
     full.extend_from_slice(&["--quiet", "--out", out]);

@@ -422,7 +422,7 @@ fn weights_are_integrity_checked() {
         PolicySnapshot::load(&flipped, Side::Captors).unwrap_err()
     );
     assert!(
-        err.contains("sha256") && err.contains("actor.safetensors"),
+        (err.contains("sha256") || err.contains("SHA-256")) && err.contains("actor.safetensors"),
         "{err}"
     );
 
@@ -462,7 +462,7 @@ fn weights_are_integrity_checked() {
             .unwrap()
     );
     assert!(
-        err.contains("sha256") && err.contains("critic.safetensors"),
+        (err.contains("sha256") || err.contains("SHA-256")) && err.contains("critic.safetensors"),
         "{err}"
     );
 
@@ -815,4 +815,61 @@ fn every_checkpoint_is_verified_by_its_manifest_and_its_sides_agree() {
     edit_meta(&ckpt, |v| v["wall_ray_range_m"] = 24.0.into());
     let err = format!("{:#}", PolicySnapshot::load(&ckpt, Side::Captors).unwrap_err());
     assert!(err.contains("wall_ray_range_m = 24"), "{err}");
+}
+
+/// Faults an adversarial pass found in the manifest's writer and `seal`:
+/// a link in the manifest's place is replaced, not written through; a
+/// name a manifest line cannot hold is refused; an export's player.json
+/// left out of its manifest is refused; a FIFO in a weight's place is
+/// called what it is.
+#[test]
+fn the_manifest_is_written_whole_in_place_and_covers_an_exports_own_files() {
+    tch::set_num_threads(1);
+    let run = tempfile::tempdir().unwrap();
+    let mut t = Trainer::new(tiny_config(), tiny_maps()).unwrap();
+    t.iterate().unwrap();
+    let ckpt = t.save(run.path()).unwrap().remove(0);
+    let copy = |name: &str| {
+        let d = run.path().join(name);
+        std::fs::create_dir_all(&d).unwrap();
+        for e in std::fs::read_dir(&ckpt).unwrap() {
+            let p = e.unwrap().path();
+            std::fs::copy(&p, d.join(p.file_name().unwrap())).unwrap();
+        }
+        d
+    };
+    // A dangling link where the manifest goes: seal refuses, and nothing
+    // is written outside the folder.
+    let linked = copy("linked");
+    std::fs::remove_file(linked.join("SHA256SUMS")).unwrap();
+    let outside = run.path().join("outside");
+    std::os::unix::fs::symlink(&outside, linked.join("SHA256SUMS")).unwrap();
+    let err = t2e::nn::checkpoint::seal(&linked).unwrap_err().to_string();
+    assert!(err.contains("not a regular file"), "{err}");
+    t2e::nn::checkpoint::write_manifest(&linked).unwrap();
+    assert!(!outside.exists(), "the manifest was written through the link");
+    assert!(std::fs::symlink_metadata(linked.join("SHA256SUMS")).unwrap().is_file());
+    PolicySnapshot::load(&linked, Side::Captors).unwrap();
+    // A name with a line break.
+    std::fs::write(linked.join("evil\nname"), b"x").unwrap();
+    let err = t2e::nn::checkpoint::write_manifest(&linked).unwrap_err().to_string();
+    assert!(err.contains("line break"), "{err}");
+    // An export whose player.json is not in its manifest.
+    let export = copy("export");
+    std::fs::write(export.join("player.json"), r#"{"side": "captors"}"#).unwrap();
+    let err = format!("{:#}", PolicySnapshot::load(&export, Side::Captors).unwrap_err());
+    assert!(err.contains("player.json") && err.contains("not listed"), "{err}");
+    t2e::nn::checkpoint::write_manifest(&export).unwrap();
+    PolicySnapshot::load(&export, Side::Captors).unwrap();
+    std::fs::write(export.join("player.json"), r#"{"player": 7}"#).unwrap();
+    let err = format!("{:#}", PolicySnapshot::load(&export, Side::Captors).unwrap_err());
+    assert!(err.contains("no string `side`"), "{err}");
+    // A FIFO in a weight's place, sealed: named as such, never opened.
+    let fifo = copy("fifo");
+    std::fs::remove_file(fifo.join("SHA256SUMS")).unwrap();
+    std::fs::remove_file(fifo.join("critic.safetensors")).unwrap();
+    assert!(std::process::Command::new("mkfifo").arg(fifo.join("critic.safetensors")).status().unwrap().success());
+    let err = t2e::nn::checkpoint::seal(&fifo).unwrap_err().to_string();
+    assert!(err.contains("critic.safetensors") && err.contains("not a regular file"), "{err}");
+    assert!(!fifo.join("SHA256SUMS").exists());
 }

@@ -1,11 +1,13 @@
 //! The controller catalogue: every controller a user can name on the command
-//! line or in a config (`heuristic`, `greedy`, `expert:SEED`, `lookahead:H`,
+//! line or in a config (`heuristic`, `greedy`, `expert:SEED`, `lookahead:H`, `robust:H:MODELS`,
 //! `random`, `still`, `ckpt:PATH`, `sample:PATH`), parsed and built behind the one `env::Controller` trait. It
 //! sits above `heuristics` and `nn` because it names controllers of both.
 
 use crate::env::{Controller, EnvConfig, Side};
 use crate::error::ConfigError;
-use crate::heuristics::{AszGreedy, Heuristic, Lookahead, RandomActions, RandomisedExpert, Still};
+use crate::heuristics::{
+    AszGreedy, Heuristic, Lookahead, RandomActions, RandomisedExpert, RobustLookahead, Still,
+};
 use crate::nn::{CheckpointController, PolicySnapshot};
 use std::fmt;
 use std::path::PathBuf;
@@ -25,9 +27,11 @@ pub enum ControllerError {
     MissingPath(&'static str),
     #[error("'{0}': lookahead:H[:CAPTORS] needs a horizon H of 1 to {max} steps, and CAPTORS a captor team (lookahead:10 plays against the expert captors, lookahead:10:greedy:2 against greedy:2)", max = Lookahead::MAX_HORIZON)]
     Lookahead(String),
+    #[error("'{0}': robust:H:MODELS needs a horizon H of 1 to {max} steps and 1 to {models} captor teams joined by '+' (robust:10:heuristic+expert:1+greedy:3); a model is no lookahead or robust target", max = Lookahead::MAX_HORIZON, models = RobustLookahead::MAX_MODELS)]
+    Robust(String),
     #[error("'{0}' plays the target only (it looks ahead against a model of the captors)")]
     LookaheadAsCaptors(String),
-    #[error("unknown controller '{0}' (expected heuristic, greedy, greedy:K, expert:SEED, lookahead:H[:CAPTORS], random, still, ckpt:PATH or sample:PATH)")]
+    #[error("unknown controller '{0}' (expected heuristic, greedy, greedy:K, expert:SEED, lookahead:H[:CAPTORS], robust:H:MODELS, random, still, ckpt:PATH or sample:PATH)")]
     Unknown(String),
     #[error("expert:{0} is a captor team (the expert captors with randomised constants); it cannot play the target")]
     ExpertAsTarget(u64),
@@ -56,6 +60,13 @@ pub enum ControllerSpec {
     Lookahead {
         horizon: usize,
         captors: Box<ControllerSpec>,
+    },
+    /// `robust:H:M1+M2+...`: the robust lookahead target
+    /// (`heuristics::RobustLookahead`), simulating H steps of each action
+    /// against every captor team M1, M2, ...; target only.
+    Robust {
+        horizon: usize,
+        models: Vec<ControllerSpec>,
     },
     Random,
     Still,
@@ -150,6 +161,26 @@ impl FromStr for ControllerSpec {
                     _ => Err(ControllerError::Lookahead(other.to_string())),
                 }
             }
+            other if other.starts_with("robust:") => {
+                let refuse = || ControllerError::Robust(other.to_string());
+                let (horizon, models) = other["robust:".len()..].split_once(':').ok_or_else(refuse)?;
+                let horizon = horizon
+                    .parse::<usize>()
+                    .ok()
+                    .filter(|h| (1..=Lookahead::MAX_HORIZON).contains(h))
+                    .ok_or_else(refuse)?;
+                let models = models
+                    .split('+')
+                    .map(|m| m.parse::<ControllerSpec>())
+                    .collect::<Result<Vec<_>, _>>()?;
+                let planner = |m: &ControllerSpec| {
+                    matches!(m, ControllerSpec::Lookahead { .. } | ControllerSpec::Robust { .. })
+                };
+                if models.is_empty() || models.len() > RobustLookahead::MAX_MODELS || models.iter().any(planner) {
+                    return Err(refuse());
+                }
+                Ok(ControllerSpec::Robust { horizon, models })
+            }
             "random" => Ok(ControllerSpec::Random),
             "still" => Ok(ControllerSpec::Still),
             other if other.starts_with("ckpt:") => {
@@ -182,6 +213,10 @@ impl fmt::Display for ControllerSpec {
                 ControllerSpec::Heuristic => write!(f, "lookahead:{horizon}"),
                 ref model => write!(f, "lookahead:{horizon}:{model}"),
             },
+            ControllerSpec::Robust { horizon, models } => {
+                let names: Vec<String> = models.iter().map(|m| m.to_string()).collect();
+                write!(f, "robust:{horizon}:{}", names.join("+"))
+            }
             ControllerSpec::Random => f.write_str("random"),
             ControllerSpec::Still => f.write_str("still"),
             ControllerSpec::Checkpoint(c) if c.sampled => write!(f, "sample:{}", c.path.display()),
@@ -202,6 +237,16 @@ impl ControllerSpec {
             },
             ControllerSpec::Lookahead { horizon, captors } => match side {
                 Side::Target => Box::new(Lookahead::new(*horizon, captors.build(Side::Captors)?)),
+                Side::Captors => return Err(ControllerError::LookaheadAsCaptors(self.to_string())),
+            },
+            ControllerSpec::Robust { horizon, models } => match side {
+                Side::Target => Box::new(RobustLookahead::new(
+                    *horizon,
+                    models
+                        .iter()
+                        .map(|m| m.build(Side::Captors))
+                        .collect::<Result<_, _>>()?,
+                )),
                 Side::Captors => return Err(ControllerError::LookaheadAsCaptors(self.to_string())),
             },
             ControllerSpec::Random => Box::new(RandomActions::new()),
@@ -227,6 +272,11 @@ impl ControllerSpec {
             }
             // The model plays the same world's captors.
             ControllerSpec::Lookahead { captors, .. } => captors.check(Side::Captors, cfg)?,
+            ControllerSpec::Robust { models, .. } => {
+                for model in models {
+                    model.check(Side::Captors, cfg)?;
+                }
+            }
             _ => {}
         }
         Ok(())
@@ -237,6 +287,7 @@ impl ControllerSpec {
         match self {
             ControllerSpec::Checkpoint(_) => true,
             ControllerSpec::Lookahead { captors, .. } => captors.is_checkpoint(),
+            ControllerSpec::Robust { models, .. } => models.iter().any(|m| m.is_checkpoint()),
             _ => false,
         }
     }

@@ -20,7 +20,7 @@ pub const SCORE_COARSENING: usize = 4;
 
 /// How one action's simulated future ended.
 #[derive(Clone, Copy, Debug, PartialEq, PartialOrd)]
-enum Future {
+pub(super) enum Future {
     /// Caught after this many steps (later is better).
     Caught(usize),
     /// Not caught within the horizon (or the episode ended); |ASZ| at its
@@ -28,30 +28,19 @@ enum Future {
     Free(usize),
 }
 
-pub struct Lookahead {
-    horizon: usize,
-    captors: Box<dyn Controller>,
+/// What a future's simulation needs besides the world: the ASZ fields it
+/// scores the horizon with and buffers for the actions, kept between
+/// decisions so that a decision allocates nothing.
+pub(super) struct Simulator {
     fields: AszFields,
     lattice: Option<CoarseLattice>,
     actions: Vec<Action>,
     rewards: Vec<f32>,
 }
 
-impl Lookahead {
-    /// The longest horizon accepted, in steps.
-    pub const MAX_HORIZON: usize = 100;
-
-    /// A lookahead target of `horizon` steps (1 to `MAX_HORIZON`) against
-    /// `captors`, the model of the team it meets.
-    pub fn new(horizon: usize, captors: Box<dyn Controller>) -> Lookahead {
-        assert!(
-            (1..=Self::MAX_HORIZON).contains(&horizon),
-            "lookahead horizon {horizon} outside 1..={}",
-            Self::MAX_HORIZON
-        );
-        Lookahead {
-            horizon,
-            captors,
+impl Simulator {
+    pub(super) fn new() -> Simulator {
+        Simulator {
             fields: AszFields::new(),
             lattice: None,
             actions: Vec::new(),
@@ -59,35 +48,24 @@ impl Lookahead {
         }
     }
 
-    /// The target's action in `env`'s state.
-    pub fn target_action(&mut self, env: &TrapEnv) -> Action {
-        let rule = target_action(env);
-        let mut best = (self.future(env, rule), rule);
-        for action in Action::ALL {
-            if action == rule {
-                continue;
-            }
-            let future = self.future(env, action);
-            if future > best.0 {
-                best = (future, action);
-            }
-        }
-        best.1
-    }
-
     /// Plays `first`, then the rule-based target, for `horizon` steps
-    /// against the captors' model, on a copy of `env`.
-    fn future(&mut self, env: &TrapEnv, first: Action) -> Future {
+    /// against `captors`, on a copy of `env`.
+    pub(super) fn future(
+        &mut self,
+        env: &TrapEnv,
+        first: Action,
+        horizon: usize,
+        captors: &mut dyn Controller,
+    ) -> Future {
         let k = env.num_captors();
         let mut sim = env.clone();
         self.actions.resize(k + 1, Action::Stop);
         self.rewards.resize(k + 1, 0.0);
-        for step in 0..self.horizon {
+        for step in 0..horizon {
             if sim.is_done() {
                 break;
             }
-            self.captors
-                .act(&sim, Side::Captors, &mut self.actions[..k]);
+            captors.act(&sim, Side::Captors, &mut self.actions[..k]);
             self.actions[k] = if step == 0 {
                 first
             } else {
@@ -109,6 +87,53 @@ impl Lookahead {
         let (captors, target) = sim.asz_sources();
         let lattice = self.lattice.as_ref().expect("set above");
         Future::Free(self.fields.asz_cells(lattice, target, &captors))
+    }
+}
+
+pub struct Lookahead {
+    horizon: usize,
+    captors: Box<dyn Controller>,
+    sim: Simulator,
+}
+
+impl Lookahead {
+    /// The longest horizon accepted, in steps.
+    pub const MAX_HORIZON: usize = 100;
+
+    /// A lookahead target of `horizon` steps (1 to `MAX_HORIZON`) against
+    /// `captors`, the model of the team it meets.
+    pub fn new(horizon: usize, captors: Box<dyn Controller>) -> Lookahead {
+        assert!(
+            (1..=Self::MAX_HORIZON).contains(&horizon),
+            "lookahead horizon {horizon} outside 1..={}",
+            Self::MAX_HORIZON
+        );
+        Lookahead {
+            horizon,
+            captors,
+            sim: Simulator::new(),
+        }
+    }
+
+    /// The target's action in `env`'s state.
+    pub fn target_action(&mut self, env: &TrapEnv) -> Action {
+        let rule = target_action(env);
+        let mut best = (self.future(env, rule), rule);
+        for action in Action::ALL {
+            if action == rule {
+                continue;
+            }
+            let future = self.future(env, action);
+            if future > best.0 {
+                best = (future, action);
+            }
+        }
+        best.1
+    }
+
+    fn future(&mut self, env: &TrapEnv, first: Action) -> Future {
+        self.sim
+            .future(env, first, self.horizon, self.captors.as_mut())
     }
 }
 

@@ -3,9 +3,11 @@
 //! controllers live one level up, in `crate::controllers`.
 
 mod lookahead;
+mod robust;
 mod rule_based;
 
 pub use lookahead::Lookahead;
+pub use robust::RobustLookahead;
 pub use rule_based::{
     expert_captor_action, expert_captor_action_with, force_to_action, target_action, wall_force,
     ExpertParams, Heuristic, RandomisedExpert,

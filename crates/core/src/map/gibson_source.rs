@@ -164,12 +164,27 @@ pub fn import_checkout(checkout: &Path, out: &Path) -> Result<Vec<ImportedMap>, 
         out: out.to_path_buf(),
         reason,
     };
-    if let Ok(link) = std::fs::read_link(out) {
-        if !out.exists() {
-            return Err(refuse(format!(
-                "a symbolic link to {}, which does not exist; remove the link or give the folder it should name",
-                link.display()
-            )));
+    // Every link on the way must lead somewhere: a dangling one or a loop
+    // would otherwise surface as "File exists" from create_dir_all.
+    for at in out.ancestors().filter(|a| !a.as_os_str().is_empty()) {
+        let Ok(link) = std::fs::read_link(at) else {
+            continue;
+        };
+        let what = if at == out { "it is".to_string() } else { format!("{} is", at.display()) };
+        match std::fs::metadata(at) {
+            Ok(_) => {}
+            Err(e) if e.raw_os_error() == Some(libc_eloop()) => {
+                return Err(refuse(format!(
+                    "{what} a loop of symbolic links (through {}); remove a link of the loop",
+                    link.display()
+                )))
+            }
+            Err(_) => {
+                return Err(refuse(format!(
+                    "{what} a symbolic link to {}, which does not exist; remove the link or give the folder it should name",
+                    link.display()
+                )))
+            }
         }
     }
     if out.exists() {
@@ -206,6 +221,7 @@ pub fn import_checkout(checkout: &Path, out: &Path) -> Result<Vec<ImportedMap>, 
         std::process::id()
     ));
     let _ = std::fs::remove_dir_all(&staging);
+    remove_dead_stagings(&parent, out);
     let filled = fill_staging(&staging, &maps).and_then(|()| {
         std::fs::rename(&staging, out).map_err(|e| refuse(format!("cannot move the maps into place: {e}")))
     });
@@ -236,6 +252,35 @@ fn fill_staging(staging: &Path, maps: &[(ImportedMap, PathBuf)]) -> Result<(), G
     }
     let splits_path = staging.join("splits.csv");
     std::fs::write(&splits_path, splits).map_err(write_err(&splits_path))
+}
+
+/// ELOOP, the error of a path that loops through symbolic links (40 on
+/// Linux; the crate links no libc).
+fn libc_eloop() -> i32 {
+    40
+}
+
+/// Removes `.OUT.partial-PID` folders that a fetch killed before its rename
+/// left beside `out`, where process PID is gone (a live one is another
+/// fetch at work).
+fn remove_dead_stagings(parent: &Path, out: &Path) {
+    let Some(name) = out.file_name().and_then(|s| s.to_str()) else {
+        return;
+    };
+    let prefix = format!(".{name}.partial-");
+    let Ok(entries) = std::fs::read_dir(parent) else {
+        return;
+    };
+    for entry in entries.flatten() {
+        let file = entry.file_name();
+        let Some(pid) = file.to_str().and_then(|f| f.strip_prefix(&prefix)) else {
+            continue;
+        };
+        let alive = pid.parse::<u32>().is_ok_and(|p| Path::new(&format!("/proc/{p}")).exists());
+        if !alive {
+            let _ = std::fs::remove_dir_all(entry.path());
+        }
+    }
 }
 
 /// A map file must be a regular file (a symbolic link to one is): reading

@@ -42,7 +42,7 @@ pub fn save_new_learner(
 pub fn load_learner(dir: &Path, learner: &mut dyn Learner) -> Result<CheckpointMeta> {
     // A run's own checkpoint, named by its state.json; one written before
     // checkpoints carried a manifest resumes, and the next one has it.
-    if dir.join("SHA256SUMS").exists() {
+    if std::fs::symlink_metadata(dir.join("SHA256SUMS")).is_ok() {
         crate::nn::checkpoint::verify_manifest(dir)?;
     }
     let meta = read_meta(dir)?;

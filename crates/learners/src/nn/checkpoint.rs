@@ -129,6 +129,8 @@ impl CheckpointMeta {
 pub enum CheckpointError {
     #[error("{}: missing", .0.display())]
     Missing(PathBuf),
+    #[error("{}: not a regular file (a FIFO, device or folder in a checkpoint file's place)", .0.display())]
+    NotARegularFile(PathBuf),
     #[error("{}: missing: {} is not a checkpoint folder (a checkpoint holds meta.json beside its .safetensors files)", .meta.display(), .dir.display())]
     NoMeta { meta: PathBuf, dir: PathBuf },
     #[error("{}: cannot read: {cause}", .path.display())]
@@ -305,8 +307,10 @@ pub fn verify_file(dir: &Path, meta: &CheckpointMeta, file: &str) -> Result<(), 
             file: file.to_string(),
         });
     };
-    if !path.is_file() {
-        return Err(CheckpointError::Missing(path));
+    match std::fs::metadata(&path) {
+        Err(_) => return Err(CheckpointError::Missing(path)),
+        Ok(m) if !m.is_file() => return Err(CheckpointError::NotARegularFile(path)),
+        Ok(_) => {}
     }
     let got = match sha256_file(&path) {
         Ok(got) => got,
@@ -406,11 +410,18 @@ fn fill_checkpoint(
 /// manifest from `export` and is exported again instead.
 pub fn seal(dir: &Path) -> Result<(), CheckpointError> {
     let manifest = dir.join("SHA256SUMS");
-    if manifest.exists() {
+    if let Ok(m) = std::fs::symlink_metadata(&manifest) {
+        let what = if m.is_file() && m.len() == 0 {
+            "already there, but empty (a write that did not finish?): remove it and seal again".into()
+        } else if m.is_file() {
+            "already there: the folder is sealed".into()
+        } else {
+            "already there, and not a regular file (a link, FIFO or folder): remove it and seal again".into()
+        };
         return Err(CheckpointError::Manifest {
             path: manifest.clone(),
             manifest,
-            what: "already there: the folder is sealed".into(),
+            what,
         });
     }
     if let Some(mark) = ["player.json", "league-config.toml"]
@@ -430,17 +441,33 @@ pub fn seal(dir: &Path) -> Result<(), CheckpointError> {
     write_manifest(dir)
 }
 
-/// Writes `dir/SHA256SUMS`: `<sha256>  <file>` for every other file of the
-/// folder, sorted by name (the `sha256sum -c` format).
+/// Writes `dir/SHA256SUMS`: `<sha256>  <file>` for every other regular
+/// file of the folder, sorted by name (the `sha256sum -c` format). Written
+/// under a temporary name and renamed over the old one, so a kill or a full
+/// disk leaves the old manifest or none, never a part of one, and a link
+/// in its place is replaced rather than written through.
 pub fn write_manifest(dir: &Path) -> Result<(), CheckpointError> {
     let io = |what: String, cause| CheckpointError::Fs(FsError::Io { what, cause });
     let mut names = Vec::new();
     for entry in std::fs::read_dir(dir).map_err(|e| io(format!("cannot list {}", dir.display()), e))? {
         let entry = entry.map_err(|e| io(format!("cannot list {}", dir.display()), e))?;
-        let name = entry.file_name().to_string_lossy().into_owned();
-        if name != "SHA256SUMS" && entry.path().is_file() {
-            names.push(name);
+        let path = entry.path();
+        let Some(name) = entry.file_name().to_str().map(str::to_string) else {
+            return Err(CheckpointError::Invalid {
+                path,
+                what: "its name is not UTF-8, so a manifest line cannot name it; rename or remove it".into(),
+            });
+        };
+        if name == "SHA256SUMS" || name.starts_with(".SHA256SUMS.") || !path.is_file() {
+            continue;
         }
+        if name.contains(['\n', '\r', '\\']) {
+            return Err(CheckpointError::Invalid {
+                path,
+                what: "its name holds a line break or a backslash, which a manifest line cannot hold; rename or remove it".into(),
+            });
+        }
+        names.push(name);
     }
     names.sort();
     let mut text = String::new();
@@ -450,7 +477,19 @@ pub fn write_manifest(dir: &Path) -> Result<(), CheckpointError> {
         text.push_str(&format!("{sha}  {name}\n"));
     }
     let path = dir.join("SHA256SUMS");
-    std::fs::write(&path, text).map_err(|e| io(format!("cannot write {}", path.display()), e))
+    let tmp = dir.join(format!(".SHA256SUMS.tmp-{}", std::process::id()));
+    let written = std::fs::File::create(&tmp)
+        .and_then(|mut f| {
+            use std::io::Write;
+            f.write_all(text.as_bytes())?;
+            f.sync_all()
+        })
+        .and_then(|()| std::fs::rename(&tmp, &path));
+    if let Err(e) = written {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(io(format!("cannot write {}", path.display()), e));
+    }
+    Ok(())
 }
 
 pub fn read_meta(dir: &Path) -> Result<CheckpointMeta, CheckpointError> {
@@ -600,6 +639,7 @@ fn verify_folder(dir: &Path, recorded: Option<&str>) -> Result<(), CheckpointErr
         cause,
     })?;
     let mut listed_meta = false;
+    let mut listed = Vec::new();
     for (i, line) in text
         .lines()
         .enumerate()
@@ -611,6 +651,15 @@ fn verify_folder(dir: &Path, recorded: Option<&str>) -> Result<(), CheckpointErr
                 format!("line {} is not `<sha256>  <file>`", i + 1),
             ));
         };
+        if name.is_empty() {
+            return Err(refuse(manifest.clone(), format!("line {} names no file", i + 1)));
+        }
+        if name == "SHA256SUMS" {
+            return Err(refuse(
+                manifest.clone(),
+                format!("line {} lists the manifest itself, whose hash it cannot hold", i + 1),
+            ));
+        }
         if name.contains('/') || name.contains('\\') || name == ".." || name == "." {
             return Err(refuse(
                 manifest.clone(),
@@ -632,15 +681,23 @@ fn verify_folder(dir: &Path, recorded: Option<&str>) -> Result<(), CheckpointErr
             return Err(refuse(
                 path,
                 format!(
-                    "SHA-256 {got} is not the {} listed: the folder changed after it was exported",
+                    "SHA-256 {got} is not the {} listed: the folder changed after its manifest was written",
                     want.trim()
                 ),
             ));
         }
         listed_meta |= name == "meta.json";
+        listed.push(name.to_string());
     }
     if !listed_meta {
         return Err(refuse(dir.join("meta.json"), "not listed".into()));
+    }
+    // An export's own files say which player it is: edited, they would
+    // name another.
+    for mark in ["player.json", "league-config.toml"] {
+        if dir.join(mark).exists() && !listed.iter().any(|n| n == mark) {
+            return Err(refuse(dir.join(mark), "not listed, though the folder holds it".into()));
+        }
     }
     Ok(())
 }
@@ -659,13 +716,16 @@ fn check_player_side(dir: &Path) -> Result<(), CheckpointError> {
             cause,
         })?;
         let value: serde_json::Value =
-            serde_json::from_str(&text).map_err(|cause| CheckpointError::NotASidecar {
+            serde_json::from_str(&text).map_err(|e| CheckpointError::Invalid {
                 path: path.to_path_buf(),
-                cause,
+                what: format!("not JSON ({e})"),
             })?;
         Ok(value.get("side").and_then(|s| s.as_str()).map(str::to_string))
     };
-    let player = side_of(&player_json)?.unwrap_or_default();
+    let player = side_of(&player_json)?.ok_or_else(|| CheckpointError::Invalid {
+        path: player_json.clone(),
+        what: "has no string `side` (captors or target)".into(),
+    })?;
     let meta = if meta_json.is_file() {
         side_of(&meta_json)?.unwrap_or_default()
     } else {

@@ -1,0 +1,121 @@
+//! The robust lookahead target: the lookahead target (lookahead.rs) planned
+//! against several captor models at once, departing from the rule-based
+//! target only where every model agrees that departing pays.
+//!
+//! Planned against one model, the lookahead target learns that model's
+//! blind spots: a move the model fails to punish is one another team
+//! punishes. So here each of the five moves is simulated `horizon` steps
+//! against **each** model, and a move's worth is its worst future over the
+//! models. The rule-based move is kept unless some model catches it within
+//! the horizon; it is then replaced only by a move that no model catches,
+//! the one whose smallest |ASZ| at the horizon over the models is largest.
+//! Where no move is free under every model, the rule-based move stays: a
+//! departure the models disagree on is the kind that did not carry over to
+//! unseen teams. This is safe policy improvement over a baseline (SPIBB):
+//! the baseline's action wherever the evidence for another is not
+//! unanimous.
+
+use super::lookahead::{Future, Simulator};
+use super::rule_based::target_action;
+use crate::env::{Action, Controller, Side, TrapEnv};
+
+pub struct RobustLookahead {
+    horizon: usize,
+    models: Vec<Box<dyn Controller>>,
+    sim: Simulator,
+    decisions: u64,
+    departures: u64,
+}
+
+impl RobustLookahead {
+    /// The most captor models one target plans against.
+    pub const MAX_MODELS: usize = 8;
+
+    /// A robust lookahead target of `horizon` steps (1 to
+    /// `Lookahead::MAX_HORIZON`) against every team of `models` (1 to
+    /// `MAX_MODELS`).
+    pub fn new(horizon: usize, models: Vec<Box<dyn Controller>>) -> RobustLookahead {
+        assert!(
+            (1..=super::Lookahead::MAX_HORIZON).contains(&horizon),
+            "robust horizon {horizon} outside 1..={}",
+            super::Lookahead::MAX_HORIZON
+        );
+        assert!(
+            (1..=Self::MAX_MODELS).contains(&models.len()),
+            "robust lookahead with {} models, not 1 to {}",
+            models.len(),
+            Self::MAX_MODELS
+        );
+        RobustLookahead {
+            horizon,
+            models,
+            sim: Simulator::new(),
+            decisions: 0,
+            departures: 0,
+        }
+    }
+
+    /// Decisions taken since it was made, and how many of them departed
+    /// from the rule-based target's move.
+    pub fn departures(&self) -> (u64, u64) {
+        (self.decisions, self.departures)
+    }
+
+    /// The target's action in `env`'s state.
+    pub fn target_action(&mut self, env: &TrapEnv) -> Action {
+        self.decisions += 1;
+        let rule = target_action(env);
+        if self.worst(env, rule).is_some() {
+            return rule;
+        }
+        let mut best: Option<(usize, Action)> = None;
+        for action in Action::ALL {
+            if action == rule {
+                continue;
+            }
+            if let Some(area) = self.worst(env, action) {
+                if best.is_none_or(|(b, _)| area > b) {
+                    best = Some((area, action));
+                }
+            }
+        }
+        match best {
+            Some((_, action)) => {
+                self.departures += 1;
+                action
+            }
+            None => rule,
+        }
+    }
+
+    /// The smallest |ASZ| (coarse cells) at the horizon over the models if
+    /// no model catches `first`, else None.
+    fn worst(&mut self, env: &TrapEnv, first: Action) -> Option<usize> {
+        let mut worst = usize::MAX;
+        for model in &mut self.models {
+            match self.sim.future(env, first, self.horizon, model.as_mut()) {
+                Future::Caught(_) => return None,
+                Future::Free(area) => worst = worst.min(area),
+            }
+        }
+        Some(worst)
+    }
+}
+
+impl Controller for RobustLookahead {
+    fn name(&self) -> String {
+        format!("robust:{}", self.horizon)
+    }
+    fn reset(&mut self, env: &TrapEnv, seed: u64) {
+        for model in &mut self.models {
+            model.reset(env, seed);
+        }
+    }
+    fn act(&mut self, env: &TrapEnv, side: Side, out: &mut [Action]) {
+        match side {
+            Side::Target => out[0] = self.target_action(env),
+            // The catalogue refuses it for captors before an episode starts.
+            Side::Captors => panic!("the robust lookahead controller plays the target only"),
+        }
+    }
+}
