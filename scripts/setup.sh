@@ -3,10 +3,21 @@
 # PyPI (the libtorch that tch 0.24 expects), a ./libtorch link to its torch
 # folder (read by .cargo/config.toml), a release build of t2e-league, and the
 # Python package (`import t2e`, built from python/ with maturin) with what its
-# tests use, the trainers they run it with included. Idempotent: a second run only rebuilds what changed.
+# tests use. Idempotent: a second run only rebuilds what changed.
 # --no-build: the virtualenv and its packages only.
+# --trainers: also the MARL trainers the Python tests run the env with
+#   (the test command's; the default job needs none of them).
 set -euo pipefail
 cd "$(dirname "$0")/.."
+build=1
+trainers=0
+for arg in "$@"; do
+  case $arg in
+    --no-build) build=0 ;;
+    --trainers) trainers=1 ;;
+    *) echo "setup.sh: unknown argument $arg (expected --no-build, --trainers)" >&2; exit 2 ;;
+  esac
+done
 
 TORCH_VERSION=2.11.0
 PYTHON=${PYTHON:-python3}
@@ -38,9 +49,14 @@ if [ -z "${LIBTORCH:-}" ]; then
 fi
 # Pinned: a second run finds them installed and reaches no index.
 # shellcheck disable=SC2086
-.venv/bin/python -m pip install --quiet $PY_PACKAGES $TRAINER_PACKAGES
+.venv/bin/python -m pip install --quiet $PY_PACKAGES
+if [ "$trainers" = 1 ]; then
+  echo "== the trainers the Python tests use (SuperSuit, SB3, TorchRL, BenchMARL, RLlib)"
+  # shellcheck disable=SC2086
+  .venv/bin/python -m pip install --quiet $TRAINER_PACKAGES
+fi
 
-if [ "${1:-}" != "--no-build" ]; then
+if [ "$build" = 1 ]; then
   echo "== cargo build --release"
   cargo build --release
   echo "== pip install ./python (import t2e)"

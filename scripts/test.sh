@@ -7,7 +7,7 @@
 # and removed when the tests end, pass or fail.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-./scripts/setup.sh --no-build
+./scripts/setup.sh --no-build --trainers
 T2E_PG_TEST_DIR=$(mktemp -d /tmp/t2e-pg-test.XXXXXX)
 chmod 755 "$T2E_PG_TEST_DIR"
 export T2E_PG_TEST_DIR

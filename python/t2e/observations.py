@@ -6,7 +6,7 @@
   "egocentric"`` with ``patch_pool``): the vector turned into the robot's
   own frame, 6 + 9N numbers, and the patch max-pooled.
 - with ``wall_rays``, each vector ends in that many wall distances in the
-  robot's frame (divided by the map's 16 m), in every kind; with
+  robot's frame (divided by a fixed 16 m, capped at 1), in every kind; with
   ``map_cells``, then in a coarse north-up map of the whole map,
   ``map_cells`` x ``map_cells`` cells in four channels (walls, captors,
   target, self), 4 * map_cells**2 numbers, row by row.

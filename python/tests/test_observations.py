@@ -39,6 +39,11 @@ def test_every_option_is_in_its_space_and_made_from_the_spec(kind, patch_pool):
             if kind == "spec":
                 assert np.array_equal(b[agent]["vector"], vector) and np.array_equal(b[agent]["patch"], patch)
                 continue
+            if kind == "image":
+                # The whole patch in image bounds, channel last; patch_pool does not apply.
+                assert np.array_equal(b[agent]["vector"], vector)
+                assert np.array_equal(b[agent]["patch"], patch[..., None] * np.uint8(255))
+                continue
             pooled = patch.reshape(side, patch_pool, side, patch_pool).max(axis=(1, 3))
             ego = observations.egocentric(vector[None])[0]
             if kind == "egocentric":

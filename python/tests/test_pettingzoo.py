@@ -14,7 +14,7 @@ def test_parallel_api():
 
 
 def test_parallel_api_with_every_observation_option():
-    for observation in ("egocentric", "flat"):
+    for observation in ("egocentric", "flat", "image"):
         parallel_api_test(t2e.parallel_env(maps="shipped", episode_length=60, observation=observation), num_cycles=100)
     parallel_api_test(t2e.parallel_env(maps="shipped", episode_length=60, target="heuristic", observation="flat"), num_cycles=100)
 

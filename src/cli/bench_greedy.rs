@@ -5,7 +5,7 @@
 
 use super::bench_before::BEFORE_DATE;
 use crate::env::{Action, Controller, EnvConfig, Side, TrapEnv};
-use crate::heuristics::{target_action, AszGreedy, Heuristic, Lookahead};
+use crate::heuristics::{target_action, AszGreedy, Heuristic, Lookahead, RandomisedExpert, RobustLookahead};
 use crate::map::PreparedMap;
 use anyhow::Result;
 use std::sync::Arc;
@@ -133,6 +133,41 @@ pub fn run(
         println!(
             "| {} | {:.2} ms | {:.0} | {:.1}% ({departures} of {}) |",
             lookahead.name(),
+            per * 1e3,
+            1.0 / per,
+            100.0 * departures as f64 / states.len() as f64,
+            states.len()
+        );
+    }
+    // The robust lookahead target against one, two and three models: its
+    // cost grows with the models, and it departs far less often.
+    for models in 1..=3u64 {
+        let make = || -> Vec<Box<dyn Controller>> {
+            (0..models)
+                .map(|m| -> Box<dyn Controller> {
+                    if m == 0 {
+                        Box::new(Heuristic)
+                    } else {
+                        Box::new(RandomisedExpert::new(m))
+                    }
+                })
+                .collect()
+        };
+        let mut robust = RobustLookahead::new(10, make());
+        let departures = states
+            .iter()
+            .filter(|env| robust.target_action(env) != target_action(env))
+            .count();
+        let start = Instant::now();
+        let mut decisions = 0usize;
+        while start.elapsed().as_secs_f64() < secs {
+            robust.target_action(&states[decisions % states.len()]);
+            decisions += 1;
+        }
+        let per = start.elapsed().as_secs_f64() / decisions as f64;
+        let names = ["heuristic", "expert:1", "expert:2"][..models as usize].join("+");
+        println!(
+            "| robust:10:{names} | {:.2} ms | {:.0} | {:.1}% ({departures} of {}) |",
             per * 1e3,
             1.0 / per,
             100.0 * departures as f64 / states.len() as f64,

@@ -279,6 +279,7 @@ fn a_sidecar_that_does_not_match_the_weights_is_a_clear_error() {
     assert!(err.contains("actor.safetensors"), "{err}");
 
     std::fs::write(ckpt.join("meta.json"), "{\"format\": 1}").unwrap();
+    t2e::nn::checkpoint::write_manifest(&ckpt).unwrap();
     let err = format!(
         "{:#}",
         PolicySnapshot::load(&ckpt, Side::Captors).unwrap_err()
