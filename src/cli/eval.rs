@@ -24,7 +24,9 @@ pub struct EvalArgs {
     /// ASZ; K as for --captors), lookahead:H or lookahead:H:CAPTORS (each
     /// move played H steps ahead against a model of the captors, the expert
     /// ones unless CAPTORS names another team; the best future kept),
-    /// random, still, ckpt:PATH (a trained policy, its most likely action)
+    /// robust:H:M1+M2+... (the same against every team M1, M2, ...; the
+    /// rule-based move unless some team catches it and another move is
+    /// free under all), random, still, ckpt:PATH (a trained policy, its most likely action)
     /// or sample:PATH (the same policy, sampling its actions).
     #[arg(long, default_value = "heuristic")]
     pub target: ControllerSpec,
