@@ -71,7 +71,7 @@ class T2EParallelEnv(ParallelEnv):
     ``state()`` is the global state a centralised critic reads.
     """
 
-    metadata = {"name": "t2e_v0", "render_modes": ["rgb_array", "human"], "is_parallelizable": True, "render_fps": 10}
+    metadata = {"name": "t2e_v1", "render_modes": ["rgb_array", "human"], "is_parallelizable": True, "render_fps": 10}
 
     def __init__(
         self,
