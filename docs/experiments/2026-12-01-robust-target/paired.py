@@ -2,7 +2,7 @@
 target on the same starts: per team and speed ratio, each target's capture
 rate (SR, 95% Wilson) and mean Time (steps; failures count 500), the mean
 paired difference of captures (robust minus rule-based) with its 95%
-normal interval, and the share of the robust target's decisions that
+normal interval, and the share (%) of the robust target's decisions that
 departed from the rule-based move. Prints a Markdown table.
 
     python paired.py OUT   (the folders run.sh wrote)
@@ -54,7 +54,7 @@ def main(out: Path) -> None:
             la, ha = wilson(sum(ca), n)
             lb, hb = wilson(sum(cb), n)
             dep = summary.get("target_departure")
-            dep = "–" if dep is None else f"{100 * dep:.1f}"
+            dep = "–" if dep is None else f"{dep:.2f}"
             print(
                 f"| {team} | 1.0:{ratio} | {n} | {100 * sum(ca) / n:.1f} [{la:.1f}, {ha:.1f}] | {time(a):.0f} "
                 f"| {100 * sum(cb) / n:.1f} [{lb:.1f}, {hb:.1f}] | {time(b):.0f} "

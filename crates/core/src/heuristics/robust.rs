@@ -15,7 +15,7 @@
 //! the baseline's action wherever the evidence for another is not
 //! unanimous.
 
-use super::lookahead::{Future, Simulator};
+use super::lookahead::{Future, Lookahead, Simulator};
 use super::rule_based::target_action;
 use crate::env::{Action, Controller, Side, TrapEnv};
 
@@ -36,9 +36,9 @@ impl RobustLookahead {
     /// `MAX_MODELS`).
     pub fn new(horizon: usize, models: Vec<Box<dyn Controller>>) -> RobustLookahead {
         assert!(
-            (1..=super::Lookahead::MAX_HORIZON).contains(&horizon),
+            (1..=Lookahead::MAX_HORIZON).contains(&horizon),
             "robust horizon {horizon} outside 1..={}",
-            super::Lookahead::MAX_HORIZON
+            Lookahead::MAX_HORIZON
         );
         assert!(
             (1..=Self::MAX_MODELS).contains(&models.len()),
