@@ -359,7 +359,7 @@ fn fetch_gibson_refuses_bad_folders_and_fifos_by_name_and_leaves_nothing() {
     );
     std::fs::remove_file(&victim).unwrap();
     assert!(Command::new("mkfifo").arg(&victim).status().unwrap().success());
-    let mut child = Command::new(env!("CARGO_BIN_EXE_t2e-league"))
+    let child = Command::new(env!("CARGO_BIN_EXE_t2e-league"))
         .args(["maps", "fetch-gibson", "--from"])
         .arg(&checkout)
         .arg("--out")
@@ -367,15 +367,7 @@ fn fetch_gibson_refuses_bad_folders_and_fifos_by_name_and_leaves_nothing() {
         .stderr(std::process::Stdio::piped())
         .spawn()
         .unwrap();
-    let start = std::time::Instant::now();
-    while child.try_wait().unwrap().is_none() {
-        if start.elapsed() > std::time::Duration::from_secs(60) {
-            let _ = child.kill();
-            panic!("fetch-gibson blocked on a FIFO in a map's place");
-        }
-        std::thread::sleep(std::time::Duration::from_millis(50));
-    }
-    let o = child.wait_with_output().unwrap();
+    let o = crate::common::output_within(child, 60, "fetch-gibson with a FIFO in a map's place");
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success() && err.contains("not a regular file"), "{err}");
     assert!(!tmp.path().join("fifo-out").exists());

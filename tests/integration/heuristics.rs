@@ -494,31 +494,7 @@ fn lookahead_targets_are_named_and_play_the_target_only() {
 /// against the expert captors, written apart from `Lookahead`: caught (and
 /// when), or |ASZ| on 0.2 m cells at the end.
 fn future_by_definition(env: &TrapEnv, first: Action, horizon: usize) -> (bool, usize) {
-    let mut sim = env.clone();
-    let k = sim.num_captors();
-    let mut rewards = vec![0f32; k + 1];
-    for step in 0..horizon {
-        if sim.is_done() {
-            break;
-        }
-        let mut acts = vec![Action::Stop; k + 1];
-        Heuristic.act(&sim, Side::Captors, &mut acts[..k]);
-        acts[k] = if step == 0 {
-            first
-        } else {
-            target_action(&sim)
-        };
-        sim.step_state(&acts, &mut rewards);
-        if sim.captured {
-            return (false, step);
-        }
-    }
-    let lattice = t2e::asz::CoarseLattice::new(sim.map(), 4);
-    let (captors, target) = sim.asz_sources();
-    (
-        true,
-        t2e::asz::AszFields::new().asz_cells(&lattice, target, &captors),
-    )
+    future_against(env, first, horizon, &mut Heuristic)
 }
 
 #[test]
@@ -603,7 +579,9 @@ fn a_copied_world_plays_on_as_the_original() {
     }
 }
 
-/// `future_by_definition` against any captor team.
+/// Where `first`, then the rule-based target, leads in `horizon` steps
+/// against `team`, written apart from the planners: caught (and when), or
+/// |ASZ| on 0.2 m cells at the end.
 fn future_against(env: &TrapEnv, first: Action, horizon: usize, team: &mut dyn Controller) -> (bool, usize) {
     let mut sim = env.clone();
     let k = sim.num_captors();

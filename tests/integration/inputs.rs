@@ -407,7 +407,7 @@ fn eval_resume_says_why_it_plays_a_setting_again() {
     let newest = old.iter().find(|p| !err.contains(&p.display().to_string())).unwrap();
     std::fs::remove_file(newest.join("summary.json")).unwrap();
     assert!(Command::new("mkfifo").arg(newest.join("summary.json")).status().unwrap().success());
-    let mut child = Command::new(BIN)
+    let child = Command::new(BIN)
         .args(["eval", "--captors", "heuristic", "--target", "heuristic", "--k", "2"])
         .args(["--maps", "shipped:small", "--episodes", "3", "--episode-length", "20"])
         .args(["--soa-every", "0", "--quiet", "--resume", "--out"])
@@ -415,15 +415,7 @@ fn eval_resume_says_why_it_plays_a_setting_again() {
         .stderr(std::process::Stdio::piped())
         .spawn()
         .unwrap();
-    let start = std::time::Instant::now();
-    while child.try_wait().unwrap().is_none() {
-        if start.elapsed() > std::time::Duration::from_secs(60) {
-            let _ = child.kill();
-            panic!("eval --resume blocked on a FIFO in a setting folder");
-        }
-        std::thread::sleep(std::time::Duration::from_millis(50));
-    }
-    let o = child.wait_with_output().unwrap();
+    let o = common::output_within(child, 60, "eval --resume with a FIFO in a setting folder");
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("summary.json is not a regular file"), "{err}");
 }

@@ -378,6 +378,16 @@ fn checkpoints_are_never_lost_and_never_silently_replaced() {
     assert!(err.contains("missing"), "{err}");
 }
 
+/// A copy of the files of folder `from` in a new folder `to`.
+fn copy_folder(from: &Path, to: &Path) -> PathBuf {
+    std::fs::create_dir_all(to).unwrap();
+    for e in std::fs::read_dir(from).unwrap() {
+        let p = e.unwrap().path();
+        std::fs::copy(&p, to.join(p.file_name().unwrap())).unwrap();
+    }
+    to.to_path_buf()
+}
+
 /// Rewrites `meta.json` of a checkpoint through `edit`, and its manifest
 /// after it, as a forger would: what is checked then is what lies past
 /// the manifest.
@@ -402,15 +412,7 @@ fn weights_are_integrity_checked() {
     PolicySnapshot::load(&ckpt, Side::Captors).unwrap();
 
     // One flipped byte in the middle of the weights.
-    let copy = |name: &str| {
-        let d = run.path().join(name);
-        std::fs::create_dir_all(&d).unwrap();
-        for e in std::fs::read_dir(&ckpt).unwrap() {
-            let p = e.unwrap().path();
-            std::fs::copy(&p, d.join(p.file_name().unwrap())).unwrap();
-        }
-        d
-    };
+    let copy = |name: &str| copy_folder(&ckpt, &run.path().join(name));
     let flipped = copy("flipped");
     let file = flipped.join("actor.safetensors");
     let mut bytes = std::fs::read(&file).unwrap();
@@ -761,12 +763,7 @@ fn every_checkpoint_is_verified_by_its_manifest_and_its_sides_agree() {
     }
     // An export's shape: player.json and the league's config beside the
     // checkpoint's files, all in the manifest.
-    let export = run.path().join("export");
-    std::fs::create_dir(&export).unwrap();
-    for e in std::fs::read_dir(&ckpt).unwrap() {
-        let p = e.unwrap().path();
-        std::fs::copy(&p, export.join(p.file_name().unwrap())).unwrap();
-    }
+    let export = copy_folder(&ckpt, &run.path().join("export"));
     std::fs::write(export.join("player.json"), r#"{"player": "captors-main", "side": "captors"}"#).unwrap();
     std::fs::write(export.join("league-config.toml"), "").unwrap();
     t2e::nn::checkpoint::write_manifest(&export).unwrap();
@@ -829,15 +826,7 @@ fn the_manifest_is_written_whole_in_place_and_covers_an_exports_own_files() {
     let mut t = Trainer::new(tiny_config(), tiny_maps()).unwrap();
     t.iterate().unwrap();
     let ckpt = t.save(run.path()).unwrap().remove(0);
-    let copy = |name: &str| {
-        let d = run.path().join(name);
-        std::fs::create_dir_all(&d).unwrap();
-        for e in std::fs::read_dir(&ckpt).unwrap() {
-            let p = e.unwrap().path();
-            std::fs::copy(&p, d.join(p.file_name().unwrap())).unwrap();
-        }
-        d
-    };
+    let copy = |name: &str| copy_folder(&ckpt, &run.path().join(name));
     // A dangling link where the manifest goes: seal refuses, and nothing
     // is written outside the folder.
     let linked = copy("linked");

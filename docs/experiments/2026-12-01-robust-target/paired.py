@@ -30,11 +30,12 @@ def setting(folder: Path):
 
 
 def main(out: Path) -> None:
-    print("| captors | v_p:v_e | episodes | rule-based SR % [95%] | Time | robust SR % [95%] | Time | paired difference, points [95%] | departures % |")
-    print("|---|---|---|---|---|---|---|---|---|")
+    print("| captors | v_p:v_e | maps | episodes | rule-based SR % [95%] | Time | robust SR % [95%] | Time | paired difference, points [95%] | departures % |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
     for team in ["expert", "expert7", "mappo", "greedy2", "lomo"]:
-        for ratio in ["1.0", "1.2"]:
-            rule_dir, robust_dir = out / f"{team}-heuristic-{ratio}", out / f"{team}-robust-{ratio}"
+        for ratio, maps in [("1.0", "large"), ("1.2", "small"), ("1.2", "medium"), ("1.2", "large")]:
+            suffix = "" if maps == "large" else f"-{maps}"
+            rule_dir, robust_dir = out / f"{team}-heuristic-{ratio}{suffix}", out / f"{team}-robust-{ratio}{suffix}"
             if not (rule_dir.exists() and robust_dir.exists()):
                 continue
             try:
@@ -56,7 +57,7 @@ def main(out: Path) -> None:
             dep = summary.get("target_departure")
             dep = "–" if dep is None else f"{dep:.2f}"
             print(
-                f"| {team} | 1.0:{ratio} | {n} | {100 * sum(ca) / n:.1f} [{la:.1f}, {ha:.1f}] | {time(a):.0f} "
+                f"| {team} | 1.0:{ratio} | {maps} | {n} | {100 * sum(ca) / n:.1f} [{la:.1f}, {ha:.1f}] | {time(a):.0f} "
                 f"| {100 * sum(cb) / n:.1f} [{lb:.1f}, {hb:.1f}] | {time(b):.0f} "
                 f"| {100 * mean:+.1f} [{100 * (mean - half):+.1f}, {100 * (mean + half):+.1f}] | {dep} |"
             )

@@ -18,6 +18,10 @@ out=$2
 shift 2
 export OMP_NUM_THREADS=1 RAYON_NUM_THREADS=1
 episodes=${EPISODES:-200}
+# MAPS: a Gibson class other than large writes OUT/TEAM-TARGET-RATIO-CLASS;
+# RATIOS: the target's speed over the captors' (1.0 is v_p:v_e 1.0:1.0).
+maps=${MAPS:-large}
+ratios=${RATIOS:-1.0 1.2}
 robust=robust:10:heuristic+expert:1+expert:2
 for team in "$@"; do
     targets="heuristic $robust"
@@ -30,10 +34,12 @@ for team in "$@"; do
     esac
     for target in $targets; do
         name=$team-$(echo "$target" | cut -d: -f1)
-        for ratio in 1.0 1.2; do
-            "$bin" eval --captors "$captors" --target "$target" --k 3 --speed-ratio $ratio \
-                --maps large --episodes "$episodes" --episode-length 500 --seed 0 \
-                --soa-every 0 --quiet --resume --out "$out/$name-$ratio"
+        for ratio in $ratios; do
+            folder=$out/$name-$ratio
+            [ "$maps" = large ] || folder=$folder-$maps
+            "$bin" eval --captors "$captors" --target "$target" --k 3 --speed-ratio "$ratio" \
+                --maps "$maps" --episodes "$episodes" --episode-length 500 --seed 0 \
+                --soa-every 0 --quiet --resume --out "$folder"
         done
     done
 done
