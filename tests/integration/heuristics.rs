@@ -664,4 +664,6 @@ fn the_robust_target_departs_only_where_every_model_agrees() {
         assert!(why.contains("robust:H:MODELS"), "{bad}: {why}");
     }
     assert!(spec.build(Side::Captors).err().unwrap().to_string().contains("target only"));
+    let why = "robust:6:heuristic+ckpt:runs/x".parse::<ControllerSpec>().unwrap_err().to_string();
+    assert!(why.contains("without memory"), "{why}");
 }
