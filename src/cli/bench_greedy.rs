@@ -5,7 +5,9 @@
 
 use super::bench_before::BEFORE_DATE;
 use crate::env::{Action, Controller, EnvConfig, Side, TrapEnv};
-use crate::heuristics::{target_action, AszGreedy, Heuristic, Lookahead, RandomisedExpert, RobustLookahead};
+use crate::heuristics::{
+    target_action, AszGreedy, Heuristic, Lookahead, RandomisedExpert, RobustLookahead,
+};
 use crate::map::PreparedMap;
 use anyhow::Result;
 use std::sync::Arc;

@@ -138,13 +138,22 @@ fn finished_setting(dir: &Path, identity: &SettingIdentity) -> Result<Summary, O
     let identity_file = dir.join("setting.json");
     if std::fs::symlink_metadata(&identity_file).is_err() {
         // Written last: without it the folder was never finished.
-        return Err(dir.is_dir().then(|| format!("{} was left unfinished (no setting.json)", dir.display())));
+        return Err(dir
+            .is_dir()
+            .then(|| format!("{} was left unfinished (no setting.json)", dir.display())));
     }
     let text = read_regular(&identity_file)?;
-    let written: SettingIdentity = serde_json::from_str(&text)
-        .map_err(|e| format!("{} is not a setting's identity ({e})", identity_file.display()))?;
+    let written: SettingIdentity = serde_json::from_str(&text).map_err(|e| {
+        format!(
+            "{} is not a setting's identity ({e})",
+            identity_file.display()
+        )
+    })?;
     if &written != identity {
-        return Err(Some(format!("{} records another setting", identity_file.display())));
+        return Err(Some(format!(
+            "{} records another setting",
+            identity_file.display()
+        )));
     }
     let summary_file = dir.join("summary.json");
     let summary: Summary = serde_json::from_str(&read_regular(&summary_file)?)
@@ -238,8 +247,12 @@ fn write_setting(
     for name in ["summary.json", "episodes.csv", "soa.csv", "soa.png"] {
         let path = dir.join(name);
         if std::fs::symlink_metadata(&path).is_ok_and(|m| !m.is_file()) {
-            std::fs::remove_file(&path)
-                .with_context(|| format!("{}: not a regular file, and cannot be removed", path.display()))?;
+            std::fs::remove_file(&path).with_context(|| {
+                format!(
+                    "{}: not a regular file, and cannot be removed",
+                    path.display()
+                )
+            })?;
         }
     }
     let episodes = dir.join("episodes.csv");
@@ -372,8 +385,11 @@ pub fn run(args: EvalArgs) -> Result<()> {
                     Ok(done) => done,
                     Err(finished) => {
                         if args.resume {
-                            if let Some(why) = why_not_resumed(&args.out, &dir, &identity, finished) {
-                                eprintln!("--resume: {spec}, K = {k}, ratio {ratio}: starts again: {why}");
+                            if let Some(why) = why_not_resumed(&args.out, &dir, &identity, finished)
+                            {
+                                eprintln!(
+                                    "--resume: {spec}, K = {k}, ratio {ratio}: starts again: {why}"
+                                );
                             }
                         }
                         let (summary, records) =

@@ -301,7 +301,9 @@ fn fetch_gibson_refuses_bad_folders_and_fifos_by_name_and_leaves_nothing() {
     let checkout = tmp.path().join("T2E");
     let folder_of = |class: SizeClass| CLASS_FOLDERS.iter().find(|(_, c)| *c == class).unwrap().0;
     for e in &list_dir(&gibson).unwrap() {
-        let dir = checkout.join("scene/val").join(folder_of(e.listed_class.unwrap()));
+        let dir = checkout
+            .join("scene/val")
+            .join(folder_of(e.listed_class.unwrap()));
         std::fs::create_dir_all(&dir).unwrap();
         std::fs::copy(&e.path, dir.join(format!("{}.png", e.name))).unwrap();
     }
@@ -324,13 +326,20 @@ fn fetch_gibson_refuses_bad_folders_and_fifos_by_name_and_leaves_nothing() {
             .collect()
     };
     let once = |err: &str, text: &str| {
-        assert_eq!(err.matches(text).count(), 1, "{text:?} not said exactly once: {err}");
+        assert_eq!(
+            err.matches(text).count(),
+            1,
+            "{text:?} not said exactly once: {err}"
+        );
     };
     // A dangling symbolic link.
     let link = tmp.path().join("LINK");
     std::os::unix::fs::symlink(tmp.path().join("nowhere"), &link).unwrap();
     let err = fetch(&link);
-    assert!(err.contains("LINK") && err.contains("does not exist"), "{err}");
+    assert!(
+        err.contains("LINK") && err.contains("does not exist"),
+        "{err}"
+    );
     assert_eq!(leftovers(tmp.path()), Vec::<String>::new());
     // Under a file.
     let file = tmp.path().join("a-file");
@@ -346,7 +355,10 @@ fn fetch_gibson_refuses_bad_folders_and_fifos_by_name_and_leaves_nothing() {
     // Where nothing can be created: the message names the folder given,
     // not the program's staging folder.
     let err = fetch(std::path::Path::new("/proc/t2e-no-such/gibson"));
-    assert!(err.contains("/proc/t2e-no-such/gibson") && !err.contains("partial"), "{err}");
+    assert!(
+        err.contains("/proc/t2e-no-such/gibson") && !err.contains("partial"),
+        "{err}"
+    );
     // A FIFO in a map's place, under a time limit: a blocked open fails
     // the test instead of hanging it.
     let victim = checkout.join("scene/val/easy").join(
@@ -358,7 +370,11 @@ fn fetch_gibson_refuses_bad_folders_and_fifos_by_name_and_leaves_nothing() {
             .unwrap(),
     );
     std::fs::remove_file(&victim).unwrap();
-    assert!(Command::new("mkfifo").arg(&victim).status().unwrap().success());
+    assert!(Command::new("mkfifo")
+        .arg(&victim)
+        .status()
+        .unwrap()
+        .success());
     let child = Command::new(env!("CARGO_BIN_EXE_t2e-league"))
         .args(["maps", "fetch-gibson", "--from"])
         .arg(&checkout)
@@ -369,6 +385,9 @@ fn fetch_gibson_refuses_bad_folders_and_fifos_by_name_and_leaves_nothing() {
         .unwrap();
     let o = crate::common::output_within(child, 60, "fetch-gibson with a FIFO in a map's place");
     let err = String::from_utf8_lossy(&o.stderr);
-    assert!(!o.status.success() && err.contains("not a regular file"), "{err}");
+    assert!(
+        !o.status.success() && err.contains("not a regular file"),
+        "{err}"
+    );
     assert!(!tmp.path().join("fifo-out").exists());
 }

@@ -582,7 +582,12 @@ fn a_copied_world_plays_on_as_the_original() {
 /// Where `first`, then the rule-based target, leads in `horizon` steps
 /// against `team`, written apart from the planners: caught (and when), or
 /// |ASZ| on 0.2 m cells at the end.
-fn future_against(env: &TrapEnv, first: Action, horizon: usize, team: &mut dyn Controller) -> (bool, usize) {
+fn future_against(
+    env: &TrapEnv,
+    first: Action,
+    horizon: usize,
+    team: &mut dyn Controller,
+) -> (bool, usize) {
     let mut sim = env.clone();
     let k = sim.num_captors();
     let mut rewards = vec![0f32; k + 1];
@@ -592,7 +597,11 @@ fn future_against(env: &TrapEnv, first: Action, horizon: usize, team: &mut dyn C
         }
         let mut acts = vec![Action::Stop; k + 1];
         team.act(&sim, Side::Captors, &mut acts[..k]);
-        acts[k] = if step == 0 { first } else { target_action(&sim) };
+        acts[k] = if step == 0 {
+            first
+        } else {
+            target_action(&sim)
+        };
         sim.step_state(&acts, &mut rewards);
         if sim.captured {
             return (false, step);
@@ -600,7 +609,10 @@ fn future_against(env: &TrapEnv, first: Action, horizon: usize, team: &mut dyn C
     }
     let lattice = t2e::asz::CoarseLattice::new(sim.map(), 4);
     let (captors, target) = sim.asz_sources();
-    (true, t2e::asz::AszFields::new().asz_cells(&lattice, target, &captors))
+    (
+        true,
+        t2e::asz::AszFields::new().asz_cells(&lattice, target, &captors),
+    )
 }
 
 /// The robust target keeps the rule-based move unless some model catches
@@ -613,7 +625,8 @@ fn the_robust_target_departs_only_where_every_model_agrees() {
     let horizon = 6;
     let spec: ControllerSpec = "robust:6:heuristic+greedy:4".parse().unwrap();
     assert_eq!(spec.to_string(), "robust:6:heuristic+greedy:4");
-    let models = || -> Vec<Box<dyn Controller>> { vec![Box::new(Heuristic), Box::new(AszGreedy::new(4))] };
+    let models =
+        || -> Vec<Box<dyn Controller>> { vec![Box::new(Heuristic), Box::new(AszGreedy::new(4))] };
     let mut robust = RobustLookahead::new(horizon, models());
     let mut check_models = models();
     let mut rewards = vec![0f32; 4];
@@ -627,9 +640,14 @@ fn the_robust_target_departs_only_where_every_model_agrees() {
             let rule = target_action(&env);
             if chosen != rule || step % 15 == 14 {
                 let worst = |a: Action, models: &mut Vec<Box<dyn Controller>>| -> Option<usize> {
-                    let futures: Vec<(bool, usize)> =
-                        models.iter_mut().map(|m| future_against(&env, a, horizon, m.as_mut())).collect();
-                    futures.iter().all(|f| f.0).then(|| futures.iter().map(|f| f.1).min().unwrap())
+                    let futures: Vec<(bool, usize)> = models
+                        .iter_mut()
+                        .map(|m| future_against(&env, a, horizon, m.as_mut()))
+                        .collect();
+                    futures
+                        .iter()
+                        .all(|f| f.0)
+                        .then(|| futures.iter().map(|f| f.1).min().unwrap())
                 };
                 let rule_worst = worst(rule, &mut check_models);
                 let others: Vec<(Action, Option<usize>)> = Action::ALL
@@ -637,11 +655,19 @@ fn the_robust_target_departs_only_where_every_model_agrees() {
                     .filter(|&&a| a != rule)
                     .map(|&a| (a, worst(a, &mut check_models)))
                     .collect();
-                let best_free = others.iter().filter_map(|(a, w)| w.map(|w| (w, *a))).max_by_key(|(w, _)| *w);
+                let best_free = others
+                    .iter()
+                    .filter_map(|(a, w)| w.map(|w| (w, *a)))
+                    .max_by_key(|(w, _)| *w);
                 match (rule_worst, best_free) {
-                    (Some(_), _) | (None, None) => assert_eq!(chosen, rule, "seed {seed}, step {step}"),
+                    (Some(_), _) | (None, None) => {
+                        assert_eq!(chosen, rule, "seed {seed}, step {step}")
+                    }
                     (None, Some((w, _))) => {
-                        let got = others.iter().find(|(a, _)| *a == chosen).and_then(|(_, w)| *w);
+                        let got = others
+                            .iter()
+                            .find(|(a, _)| *a == chosen)
+                            .and_then(|(_, w)| *w);
                         assert_eq!(got, Some(w), "seed {seed}, step {step}: {others:?}");
                     }
                 }
@@ -657,13 +683,32 @@ fn the_robust_target_departs_only_where_every_model_agrees() {
         }
     }
     let (decisions, counted) = robust.departures();
-    assert!(decisions >= 100 && counted as usize == departures, "{decisions} decisions, {counted} counted, {departures} seen");
-    assert!(checked >= 40 && departures > 0, "{checked} checked, {departures} departures, {rule_caught} rule moves caught");
-    for bad in ["robust:6", "robust:0:heuristic", "robust:6:lookahead:3", "robust:6:heuristic+robust:2:greedy"] {
+    assert!(
+        decisions >= 100 && counted as usize == departures,
+        "{decisions} decisions, {counted} counted, {departures} seen"
+    );
+    assert!(
+        checked >= 40 && departures > 0,
+        "{checked} checked, {departures} departures, {rule_caught} rule moves caught"
+    );
+    for bad in [
+        "robust:6",
+        "robust:0:heuristic",
+        "robust:6:lookahead:3",
+        "robust:6:heuristic+robust:2:greedy",
+    ] {
         let why = bad.parse::<ControllerSpec>().unwrap_err().to_string();
         assert!(why.contains("robust:H:MODELS"), "{bad}: {why}");
     }
-    assert!(spec.build(Side::Captors).err().unwrap().to_string().contains("target only"));
-    let why = "robust:6:heuristic+ckpt:runs/x".parse::<ControllerSpec>().unwrap_err().to_string();
+    assert!(spec
+        .build(Side::Captors)
+        .err()
+        .unwrap()
+        .to_string()
+        .contains("target only"));
+    let why = "robust:6:heuristic+ckpt:runs/x"
+        .parse::<ControllerSpec>()
+        .unwrap_err()
+        .to_string();
     assert!(why.contains("without memory"), "{why}");
 }

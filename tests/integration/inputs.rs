@@ -348,7 +348,10 @@ fn an_edited_meta_json_of_a_training_checkpoint_is_refused_by_its_manifest() {
         ..EvalSetting::default()
     };
     SettingIdentity::of(&setting(spec()), "shipped:small", &maps).unwrap();
-    assert!(ckpt.join("SHA256SUMS").is_file(), "a training checkpoint carries a manifest");
+    assert!(
+        ckpt.join("SHA256SUMS").is_file(),
+        "a training checkpoint carries a manifest"
+    );
 
     // Relabel the protocol by hand: the weights are untouched, so their
     // hashes in meta.json still match, but the rows it labels would lie.
@@ -359,7 +362,10 @@ fn an_edited_meta_json_of_a_training_checkpoint_is_refused_by_its_manifest() {
     let err = SettingIdentity::of(&setting(spec()), "shipped:small", &maps)
         .unwrap_err()
         .to_string();
-    assert!(err.contains("meta.json") && err.contains("SHA256SUMS"), "{err}");
+    assert!(
+        err.contains("meta.json") && err.contains("SHA256SUMS"),
+        "{err}"
+    );
 
     // Without the manifest it is refused too, and `seal` names the way.
     std::fs::write(&meta, &text).unwrap();
@@ -367,7 +373,10 @@ fn an_edited_meta_json_of_a_training_checkpoint_is_refused_by_its_manifest() {
     let err = SettingIdentity::of(&setting(spec()), "shipped:small", &maps)
         .unwrap_err()
         .to_string();
-    assert!(err.contains("SHA256SUMS: missing") && err.contains("t2e-league seal"), "{err}");
+    assert!(
+        err.contains("SHA256SUMS: missing") && err.contains("t2e-league seal"),
+        "{err}"
+    );
     let o = Command::new(BIN).arg("seal").arg(&ckpt).output().unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     SettingIdentity::of(&setting(spec()), "shipped:small", &maps).unwrap();
@@ -380,36 +389,83 @@ fn eval_resume_says_why_it_plays_a_setting_again() {
     let out = tempfile::tempdir().unwrap();
     let eval = |episodes: &str| {
         Command::new(BIN)
-            .args(["eval", "--captors", "heuristic", "--target", "heuristic", "--k", "2"])
-            .args(["--maps", "shipped:small", "--episodes", episodes, "--episode-length", "20"])
+            .args([
+                "eval",
+                "--captors",
+                "heuristic",
+                "--target",
+                "heuristic",
+                "--k",
+                "2",
+            ])
+            .args([
+                "--maps",
+                "shipped:small",
+                "--episodes",
+                episodes,
+                "--episode-length",
+                "20",
+            ])
             .args(["--soa-every", "0", "--quiet", "--resume", "--out"])
             .arg(out.path())
             .output()
             .unwrap()
     };
     let first = eval("2");
-    assert!(first.status.success(), "{}", String::from_utf8_lossy(&first.stderr));
+    assert!(
+        first.status.success(),
+        "{}",
+        String::from_utf8_lossy(&first.stderr)
+    );
     assert!(!String::from_utf8_lossy(&first.stderr).contains("starts again"));
     let again = eval("2");
     assert!(!String::from_utf8_lossy(&again.stderr).contains("starts again"));
     let changed = eval("3");
     let err = String::from_utf8_lossy(&changed.stderr);
     assert!(changed.status.success(), "{err}");
-    assert!(err.contains("starts again") && err.contains("episodes 2 -> 3"), "{err}");
+    assert!(
+        err.contains("starts again") && err.contains("episodes 2 -> 3"),
+        "{err}"
+    );
     let old: Vec<_> = std::fs::read_dir(out.path())
         .unwrap()
         .map(|e| e.unwrap().path())
         .filter(|p| p.is_dir())
         .collect();
     assert_eq!(old.len(), 2, "{old:?}");
-    assert!(old.iter().any(|p| err.contains(&p.display().to_string())), "{err}");
+    assert!(
+        old.iter().any(|p| err.contains(&p.display().to_string())),
+        "{err}"
+    );
     // A FIFO in place of a finished setting's files is named, never read.
-    let newest = old.iter().find(|p| !err.contains(&p.display().to_string())).unwrap();
+    let newest = old
+        .iter()
+        .find(|p| !err.contains(&p.display().to_string()))
+        .unwrap();
     std::fs::remove_file(newest.join("summary.json")).unwrap();
-    assert!(Command::new("mkfifo").arg(newest.join("summary.json")).status().unwrap().success());
+    assert!(Command::new("mkfifo")
+        .arg(newest.join("summary.json"))
+        .status()
+        .unwrap()
+        .success());
     let child = Command::new(BIN)
-        .args(["eval", "--captors", "heuristic", "--target", "heuristic", "--k", "2"])
-        .args(["--maps", "shipped:small", "--episodes", "3", "--episode-length", "20"])
+        .args([
+            "eval",
+            "--captors",
+            "heuristic",
+            "--target",
+            "heuristic",
+            "--k",
+            "2",
+        ])
+        .args([
+            "--maps",
+            "shipped:small",
+            "--episodes",
+            "3",
+            "--episode-length",
+            "20",
+        ])
         .args(["--soa-every", "0", "--quiet", "--resume", "--out"])
         .arg(out.path())
         .stderr(std::process::Stdio::piped())

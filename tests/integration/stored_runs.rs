@@ -542,7 +542,10 @@ fn evaluates_as_stored(out: &str, fixtures: &[&str], args: &[&str]) {
                 .output()
                 .unwrap();
             let err = String::from_utf8_lossy(&refused.stderr);
-            assert!(!refused.status.success() && err.contains("t2e-league seal"), "{err}");
+            assert!(
+                !refused.status.success() && err.contains("t2e-league seal"),
+                "{err}"
+            );
             t2e(tmp.path(), &["seal", ckpt.to_str().unwrap()]);
         }
     }

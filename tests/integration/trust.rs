@@ -764,14 +764,33 @@ fn every_checkpoint_is_verified_by_its_manifest_and_its_sides_agree() {
     // An export's shape: player.json and the league's config beside the
     // checkpoint's files, all in the manifest.
     let export = copy_folder(&ckpt, &run.path().join("export"));
-    std::fs::write(export.join("player.json"), r#"{"player": "captors-main", "side": "captors"}"#).unwrap();
+    std::fs::write(
+        export.join("player.json"),
+        r#"{"player": "captors-main", "side": "captors"}"#,
+    )
+    .unwrap();
     std::fs::write(export.join("league-config.toml"), "").unwrap();
     t2e::nn::checkpoint::write_manifest(&export).unwrap();
     PolicySnapshot::load(&export, Side::Captors).unwrap();
     let eval_target = |dir: &Path| {
         std::process::Command::new(env!("CARGO_BIN_EXE_t2e-league"))
-            .args(["eval", "--captors", "heuristic", "--k", "2", "--maps", "shipped:small"])
-            .args(["--episodes", "1", "--episode-length", "10", "--quiet", "--out"])
+            .args([
+                "eval",
+                "--captors",
+                "heuristic",
+                "--k",
+                "2",
+                "--maps",
+                "shipped:small",
+            ])
+            .args([
+                "--episodes",
+                "1",
+                "--episode-length",
+                "10",
+                "--quiet",
+                "--out",
+            ])
             .arg(run.path().join("eval"))
             .arg("--target")
             .arg(format!("ckpt:{}", dir.display()))
@@ -781,36 +800,73 @@ fn every_checkpoint_is_verified_by_its_manifest_and_its_sides_agree() {
 
     // meta.json's side turned to the target, the manifest made again.
     edit_meta(&export, |v| v["side"] = "target".into());
-    let err = format!("{:#}", PolicySnapshot::load(&export, Side::Target).unwrap_err());
-    assert!(err.contains("player.json") && err.contains("\"captors\""), "{err}");
+    let err = format!(
+        "{:#}",
+        PolicySnapshot::load(&export, Side::Target).unwrap_err()
+    );
+    assert!(
+        err.contains("player.json") && err.contains("\"captors\""),
+        "{err}"
+    );
     let o = eval_target(&export);
     let stderr = String::from_utf8_lossy(&o.stderr);
-    assert!(!o.status.success() && stderr.contains("player.json"), "{stderr}");
+    assert!(
+        !o.status.success() && stderr.contains("player.json"),
+        "{stderr}"
+    );
 
     // The export stripped of its manifest and its marks.
     edit_meta(&export, |v| v["side"] = "captors".into());
     for mark in ["SHA256SUMS", "player.json", "league-config.toml"] {
         std::fs::remove_file(export.join(mark)).unwrap();
     }
-    let err = format!("{:#}", PolicySnapshot::load(&export, Side::Captors).unwrap_err());
+    let err = format!(
+        "{:#}",
+        PolicySnapshot::load(&export, Side::Captors).unwrap_err()
+    );
     assert!(err.contains("SHA256SUMS: missing"), "{err}");
 
     // A training checkpoint's meta.json edited without its manifest.
     let meta = ckpt.join("meta.json");
     let text = std::fs::read_to_string(&meta).unwrap();
-    std::fs::write(&meta, text.replace("\"env_steps\"", "\"env_steps\" ").replacen("\"iteration\": 1", "\"iteration\": 7", 1)).unwrap();
-    let err = format!("{:#}", PolicySnapshot::load(&ckpt, Side::Captors).unwrap_err());
-    assert!(err.contains("meta.json") && err.contains("SHA256SUMS"), "{err}");
+    std::fs::write(
+        &meta,
+        text.replace("\"env_steps\"", "\"env_steps\" ").replacen(
+            "\"iteration\": 1",
+            "\"iteration\": 7",
+            1,
+        ),
+    )
+    .unwrap();
+    let err = format!(
+        "{:#}",
+        PolicySnapshot::load(&ckpt, Side::Captors).unwrap_err()
+    );
+    assert!(
+        err.contains("meta.json") && err.contains("SHA256SUMS"),
+        "{err}"
+    );
     std::fs::write(&meta, &text).unwrap();
     PolicySnapshot::load(&ckpt, Side::Captors).unwrap();
 
     // Rays without their range: written when a ray was divided by each
     // map's extent.
-    edit_meta(&ckpt, |v| v["net"]["sight"] = serde_json::json!({"wall_rays": 12}));
-    let err = format!("{:#}", PolicySnapshot::load(&ckpt, Side::Captors).unwrap_err());
-    assert!(err.contains("wall_ray_range_m") && err.contains("16 m"), "{err}");
+    edit_meta(&ckpt, |v| {
+        v["net"]["sight"] = serde_json::json!({"wall_rays": 12})
+    });
+    let err = format!(
+        "{:#}",
+        PolicySnapshot::load(&ckpt, Side::Captors).unwrap_err()
+    );
+    assert!(
+        err.contains("wall_ray_range_m") && err.contains("16 m"),
+        "{err}"
+    );
     edit_meta(&ckpt, |v| v["wall_ray_range_m"] = 24.0.into());
-    let err = format!("{:#}", PolicySnapshot::load(&ckpt, Side::Captors).unwrap_err());
+    let err = format!(
+        "{:#}",
+        PolicySnapshot::load(&ckpt, Side::Captors).unwrap_err()
+    );
     assert!(err.contains("wall_ray_range_m = 24"), "{err}");
 }
 
@@ -836,29 +892,52 @@ fn the_manifest_is_written_whole_in_place_and_covers_an_exports_own_files() {
     let err = t2e::nn::checkpoint::seal(&linked).unwrap_err().to_string();
     assert!(err.contains("not a regular file"), "{err}");
     t2e::nn::checkpoint::write_manifest(&linked).unwrap();
-    assert!(!outside.exists(), "the manifest was written through the link");
-    assert!(std::fs::symlink_metadata(linked.join("SHA256SUMS")).unwrap().is_file());
+    assert!(
+        !outside.exists(),
+        "the manifest was written through the link"
+    );
+    assert!(std::fs::symlink_metadata(linked.join("SHA256SUMS"))
+        .unwrap()
+        .is_file());
     PolicySnapshot::load(&linked, Side::Captors).unwrap();
     // A name with a line break.
     std::fs::write(linked.join("evil\nname"), b"x").unwrap();
-    let err = t2e::nn::checkpoint::write_manifest(&linked).unwrap_err().to_string();
+    let err = t2e::nn::checkpoint::write_manifest(&linked)
+        .unwrap_err()
+        .to_string();
     assert!(err.contains("line break"), "{err}");
     // An export whose player.json is not in its manifest.
     let export = copy("export");
     std::fs::write(export.join("player.json"), r#"{"side": "captors"}"#).unwrap();
-    let err = format!("{:#}", PolicySnapshot::load(&export, Side::Captors).unwrap_err());
-    assert!(err.contains("player.json") && err.contains("not listed"), "{err}");
+    let err = format!(
+        "{:#}",
+        PolicySnapshot::load(&export, Side::Captors).unwrap_err()
+    );
+    assert!(
+        err.contains("player.json") && err.contains("not listed"),
+        "{err}"
+    );
     t2e::nn::checkpoint::write_manifest(&export).unwrap();
     PolicySnapshot::load(&export, Side::Captors).unwrap();
     std::fs::write(export.join("player.json"), r#"{"player": 7}"#).unwrap();
-    let err = format!("{:#}", PolicySnapshot::load(&export, Side::Captors).unwrap_err());
+    let err = format!(
+        "{:#}",
+        PolicySnapshot::load(&export, Side::Captors).unwrap_err()
+    );
     assert!(err.contains("no string `side`"), "{err}");
     // A FIFO in a weight's place, sealed: named as such, never opened.
     let fifo = copy("fifo");
     std::fs::remove_file(fifo.join("SHA256SUMS")).unwrap();
     std::fs::remove_file(fifo.join("critic.safetensors")).unwrap();
-    assert!(std::process::Command::new("mkfifo").arg(fifo.join("critic.safetensors")).status().unwrap().success());
+    assert!(std::process::Command::new("mkfifo")
+        .arg(fifo.join("critic.safetensors"))
+        .status()
+        .unwrap()
+        .success());
     let err = t2e::nn::checkpoint::seal(&fifo).unwrap_err().to_string();
-    assert!(err.contains("critic.safetensors") && err.contains("not a regular file"), "{err}");
+    assert!(
+        err.contains("critic.safetensors") && err.contains("not a regular file"),
+        "{err}"
+    );
     assert!(!fifo.join("SHA256SUMS").exists());
 }

@@ -285,7 +285,8 @@ pub fn write_file_atomically(path: &Path, bytes: &[u8]) -> Result<(), FsError> {
     Ok(())
 }
 
-fn pid_alive(pid: u32) -> bool {
+/// Whether process `pid` is this one or still running (Linux's /proc).
+pub(crate) fn pid_alive(pid: u32) -> bool {
     pid == std::process::id() || Path::new(&format!("/proc/{pid}")).exists()
 }
 

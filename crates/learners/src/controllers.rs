@@ -165,7 +165,9 @@ impl FromStr for ControllerSpec {
             }
             other if other.starts_with("robust:") => {
                 let refuse = || ControllerError::Robust(other.to_string());
-                let (horizon, models) = other["robust:".len()..].split_once(':').ok_or_else(refuse)?;
+                let (horizon, models) = other["robust:".len()..]
+                    .split_once(':')
+                    .ok_or_else(refuse)?;
                 let horizon = horizon
                     .parse::<usize>()
                     .ok()
@@ -176,9 +178,15 @@ impl FromStr for ControllerSpec {
                     .map(|m| m.parse::<ControllerSpec>())
                     .collect::<Result<Vec<_>, _>>()?;
                 let planner = |m: &ControllerSpec| {
-                    matches!(m, ControllerSpec::Lookahead { .. } | ControllerSpec::Robust { .. })
+                    matches!(
+                        m,
+                        ControllerSpec::Lookahead { .. } | ControllerSpec::Robust { .. }
+                    )
                 };
-                if models.is_empty() || models.len() > RobustLookahead::MAX_MODELS || models.iter().any(planner) {
+                if models.is_empty()
+                    || models.len() > RobustLookahead::MAX_MODELS
+                    || models.iter().any(planner)
+                {
                     return Err(refuse());
                 }
                 // A learned team's recurrent state would be advanced by every

@@ -139,7 +139,11 @@ pub mod postgres;
 /// Waits for `child` (its stderr piped) at most `secs` seconds, killing it
 /// and failing the test past that: a command that blocks (on a FIFO, say)
 /// fails instead of hanging the suite.
-pub fn output_within(mut child: std::process::Child, secs: u64, what: &str) -> std::process::Output {
+pub fn output_within(
+    mut child: std::process::Child,
+    secs: u64,
+    what: &str,
+) -> std::process::Output {
     let start = std::time::Instant::now();
     while child.try_wait().unwrap().is_none() {
         if start.elapsed() > std::time::Duration::from_secs(secs) {

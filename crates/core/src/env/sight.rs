@@ -280,12 +280,22 @@ mod tests {
         };
         let (a, b) = (read(&small), read(&large));
         for k in 0..4 {
-            assert!((a[k] - b[k]).abs() < 1e-6, "ray {k}: {a:?} on 16 m, {b:?} on 24 m");
+            assert!(
+                (a[k] - b[k]).abs() < 1e-6,
+                "ray {k}: {a:?} on 16 m, {b:?} on 24 m"
+            );
         }
         // East: from column 40.5 to 120 is 79.5 cells, 3.975 m.
-        assert!((a[0] as f64 * WALL_RAY_RANGE_M - 79.5 * 0.05).abs() < 0.06, "{a:?}");
+        assert!(
+            (a[0] as f64 * WALL_RAY_RANGE_M - 79.5 * 0.05).abs() < 0.06,
+            "{a:?}"
+        );
         // A corridor 20 m long: the ray east sees no wall within 16 m.
-        let long = PreparedMap::new(Grid::with_free_rects("corridor", 480, &[(150..170, 10..470)]));
+        let long = PreparedMap::new(Grid::with_free_rects(
+            "corridor",
+            480,
+            &[(150..170, 10..470)],
+        ));
         let mut rays = [0f32; 4];
         write_wall_rays(&long, long.grid.cell_center(160, 20), 0.0, &mut rays);
         assert_eq!(rays[0], 1.0, "{rays:?}");

@@ -170,7 +170,11 @@ pub fn import_checkout(checkout: &Path, out: &Path) -> Result<Vec<ImportedMap>, 
         let Ok(link) = std::fs::read_link(at) else {
             continue;
         };
-        let what = if at == out { "it is".to_string() } else { format!("{} is", at.display()) };
+        let what = if at == out {
+            "it is".to_string()
+        } else {
+            format!("{} is", at.display())
+        };
         match std::fs::metadata(at) {
             Ok(_) => {}
             Err(e) if e.raw_os_error() == Some(libc_eloop()) => {
@@ -189,7 +193,9 @@ pub fn import_checkout(checkout: &Path, out: &Path) -> Result<Vec<ImportedMap>, 
     }
     if out.exists() {
         if !out.is_dir() {
-            return Err(refuse("exists and is not a folder; choose another --out".into()));
+            return Err(refuse(
+                "exists and is not a folder; choose another --out".into(),
+            ));
         }
         // Idempotent: a second fetch into a finished folder is not an error.
         if let Ok(existing) = read_flat(out) {
@@ -214,7 +220,8 @@ pub fn import_checkout(checkout: &Path, out: &Path) -> Result<Vec<ImportedMap>, 
             file.display()
         )));
     }
-    std::fs::create_dir_all(&parent).map_err(|e| refuse(format!("cannot create its parent folder: {e}")))?;
+    std::fs::create_dir_all(&parent)
+        .map_err(|e| refuse(format!("cannot create its parent folder: {e}")))?;
     let staging = parent.join(format!(
         ".{}.partial-{}",
         out.file_name().and_then(|s| s.to_str()).unwrap_or("gibson"),
@@ -223,7 +230,8 @@ pub fn import_checkout(checkout: &Path, out: &Path) -> Result<Vec<ImportedMap>, 
     let _ = std::fs::remove_dir_all(&staging);
     remove_dead_stagings(&parent, out);
     let filled = fill_staging(&staging, &maps).and_then(|()| {
-        std::fs::rename(&staging, out).map_err(|e| refuse(format!("cannot move the maps into place: {e}")))
+        std::fs::rename(&staging, out)
+            .map_err(|e| refuse(format!("cannot move the maps into place: {e}")))
     });
     if filled.is_err() {
         // Nothing half-written is left behind, hidden or not.
@@ -276,7 +284,7 @@ fn remove_dead_stagings(parent: &Path, out: &Path) {
         let Some(pid) = file.to_str().and_then(|f| f.strip_prefix(&prefix)) else {
             continue;
         };
-        let alive = pid.parse::<u32>().is_ok_and(|p| Path::new(&format!("/proc/{p}")).exists());
+        let alive = pid.parse::<u32>().is_ok_and(crate::fs::pid_alive);
         if !alive {
             let _ = std::fs::remove_dir_all(entry.path());
         }

@@ -412,7 +412,8 @@ pub fn seal(dir: &Path) -> Result<(), CheckpointError> {
     let manifest = dir.join("SHA256SUMS");
     if let Ok(m) = std::fs::symlink_metadata(&manifest) {
         let what = if m.is_file() && m.len() == 0 {
-            "already there, but empty (a write that did not finish?): remove it and seal again".into()
+            "already there, but empty (a write that did not finish?): remove it and seal again"
+                .into()
         } else if m.is_file() {
             "already there: the folder is sealed".into()
         } else {
@@ -449,13 +450,17 @@ pub fn seal(dir: &Path) -> Result<(), CheckpointError> {
 pub fn write_manifest(dir: &Path) -> Result<(), CheckpointError> {
     let io = |what: String, cause| CheckpointError::Fs(FsError::Io { what, cause });
     let mut names = Vec::new();
-    for entry in std::fs::read_dir(dir).map_err(|e| io(format!("cannot list {}", dir.display()), e))? {
+    for entry in
+        std::fs::read_dir(dir).map_err(|e| io(format!("cannot list {}", dir.display()), e))?
+    {
         let entry = entry.map_err(|e| io(format!("cannot list {}", dir.display()), e))?;
         let path = entry.path();
         let Some(name) = entry.file_name().to_str().map(str::to_string) else {
             return Err(CheckpointError::Invalid {
                 path,
-                what: "its name is not UTF-8, so a manifest line cannot name it; rename or remove it".into(),
+                what:
+                    "its name is not UTF-8, so a manifest line cannot name it; rename or remove it"
+                        .into(),
             });
         };
         if name == "SHA256SUMS" || name.starts_with(".SHA256SUMS.") || !path.is_file() {
@@ -473,7 +478,8 @@ pub fn write_manifest(dir: &Path) -> Result<(), CheckpointError> {
     let mut text = String::new();
     for name in names {
         let path = dir.join(&name);
-        let sha = sha256_file(&path).map_err(|cause| CheckpointError::Unreadable { path, cause })?;
+        let sha =
+            sha256_file(&path).map_err(|cause| CheckpointError::Unreadable { path, cause })?;
         text.push_str(&format!("{sha}  {name}\n"));
     }
     let path = dir.join("SHA256SUMS");
@@ -610,8 +616,10 @@ fn verify_folder(dir: &Path, recorded: Option<&str>) -> Result<(), CheckpointErr
         let meta = dir.join("meta.json");
         match recorded {
             Some(want) if meta.is_file() => {
-                let got = sha256_file(&meta)
-                    .map_err(|cause| CheckpointError::Unreadable { path: meta.clone(), cause })?;
+                let got = sha256_file(&meta).map_err(|cause| CheckpointError::Unreadable {
+                    path: meta.clone(),
+                    cause,
+                })?;
                 if got != want {
                     return Err(CheckpointError::HashMismatch {
                         path: meta,
@@ -652,12 +660,18 @@ fn verify_folder(dir: &Path, recorded: Option<&str>) -> Result<(), CheckpointErr
             ));
         };
         if name.is_empty() {
-            return Err(refuse(manifest.clone(), format!("line {} names no file", i + 1)));
+            return Err(refuse(
+                manifest.clone(),
+                format!("line {} names no file", i + 1),
+            ));
         }
         if name == "SHA256SUMS" {
             return Err(refuse(
                 manifest.clone(),
-                format!("line {} lists the manifest itself, whose hash it cannot hold", i + 1),
+                format!(
+                    "line {} lists the manifest itself, whose hash it cannot hold",
+                    i + 1
+                ),
             ));
         }
         if name.contains('/') || name.contains('\\') || name == ".." || name == "." {
@@ -696,7 +710,10 @@ fn verify_folder(dir: &Path, recorded: Option<&str>) -> Result<(), CheckpointErr
     // name another.
     for mark in ["player.json", "league-config.toml"] {
         if dir.join(mark).exists() && !listed.iter().any(|n| n == mark) {
-            return Err(refuse(dir.join(mark), "not listed, though the folder holds it".into()));
+            return Err(refuse(
+                dir.join(mark),
+                "not listed, though the folder holds it".into(),
+            ));
         }
     }
     Ok(())
@@ -720,7 +737,10 @@ fn check_player_side(dir: &Path) -> Result<(), CheckpointError> {
                 path: path.to_path_buf(),
                 what: format!("not JSON ({e})"),
             })?;
-        Ok(value.get("side").and_then(|s| s.as_str()).map(str::to_string))
+        Ok(value
+            .get("side")
+            .and_then(|s| s.as_str())
+            .map(str::to_string))
     };
     let player = side_of(&player_json)?.ok_or_else(|| CheckpointError::Invalid {
         path: player_json.clone(),
