@@ -31,10 +31,14 @@
 //! ```
 pub mod cli;
 
-// The floors below, each in its own crate, under the names the rest of the
-// code and its users know: the core (no libtorch, no database), the
-// learners (libtorch, no database) and the league (rules, store, processes;
-// no command line).
+// The users' facade: the floors below, each its own crate, under one name
+// (`t2e::env`, `t2e::learn`, `t2e::league`): the core (no libtorch, no
+// database), the learners (libtorch, no database) and the league (rules,
+// store, processes; no command line). The project's own code names each
+// module by its real crate (`t2e_core::env`, `t2e_learners::learn`,
+// `league::rules::config`), so a path says which floor it lives on.
 pub use league;
-pub use t2e_core::{algorithm, asz, env, error, fs, heuristics, map, protocol, util, PROJECT_ROOT};
-pub use t2e_learners::{controllers, eval, learn, nn, render};
+pub use t2e_core::{
+    algorithm, asz, env, error, fs, heuristics, map, protocol, render, util, PROJECT_ROOT,
+};
+pub use t2e_learners::{controllers, eval, learn, nn, plots};

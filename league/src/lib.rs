@@ -22,43 +22,30 @@
 //! - `store/`: the store (players, matches, ratings, curriculum,
 //!   heartbeats, crashes, seats, config) on SQLite or PostgreSQL, sqlx kept
 //!   inside it; its migrations are in `league/migrations`.
-//! - `run/`: the league's processes and folders:
-//!   - `dir`: the league directory's layout; `open`: opening one, every
-//!     check before any write (identity, store, config); `preflight`: the
-//!     checks of a new league's config that need its maps or checkpoints
-//!     loaded;
-//!   - `pool`: snapshot folders and their rows (written once, adopted,
-//!     quarantined, never deleted);
-//!   - `child`: the league's child processes as one typed command, which
-//!     the parents spawn and the CLI reads back;
-//!   - `process`: spawning a seat's process, per-host locks, logs;
-//!   - `manager` (`t2e-league run`) and `manager_lease`; `worker`
-//!     (`t2e-league worker`); `seats`: the manager's side of a league
-//!     whose seats run on workers; `supervisor`: the one loop the three
-//!     run, each as a small policy;
-//!   - `learner`: one main learner's process; `opponents`: the opponents
-//!     it plays per world;
-//!   - `evaluator` and `panels`: every snapshot against a fixed panel;
-//!   - `exploit`: a fresh best response against one frozen player;
-//!   - `status`: what `status` and `export` read from a league;
+//! - `run/`: the league's processes and folders, one folder per role:
+//!   - `folder/`: the league directory's layout (`layout`), its snapshot
+//!     pool (`pool`: written once, adopted, quarantined, never deleted),
+//!     and opening a league, every check before any write (`open`);
+//!   - `evaluation/`: every snapshot against a fixed panel (`evaluator`),
+//!     the panels (`panels`), and the panel checks of a new league that
+//!     need its maps or checkpoints loaded (`preflight`);
+//!   - `seat/`: one main learner's process (`learner`) and the opponents
+//!     it plays per world (`opponents`);
+//!   - `processes/`: the manager (`t2e-league run`) and its lease, the
+//!     workers, the manager's side of seats run on workers (`seats`), the
+//!     one loop the three supervise in (`supervising_loop`), the child
+//!     processes as one typed command (`child`) and spawning them with
+//!     per-host locks and logs (`spawn`);
+//!   - `exploit/`: a fresh best response against one frozen player;
+//!   - `status/`: what `status` and `export` read from a league;
 //!   - `view`: what the manager and `exploit` show while they run, as
 //!     calls on a `View` the caller implements (the CLI's progress bars).
 //!
-//! Users keep the modules' short paths (`league::config`, `league::store`,
-//! `league::learner`) through the re-exports below; inside the crate each
-//! file names the floor it imports from (`crate::rules::config`,
-//! `t2e_core::env`), so its arrows can be read from its imports.
+//! Every module has one path, the one its file has: `league::rules::config`,
+//! `league::run::seat::learner`, so a path says which floor a name lives
+//! on, and a file's imports show its arrows.
 
 pub mod data;
 pub mod rules;
 pub mod run;
 pub mod store;
-
-pub use rules::{
-    config, curriculum, evaluator_config, matchmaking, members, payoff, players, ratings, roles,
-    selection, supervision,
-};
-pub use run::{
-    child, dir, evaluator, exploit, exploit_key, learner, manager, manager_lease, open, opponents,
-    panels, pool, preflight, process, seats, status, supervisor, view, worker,
-};

@@ -676,11 +676,13 @@ class TorchPolicy:
 
 def _unwrap(env):
     """The ``t2e.parallel_env`` under ``env`` (``t2e.env()``'s AEC
-    wrappers included), or a TypeError naming what was given."""
-    from .parallel import T2EParallelEnv
+    wrappers included), or a TypeError naming what was given. Known by
+    the native env it holds, so that this module, which the parallel env
+    imports, imports nothing back."""
+    from ._core import Env
 
     inner = getattr(env, "unwrapped", env)
-    if not isinstance(inner, T2EParallelEnv):
+    if not isinstance(getattr(inner, "_env", None), Env):
         raise TypeError(
             f"env = {type(env).__name__}: a loaded policy plays a t2e.parallel_env or t2e.env; "
             "for arrays (t2e.vector_env), call policy.logits(patches, vectors)"

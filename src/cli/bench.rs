@@ -2,15 +2,15 @@
 //! printed as a table beside the reference implementation's figures.
 
 use super::bench_before::BEFORE_DATE;
-use crate::asz::{AszFields, FastMarching};
-use crate::env::{Action, Controller, EnvConfig, Side, TrapEnv, VecEnv, PATCH_LEN};
-use crate::heuristics::{target_action, Heuristic};
-use crate::map::{self, PreparedMap};
 use anyhow::Result;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
+use t2e_core::asz::{AszFields, FastMarching};
+use t2e_core::env::{Action, Controller, EnvConfig, Side, TrapEnv, VecEnv, PATCH_LEN};
+use t2e_core::heuristics::{target_action, Heuristic};
+use t2e_core::map::{self, PreparedMap};
 
 #[derive(clap::Args, Debug)]
 pub struct BenchArgs {
@@ -35,7 +35,7 @@ pub struct BenchArgs {
     pub iterations: usize,
     /// Device for --train: auto, cpu or cuda.
     #[arg(long)]
-    pub device: Option<crate::learn::config::DeviceChoice>,
+    pub device: Option<t2e_learners::learn::run_config::DeviceChoice>,
     /// Instead of the environment table, time a league learner's opponent
     /// inference (one pass per opponent, and stacked) against its own, per
     /// robot row, over --envs worlds.
@@ -124,12 +124,12 @@ fn matmul_peak_flops() -> f64 {
 }
 
 fn time_training(args: &BenchArgs, path: &std::path::Path) -> Result<TrainTiming> {
-    let mut cfg = crate::learn::train::TrainConfig::load(path)?;
+    let mut cfg = t2e_learners::learn::train::TrainConfig::load(path)?;
     if let Some(d) = &args.device {
         cfg.device = *d;
     }
     let maps = map::catalog::load_prepared(&cfg.maps)?;
-    let mut trainer = crate::learn::train::Trainer::new(cfg.clone(), maps)?;
+    let mut trainer = t2e_learners::learn::train::Trainer::new(cfg.clone(), maps)?;
     for _ in 0..1000 {
         let m = trainer.iterate()?;
         if m.captor_value_loss.is_some() || m.target_value_loss.is_some() {
@@ -242,7 +242,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
     if args.threads > 256 {
         anyhow::bail!("--threads {}: at most 256", args.threads);
     }
-    let (threads, why) = crate::util::thread_count(args.threads);
+    let (threads, why) = t2e_core::util::thread_count(args.threads);
     // An error means this process already started the pool (a library
     // caller running a second command): that pool stays.
     let _ = rayon::ThreadPoolBuilder::new()
@@ -250,12 +250,12 @@ pub fn run(args: BenchArgs) -> Result<()> {
         .build_global();
     tch::set_num_threads(threads as i32);
     tracing::info!("bench: {threads} threads ({why})");
-    if let Some(load) = crate::util::load_average() {
+    if let Some(load) = t2e_core::util::load_average() {
         // Timings on a shared machine measure the other processes too.
         if load >= 0.5 {
             tracing::warn!(
                 "the machine is busy (load {load:.1} on {} cores): these timings will read low; compare ratios measured side by side",
-                crate::util::cores()
+                t2e_core::util::cores()
             );
         }
     }
@@ -373,7 +373,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
     // (0.17 s on one thread, 2026-11-28).
     let generated = map::catalog::load_prepared("generated:20")?;
     let per = measure(secs, || {
-        crate::protocol::Protocol::HeldOut
+        t2e_core::protocol::Protocol::HeldOut
             .check_training_maps("generated:20", &generated)
             .expect("generated maps pass the held-out check");
         1

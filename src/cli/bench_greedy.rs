@@ -4,14 +4,14 @@
 //! action as the spec's cells; then the lookahead target's decision.
 
 use super::bench_before::BEFORE_DATE;
-use crate::env::{Action, Controller, EnvConfig, Side, TrapEnv};
-use crate::heuristics::{
-    target_action, AszGreedy, Heuristic, Lookahead, RandomisedExpert, RobustLookahead,
-};
-use crate::map::PreparedMap;
 use anyhow::Result;
 use std::sync::Arc;
 use std::time::Instant;
+use t2e_core::env::{Action, Controller, EnvConfig, Side, TrapEnv};
+use t2e_core::heuristics::{
+    target_action, AszGreedy, Heuristic, Lookahead, RandomisedExpert, RobustLookahead,
+};
+use t2e_core::map::PreparedMap;
 
 /// Coarsenings timed, the spec's first.
 const COARSENINGS: [usize; 4] = [1, 2, 3, 4];

@@ -3,11 +3,11 @@
 //! stacked in one pass) beside the learner's own inference, at the league's
 //! default sizes. One libtorch thread, as in a league process.
 
-use crate::env::EnvConfig;
-use crate::nn::stacked::{PreparedActor, StackedActors};
-use crate::nn::{Actor, Critic, NetConfig};
 use anyhow::Result;
 use std::time::Instant;
+use t2e_core::env::EnvConfig;
+use t2e_learners::nn::stacked::{PreparedActor, StackedActors};
+use t2e_learners::nn::{Actor, Critic, NetConfig};
 use tch::{nn, Device, Kind, Tensor};
 
 /// Times `op` for about `secs` seconds; returns microseconds per call.

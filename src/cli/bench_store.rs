@@ -4,10 +4,10 @@
 //! write, for a fixed time; the table gives matches recorded per second and
 //! each write's latency (median, p99) for every N asked.
 
-use crate::env::Side;
-use crate::league::store::{Kind, MatchRecord, NewPlayer, Store, StoreUrl};
 use anyhow::{bail, Result};
+use league::store::{Kind, MatchRecord, NewPlayer, Store, StoreUrl};
 use std::time::{Duration, Instant};
+use t2e_core::env::Side;
 
 pub fn run(url: &str, writers: &[usize], seconds: f64) -> Result<()> {
     let base = StoreUrl::parse(url).map_err(anyhow::Error::msg)?;
@@ -102,7 +102,7 @@ fn tempfile_dir() -> Result<std::path::PathBuf> {
     let dir = std::env::temp_dir().join(format!(
         "t2e-bench-store-{}-{}",
         std::process::id(),
-        crate::league::store::now_ms()
+        league::store::now_ms()
     ));
     std::fs::create_dir_all(&dir)?;
     Ok(dir)

@@ -1,14 +1,14 @@
 //! `t2e-league eval`: the paper's protocol over one or more settings.
 
-use crate::controllers::ControllerSpec;
-use crate::env::{CaptureRule, EnvConfig, Side};
-use crate::eval::{self, ratio_label, EvalSetting, SettingIdentity, Summary, TABLE_HEADER};
-use crate::map::{self, PreparedMap};
-use crate::render::plot::{self, Series};
 use anyhow::{Context, Result};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
+use t2e_core::env::{CaptureRule, EnvConfig, Side};
+use t2e_core::map::{self, PreparedMap};
+use t2e_learners::controllers::ControllerSpec;
+use t2e_learners::eval::{self, ratio_label, EvalSetting, SettingIdentity, Summary, TABLE_HEADER};
+use t2e_learners::plots::line::{self, Series};
 
 #[derive(clap::Args, Debug)]
 pub struct EvalArgs {
@@ -86,7 +86,7 @@ fn parse_k(text: &str) -> Result<usize, String> {
     let k: i64 = text.trim().parse().map_err(|_| {
         format!("K = '{text}': not a whole number (K is the number of captors, e.g. --k 3,4)")
     })?;
-    let max = crate::env::MAX_CAPTORS as i64;
+    let max = t2e_core::env::MAX_CAPTORS as i64;
     if !(1..=max).contains(&k) {
         return Err(format!(
             "K = {k}: the number of captors must be at least 1 and at most {max}"
@@ -108,7 +108,7 @@ fn load_map_sets(specs: &[String]) -> Result<BTreeMap<String, Arc<Vec<Arc<Prepar
 /// leave `out`) and the identity's hash, so two settings that differ in
 /// anything that changes their numbers never share a folder.
 fn setting_dir(out: &Path, s: &EvalSetting, maps: &str, identity: &SettingIdentity) -> PathBuf {
-    let part = |text: &str| crate::util::safe_component(text, 40);
+    let part = |text: &str| t2e_core::util::safe_component(text, 40);
     out.join(format!(
         "{}-vs-{}_k{}_r{}_{}_{}",
         part(&s.captors.to_string()),
@@ -304,7 +304,7 @@ fn write_setting(
         }
         w.flush()?;
     }
-    crate::fs::write_file_atomically(
+    t2e_core::fs::write_file_atomically(
         &dir.join("setting.json"),
         serde_json::to_string_pretty(identity)?.as_bytes(),
     )?;
@@ -409,14 +409,14 @@ pub fn run(args: EvalArgs) -> Result<()> {
                     let series = Series {
                         label: label.clone(),
                         points,
-                        color: plot::palette(curves.len()),
+                        color: line::palette(curves.len()),
                     };
                     let title = format!(
                         "mean |ASZ| over time: {} vs {}, {label}",
                         args.captors, args.target
                     );
-                    plot::save_png(
-                        &plot::line_plot(
+                    line::save_png(
+                        &line::line_plot(
                             std::slice::from_ref(&series),
                             &title,
                             "step",
@@ -444,13 +444,13 @@ pub fn run(args: EvalArgs) -> Result<()> {
             serde_json::to_string_pretty(&summaries)?.into_bytes(),
         ),
     ] {
-        crate::fs::write_file_atomically(&args.out.join(name), &bytes)
+        t2e_core::fs::write_file_atomically(&args.out.join(name), &bytes)
             .with_context(|| format!("cannot write {}", args.out.join(name).display()))?;
     }
     if curves.len() > 1 {
         let title = format!("mean |ASZ| over time: {} vs {}", args.captors, args.target);
-        plot::save_png(
-            &plot::line_plot(&curves, &title, "step", "|ASZ| (m^2)", 1000, 600),
+        line::save_png(
+            &line::line_plot(&curves, &title, "step", "|ASZ| (m^2)", 1000, 600),
             args.out.join("soa.png"),
         )?;
     }
@@ -463,7 +463,7 @@ mod tests {
     use super::*;
 
     fn identity(setting: &EvalSetting) -> SettingIdentity {
-        let grid = crate::map::Grid::with_free_rects("m", 320, &[(100..200, 100..200)]);
+        let grid = t2e_core::map::Grid::with_free_rects("m", 320, &[(100..200, 100..200)]);
         let maps = vec![Arc::new(PreparedMap::new(grid))];
         SettingIdentity::of(setting, "m", &maps).unwrap()
     }
@@ -534,7 +534,7 @@ mod tests {
             dirs.push(vdir);
         }
         // Other maps under the same name: another identity.
-        let grid = crate::map::Grid::with_free_rects("m", 320, &[(100..200, 100..201)]);
+        let grid = t2e_core::map::Grid::with_free_rects("m", 320, &[(100..200, 100..201)]);
         let other =
             SettingIdentity::of(&setting, "m", &[Arc::new(PreparedMap::new(grid))]).unwrap();
         assert!(finished_setting(&dir, &other).is_err());

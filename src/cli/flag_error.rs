@@ -1,7 +1,7 @@
 //! A library's typed option error (`ConfigError`: field, value, rule) shown
 //! as the flag a user typed: `threads = 0` reads `--threads 0`.
 
-use crate::error::ConfigError;
+use t2e_core::error::ConfigError;
 
 pub fn as_flag(e: ConfigError) -> anyhow::Error {
     let flag = e.field.replace('_', "-");

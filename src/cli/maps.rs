@@ -1,13 +1,13 @@
 //! `t2e-league maps`: list map sets, draw one map, generate floor plans.
 
-use crate::map::catalog::{gibson_dir, resolve, shipped_dir};
-use crate::map::generate::{generate, GeneratorConfig};
-use crate::map::{load_png, save_png, Grid, PreparedMap, SizeClass};
-use crate::render::map_image::map_image_prepared;
 use anyhow::{bail, Context, Result};
 use rayon::prelude::*;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
+use t2e_core::map::catalog::{gibson_dir, resolve, shipped_dir};
+use t2e_core::map::generate::{generate, GeneratorConfig};
+use t2e_core::map::{load_png, save_png, Grid, PreparedMap, SizeClass};
+use t2e_core::render::map_image::map_image_prepared;
 
 #[derive(clap::Args, Debug)]
 pub struct MapsArgs {
@@ -162,7 +162,7 @@ fn list(spec: &str) -> Result<()> {
 }
 
 fn fetch_gibson(out: &Path, from: Option<&Path>) -> Result<()> {
-    use crate::map::gibson_source::{import_checkout, REFERENCE_COMMIT, REFERENCE_REPOSITORY};
+    use t2e_core::map::gibson_source::{import_checkout, REFERENCE_COMMIT, REFERENCE_REPOSITORY};
     let clone;
     let checkout = match from {
         Some(dir) => dir.to_path_buf(),
@@ -288,7 +288,7 @@ fn show(map: &str, out: &Path, scale: u32) -> Result<()> {
     let mut bytes = std::io::Cursor::new(Vec::new());
     img.write_to(&mut bytes, image::ImageFormat::Png)
         .with_context(|| format!("cannot encode {}", out.display()))?;
-    crate::fs::write_file_atomically(out, bytes.get_ref())
+    t2e_core::fs::write_file_atomically(out, bytes.get_ref())
         .with_context(|| format!("cannot write {}", out.display()))?;
     let g = &prepared.grid;
     println!(
@@ -382,7 +382,7 @@ pub fn update_manifest(path: &Path, new: &[ManifestRow]) -> Result<()> {
     let bytes = writer
         .into_inner()
         .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
-    Ok(crate::fs::write_file_atomically(path, &bytes)?)
+    Ok(t2e_core::fs::write_file_atomically(path, &bytes)?)
 }
 
 /// Most maps one `maps generate` writes (about 20 KB each).
@@ -500,7 +500,7 @@ mod tests {
             assert_eq!(g.size_class(), row.split);
         }
         // The catalog reads the manifest's classes.
-        let entries = crate::map::catalog::list_dir(dir.path()).unwrap();
+        let entries = t2e_core::map::catalog::list_dir(dir.path()).unwrap();
         assert_eq!(entries.len(), 2);
         assert!(entries
             .iter()

@@ -6,14 +6,12 @@ mod bench_before;
 mod bench_greedy;
 mod bench_opponents;
 mod bench_store;
-mod csv_rows;
 pub mod docs;
 pub mod eval;
 mod flag_error;
-pub mod league;
+pub mod league_commands;
 pub mod logging;
 pub mod maps;
-pub mod periodic_eval;
 mod progress;
 pub mod render;
 pub mod status_text;
@@ -58,27 +56,27 @@ pub enum Command {
     Table(table::TableArgs),
     /// Run a league (or resume the one in --dir): captor and target learners
     /// against pools of each other's snapshots.
-    Run(league::RunArgs),
+    Run(league_commands::RunArgs),
     /// A league's players, ratings, payoff matrix, curriculum and learners.
-    Status(league::StatusArgs),
+    Status(league_commands::StatusArgs),
     /// Write one league player as a self-contained checkpoint folder.
-    Export(league::ExportArgs),
+    Export(league_commands::ExportArgs),
     /// Train a fresh best response against one frozen league player for a
     /// fixed budget; its win rate (95% interval) goes to the store and `status`.
-    Exploit(league::ExploitArgs),
+    Exploit(league_commands::ExploitArgs),
     /// Write the manifest (SHA256SUMS) that a checkpoint folder written
     /// before 0.2.0 lacks, after checking its files against meta.json: it
     /// vouches for meta.json as it is now, so seal only folders you trust.
     Seal(SealArgs),
     /// Run a league's seats on this host, taken from its store (a league
     /// started with `run --store URL --pool DIR`).
-    Worker(league::WorkerArgs),
+    Worker(league_commands::WorkerArgs),
     /// One learner of a league (spawned by `run`).
     #[command(hide = true)]
-    LeagueLearner(league::SeatArgs),
+    LeagueLearner(league_commands::SeatArgs),
     /// A league's evaluator (spawned by `run`).
     #[command(hide = true)]
-    LeagueEvaluator(league::SeatArgs),
+    LeagueEvaluator(league_commands::SeatArgs),
     /// Write docs/reference/cli.md and the man pages from these definitions.
     #[command(hide = true)]
     GenerateDocs(docs::GenerateDocsArgs),
@@ -108,13 +106,13 @@ pub fn main() -> anyhow::Result<()> {
         Command::Bench(a) => bench::run(a),
         Command::Table(a) => table::run(a),
         Command::Train(a) => train::run(a),
-        Command::Run(a) => league::run(a),
-        Command::Status(a) => league::status(a),
-        Command::Export(a) => league::export(a),
-        Command::Exploit(a) => league::exploit(a),
-        Command::Worker(a) => league::worker(a),
-        Command::LeagueLearner(a) => league::learner(a),
-        Command::LeagueEvaluator(a) => league::evaluator(a),
+        Command::Run(a) => league_commands::run(a),
+        Command::Status(a) => league_commands::status(a),
+        Command::Export(a) => league_commands::export(a),
+        Command::Exploit(a) => league_commands::exploit(a),
+        Command::Worker(a) => league_commands::worker(a),
+        Command::LeagueLearner(a) => league_commands::learner(a),
+        Command::LeagueEvaluator(a) => league_commands::evaluator(a),
         Command::GenerateDocs(a) => docs::run::<Cli>(a),
     }
 }

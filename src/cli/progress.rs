@@ -2,8 +2,8 @@
 //! for an exploit's best response. Where stderr is not a terminal the bars
 //! draw nothing and the lines are printed plainly.
 
-use crate::league::view::{BudgetUnit, SeatProgress, View};
 use indicatif::{MultiProgress, ProgressBar, ProgressStyle};
+use league::run::view::{BudgetUnit, SeatProgress, View};
 use std::io::Write;
 use std::sync::Mutex;
 

@@ -1,10 +1,10 @@
 //! `t2e-league render`: play one episode and write it as an animated GIF.
 
-use crate::controllers::ControllerSpec;
-use crate::env::{CaptureRule, EnvConfig, Side, TrapEnv};
-use crate::render::episode::{render_episode, RenderOptions};
 use anyhow::{anyhow, Result};
 use std::path::PathBuf;
+use t2e_core::env::{CaptureRule, EnvConfig, Side, TrapEnv};
+use t2e_core::render::episode::{render_episode, RenderOptions};
+use t2e_learners::controllers::ControllerSpec;
 
 #[derive(clap::Args, Debug)]
 pub struct RenderArgs {
@@ -31,7 +31,7 @@ pub struct RenderArgs {
     #[arg(long, default_value = "heuristic")]
     pub target: ControllerSpec,
     /// Number of captors K.
-    #[arg(long, default_value_t = 3, allow_negative_numbers = true, value_parser = clap::value_parser!(u32).range(1..=crate::env::MAX_CAPTORS as i64))]
+    #[arg(long, default_value_t = 3, allow_negative_numbers = true, value_parser = clap::value_parser!(u32).range(1..=t2e_core::env::MAX_CAPTORS as i64))]
     pub k: u32,
     /// Target speed over captor speed (captors move at 1.0 m/s; 1.0, 1.2, 1.4 in the paper).
     #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
@@ -80,7 +80,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
         ));
     }
     // All maps of the set, in catalogue order, so the seed picks the same map as in `eval`.
-    let maps = crate::map::catalog::load_prepared(&args.maps)?;
+    let maps = t2e_core::map::catalog::load_prepared(&args.maps)?;
     let cfg = EnvConfig {
         num_captors: args.k as usize,
         captor_speed: 1.0,

@@ -1,13 +1,24 @@
 //! `status` as text: the tables a person reads in a terminal.
 
-use crate::env::Side;
-use crate::league::players::EVALUATOR;
-use crate::league::status::*;
+use league::rules::players::EVALUATOR;
+use league::run::status::*;
 use std::fmt::Write as _;
+use t2e_core::env::Side;
 
-/// The report as text: players, learners, curriculum, payoff matrix, crashes.
+/// The report as text: players, exploitability, learners, curriculum,
+/// payoff matrix, panel, seats, crashes; each section its own function.
 pub fn render(r: &StatusReport) -> String {
     let mut s = String::new();
+    let sections: [fn(&mut String, &StatusReport); 7] =
+        [players, exploits, learners, payoff, panel, seats, crashes];
+    for section in sections {
+        section(&mut s, r);
+    }
+    s
+}
+
+/// The players, best Bradley-Terry Elo first.
+fn players(s: &mut String, r: &StatusReport) {
     let _ = writeln!(
         s,
         "league {} ({}), {} matches\n",
@@ -45,6 +56,10 @@ pub fn render(r: &StatusReport) -> String {
                 .unwrap_or_default()
         );
     }
+}
+
+/// Each `exploit` result with its interval.
+fn exploits(s: &mut String, r: &StatusReport) {
     if !r.exploits.is_empty() {
         let _ = writeln!(
             s,
@@ -84,6 +99,10 @@ pub fn render(r: &StatusReport) -> String {
             );
         }
     }
+}
+
+/// Each learner's progress and heartbeat, then the curriculum.
+fn learners(s: &mut String, r: &StatusReport) {
     let _ = writeln!(s, "\nlearners:");
     for l in &r.learners {
         if l.name == EVALUATOR {
@@ -104,7 +123,7 @@ pub fn render(r: &StatusReport) -> String {
         s,
         "\ncurriculum: stage {} (speed ratio 1.0:{})",
         r.curriculum.stage,
-        crate::eval::ratio_label(r.curriculum.speed_ratio)
+        t2e_learners::eval::ratio_label(r.curriculum.speed_ratio)
     );
     for h in &r.curriculum.history {
         let _ = writeln!(
@@ -113,6 +132,10 @@ pub fn render(r: &StatusReport) -> String {
             h.stage, h.speed_ratio, h.reason
         );
     }
+}
+
+/// Captor win % per (captors, target) pair.
+fn payoff(s: &mut String, r: &StatusReport) {
     let name = |id: i64| {
         r.players
             .iter()
@@ -163,6 +186,10 @@ pub fn render(r: &StatusReport) -> String {
     for t in &targets {
         let _ = writeln!(s, "  #{t} = {}", name(*t));
     }
+}
+
+/// The evaluator's panel games.
+fn panel(s: &mut String, r: &StatusReport) {
     if !r.panel.is_empty() {
         let _ = writeln!(
             s,
@@ -186,6 +213,10 @@ pub fn render(r: &StatusReport) -> String {
             );
         }
     }
+}
+
+/// Seats run by workers.
+fn seats(s: &mut String, r: &StatusReport) {
     if !r.seats.is_empty() {
         let _ = writeln!(s, "\nseats (run by workers):");
         for seat in &r.seats {
@@ -206,6 +237,10 @@ pub fn render(r: &StatusReport) -> String {
             );
         }
     }
+}
+
+/// Each crash's last line.
+fn crashes(s: &mut String, r: &StatusReport) {
     if !r.crashes.is_empty() {
         let _ = writeln!(s, "\ncrashes:");
         for c in &r.crashes {
@@ -218,5 +253,4 @@ pub fn render(r: &StatusReport) -> String {
             );
         }
     }
-    s
 }

@@ -2,10 +2,10 @@
 //! with `--cross` its Table V (Markdown), from the summaries of `eval`
 //! output folders.
 
-use crate::eval::{cross_table, paper_table, Summary};
-use crate::fs::write_file_atomically;
 use anyhow::{bail, Context, Result};
 use std::path::PathBuf;
+use t2e_core::fs::write_file_atomically;
+use t2e_learners::eval::{cross_table, paper_table, Summary};
 
 #[derive(clap::Args, Debug)]
 pub struct TableArgs {

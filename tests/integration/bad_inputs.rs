@@ -63,7 +63,7 @@ fn refused_config(cfg: &Path, dir: &Path, what: &str) -> String {
 #[test]
 fn validation_maps_are_compared_with_the_training_maps_by_content() {
     let tmp = tempfile::tempdir().unwrap();
-    let shipped = t2e::map::catalog::shipped_dir();
+    let shipped = t2e_core::map::catalog::shipped_dir();
     let panel = "validation_captors = [\"expert:1\"]";
     // The shipped folder by path while training on "shipped".
     let err = refused_before_start(
@@ -136,7 +136,7 @@ fn validation_settings_that_need_loading_are_refused_before_training() {
         );
         assert!(err.contains(says), "{maps}: {err}");
     }
-    if let Some(gibson) = t2e::map::catalog::gibson_dir() {
+    if let Some(gibson) = t2e_core::map::catalog::gibson_dir() {
         let err = refused_before_start(
             tmp.path(),
             &format!("validation_maps = \"{}\"\n{panel}", gibson.display()),

@@ -14,11 +14,11 @@
 use flate2::read::GzDecoder;
 use std::collections::BTreeMap;
 use std::sync::{Arc, OnceLock};
-use t2e::env::physics::{target_is_trapped, Robot};
-use t2e::env::{Action, EnvConfig, TrapEnv};
-use t2e::heuristics::{expert_captor_action, target_action};
-use t2e::map::catalog::{gibson_dir, shared_file};
-use t2e::map::{load_png, PreparedMap};
+use t2e_core::env::physics::{target_is_trapped, Robot};
+use t2e_core::env::{Action, EnvConfig, TrapEnv};
+use t2e_core::heuristics::{expert_captor_action, target_action};
+use t2e_core::map::catalog::{gibson_dir, shared_file};
+use t2e_core::map::{load_png, PreparedMap};
 
 const K: usize = 3;
 const ROBOTS: usize = K + 1;

@@ -2,12 +2,12 @@
 //! capture, rewards, placement, observations, determinism and the vector env.
 
 use std::sync::Arc;
-use t2e::env::physics::{blocked_probes, target_is_trapped, Robot};
-use t2e::env::potential::Potential;
-use t2e::env::vec_env::episode_seed;
-use t2e::env::*;
-use t2e::heuristics::{Heuristic, RandomActions};
-use t2e::map::PreparedMap;
+use t2e_core::env::physics::{blocked_probes, target_is_trapped, Robot};
+use t2e_core::env::potential::Potential;
+use t2e_core::env::vec_env::episode_seed;
+use t2e_core::env::*;
+use t2e_core::heuristics::{Heuristic, RandomActions};
+use t2e_core::map::PreparedMap;
 
 use crate::common;
 use common::{env_with, maps, robot, room};
@@ -301,7 +301,7 @@ fn placement_respects_the_distances_and_fails_cleanly() {
     .err()
     .unwrap();
     match &e {
-        t2e::error::EnvError::Config(c) => {
+        t2e_core::error::EnvError::Config(c) => {
             assert_eq!(
                 (c.field.as_str(), c.value.as_deref()),
                 ("target_speed", Some("-1"))
@@ -311,7 +311,7 @@ fn placement_respects_the_distances_and_fails_cleanly() {
     }
     assert!(e.to_string().starts_with("target_speed = -1: "), "{e}");
     let no_maps = TrapEnv::new(cfg(3), std::sync::Arc::new(Vec::new())).err();
-    assert_eq!(no_maps, Some(t2e::error::EnvError::NoMaps));
+    assert_eq!(no_maps, Some(t2e_core::error::EnvError::NoMaps));
 }
 
 #[test]
@@ -494,7 +494,7 @@ fn vec_env_matches_single_envs_and_auto_resets() {
         venv.step(&acts).unwrap();
         for (e, env) in singles.iter_mut().enumerate() {
             let mut a = acts[e * 4..e * 4 + 4].to_vec();
-            a[3] = t2e::heuristics::target_action(env);
+            a[3] = t2e_core::heuristics::target_action(env);
             let s = env.step(&a);
             assert_eq!(
                 &venv.rewards[e * 4..e * 4 + 4],
@@ -541,7 +541,7 @@ fn vec_env_matches_single_envs_and_auto_resets() {
 #[test]
 fn patch_matches_a_direct_rotation_on_a_floor_plan() {
     use rand::{Rng, SeedableRng};
-    let entries = t2e::map::resolve("shipped:medium").unwrap();
+    let entries = t2e_core::map::resolve("shipped:medium").unwrap();
     let m = PreparedMap::new(entries[0].load().unwrap());
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(1);
     let mut patch = vec![0u8; PATCH_LEN];
@@ -554,7 +554,7 @@ fn patch_matches_a_direct_rotation_on_a_floor_plan() {
             centre[1] + rng.gen_range(-0.02..0.02),
         ];
         let theta: f64 = rng.gen_range(0.0..std::f64::consts::TAU);
-        t2e::env::observe::write_patch(&m, pos, theta, &mut patch);
+        t2e_core::env::observe::write_patch(&m, pos, theta, &mut patch);
         let (r0, c0) = m.grid.cell_of(pos);
         for a in 0..PATCH {
             for b in 0..PATCH {
@@ -625,9 +625,9 @@ fn the_asz_potential_rises_as_the_captors_close_in() {
 /// accepted setting fails at its reset.
 #[test]
 fn the_most_captors_are_placed_on_every_map() {
-    use t2e::map::catalog::load_prepared;
+    use t2e_core::map::catalog::load_prepared;
     let mut sets = vec!["shipped"];
-    if t2e::map::catalog::gibson_dir().is_some() {
+    if t2e_core::map::catalog::gibson_dir().is_some() {
         sets.push("gibson");
     }
     let mut failures = Vec::new();

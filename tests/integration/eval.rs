@@ -1,9 +1,9 @@
 //! The evaluation protocol end to end on real maps.
 
 use std::sync::Arc;
-use t2e::controllers::ControllerSpec;
-use t2e::eval::{self, EvalSetting};
-use t2e::map::{self, PreparedMap};
+use t2e_core::map::{self, PreparedMap};
+use t2e_learners::controllers::ControllerSpec;
+use t2e_learners::eval::{self, EvalSetting};
 
 fn shipped_small() -> Arc<Vec<Arc<PreparedMap>>> {
     let entries = map::resolve("shipped:small").unwrap();
@@ -90,12 +90,13 @@ fn strict_capture_ends_episodes_at_the_asz_threshold() {
         episodes: 30,
         episode_length: 300,
         soa_every: 1,
-        capture_rule: t2e::env::CaptureRule::Strict,
+        capture_rule: t2e_core::env::CaptureRule::Strict,
         ..EvalSetting::default()
     };
     let (summary, records) = eval::run(&strict, &maps, "small", false).unwrap();
     assert!(summary.sr > 0.0, "some strict captures happen");
-    let threshold = t2e::asz::cells_to_m2(t2e::asz::strict_capture_cells(0.2).floor() as usize);
+    let threshold =
+        t2e_core::asz::cells_to_m2(t2e_core::asz::strict_capture_cells(0.2).floor() as usize);
     for r in &records {
         let last = *r.soa_m2.last().unwrap();
         if r.captured {

@@ -3,8 +3,8 @@
 
 use std::collections::BTreeMap;
 use std::path::PathBuf;
-use t2e::map::catalog::{gibson_dir, list_dir, shipped_dir};
-use t2e::map::{Grid, SizeClass};
+use t2e_core::map::catalog::{gibson_dir, list_dir, shipped_dir};
+use t2e_core::map::{Grid, SizeClass};
 
 /// The Gibson folder, or None (after a note) when it is absent outside CI.
 fn gibson_or_skip() -> Option<PathBuf> {
@@ -137,23 +137,23 @@ fn the_test_set_is_recognised_by_content() {
     }
     for (name, (grid, _)) in &maps {
         assert_eq!(
-            t2e::map::testset::gibson_name(grid),
+            t2e_core::map::testset::gibson_name(grid),
             Some(name.as_str()),
             "{name} is not recognised as a test map; the table should read:\n{listed}"
         );
     }
     // A generated map is not a test map.
-    let generated = t2e::map::generate::generate(
+    let generated = t2e_core::map::generate::generate(
         1,
         SizeClass::Medium,
-        &t2e::map::generate::GeneratorConfig::default(),
+        &t2e_core::map::generate::GeneratorConfig::default(),
     );
-    assert_eq!(t2e::map::testset::gibson_name(&generated), None);
+    assert_eq!(t2e_core::map::testset::gibson_name(&generated), None);
 }
 
 /// The fingerprints of the Gibson folder, as `map::testset` embeds them.
 fn fingerprint_file(dir: &std::path::Path) -> Vec<u8> {
-    use t2e::map::fingerprint::{encode, Fingerprint};
+    use t2e_core::map::fingerprint::{encode, Fingerprint};
     let maps: Vec<_> = list_dir(dir)
         .unwrap()
         .iter()
@@ -167,11 +167,11 @@ fn the_embedded_fingerprints_are_those_of_the_test_maps() {
     let Some(dir) = gibson_or_skip() else { return };
     let file = fingerprint_file(&dir);
     assert!(
-        file == t2e::map::testset::FINGERPRINTS_FILE,
+        file == t2e_core::map::testset::FINGERPRINTS_FILE,
         "crates/core/src/map/gibson_fingerprints.bin is not the fingerprint of {}: regenerate it with cargo test --release --test integration -- --ignored gibson_maps::write_test_map_fingerprints",
         dir.display()
     );
-    let probes = t2e::map::testset::test_probes();
+    let probes = t2e_core::map::testset::test_probes();
     assert_eq!(probes.len(), 26);
     assert!(probes.iter().all(|(_, class)| class.is_some()));
 }
@@ -196,7 +196,7 @@ fn write_test_map_fingerprints() {
 #[test]
 fn fetch_gibson_extracts_the_reference_layout() {
     use std::process::Command;
-    use t2e::map::gibson_source::{read_flat, CLASS_FOLDERS};
+    use t2e_core::map::gibson_source::{read_flat, CLASS_FOLDERS};
     let Some(gibson) = gibson_or_skip() else {
         return;
     };
@@ -293,7 +293,7 @@ fn fetch_gibson_extracts_the_reference_layout() {
 #[test]
 fn fetch_gibson_refuses_bad_folders_and_fifos_by_name_and_leaves_nothing() {
     use std::process::Command;
-    use t2e::map::gibson_source::CLASS_FOLDERS;
+    use t2e_core::map::gibson_source::CLASS_FOLDERS;
     let Some(gibson) = gibson_or_skip() else {
         return;
     };

@@ -1,11 +1,11 @@
 //! The rule-based robots of spec §7 and the controller catalogue.
 
-use t2e::asz::Source;
-use t2e::controllers::ControllerSpec;
-use t2e::env::physics::{self, Robot};
-use t2e::env::*;
-use t2e::heuristics::*;
-use t2e::map::Grid;
+use t2e_core::asz::Source;
+use t2e_core::env::physics::{self, Robot};
+use t2e_core::env::*;
+use t2e_core::heuristics::*;
+use t2e_core::map::Grid;
+use t2e_learners::controllers::ControllerSpec;
 
 use crate::common;
 use common::{robot, room};
@@ -138,7 +138,7 @@ fn greedy_captor_picks_the_action_that_shrinks_the_asz_most() {
                 pos: alone[0].pos,
                 speed: 1.0,
             };
-            t2e::asz::AszFields::new().asz_cells(&**env.map(), target, &c)
+            t2e_core::asz::AszFields::new().asz_cells(&**env.map(), target, &c)
         };
         let sizes: Vec<usize> = [
             Action::Forward,
@@ -189,7 +189,7 @@ fn greedy_target_picks_the_action_that_keeps_the_largest_asz() {
                 pos: moved_alone(&env, t, a).pos,
                 speed: target.speed,
             };
-            t2e::asz::AszFields::new().asz_cells(&**env.map(), moved, &captors)
+            t2e_core::asz::AszFields::new().asz_cells(&**env.map(), moved, &captors)
         })
         .collect();
     let best = *sizes.iter().max().unwrap();
@@ -353,7 +353,7 @@ fn randomised_experts_draw_their_constants_per_episode_and_replay_with_the_seed(
 fn greedy_by_definition(
     env: &TrapEnv,
     i: usize,
-    fm: &mut t2e::asz::FastMarching,
+    fm: &mut t2e_core::asz::FastMarching,
 ) -> (Action, bool) {
     let actions = [
         Action::Forward,
@@ -369,7 +369,7 @@ fn greedy_by_definition(
                 pos: moved_alone(env, i, a).pos,
                 speed: env.spec(i).max_speed,
             };
-            t2e::asz::AszFields::new().asz_cells(&**env.map(), target, &captors)
+            t2e_core::asz::AszFields::new().asz_cells(&**env.map(), target, &captors)
         })
         .collect();
     if sizes.iter().any(|&s| s != sizes[0]) {
@@ -394,7 +394,7 @@ fn greedy_by_definition(
 
 /// Three captors and a target on the 26 Gibson maps, episodes of 500 steps.
 fn gibson_3v1() -> TrapEnv {
-    let maps = t2e::map::catalog::load_prepared("gibson").unwrap();
+    let maps = t2e_core::map::catalog::load_prepared("gibson").unwrap();
     let cfg = EnvConfig {
         num_captors: 3,
         episode_length: 500,
@@ -407,7 +407,7 @@ fn gibson_3v1() -> TrapEnv {
 fn greedy_captors_pick_the_definitions_action_on_real_states() {
     let mut env = gibson_3v1();
     let mut greedy = AszGreedy::default();
-    let mut fm = t2e::asz::FastMarching::new();
+    let mut fm = t2e_core::asz::FastMarching::new();
     let mut rewards = vec![0f32; 4];
     let (mut decisions, mut by_size) = (0, 0);
     for seed in 0..26u64 {
@@ -542,7 +542,7 @@ fn the_lookahead_target_plays_the_best_simulated_future() {
 
 #[test]
 fn a_copied_world_plays_on_as_the_original() {
-    let maps = t2e::map::catalog::load_prepared("shipped").unwrap();
+    let maps = t2e_core::map::catalog::load_prepared("shipped").unwrap();
     let cfg = EnvConfig {
         num_captors: 3,
         ..EnvConfig::default()
@@ -607,11 +607,11 @@ fn future_against(
             return (false, step);
         }
     }
-    let lattice = t2e::asz::CoarseLattice::new(sim.map(), 4);
+    let lattice = t2e_core::asz::CoarseLattice::new(sim.map(), 4);
     let (captors, target) = sim.asz_sources();
     (
         true,
-        t2e::asz::AszFields::new().asz_cells(&lattice, target, &captors),
+        t2e_core::asz::AszFields::new().asz_cells(&lattice, target, &captors),
     )
 }
 

@@ -11,12 +11,12 @@ use crate::common;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use t2e::cli::table::TableArgs;
-use t2e::controllers::ControllerSpec;
-use t2e::env::CaptureRule;
-use t2e::eval::{EvalSetting, SettingIdentity, Summary};
-use t2e::learn::train::Trainer;
-use t2e::map::catalog;
-use t2e::map::SizeClass;
+use t2e_core::env::CaptureRule;
+use t2e_core::map::catalog;
+use t2e_core::map::SizeClass;
+use t2e_learners::controllers::ControllerSpec;
+use t2e_learners::eval::{EvalSetting, SettingIdentity, Summary};
+use t2e_learners::learn::train::Trainer;
 
 const BIN: &str = env!("CARGO_BIN_EXE_t2e-league");
 
@@ -326,7 +326,7 @@ fn table_refuses_two_results_for_one_cell_and_rows_of_mixed_settings() {
 
 fn tiny_run(dir: &Path) -> PathBuf {
     tch::set_num_threads(1);
-    let cfg = common::tiny_train_config("inputs", t2e::protocol::Protocol::HeldOut, "shipped");
+    let cfg = common::tiny_train_config("inputs", t2e_core::protocol::Protocol::HeldOut, "shipped");
     let maps = catalog::load_prepared("shipped:small").unwrap();
     let mut t = Trainer::new(cfg, maps).unwrap();
     t.iterate().unwrap();
@@ -569,7 +569,8 @@ fn negative_list_values_reach_our_own_checks() {
 #[test]
 fn train_for_a_wall_clock_budget_with_periodic_evaluation() {
     let dir = tempfile::tempdir().unwrap();
-    let mut cfg = common::tiny_train_config("budget", t2e::protocol::Protocol::HeldOut, "shipped");
+    let mut cfg =
+        common::tiny_train_config("budget", t2e_core::protocol::Protocol::HeldOut, "shipped");
     cfg.total_env_steps = 100_000_000;
     let config = dir.path().join("config.toml");
     std::fs::write(&config, toml::to_string(&cfg).unwrap()).unwrap();
@@ -618,7 +619,7 @@ fn train_for_a_wall_clock_budget_with_periodic_evaluation() {
     let final_steps = state["env_steps"].as_u64().unwrap();
     assert!(final_steps > 0 && final_steps < cfg.total_env_steps);
     let mut reader = csv::Reader::from_path(run.join("eval.csv")).unwrap();
-    let rows: Vec<t2e::cli::periodic_eval::EvalRow> =
+    let rows: Vec<t2e_learners::learn::train::periodic_eval::EvalRow> =
         reader.deserialize().collect::<Result<_, _>>().unwrap();
     assert!(rows.len() >= 2, "{rows:?}");
     for pair in rows.windows(2) {
@@ -655,14 +656,14 @@ fn train_for_a_wall_clock_budget_with_periodic_evaluation() {
 
 /// The tiny league's config, as a league stores it.
 fn stored_config() -> String {
-    let cfg = t2e::league::config::LeagueConfig::parse(common::league::TINY_LEAGUE).unwrap();
+    let cfg = league::rules::config::LeagueConfig::parse(common::league::TINY_LEAGUE).unwrap();
     toml::to_string_pretty(&cfg).unwrap()
 }
 
 /// A league store made by hand (the tiny league's config and an identity,
 /// no players): enough for `status`, and far cheaper than running one.
-fn league_store(store: &t2e::league::store::StoreUrl) {
-    let s = t2e::league::store::Store::open(store).unwrap();
+fn league_store(store: &league::store::StoreUrl) {
+    let s = league::store::Store::open(store).unwrap();
     s.config_once(&stored_config()).unwrap();
     s.set_league_id_once("0123456789abcdef").unwrap();
 }
@@ -672,7 +673,7 @@ fn league_store(store: &t2e::league::store::StoreUrl) {
 fn league_folder(root: &Path, rel: &str) -> PathBuf {
     let dir = root.join(rel);
     std::fs::create_dir_all(&dir).unwrap();
-    league_store(&t2e::league::store::StoreUrl::in_dir(&dir));
+    league_store(&league::store::StoreUrl::in_dir(&dir));
     std::fs::write(dir.join("config.toml"), stored_config()).unwrap();
     dir
 }
@@ -811,7 +812,7 @@ fn with_store_status_takes_the_shared_pool_as_pool_like_export() {
     let root = tmp.path();
     // A store that is not league.db in a league folder: a SQLite file.
     let db = root.join("shared.db");
-    league_store(&t2e::league::store::StoreUrl::Sqlite(db.clone()));
+    league_store(&league::store::StoreUrl::Sqlite(db.clone()));
     let pool = root.join("pool");
     std::fs::create_dir_all(&pool).unwrap();
     let (db, pool) = (db.to_str().unwrap(), pool.to_str().unwrap());

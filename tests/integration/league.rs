@@ -8,12 +8,12 @@
 use crate::common;
 use common::league::run_to_the_end;
 
+use league::run::folder::layout::LeagueDir;
+use league::store::{BeatState, Kind, Store};
 use std::path::Path;
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
-use t2e::env::Side;
-use t2e::league::dir::LeagueDir;
-use t2e::league::store::{BeatState, Kind, Store};
+use t2e_core::env::Side;
 
 const CONFIG: &str = common::league::TINY_LEAGUE;
 
@@ -130,7 +130,7 @@ fn killed_at_random_moments_the_league_loses_and_duplicates_nothing() {
         );
     }
     // status: every player, ratings for those who played, a payoff row per pair.
-    let report = t2e::league::status::report(&dir).unwrap();
+    let report = league::run::status::report(&dir).unwrap();
     assert_eq!(report.matches, m);
     assert!(report.players.iter().any(|p| p.name == "rule-based-target"));
     let games: u64 = report.payoff.iter().map(|p| p.games).sum();
@@ -159,19 +159,19 @@ fn killed_at_random_moments_the_league_loses_and_duplicates_nothing() {
         "{text}"
     );
     let png = tmp.path().join("status.png");
-    t2e::league::status::plot(&dir, &report, &png).unwrap();
+    league::run::status::plot(&dir, &report, &png).unwrap();
     assert!(image::open(&png).unwrap().width() >= 900);
 
     // export: a self-contained folder that plays as ckpt:FOLDER, with a
     // manifest that matches its files.
-    let best = t2e::league::status::best_player(&report, Side::Target).unwrap();
+    let best = league::run::status::best_player(&report, Side::Target).unwrap();
     let out = tmp.path().join("exported");
-    t2e::league::status::export(&dir, &best, &out).unwrap();
+    league::run::status::export(&dir, &best, &out).unwrap();
     let sums = std::fs::read_to_string(out.join("SHA256SUMS")).unwrap();
     for line in sums.lines() {
         let (sha, name) = line.split_once("  ").unwrap();
         assert_eq!(
-            t2e::util::sha256_file(&out.join(name)).unwrap(),
+            t2e_core::util::sha256_file(&out.join(name)).unwrap(),
             sha,
             "{name}"
         );
@@ -185,21 +185,22 @@ fn killed_at_random_moments_the_league_loses_and_duplicates_nothing() {
     ] {
         assert!(sums.contains(f), "{f} missing from the export");
     }
-    let spec: t2e::controllers::ControllerSpec = format!("ckpt:{}", out.display()).parse().unwrap();
-    let cfg = t2e::env::EnvConfig {
+    let spec: t2e_learners::controllers::ControllerSpec =
+        format!("ckpt:{}", out.display()).parse().unwrap();
+    let cfg = t2e_core::env::EnvConfig {
         num_captors: 2,
         ..Default::default()
     };
     spec.check(Side::Target, &cfg).unwrap();
     assert!(
-        t2e::league::status::export(&dir, "no-such-player", &tmp.path().join("x"))
+        league::run::status::export(&dir, "no-such-player", &tmp.path().join("x"))
             .unwrap_err()
             .to_string()
             .contains("no player")
     );
 
     // A second manager on a live league is refused.
-    let _held = t2e::league::process::try_lock(&dir.root.join("league.lock"))
+    let _held = league::run::processes::spawn::try_lock(&dir.root.join("league.lock"))
         .unwrap()
         .unwrap();
     let out = Command::new(bin())
@@ -274,7 +275,7 @@ fn exploiters_play_the_main_learners_join_the_pool_and_start_again() {
         // It plays only the other side's main learner (its snapshots), or
         // the heuristic member before the main learner has one.
         let main = id(&format!("{}-main", other.name())).unwrap();
-        let heuristic = id(&t2e::league::players::heuristic_name(other)).unwrap();
+        let heuristic = id(&league::rules::players::heuristic_name(other)).unwrap();
         let mut games = 0;
         for r in &payoff {
             let (me, them) = match side {
@@ -341,7 +342,7 @@ fn held_out_opponents_play_every_snapshot_but_never_the_league() {
         assert_eq!((rows[0].opponent.as_str(), rows[0].episodes), (want, 3));
     }
     drop(store);
-    let report = t2e::league::status::report(&dir).unwrap();
+    let report = league::run::status::report(&dir).unwrap();
     let marked: Vec<_> = report.panel.iter().filter(|r| r.held_out).collect();
     assert_eq!(marked.len(), snapshots.len());
     assert!(marked.iter().all(|r| r.opponent == 0 && r.episodes == 3));
@@ -401,9 +402,9 @@ fn extra_heuristic_members_join_the_pool_and_play_the_learners() {
 
 /// A tiny trained captor team (K = 2, held-out protocol) saved under `runs`.
 fn tiny_captors(runs: &Path) -> std::path::PathBuf {
-    let shipped = t2e::map::catalog::load_prepared("shipped").unwrap();
-    let cfg = common::tiny_train_config("member", t2e::protocol::Protocol::HeldOut, "shipped");
-    let mut trainer = t2e::learn::train::Trainer::new(cfg, shipped).unwrap();
+    let shipped = t2e_core::map::catalog::load_prepared("shipped").unwrap();
+    let cfg = common::tiny_train_config("member", t2e_core::protocol::Protocol::HeldOut, "shipped");
+    let mut trainer = t2e_learners::learn::train::Trainer::new(cfg, shipped).unwrap();
     trainer.iterate().unwrap();
     trainer.save(runs).unwrap().remove(0)
 }
@@ -448,7 +449,7 @@ fn a_trained_team_joins_the_pool_as_a_frozen_member_and_a_paper_one_is_refused()
         );
     }
     assert_eq!(
-        t2e::util::sha256_file(&source.join("meta.json")).unwrap(),
+        t2e_core::util::sha256_file(&source.join("meta.json")).unwrap(),
         sha
     );
     let target_main = players.iter().find(|p| p.name == "target-main").unwrap();
@@ -479,7 +480,7 @@ fn a_trained_team_joins_the_pool_as_a_frozen_member_and_a_paper_one_is_refused()
         .replace("\"held-out\"", "\"paper\"");
     std::fs::write(&meta, edited).unwrap();
     // As if trained so: the manifest made again over the edit.
-    t2e::nn::checkpoint::write_manifest(&paper).unwrap();
+    t2e_learners::nn::checkpoint::write_manifest(&paper).unwrap();
     let config = tmp.path().join("paper.toml");
     std::fs::write(
         &config,

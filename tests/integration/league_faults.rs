@@ -7,12 +7,12 @@
 
 use crate::common;
 
+use league::run::folder::layout::LeagueDir;
+use league::store::{BeatState, Kind, Store};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Output, Stdio};
 use std::time::{Duration, Instant};
-use t2e::league::dir::LeagueDir;
-use t2e::league::store::{BeatState, Kind, Store};
 
 /// A tiny league: 80 env steps per iteration, tiny networks, no pacing.
 fn config(name: &str, budget: u64, extra: &str) -> String {
@@ -238,9 +238,7 @@ fn proc_state(pid: u32) -> String {
 /// manager's, and either could fail; a manager that lost that race exited
 /// before starting any learner (a likely cause of the CI timeouts in the
 /// waits below, reproduced once in a fresh clone's full test run).
-fn poll_heartbeats(
-    l: &League,
-) -> Result<Vec<t2e::league::store::Heartbeat>, t2e::league::store::StoreError> {
+fn poll_heartbeats(l: &League) -> Result<Vec<league::store::Heartbeat>, league::store::StoreError> {
     Store::open_read_only(&l.dir.store).and_then(|s| s.heartbeats())
 }
 
@@ -276,7 +274,7 @@ fn pool_files(dir: &LeagueDir) -> BTreeMap<String, String> {
     for e in std::fs::read_dir(dir.players_dir()).unwrap().flatten() {
         let name = e.file_name().to_string_lossy().into_owned();
         if !name.starts_with('.') {
-            if let Ok(sha) = t2e::util::sha256_file(&e.path().join("meta.json")) {
+            if let Ok(sha) = t2e_core::util::sha256_file(&e.path().join("meta.json")) {
                 out.insert(name, sha);
             }
         }
@@ -322,7 +320,7 @@ fn a_learner_killed_between_checkpoints_never_rewrites_a_pool_member() {
     let players = store.players().unwrap();
     for (name, first_sha) in &seen {
         let now =
-            t2e::util::sha256_file(&l.dir.players_dir().join(name).join("meta.json")).unwrap();
+            t2e_core::util::sha256_file(&l.dir.players_dir().join(name).join("meta.json")).unwrap();
         assert_eq!(
             &now, first_sha,
             "{name} was rewritten after it was first written"
@@ -419,7 +417,7 @@ fn a_lost_empty_or_foreign_store_is_refused_and_the_pool_kept() {
 
     // Its write-ahead log lost: the tables exist, their rows do not.
     let blank = tempfile::tempdir().unwrap();
-    drop(Store::open(&t2e::league::store::StoreUrl::in_dir(blank.path())).unwrap());
+    drop(Store::open(&league::store::StoreUrl::in_dir(blank.path())).unwrap());
     std::fs::copy(blank.path().join("league.db"), &db).unwrap();
     let o = run_dir(&l);
     assert!(!o.status.success());
@@ -484,7 +482,7 @@ fn unrecorded_snapshot_folders_are_adopted_or_kept_never_deleted() {
     meta["league"]["player"] = "captors-snap-000000999999".into();
     meta["env_steps"] = 999_999.into();
     std::fs::write(&meta_path, serde_json::to_string_pretty(&meta).unwrap()).unwrap();
-    t2e::nn::checkpoint::write_manifest(&adoptable).unwrap();
+    t2e_learners::nn::checkpoint::write_manifest(&adoptable).unwrap();
     // A folder that verifies but names no league pool (copied by hand): kept.
     let foreign = l.dir.players_dir().join("hand-copied");
     copy_dir(&src, &foreign);
@@ -493,7 +491,7 @@ fn unrecorded_snapshot_folders_are_adopted_or_kept_never_deleted() {
         serde_json::from_str(&std::fs::read_to_string(&m).unwrap()).unwrap();
     meta.as_object_mut().unwrap().remove("league");
     std::fs::write(&m, serde_json::to_string_pretty(&meta).unwrap()).unwrap();
-    t2e::nn::checkpoint::write_manifest(&foreign).unwrap();
+    t2e_learners::nn::checkpoint::write_manifest(&foreign).unwrap();
     // A temporary of a dead writer: removed.
     let temporary = l
         .dir
@@ -590,7 +588,7 @@ fn a_learner_never_starts_over_silently_and_a_broken_one_stops_the_league() {
     // state.json deleted: resumed from the checkpoint the store names.
     let state = l
         .dir
-        .learner_dir(t2e::env::Side::Captors)
+        .learner_dir(t2e_core::env::Side::Captors)
         .join("state.json");
     std::fs::remove_file(&state).unwrap();
     let o = run_dir(&l);
@@ -606,7 +604,7 @@ fn a_learner_never_starts_over_silently_and_a_broken_one_stops_the_league() {
         serde_json::from_str(&std::fs::read_to_string(&state).unwrap()).unwrap();
     let ckpt = l
         .dir
-        .learner_dir(t2e::env::Side::Captors)
+        .learner_dir(t2e_core::env::Side::Captors)
         .join("checkpoints")
         .join(named["checkpoints"][0][1].as_str().unwrap());
     let actor = ckpt.join("actor.safetensors");
@@ -679,7 +677,7 @@ fn status_reports_the_dead_as_dead_and_the_finished_as_they_were() {
     signal(manager.id() as i64, libc::SIGKILL);
     let _ = manager.wait();
     std::thread::sleep(Duration::from_millis(800));
-    let report = t2e::league::status::report(&l.dir).unwrap();
+    let report = league::run::status::report(&l.dir).unwrap();
     for r in &report.learners {
         assert_ne!(r.state, "training", "{r:?}");
         assert_ne!(r.state, "evaluating", "{r:?}");
@@ -701,11 +699,11 @@ fn a_finished_league_keeps_its_rate_and_its_evaluator_count() {
         .replace("[evaluator]\nenabled = false\n", "");
     std::fs::write(&l.config, text).unwrap();
     run_to_end(&l);
-    let first = t2e::league::status::report(&l.dir).unwrap();
+    let first = league::run::status::report(&l.dir).unwrap();
     // Run the finished league again: nothing trains.
     let o = run_dir(&l);
     assert!(o.status.success(), "{}", stderr(&o));
-    let again = t2e::league::status::report(&l.dir).unwrap();
+    let again = league::run::status::report(&l.dir).unwrap();
     let store = Store::open_existing(&l.dir.store).unwrap();
     let panel = store.matches_recorded_by("evaluator").unwrap();
     assert!(panel > 0);
@@ -969,12 +967,12 @@ fn a_file_that_is_not_this_leagues_store_is_refused_untouched() {
             .unwrap();
         pool.close().await;
     });
-    let sha = t2e::util::sha256_file(&db).unwrap();
+    let sha = t2e_core::util::sha256_file(&db).unwrap();
     let o = run_dir(&l);
     assert!(!o.status.success());
     assert!(stderr(&o).contains("not a league store"), "{}", stderr(&o));
     assert_eq!(
-        t2e::util::sha256_file(&db).unwrap(),
+        t2e_core::util::sha256_file(&db).unwrap(),
         sha,
         "the file was changed"
     );
@@ -1048,7 +1046,7 @@ fn a_full_disk_is_named_in_the_crash_record() {
         .stderr(Stdio::from(log))
         .spawn()
         .unwrap();
-    let url = t2e::league::store::StoreUrl::Sqlite(db.clone());
+    let url = league::store::StoreUrl::Sqlite(db.clone());
     let open = || {
         db.is_file()
             .then(|| Store::open_read_only(&url).ok())
@@ -1116,13 +1114,13 @@ fn a_full_disk_is_named_in_the_crash_record() {
 /// randomised expert teams on one generated map nobody trains on.
 const VALIDATION: &str = "episodes = 3\ncpu_share = 1.0\nvalidation_maps = \"generated:1@1001:small\"\nvalidation_captors = [\"expert:1\", \"expert:2\"]\n";
 
-fn validation_rows(l: &League) -> Vec<t2e::league::store::HeldOutResult> {
+fn validation_rows(l: &League) -> Vec<league::store::HeldOutResult> {
     Store::open_existing(&l.dir.store)
         .unwrap()
         .held_out_results()
         .unwrap()
         .into_iter()
-        .filter(|r| r.panel == t2e::league::store::Panel::Validation)
+        .filter(|r| r.panel == league::store::Panel::Validation)
         .collect()
 }
 
@@ -1151,16 +1149,16 @@ fn export_best_exports_the_validation_best_snapshot_of_a_store_made_by_hand() {
     // games are all played); the third escaped every game, but played only
     // 2 of its 3 against expert:2 (a validation cut short).
     let record =
-        |member: &t2e::league::store::Player, opponent: &str, episode: usize, captured: bool| {
+        |member: &league::store::Player, opponent: &str, episode: usize, captured: bool| {
             store
-                .record_held_out(&t2e::league::store::HeldOutEpisode {
-                    key: t2e::league::evaluator::panel_episode_key(
-                        t2e::league::store::Panel::Validation,
+                .record_held_out(&league::store::HeldOutEpisode {
+                    key: league::run::evaluation::evaluator::panel_episode_key(
+                        league::store::Panel::Validation,
                         &member.name,
                         opponent,
                         episode,
                     ),
-                    panel: t2e::league::store::Panel::Validation,
+                    panel: league::store::Panel::Validation,
                     member: member.id,
                     opponent: opponent.into(),
                     map: "generated-small-1001".into(),
@@ -1240,7 +1238,7 @@ fn killed_during_validation_games_the_league_records_no_half_result() {
             .and_then(|s| s.held_out_results())
             .map(|rows| {
                 rows.iter()
-                    .any(|r| r.panel == t2e::league::store::Panel::Validation)
+                    .any(|r| r.panel == league::store::Panel::Validation)
             })
             .unwrap_or(false)
     });
@@ -1316,7 +1314,7 @@ fn killed_during_validation_games_the_league_records_no_half_result() {
         .players()
         .unwrap()
         .into_iter()
-        .filter(|p| p.kind == Kind::Snapshot && p.side == t2e::env::Side::Target)
+        .filter(|p| p.kind == Kind::Snapshot && p.side == t2e_core::env::Side::Target)
         .map(|p| p.id)
         .collect();
     let rows = validation_rows(&l);
@@ -1392,7 +1390,7 @@ fn a_frozen_manager_is_not_replaced_by_one_that_cannot_run() {
         "a second manager ran beside a frozen one"
     );
     assert!(err.contains("already running"), "{err}");
-    let lease = Store::open_read_only(&t2e::league::store::StoreUrl::Sqlite(store.clone()))
+    let lease = Store::open_read_only(&league::store::StoreUrl::Sqlite(store.clone()))
         .unwrap()
         .manager()
         .unwrap();

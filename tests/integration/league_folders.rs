@@ -11,15 +11,15 @@
 use crate::common;
 
 use common::league::{check, TINY_LEAGUE};
+use league::run::folder::layout::LeagueDir;
+use league::store::StoreUrl;
 use serde_json::Value;
 use std::ffi::OsString;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Output, Stdio};
 use std::time::{Duration, Instant};
-use t2e::env::Side;
-use t2e::league::dir::LeagueDir;
-use t2e::league::store::StoreUrl;
-use t2e::learn::persist::RunDir;
+use t2e_core::env::Side;
+use t2e_learners::learn::persist::RunDir;
 
 fn bin() -> &'static str {
     env!("CARGO_BIN_EXE_t2e-league")
@@ -218,7 +218,7 @@ fn assert_export_intact(out: &Path) {
     for line in sums.lines() {
         let (sha, name) = line.split_once("  ").unwrap();
         assert_eq!(
-            t2e::util::sha256_file(&out.join(name)).unwrap(),
+            t2e_core::util::sha256_file(&out.join(name)).unwrap(),
             sha,
             "{}/{name}",
             out.display()

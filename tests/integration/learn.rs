@@ -6,12 +6,12 @@ use crate::common;
 use common::{maps, room};
 use std::path::Path;
 use std::sync::Arc;
-use t2e::controllers::ControllerSpec;
-use t2e::env::{EnvConfig, Side, TrapEnv};
-use t2e::eval::{self, EvalSetting};
-use t2e::learn::train::{SideConfig, TrainConfig, Trainer};
-use t2e::nn::checkpoint::{named_cpu_tensors, read_meta};
-use t2e::nn::{NetConfig, PolicySnapshot};
+use t2e_core::env::{EnvConfig, Side, TrapEnv};
+use t2e_learners::controllers::ControllerSpec;
+use t2e_learners::eval::{self, EvalSetting};
+use t2e_learners::learn::train::{SideConfig, TrainConfig, Trainer};
+use t2e_learners::nn::checkpoint::{named_cpu_tensors, read_meta};
+use t2e_learners::nn::{NetConfig, PolicySnapshot};
 
 /// One captor against a target that stands still, in a 3 m x 3 m room: all
 /// the captor must learn is to turn towards the target and drive to it.
@@ -26,7 +26,7 @@ fn chase_config(seed: u64) -> TrainConfig {
         patch_pool: 4,
         ..Default::default()
     };
-    cfg.captors.ppo = t2e::learn::ppo::PpoConfig {
+    cfg.captors.ppo = t2e_learners::learn::ppo::PpoConfig {
         lr: 2e-3,
         epochs: 4,
         ..Default::default()
@@ -34,7 +34,7 @@ fn chase_config(seed: u64) -> TrainConfig {
     cfg
 }
 
-fn chase_maps() -> Arc<Vec<Arc<t2e::map::PreparedMap>>> {
+fn chase_maps() -> Arc<Vec<Arc<t2e_core::map::PreparedMap>>> {
     maps(room(100, 160, 100, 160))
 }
 
@@ -146,16 +146,20 @@ fn checkpoints_play_as_controllers_and_resume_exactly() {
     // Resuming restores weights, optimiser and counters.
     let resumed = Trainer::resume(cfg.clone(), chase_maps(), run).unwrap();
     assert_eq!((resumed.iteration, resumed.env_steps), (2, 1280));
-    let saved = t2e::nn::checkpoint::read_tensors(&ckpt.join("actor.safetensors")).unwrap();
+    let saved =
+        t2e_learners::nn::checkpoint::read_tensors(&ckpt.join("actor.safetensors")).unwrap();
     let again = resumed.save(&run.join("again")).unwrap();
-    let reloaded = t2e::nn::checkpoint::read_tensors(&again[0].join("actor.safetensors")).unwrap();
+    let reloaded =
+        t2e_learners::nn::checkpoint::read_tensors(&again[0].join("actor.safetensors")).unwrap();
     assert_eq!(saved.len(), reloaded.len());
     for ((n1, t1), (n2, t2)) in saved.iter().zip(&reloaded) {
         assert_eq!(n1, n2);
         assert!(t1.equal(t2), "{n1} differs after resume");
     }
-    let opt1 = t2e::nn::checkpoint::read_tensors(&ckpt.join("optimizer.safetensors")).unwrap();
-    let opt2 = t2e::nn::checkpoint::read_tensors(&again[0].join("optimizer.safetensors")).unwrap();
+    let opt1 =
+        t2e_learners::nn::checkpoint::read_tensors(&ckpt.join("optimizer.safetensors")).unwrap();
+    let opt2 = t2e_learners::nn::checkpoint::read_tensors(&again[0].join("optimizer.safetensors"))
+        .unwrap();
     assert!(opt1.iter().zip(&opt2).all(|((_, a), (_, b))| a.equal(b)));
     assert_eq!(
         read_meta(&again[0]).unwrap().learner_state,
@@ -236,7 +240,7 @@ fn edit_meta(ckpt: &Path, from: &str, to: &str) {
     std::fs::write(&p, text.replacen(from, to, 1)).unwrap();
     // The manifest made again, as a forger would: what is checked is what
     // lies past it.
-    t2e::nn::checkpoint::write_manifest(ckpt).unwrap();
+    t2e_learners::nn::checkpoint::write_manifest(ckpt).unwrap();
 }
 
 #[test]
@@ -279,7 +283,7 @@ fn a_sidecar_that_does_not_match_the_weights_is_a_clear_error() {
     assert!(err.contains("actor.safetensors"), "{err}");
 
     std::fs::write(ckpt.join("meta.json"), "{\"format\": 1}").unwrap();
-    t2e::nn::checkpoint::write_manifest(&ckpt).unwrap();
+    t2e_learners::nn::checkpoint::write_manifest(&ckpt).unwrap();
     let err = format!(
         "{:#}",
         PolicySnapshot::load(&ckpt, Side::Captors).unwrap_err()
@@ -344,7 +348,7 @@ fn both_sides_learn_together_and_a_frozen_checkpoint_can_be_the_opponent() {
 fn off_policy_chase(play: &str, seed: u64) -> TrainConfig {
     let mut cfg = chase_config(seed);
     cfg.captors.play = play.parse().unwrap();
-    cfg.captors.maddpg = t2e::learn::maddpg::MaddpgConfig {
+    cfg.captors.maddpg = t2e_learners::learn::maddpg::MaddpgConfig {
         learning_starts: 640,
         replay_ratio: 8.0,
         buffer_steps: 50_000,
@@ -356,7 +360,7 @@ fn off_policy_chase(play: &str, seed: u64) -> TrainConfig {
         epsilon_anneal_steps: 20_000,
         ..Default::default()
     };
-    cfg.captors.maac = t2e::learn::maac::MaacConfig {
+    cfg.captors.maac = t2e_learners::learn::maac::MaacConfig {
         learning_starts: 640,
         replay_ratio: 8.0,
         buffer_steps: 50_000,
@@ -420,8 +424,9 @@ fn off_policy_checkpoints_keep_their_target_networks_resume_and_play() {
         let ckpt = &written[0];
         let meta = read_meta(ckpt).unwrap();
         assert_eq!((meta.algorithm.name(), meta.num_captors), (play, 2));
-        let files =
-            |dir: &Path, name: &str| t2e::nn::checkpoint::read_tensors(&dir.join(name)).unwrap();
+        let files = |dir: &Path, name: &str| {
+            t2e_learners::nn::checkpoint::read_tensors(&dir.join(name)).unwrap()
+        };
         // Soft updates keep the targets behind the online networks, and the
         // checkpoint keeps both.
         let (actor, target_actor) = (
@@ -481,14 +486,14 @@ fn off_policy_checkpoints_keep_their_target_networks_resume_and_play() {
     // A checkpoint of one algorithm does not load into a learner of another.
     let (maddpg_cfg, _) = &checkpoints[0];
     let (_, maac_ckpt) = &checkpoints[1];
-    let mut learner = t2e::learn::maddpg::MaddpgLearner::new(
+    let mut learner = t2e_learners::learn::maddpg::MaddpgLearner::new(
         maddpg_cfg.captors.maddpg.clone(),
         maddpg_cfg.captors.net.clone(),
         maddpg_cfg.env.vector_len(),
         2,
         tch::Device::Cpu,
     );
-    let err = t2e::learn::persist::load_learner(maac_ckpt, &mut learner)
+    let err = t2e_learners::learn::persist::load_learner(maac_ckpt, &mut learner)
         .unwrap_err()
         .to_string();
     assert!(
@@ -514,7 +519,7 @@ fn a_target_leaning_on_the_rule_based_one_plays_it_and_learns_from_its_own_logit
             heuristic_prior: 20.0,
             ..cfg.captors.net.clone()
         },
-        ppo: t2e::learn::ppo::PpoConfig {
+        ppo: t2e_learners::learn::ppo::PpoConfig {
             epochs: 1,
             minibatches: 1,
             ..Default::default()
@@ -557,10 +562,10 @@ fn a_target_leaning_on_the_rule_based_one_plays_it_and_learns_from_its_own_logit
         assert_eq!((departed, decisions), (0, learned.steps), "{learned:?}");
         assert_eq!(rule.target_departures, None);
     }
-    let without_departures = |records: Vec<t2e::eval::EpisodeRecord>| {
+    let without_departures = |records: Vec<t2e_learners::eval::EpisodeRecord>| {
         records
             .into_iter()
-            .map(|r| t2e::eval::EpisodeRecord {
+            .map(|r| t2e_learners::eval::EpisodeRecord {
                 target_departures: None,
                 ..r
             })
@@ -595,9 +600,9 @@ fn a_target_leaning_on_the_rule_based_one_plays_it_and_learns_from_its_own_logit
 /// towards that action while it learns. The captors may not have one.
 #[test]
 fn a_kl_towards_the_rule_based_target_pulls_the_learned_target_to_its_actions() {
-    use t2e::env::controller::Controller;
-    use t2e::heuristics::{expert_captor_action, target_action};
-    use t2e::nn::CheckpointController;
+    use t2e_core::env::controller::Controller;
+    use t2e_core::heuristics::{expert_captor_action, target_action};
+    use t2e_learners::nn::CheckpointController;
     tch::set_num_threads(1);
     let room_maps = || maps(room(60, 260, 60, 260));
     let trained = |kl: f64| {
@@ -606,7 +611,7 @@ fn a_kl_towards_the_rule_based_target_pulls_the_learned_target_to_its_actions() 
         cfg.target = SideConfig {
             play: "ippo".parse().unwrap(),
             net: cfg.captors.net.clone(),
-            ppo: t2e::learn::ppo::PpoConfig {
+            ppo: t2e_learners::learn::ppo::PpoConfig {
                 lr: 2e-3,
                 epochs: 4,
                 minibatches: 2,
@@ -639,7 +644,7 @@ fn a_kl_towards_the_rule_based_target_pulls_the_learned_target_to_its_actions() 
             env.reset(seed).unwrap();
             ckpt.reset(&env, seed);
             for _ in 0..40 {
-                let mut learned = [t2e::env::Action::Stop];
+                let mut learned = [t2e_core::env::Action::Stop];
                 ckpt.act(&env, Side::Target, &mut learned);
                 let rule = target_action(&env);
                 same += usize::from(learned[0] == rule);

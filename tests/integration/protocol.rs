@@ -6,14 +6,14 @@
 use crate::common;
 
 use std::sync::Arc;
-use t2e::controllers::ControllerSpec;
+use t2e_learners::controllers::ControllerSpec;
 
-use t2e::eval::{self, EvalSetting};
-use t2e::learn::train::{TrainConfig, Trainer};
-use t2e::map::catalog;
-use t2e::nn::checkpoint::read_meta;
+use t2e_core::map::catalog;
+use t2e_learners::eval::{self, EvalSetting};
+use t2e_learners::learn::train::{TrainConfig, Trainer};
+use t2e_learners::nn::checkpoint::read_meta;
 
-use t2e::protocol::Protocol;
+use t2e_core::protocol::Protocol;
 
 fn tiny(protocol: Protocol, maps: &str) -> TrainConfig {
     common::tiny_train_config("protocol", protocol, maps)
@@ -130,13 +130,13 @@ fn a_config_file_must_name_its_protocol() {
     std::fs::write(&league, "name = \"l\"\nmaps = \"shipped\"\n").unwrap();
     let err = format!(
         "{:#}",
-        t2e::league::config::LeagueConfig::load(&league).unwrap_err()
+        league::rules::config::LeagueConfig::load(&league).unwrap_err()
     );
     assert!(
         err.contains("league.toml") && err.contains("protocol: missing"),
         "{err}"
     );
-    let stored = t2e::league::config::LeagueConfig::load_stored(&league).unwrap();
+    let stored = league::rules::config::LeagueConfig::load_stored(&league).unwrap();
     assert_eq!(stored.protocol, Protocol::HeldOut);
 }
 
@@ -305,7 +305,7 @@ fn shipped_and_generated_maps_train_held_out() {
 /// below it. Prints the numbers (`-- --nocapture`).
 #[test]
 fn near_copy_margins() {
-    use t2e::map::testset::{resembled_test_map, NEAR_COPY_THRESHOLD};
+    use t2e_core::map::testset::{resembled_test_map, NEAR_COPY_THRESHOLD};
     let Some(gibson) = gibson_or_skip() else {
         return;
     };
@@ -313,7 +313,7 @@ fn near_copy_margins() {
     for entry in catalog::list_dir(&gibson).unwrap() {
         let img = image::open(&entry.path).unwrap().to_luma8();
         for (edit, copy) in edited_copies(&img) {
-            let grid = t2e::map::load::grid_from_pixels("copy", &copy).unwrap();
+            let grid = t2e_core::map::load::grid_from_pixels("copy", &copy).unwrap();
             let r = resembled_test_map(&grid, 0.0).unwrap();
             assert_eq!(r.name, entry.name, "{edit} of {}: {r}", entry.name);
             let low = lowest.entry(edit).or_insert((f64::MAX, String::new()));

@@ -8,10 +8,10 @@
 use crate::common;
 
 use std::path::{Path, PathBuf};
-use t2e::controllers::ControllerSpec;
-use t2e::env::{Action, EnvConfig, Side, Sight, TrapEnv, PATCH_LEN};
-use t2e::learn::train::{SideConfig, Trainer};
-use t2e::map::catalog;
+use t2e_core::env::{Action, EnvConfig, Side, Sight, TrapEnv, PATCH_LEN};
+use t2e_core::map::catalog;
+use t2e_learners::controllers::ControllerSpec;
+use t2e_learners::learn::train::{SideConfig, Trainer};
 
 const RAYS: Sight = Sight::rays(8);
 const RAYS_AND_MAP: Sight = Sight {
@@ -27,9 +27,10 @@ fn sighted_run(dir: &Path) -> PathBuf {
 /// A tiny captor team trained one iteration with `sight`.
 fn sighted_run_with(dir: &Path, sight: Sight) -> PathBuf {
     tch::set_num_threads(1);
-    let mut cfg = common::tiny_train_config("sighted", t2e::protocol::Protocol::HeldOut, "shipped");
+    let mut cfg =
+        common::tiny_train_config("sighted", t2e_core::protocol::Protocol::HeldOut, "shipped");
     cfg.captors.net.sight = sight;
-    cfg.captors.net.vector_input = t2e::nn::VectorInput::Egocentric;
+    cfg.captors.net.vector_input = t2e_learners::nn::VectorInput::Egocentric;
     let maps = catalog::load_prepared("shipped:small").unwrap();
     let mut t = Trainer::new(cfg, maps).unwrap();
     t.iterate().unwrap();
@@ -108,7 +109,7 @@ fn the_coarse_map_follows_the_rays_and_shows_every_robot() {
 fn a_checkpoint_with_a_map_records_it_and_is_refused_where_the_env_lacks_it() {
     let run = tempfile::tempdir().unwrap();
     let ckpt = sighted_run_with(run.path(), RAYS_AND_MAP);
-    let meta = t2e::nn::checkpoint::read_meta(&ckpt).unwrap();
+    let meta = t2e_learners::nn::checkpoint::read_meta(&ckpt).unwrap();
     assert_eq!(meta.net.sight, RAYS_AND_MAP);
     assert_eq!(meta.vector_len(), 15 + 4 + 256);
     let text = std::fs::read_to_string(ckpt.join("meta.json")).unwrap();
@@ -147,7 +148,7 @@ fn a_checkpoint_with_a_map_records_it_and_is_refused_where_the_env_lacks_it() {
 fn a_sighted_checkpoint_records_its_rays_and_sees_with_them_in_any_env() {
     let run = tempfile::tempdir().unwrap();
     let ckpt = sighted_run(run.path());
-    let meta = t2e::nn::checkpoint::read_meta(&ckpt).unwrap();
+    let meta = t2e_learners::nn::checkpoint::read_meta(&ckpt).unwrap();
     assert_eq!(meta.net.sight, RAYS);
     assert_eq!(meta.vector_len(), 15 + 8);
     let text = std::fs::read_to_string(ckpt.join("meta.json")).unwrap();
@@ -199,7 +200,8 @@ fn a_sighted_checkpoint_records_its_rays_and_sees_with_them_in_any_env() {
 
 #[test]
 fn two_learners_or_a_league_with_different_sight_are_refused_by_name() {
-    let mut cfg = common::tiny_train_config("two", t2e::protocol::Protocol::HeldOut, "shipped");
+    let mut cfg =
+        common::tiny_train_config("two", t2e_core::protocol::Protocol::HeldOut, "shipped");
     cfg.captors.net.sight = RAYS;
     cfg.target = SideConfig {
         play: "mappo".parse().unwrap(),
@@ -215,7 +217,7 @@ fn two_learners_or_a_league_with_different_sight_are_refused_by_name() {
         "{err}"
     );
 
-    let league = t2e::league::config::LeagueConfig::parse(
+    let league = league::rules::config::LeagueConfig::parse(
         "[captors.net.sight]\nwall_rays = 12\n[target.net.sight]\nwall_rays = 12\n",
     )
     .unwrap();
@@ -223,17 +225,17 @@ fn two_learners_or_a_league_with_different_sight_are_refused_by_name() {
         league.train_config(Side::Target).learning_env().sight,
         Sight::rays(12)
     );
-    let err = t2e::league::config::LeagueConfig::parse("[captors.net.sight]\nwall_rays = 12\n")
+    let err = league::rules::config::LeagueConfig::parse("[captors.net.sight]\nwall_rays = 12\n")
         .unwrap_err()
         .to_string();
     assert!(err.contains("target.net.sight"), "{err}");
-    let err = t2e::league::config::LeagueConfig::parse(
+    let err = league::rules::config::LeagueConfig::parse(
         "[captors.net.sight]\nwall_rays = 2\n[target.net.sight]\nwall_rays = 2\n",
     )
     .unwrap_err()
     .to_string();
     assert!(err.contains("sight.wall_rays"), "{err}");
-    let err = t2e::league::config::LeagueConfig::parse(
+    let err = league::rules::config::LeagueConfig::parse(
         "[captors.net.sight]\nmap_cells = 64\n[target.net.sight]\nmap_cells = 64\n",
     )
     .unwrap_err()
@@ -244,7 +246,7 @@ fn two_learners_or_a_league_with_different_sight_are_refused_by_name() {
 #[test]
 fn a_league_with_sight_trains_snapshots_that_carry_it_and_meet_each_other() {
     let tmp = tempfile::tempdir().unwrap();
-    let dir = t2e::league::dir::LeagueDir::new(tmp.path().join("league"));
+    let dir = league::run::folder::layout::LeagueDir::new(tmp.path().join("league"));
     let config = tmp.path().join("league.toml");
     let text = common::league::TINY_LEAGUE
         .replace(
@@ -263,11 +265,11 @@ fn a_league_with_sight_trains_snapshots_that_carry_it_and_meet_each_other() {
     common::league::run_to_the_end(&dir.root, &config);
     let (matches, _) = common::league::check(&dir);
     assert!(matches > 0, "no match was played");
-    let store = t2e::league::store::Store::open(&dir.store).unwrap();
+    let store = league::store::Store::open(&dir.store).unwrap();
     let mut snapshots = 0;
     for p in store.players().unwrap() {
         if let Some((rel, _)) = &p.checkpoint {
-            let meta = t2e::nn::checkpoint::read_meta(&dir.root.join(rel)).unwrap();
+            let meta = t2e_learners::nn::checkpoint::read_meta(&dir.root.join(rel)).unwrap();
             assert_eq!(meta.net.sight, RAYS, "{}", p.name);
             snapshots += 1;
         }

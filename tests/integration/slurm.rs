@@ -7,10 +7,10 @@
 use crate::common;
 
 use common::league::TINY_LEAGUE;
+use league::store::{BeatState, Presence, SeatRow, Store, StoreUrl};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
-use t2e::league::store::{BeatState, Presence, SeatRow, Store, StoreUrl};
 
 const JOB: &str = "4242";
 

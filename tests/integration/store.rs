@@ -6,13 +6,13 @@
 use crate::common;
 
 use common::postgres::{fresh_database, server, sql, with_database};
-use std::collections::{BTreeMap, BTreeSet};
-use std::sync::{Arc, Barrier, Mutex};
-use t2e::env::Side;
-use t2e::league::store::{
+use league::store::{
     BeatState, ExploitRecord, HeldOutEpisode, Kind, MatchRecord, NewPlayer, Panel, SeatState,
     Store, StoreUrl,
 };
+use std::collections::{BTreeMap, BTreeSet};
+use std::sync::{Arc, Barrier, Mutex};
+use t2e_core::env::Side;
 
 fn player(name: &str, side: Side, kind: Kind) -> NewPlayer {
     NewPlayer {
@@ -462,7 +462,7 @@ fn a_newer_schema_on_postgres_is_refused() {
 
 #[test]
 fn one_manager_holds_a_league_at_a_time_by_the_stores_clock() {
-    use t2e::league::store::ManagerLease;
+    use league::store::ManagerLease;
     let (_tmp, urls) = both("manager");
     for url in urls {
         let s = Store::open(&url).unwrap();
@@ -494,7 +494,7 @@ fn one_manager_holds_a_league_at_a_time_by_the_stores_clock() {
         assert!(s.renew_manager("b", -1_000).unwrap());
         assert_eq!(s.claim_manager(&a, 60_000, None).unwrap(), Ok(()));
         let now = s.clock_ms().unwrap();
-        let local = t2e::league::store::now_ms();
+        let local = league::store::now_ms();
         assert!((now - local).abs() < 5_000, "{url}: clock {now} vs {local}");
         s.release_manager("b").unwrap();
         assert!(

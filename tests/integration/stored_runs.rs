@@ -10,13 +10,13 @@
 //! binary there with relative paths (the stored eval and export files
 //! record paths as given), so nothing is ever written into tests/fixtures/.
 
+use league::rules::config::LeagueConfig;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
-use t2e::env::Side;
-use t2e::league::config::LeagueConfig;
-use t2e::learn::train::TrainConfig;
+use t2e_core::env::Side;
+use t2e_learners::learn::train::TrainConfig;
 
 fn bin() -> &'static str {
     env!("CARGO_BIN_EXE_t2e-league")

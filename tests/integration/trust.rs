@@ -11,14 +11,14 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use t2e::cli::bench::BenchArgs;
 use t2e::cli::eval::EvalArgs;
-use t2e::env::{CaptureRule, Side};
-use t2e::eval::Summary;
-use t2e::fs::{clean_stale_temporaries, write_dir_atomically, Written};
-use t2e::learn::ppo::{PpoConfig, PpoLearner};
-use t2e::learn::rollout::Rollout;
-use t2e::learn::train::{TrainConfig, Trainer};
-use t2e::nn::checkpoint::read_meta;
-use t2e::nn::{NetConfig, PolicySnapshot};
+use t2e_core::env::{CaptureRule, Side};
+use t2e_core::fs::{clean_stale_temporaries, write_dir_atomically, Written};
+use t2e_learners::eval::Summary;
+use t2e_learners::learn::ppo::{PpoConfig, PpoLearner};
+use t2e_learners::learn::rollout::Rollout;
+use t2e_learners::learn::train::{TrainConfig, Trainer};
+use t2e_learners::nn::checkpoint::read_meta;
+use t2e_learners::nn::{NetConfig, PolicySnapshot};
 
 fn eval_args(out: &Path) -> EvalArgs {
     EvalArgs {
@@ -205,7 +205,7 @@ fn nan_in_a_config_is_an_error_naming_the_field() {
 /// A small learner and a rollout of random but finite data.
 fn learner_and_rollout() -> (PpoLearner, Rollout) {
     use rand::{Rng, SeedableRng};
-    let _seed = t2e::nn::seed_torch(0);
+    let _seed = t2e_learners::nn::seed_torch(0);
     let net = NetConfig {
         hidden: 16,
         conv_channels: [2, 4],
@@ -218,7 +218,7 @@ fn learner_and_rollout() -> (PpoLearner, Rollout) {
     };
     let (steps, rows, vl) = (10, 4, 10);
     let learner = PpoLearner::new(
-        &t2e::learn::mappo::KIND,
+        &t2e_learners::learn::mappo::KIND,
         cfg,
         net.clone(),
         vl,
@@ -244,9 +244,11 @@ fn learner_and_rollout() -> (PpoLearner, Rollout) {
 }
 
 fn weights(l: &PpoLearner) -> Vec<Vec<f32>> {
-    t2e::nn::checkpoint::named_cpu_tensors(&l.actor_vs)
+    t2e_learners::nn::checkpoint::named_cpu_tensors(&l.actor_vs)
         .into_iter()
-        .chain(t2e::nn::checkpoint::named_cpu_tensors(&l.critic_vs))
+        .chain(t2e_learners::nn::checkpoint::named_cpu_tensors(
+            &l.critic_vs,
+        ))
         .map(|(_, t)| {
             let t = t.flatten(0, -1);
             let mut v = vec![0f32; t.numel()];
@@ -294,7 +296,7 @@ fn tiny_config() -> TrainConfig {
     cfg
 }
 
-fn tiny_maps() -> Arc<Vec<Arc<t2e::map::PreparedMap>>> {
+fn tiny_maps() -> Arc<Vec<Arc<t2e_core::map::PreparedMap>>> {
     maps(room(100, 160, 100, 160))
 }
 
@@ -397,7 +399,7 @@ fn edit_meta(dir: &Path, edit: impl FnOnce(&mut serde_json::Value)) {
         serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
     edit(&mut v);
     std::fs::write(&path, serde_json::to_string_pretty(&v).unwrap()).unwrap();
-    t2e::nn::checkpoint::write_manifest(dir).unwrap();
+    t2e_learners::nn::checkpoint::write_manifest(dir).unwrap();
 }
 
 #[test]
@@ -434,7 +436,7 @@ fn weights_are_integrity_checked() {
     let tensors = tch::Tensor::read_safetensors(&file).unwrap();
     let _ = tensors[0].1.view(-1).get(0).fill_(f64::NAN);
     tch::Tensor::write_safetensors(&tensors, &file).unwrap();
-    let hash = t2e::util::sha256_file(&file).unwrap();
+    let hash = t2e_core::util::sha256_file(&file).unwrap();
     edit_meta(&poisoned, |v| v["files"]["actor.safetensors"] = hash.into());
     let err = format!(
         "{:#}",
@@ -485,7 +487,7 @@ fn weights_are_integrity_checked() {
 
 #[test]
 fn test_maps_are_recognised_by_content_wherever_they_sit() {
-    let Some(gibson) = t2e::map::catalog::gibson_dir() else {
+    let Some(gibson) = t2e_core::map::catalog::gibson_dir() else {
         assert!(
             std::env::var_os("CI").is_none(),
             "Gibson maps missing in CI"
@@ -496,7 +498,7 @@ fn test_maps_are_recognised_by_content_wherever_they_sit() {
     let src = gibson.join("Kettle_floor_trav_0_v3.png");
     let renamed = copy.path().join("my-own-map.png");
     std::fs::copy(&src, &renamed).unwrap();
-    let maps = t2e::map::catalog::load_prepared(&renamed.display().to_string()).unwrap();
+    let maps = t2e_core::map::catalog::load_prepared(&renamed.display().to_string()).unwrap();
     let err = Trainer::new(tiny_config(), maps).err().unwrap().to_string();
     assert!(
         err.contains("Kettle_floor_trav_0_v3") && err.contains("test set"),
@@ -507,7 +509,7 @@ fn test_maps_are_recognised_by_content_wherever_they_sit() {
 #[test]
 fn extra_maps_are_held_to_the_held_out_rule_and_mixed_by_share() {
     // A copy of a test map is refused as an extra map, whatever it is called.
-    if let Some(gibson) = t2e::map::catalog::gibson_dir() {
+    if let Some(gibson) = t2e_core::map::catalog::gibson_dir() {
         let copy = tempfile::tempdir().unwrap();
         std::fs::copy(
             gibson.join("Kettle_floor_trav_0_v3.png"),
@@ -559,7 +561,7 @@ fn inputs_that_once_misbehaved_give_clear_errors() {
     png.extend([8, 0, 0, 0, 0, 0, 0, 0, 0]);
     let huge = dir.path().join("huge.png");
     std::fs::write(&huge, &png).unwrap();
-    let err = t2e::map::load_png(&huge).unwrap_err().to_string();
+    let err = t2e_core::map::load_png(&huge).unwrap_err().to_string();
     assert!(
         err.contains("huge.png") && err.contains("20000x20000"),
         "{err}"
@@ -567,24 +569,24 @@ fn inputs_that_once_misbehaved_give_clear_errors() {
 
     // Missing files and folders say "not found".
     for spec in ["nowhere.png", "no-such-folder:small"] {
-        let err = format!("{:#}", t2e::map::resolve(spec).unwrap_err());
+        let err = format!("{:#}", t2e_core::map::resolve(spec).unwrap_err());
         assert!(err.contains("not found"), "{spec}: {err}");
     }
-    let err = format!("{:#}", t2e::map::resolve("maps:huge").unwrap_err());
+    let err = format!("{:#}", t2e_core::map::resolve("maps:huge").unwrap_err());
     assert!(err.contains("'huge' is not a size class"), "{err}");
 
     // A class list that is not UTF-8 is named.
     let bad = dir.path().join("bad");
     std::fs::create_dir(&bad).unwrap();
     std::fs::copy(
-        t2e::map::catalog::shipped_dir().join("gen-small-1.png"),
+        t2e_core::map::catalog::shipped_dir().join("gen-small-1.png"),
         bad.join("a.png"),
     )
     .unwrap();
     std::fs::write(bad.join("manifest.csv"), b"map,split\na,sm\xffall\n").unwrap();
     let err = format!(
         "{:#}",
-        t2e::map::resolve(&bad.display().to_string()).unwrap_err()
+        t2e_core::map::resolve(&bad.display().to_string()).unwrap_err()
     );
     assert!(
         err.contains("manifest.csv") && err.contains("UTF-8"),
@@ -647,7 +649,7 @@ fn defects_an_adversarial_pass_found_are_fixed() {
     image::GrayImage::from_pixel(1, 1, image::Luma([255]))
         .save(&one)
         .unwrap();
-    let err = t2e::map::load_png(&one).unwrap_err().to_string();
+    let err = t2e_core::map::load_png(&one).unwrap_err().to_string();
     assert!(err.contains("smaller than one 0.05 m cell"), "{err}");
 
     // eval names the file it cannot write.
@@ -675,11 +677,11 @@ fn defects_an_adversarial_pass_found_are_fixed() {
 
     // maps generate records each map as it goes, and caps --count.
     let gen = dir.path().join("gen");
-    t2e::cli::maps::generate_maps(t2e::map::SizeClass::Small, 1, 2, &gen).unwrap();
+    t2e::cli::maps::generate_maps(t2e_core::map::SizeClass::Small, 1, 2, &gen).unwrap();
     let manifest = std::fs::read_to_string(gen.join("manifest.csv")).unwrap();
     assert_eq!(manifest.lines().count(), 3, "{manifest}");
     assert!(
-        t2e::cli::maps::generate_maps(t2e::map::SizeClass::Small, 1, 1_000_000_000, &gen)
+        t2e::cli::maps::generate_maps(t2e_core::map::SizeClass::Small, 1, 1_000_000_000, &gen)
             .unwrap_err()
             .to_string()
             .contains("--count")
@@ -770,7 +772,7 @@ fn every_checkpoint_is_verified_by_its_manifest_and_its_sides_agree() {
     )
     .unwrap();
     std::fs::write(export.join("league-config.toml"), "").unwrap();
-    t2e::nn::checkpoint::write_manifest(&export).unwrap();
+    t2e_learners::nn::checkpoint::write_manifest(&export).unwrap();
     PolicySnapshot::load(&export, Side::Captors).unwrap();
     let eval_target = |dir: &Path| {
         std::process::Command::new(env!("CARGO_BIN_EXE_t2e-league"))
@@ -889,9 +891,11 @@ fn the_manifest_is_written_whole_in_place_and_covers_an_exports_own_files() {
     std::fs::remove_file(linked.join("SHA256SUMS")).unwrap();
     let outside = run.path().join("outside");
     std::os::unix::fs::symlink(&outside, linked.join("SHA256SUMS")).unwrap();
-    let err = t2e::nn::checkpoint::seal(&linked).unwrap_err().to_string();
+    let err = t2e_learners::nn::checkpoint::seal(&linked)
+        .unwrap_err()
+        .to_string();
     assert!(err.contains("not a regular file"), "{err}");
-    t2e::nn::checkpoint::write_manifest(&linked).unwrap();
+    t2e_learners::nn::checkpoint::write_manifest(&linked).unwrap();
     assert!(
         !outside.exists(),
         "the manifest was written through the link"
@@ -902,7 +906,7 @@ fn the_manifest_is_written_whole_in_place_and_covers_an_exports_own_files() {
     PolicySnapshot::load(&linked, Side::Captors).unwrap();
     // A name with a line break.
     std::fs::write(linked.join("evil\nname"), b"x").unwrap();
-    let err = t2e::nn::checkpoint::write_manifest(&linked)
+    let err = t2e_learners::nn::checkpoint::write_manifest(&linked)
         .unwrap_err()
         .to_string();
     assert!(err.contains("line break"), "{err}");
@@ -917,7 +921,7 @@ fn the_manifest_is_written_whole_in_place_and_covers_an_exports_own_files() {
         err.contains("player.json") && err.contains("not listed"),
         "{err}"
     );
-    t2e::nn::checkpoint::write_manifest(&export).unwrap();
+    t2e_learners::nn::checkpoint::write_manifest(&export).unwrap();
     PolicySnapshot::load(&export, Side::Captors).unwrap();
     std::fs::write(export.join("player.json"), r#"{"player": 7}"#).unwrap();
     let err = format!(
@@ -934,7 +938,9 @@ fn the_manifest_is_written_whole_in_place_and_covers_an_exports_own_files() {
         .status()
         .unwrap()
         .success());
-    let err = t2e::nn::checkpoint::seal(&fifo).unwrap_err().to_string();
+    let err = t2e_learners::nn::checkpoint::seal(&fifo)
+        .unwrap_err()
+        .to_string();
     assert!(
         err.contains("critic.safetensors") && err.contains("not a regular file"),
         "{err}"

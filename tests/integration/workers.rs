@@ -8,11 +8,11 @@ use crate::common;
 
 use common::league::{check, TINY_LEAGUE};
 use common::postgres::{cluster_dir, fresh_database, server, start_cluster, stop_cluster};
+use league::run::folder::layout::{LeagueDir, LeagueIdentity};
+use league::store::{BeatState, Kind, NewPlayer, Presence, SeatState, Store, StoreUrl};
 use std::path::Path;
 use std::process::{Child, Command, Output, Stdio};
 use std::time::{Duration, Instant};
-use t2e::league::dir::{LeagueDir, LeagueIdentity};
-use t2e::league::store::{BeatState, Kind, NewPlayer, Presence, SeatState, Store, StoreUrl};
 
 static RUNS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
 
@@ -263,7 +263,7 @@ fn eight_workers_and_a_status_poller_contend_without_loss() {
     for seat in s.seats().unwrap() {
         assert!(seat.claims >= 1, "{seat:?}");
         assert!(
-            !seat.held_at(t2e::league::store::now_ms()),
+            !seat.held_at(league::store::now_ms()),
             "a lease outlived its worker: {seat:?}"
         );
     }
@@ -366,7 +366,7 @@ fn bad_input_gets_a_clear_error() {
     let e = err(run_cli(&["status", "--store", &format!("{raw}/x")], None));
     assert!(e.contains("stray path"), "{e}");
     // A league whose pool this worker cannot see.
-    let cfg = t2e::league::config::LeagueConfig::parse(TINY_LEAGUE).unwrap();
+    let cfg = league::rules::config::LeagueConfig::parse(TINY_LEAGUE).unwrap();
     let s = Store::open(&url).unwrap();
     s.config_once(&toml::to_string_pretty(&cfg).unwrap())
         .unwrap();
@@ -385,7 +385,7 @@ fn bad_input_gets_a_clear_error() {
     std::fs::write(dir.config_path(), toml::to_string_pretty(&cfg).unwrap()).unwrap();
     s.add_player(&NewPlayer {
         name: "captors-snap-1".into(),
-        side: t2e::env::Side::Captors,
+        side: t2e_core::env::Side::Captors,
         kind: Kind::Snapshot,
         parent: None,
         env_steps: 640,
@@ -404,7 +404,7 @@ fn bad_input_gets_a_clear_error() {
     // A row naming a path outside the pool is refused, written or read.
     let outside = NewPlayer {
         name: "evil".into(),
-        side: t2e::env::Side::Captors,
+        side: t2e_core::env::Side::Captors,
         kind: Kind::Snapshot,
         parent: None,
         env_steps: 1,

@@ -3,16 +3,16 @@
 //! `random`, `still`, `ckpt:PATH`, `sample:PATH`), parsed and built behind the one `env::Controller` trait. It
 //! sits above `heuristics` and `nn` because it names controllers of both.
 
-use crate::env::{Controller, EnvConfig, Side};
-use crate::error::ConfigError;
-use crate::heuristics::{
-    AszGreedy, Heuristic, Lookahead, RandomActions, RandomisedExpert, RobustLookahead, Still,
-};
 use crate::nn::{CheckpointController, PolicySnapshot};
 use std::fmt;
 use std::path::PathBuf;
 use std::str::FromStr;
 use std::sync::{Arc, OnceLock};
+use t2e_core::env::{Controller, EnvConfig, Side};
+use t2e_core::error::ConfigError;
+use t2e_core::heuristics::{
+    AszGreedy, Heuristic, Lookahead, RandomActions, RandomisedExpert, RobustLookahead, Still,
+};
 
 /// Why a controller cannot be named, loaded or built for a side.
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]

@@ -248,7 +248,7 @@ impl LeagueConfig {
             num_envs: self.num_envs,
             rollout_steps: self.rollout_steps,
             checkpoint_every: self.checkpoint_every,
-            device: t2e_learners::learn::config::DeviceChoice::Cpu,
+            device: t2e_learners::learn::run_config::DeviceChoice::Cpu,
             protocol: self.protocol,
             maps: self.maps.clone(),
             extra_maps: Default::default(),

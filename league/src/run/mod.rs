@@ -1,23 +1,21 @@
-//! The league's processes and folders: the manager, workers, learners, the
-//! evaluator and `exploit`, and the league directory they share, over the
-//! rules and the store.
+//! The league's processes and folders, over the rules and the store, one
+//! folder per role:
+//!
+//! - `folder/`: the league directory's layout, its snapshot pool and
+//!   opening a league, every check before any write;
+//! - `evaluation/`: the evaluator, its panels, and the checks of a new
+//!   league's panels that need maps or checkpoints loaded;
+//! - `seat/`: one main learner's process and the opponents it plays;
+//! - `processes/`: the manager, workers, the seats on workers, the loop
+//!   the three supervise in, and spawning the league's child processes;
+//! - `exploit/`: a fresh best response against one frozen player;
+//! - `status/`: what `status` and `export` read from a league;
+//! - `view`: what the manager and `exploit` show while they run.
 
-pub mod child;
-pub mod dir;
-pub mod evaluator;
+pub mod evaluation;
 pub mod exploit;
-pub mod exploit_key;
-pub mod learner;
-pub mod manager;
-pub mod manager_lease;
-pub mod open;
-pub mod opponents;
-pub mod panels;
-pub mod pool;
-pub mod preflight;
-pub mod process;
-pub mod seats;
+pub mod folder;
+pub mod processes;
+pub mod seat;
 pub mod status;
-pub mod supervisor;
 pub mod view;
-pub mod worker;

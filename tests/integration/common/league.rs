@@ -2,11 +2,11 @@
 //! tests/integration/workers.rs).
 #![allow(dead_code)]
 
+use league::run::folder::layout::LeagueDir;
+use league::store::{Kind, Store};
 use std::collections::BTreeSet;
-use t2e::env::Side;
-use t2e::league::dir::LeagueDir;
-use t2e::league::store::{Kind, Store};
-use t2e::learn::persist::RunDir;
+use t2e_core::env::Side;
+use t2e_learners::learn::persist::RunDir;
 
 /// The tiny league of tests/integration/league.rs: two learners (K = 2, tiny networks)
 /// and the evaluator, 9,600 env steps each.
@@ -73,16 +73,16 @@ pub fn check(dir: &LeagueDir) -> (u64, Vec<u64>) {
             if !rels.contains(&dir.relative(&path)) {
                 // A writer killed between the folder and its row leaves a
                 // complete snapshot that the next start adopts.
-                let meta = t2e::nn::checkpoint::read_meta(&path)
+                let meta = t2e_learners::nn::checkpoint::read_meta(&path)
                     .unwrap_or_else(|e| panic!("orphan {}: {e:#}", path.display()));
                 assert!(
-                    t2e::league::pool::PoolMembership::of(&meta)
+                    league::run::folder::pool::PoolMembership::of(&meta)
                         .unwrap()
                         .is_some(),
                     "orphan {}",
                     path.display()
                 );
-                t2e::nn::PolicySnapshot::load(&path, meta.side).unwrap();
+                t2e_learners::nn::PolicySnapshot::load(&path, meta.side).unwrap();
             }
         }
     }
@@ -90,8 +90,8 @@ pub fn check(dir: &LeagueDir) -> (u64, Vec<u64>) {
         if s.quarantined.is_none() {
             let (rel, sha) = s.checkpoint.as_ref().unwrap();
             let meta = dir.root.join(rel).join("meta.json");
-            assert_eq!(&t2e::util::sha256_file(&meta).unwrap(), sha, "{rel}");
-            t2e::nn::PolicySnapshot::load(&dir.root.join(rel), s.side).unwrap();
+            assert_eq!(&t2e_core::util::sha256_file(&meta).unwrap(), sha, "{rel}");
+            t2e_learners::nn::PolicySnapshot::load(&dir.root.join(rel), s.side).unwrap();
         }
     }
     // Matches reference known players; keys are unique (schema) and name their recorder.

@@ -2,9 +2,9 @@
 #![allow(dead_code)]
 
 use std::sync::Arc;
-use t2e::env::physics::Robot;
-use t2e::env::{EnvConfig, TrapEnv};
-use t2e::map::{Grid, PreparedMap};
+use t2e_core::env::physics::Robot;
+use t2e_core::env::{EnvConfig, TrapEnv};
+use t2e_core::map::{Grid, PreparedMap};
 
 /// Free rectangle rows r0..r1, cols c0..c1 of a 320-cell grid.
 pub fn room(r0: usize, r1: usize, c0: usize, c1: usize) -> Grid {
@@ -66,15 +66,15 @@ pub fn children_of(parent: u32, needle: &str) -> Vec<i64> {
 /// One MAPPO captor against a target that stands still, on maps the test
 /// hands the trainer (`maps` is not read), budget unbounded: the base the
 /// learning tests set their worlds, episode length and networks on.
-pub fn one_captor_against_still(name: &str, seed: u64) -> t2e::learn::train::TrainConfig {
-    use t2e::learn::train::{SideConfig, TrainConfig};
+pub fn one_captor_against_still(name: &str, seed: u64) -> t2e_learners::learn::train::TrainConfig {
+    use t2e_learners::learn::train::{SideConfig, TrainConfig};
     TrainConfig {
         name: name.into(),
         seed,
         total_env_steps: u64::MAX,
         checkpoint_every: 1000,
-        device: t2e::learn::config::DeviceChoice::Cpu,
-        protocol: t2e::protocol::Protocol::HeldOut,
+        device: t2e_learners::learn::run_config::DeviceChoice::Cpu,
+        protocol: t2e_core::protocol::Protocol::HeldOut,
         maps: "unused".into(),
         env: EnvConfig {
             num_captors: 1,
@@ -97,17 +97,17 @@ pub fn one_captor_against_still(name: &str, seed: u64) -> t2e::learn::train::Tra
 /// 10 steps.
 pub fn tiny_train_config(
     name: &str,
-    protocol: t2e::protocol::Protocol,
+    protocol: t2e_core::protocol::Protocol,
     maps: &str,
-) -> t2e::learn::train::TrainConfig {
-    use t2e::learn::train::{SideConfig, TrainConfig};
+) -> t2e_learners::learn::train::TrainConfig {
+    use t2e_learners::learn::train::{SideConfig, TrainConfig};
     TrainConfig {
         name: name.into(),
         seed: 1,
         num_envs: 2,
         rollout_steps: 10,
         total_env_steps: 20,
-        device: t2e::learn::config::DeviceChoice::Cpu,
+        device: t2e_learners::learn::run_config::DeviceChoice::Cpu,
         protocol,
         maps: maps.into(),
         extra_maps: Default::default(),
@@ -118,7 +118,7 @@ pub fn tiny_train_config(
         },
         captors: SideConfig {
             play: "mappo".parse().unwrap(),
-            net: t2e::nn::NetConfig {
+            net: t2e_learners::nn::NetConfig {
                 hidden: 8,
                 conv_channels: [2, 2],
                 patch_pool: 4,

@@ -18,6 +18,7 @@
 //! `target.` and the other way round (the target-only fields are written
 //! under `target.`).
 
+use league::rules::config::LeagueConfig;
 use serde::de::{
     self, DeserializeSeed, EnumAccess, IntoDeserializer, MapAccess, SeqAccess, VariantAccess,
     Visitor,
@@ -26,8 +27,7 @@ use serde::Deserialize;
 use std::cell::RefCell;
 use std::collections::BTreeSet;
 use std::path::Path;
-use t2e::league::config::LeagueConfig;
-use t2e::learn::config::TrainConfig;
+use t2e_learners::learn::run_config::TrainConfig;
 
 type Error = de::value::Error;
 
@@ -514,10 +514,10 @@ fn a_missing_or_stale_row_is_caught() {
 
 /// A status report with one row of every kind and every optional field
 /// set, so that every field appears in its JSON.
-fn full_status_report() -> t2e::league::status::StatusReport {
-    use t2e::env::Side;
-    use t2e::league::status::*;
-    use t2e::league::store::Kind;
+fn full_status_report() -> league::run::status::StatusReport {
+    use league::run::status::*;
+    use league::store::Kind;
+    use t2e_core::env::Side;
     StatusReport {
         league: "default".into(),
         dir: "runs/league/default".into(),

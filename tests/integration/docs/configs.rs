@@ -2,9 +2,9 @@
 //! with a header that says what it is for and names the protocol it
 //! trains under (a figure must never be read under the wrong one).
 
+use league::rules::config::LeagueConfig;
 use std::path::PathBuf;
-use t2e::league::config::LeagueConfig;
-use t2e::learn::config::TrainConfig;
+use t2e_learners::learn::run_config::TrainConfig;
 
 #[test]
 fn every_config_loads_and_its_header_names_its_protocol() {

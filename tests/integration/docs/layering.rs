@@ -193,9 +193,16 @@ fn learn_imports() -> std::collections::BTreeMap<String, std::collections::BTree
 }
 
 #[test]
-fn the_learn_floor_has_no_import_circle_and_its_settings_are_a_leaf() {
+fn the_learn_floor_has_no_import_circle_and_its_side_configs_are_a_leaf() {
     let graph = learn_imports();
-    for module in ["settings", "learner", "kind", "config", "train", "ppo"] {
+    for module in [
+        "side_config",
+        "learner",
+        "kind",
+        "run_config",
+        "train",
+        "ppo",
+    ] {
         assert!(graph.contains_key(module), "no learn::{module}: {graph:?}");
     }
     // The reader sees what it must: the registry names the algorithms,
@@ -205,14 +212,14 @@ fn the_learn_floor_has_no_import_circle_and_its_settings_are_a_leaf() {
         "{:?}",
         graph["kind"]
     );
-    assert!(graph["ppo"].contains("settings"), "{:?}", graph["ppo"]);
+    assert!(graph["ppo"].contains("side_config"), "{:?}", graph["ppo"]);
     assert!(
-        graph["settings"].is_empty(),
-        "learn::settings imports {:?}: the settings structs are a leaf",
-        graph["settings"]
+        graph["side_config"].is_empty(),
+        "learn::side_config imports {:?}: the settings structs are a leaf",
+        graph["side_config"]
     );
     for algorithm in ["ppo", "mappo", "ippo", "maddpg", "maac", "offpolicy"] {
-        for above in ["kind", "config", "train"] {
+        for above in ["kind", "run_config", "train"] {
             assert!(
                 !graph[algorithm].contains(above),
                 "learn::{algorithm} imports learn::{above}, a floor above it"

@@ -3,6 +3,7 @@
 //! reference is what the binary generates, the config references list every
 //! field, the README's quick start runs, and the core crate stays below
 //! libtorch and the database (ARCHITECTURE.md).
+mod architecture;
 mod cli_reference;
 mod config_reference;
 mod configs;

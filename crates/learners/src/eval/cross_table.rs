@@ -11,9 +11,9 @@
 
 use super::paper_table::{differences, paper_cells, same_play, Sourced, TableError, CLASSES};
 use super::{ratio_label, wilson_interval, Summary};
-use crate::env::CaptureRule;
 use std::collections::BTreeMap;
 use std::fmt::Write;
+use t2e_core::env::CaptureRule;
 
 /// One (captors, target) pair at one K and speed ratio: its summaries per
 /// class.

@@ -2,13 +2,13 @@
 //! setting, in parallel, summarised as Time, SR (with a 95% Wilson interval),
 //! Path Len and the size of the Absolutely Safe Zone over time (SoA).
 
-use crate::asz::{cells_to_m2, AszFields};
 use crate::controllers::ControllerError;
 use crate::controllers::ControllerSpec;
-use crate::env::vec_env::episode_seed;
-use crate::env::{Action, CaptureRule, EnvConfig, Side, TrapEnv};
-use crate::error::{in_interval, ConfigError};
-use crate::map::PreparedMap;
+use t2e_core::asz::{cells_to_m2, AszFields};
+use t2e_core::env::vec_env::episode_seed;
+use t2e_core::env::{Action, CaptureRule, EnvConfig, Side, TrapEnv};
+use t2e_core::error::{in_interval, ConfigError};
+use t2e_core::map::PreparedMap;
 
 pub mod cross_table;
 pub mod paper_table;
@@ -174,7 +174,7 @@ impl SettingIdentity {
     /// First 12 hex digits of the SHA-256 of the identity's JSON.
     pub fn short_hash(&self) -> String {
         let json = serde_json::to_string(self).expect("identity serialises");
-        crate::util::sha256_hex(json.as_bytes())[..12].to_string()
+        t2e_core::util::sha256_hex(json.as_bytes())[..12].to_string()
     }
 }
 
@@ -310,7 +310,7 @@ pub fn play_episode(
         target.act(&env, Side::Target, &mut actions[k..]);
         if let Some((departed, decisions)) = &mut departures {
             *decisions += 1;
-            *departed += u32::from(actions[k] != crate::heuristics::target_action(&env));
+            *departed += u32::from(actions[k] != t2e_core::heuristics::target_action(&env));
         }
         let info = env.step_state(&actions, &mut rewards);
         if setting.soa_every > 0 && env.steps % setting.soa_every == 0 {

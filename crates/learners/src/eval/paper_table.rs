@@ -5,9 +5,9 @@
 //! Markdown and LaTeX.
 
 use super::{ratio_label, Summary};
-use crate::env::CaptureRule;
 use std::collections::BTreeMap;
 use std::fmt::Write;
+use t2e_core::env::CaptureRule;
 
 /// Why eval results cannot be laid out as a table: two results for one
 /// cell, or a row that would join results of different settings.
@@ -500,7 +500,8 @@ mod tests {
                 .to_string()
                 .contains("line 2")
         );
-        let shared = std::path::Path::new(crate::PROJECT_ROOT).join("../shared/paper/tables.csv");
+        let shared =
+            std::path::Path::new(t2e_core::PROJECT_ROOT).join("../shared/paper/tables.csv");
         if let Ok(text) = std::fs::read_to_string(&shared) {
             assert_eq!(
                 text,

@@ -4,8 +4,8 @@
 //! learners and the league's frozen opponents both act through this, one
 //! forward pass per network over all the worlds it plays in.
 
-use crate::env::{Side, VecEnv, PATCH_LEN};
 use crate::nn::{pool_patch, NetConfig};
+use t2e_core::env::{Side, VecEnv, PATCH_LEN};
 
 /// Copies one side's observations out of the vector env, a world's robots
 /// adjacent, pooling each patch for the side's network.

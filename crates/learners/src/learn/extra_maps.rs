@@ -8,10 +8,10 @@
 //! run that uses them says so in its config (and hash); every figure it
 //! makes must say "paper protocol + extra maps".
 
-use crate::error::ConfigError;
-use crate::map::PreparedMap;
 use serde::{Deserialize, Serialize};
 use std::sync::Arc;
+use t2e_core::error::ConfigError;
+use t2e_core::map::PreparedMap;
 
 /// `[extra_maps]` of a training config.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

@@ -3,7 +3,7 @@
 //! what its actor sees. Everything else is the PPO of `ppo.rs`.
 
 use super::ppo::{CriticView, PpoKind};
-use crate::algorithm::Algorithm;
+use t2e_core::algorithm::Algorithm;
 use tch::Tensor;
 
 pub struct Ippo;

@@ -9,7 +9,7 @@
 
 use super::learner::LearnerKind;
 use super::{ippo, maac, maddpg, mappo};
-use crate::algorithm::Algorithm;
+use t2e_core::algorithm::Algorithm;
 
 /// The kind of `algorithm`.
 pub fn kind(algorithm: Algorithm) -> &'static dyn LearnerKind {
@@ -32,7 +32,7 @@ pub fn learner_names(last: &str) -> String {
 
 #[cfg(test)]
 mod tests {
-    use super::super::settings::SideConfig;
+    use super::super::side_config::SideConfig;
     use super::*;
     use tch::Device;
 
@@ -45,7 +45,7 @@ mod tests {
             assert!(k.chunk_len(&side) >= 1);
             assert!(k.gamma(&side) > 0.0 && k.gamma(&side) < 1.0);
             assert_eq!(k.off_policy(), k.replay(&side).is_some());
-            let vector_len = crate::env::EnvConfig::default().vector_len();
+            let vector_len = t2e_core::env::EnvConfig::default().vector_len();
             let learner = k.build(&side, vector_len, 3, Device::Cpu);
             assert_eq!(learner.algorithm(), algorithm, "{algorithm}");
             assert_eq!(learner.team(), 3);

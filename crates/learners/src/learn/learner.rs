@@ -12,12 +12,12 @@
 
 use super::adam::Adam;
 use super::rollout::{BadUpdate, Rollout, UpdateStats};
-use super::settings::SideConfig;
-use crate::algorithm::Algorithm;
-use crate::error::ConfigError;
+use super::side_config::SideConfig;
 use crate::nn::{Actor, NetConfig};
 use rand_chacha::ChaCha8Rng;
 use std::path::Path;
+use t2e_core::algorithm::Algorithm;
+use t2e_core::error::ConfigError;
 use tch::{Device, Tensor};
 
 pub trait LearnerKind: Sync {

@@ -32,12 +32,12 @@ use super::offpolicy::{
     ReplayCore, ReplayKind,
 };
 use super::rollout::{BadUpdate, UpdateStats};
-pub use super::settings::maac::MaacConfig;
-use super::settings::replay::ReplayConfig;
-use crate::algorithm::Algorithm;
-use crate::env::Action;
+pub use super::side_config::maac::MaacConfig;
+use super::side_config::replay::ReplayConfig;
 use crate::nn::{Actor, NetConfig, Trunk};
 use rand_chacha::ChaCha8Rng;
+use t2e_core::algorithm::Algorithm;
+use t2e_core::env::Action;
 use tch::{nn, Device, Kind, Tensor};
 
 /// Scaled dot-product attention of every robot over its teammates.

@@ -27,12 +27,12 @@ use super::offpolicy::{
 };
 use super::ppo::CriticView;
 use super::rollout::{BadUpdate, UpdateStats};
-pub use super::settings::maddpg::MaddpgConfig;
-use super::settings::replay::ReplayConfig;
-use crate::algorithm::Algorithm;
-use crate::env::Action;
+pub use super::side_config::maddpg::MaddpgConfig;
+use super::side_config::replay::ReplayConfig;
 use crate::nn::{Actor, NetConfig, Trunk};
 use rand_chacha::ChaCha8Rng;
+use t2e_core::algorithm::Algorithm;
+use t2e_core::env::Action;
 use tch::{nn, Device, Kind, Tensor};
 
 /// The centralised Q function: the trunk over the team's observations (own

@@ -7,9 +7,9 @@
 //! maps are trained on, the environment and the evaluation do not change;
 //! a run that balances says so in its config (and hash).
 
-use crate::map::{PreparedMap, SizeClass};
 use serde::{Deserialize, Serialize};
 use std::sync::Arc;
+use t2e_core::map::{PreparedMap, SizeClass};
 
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]

@@ -5,7 +5,7 @@
 //! Everything else is the PPO of `ppo.rs`.
 
 use super::ppo::{CriticView, PpoKind};
-use crate::algorithm::Algorithm;
+use t2e_core::algorithm::Algorithm;
 use tch::{Device, Kind, Tensor};
 
 pub struct Mappo;

@@ -5,7 +5,6 @@
 
 pub mod acting;
 pub mod adam;
-pub mod config;
 pub mod extra_maps;
 pub mod ippo;
 pub mod kind;
@@ -18,11 +17,12 @@ pub mod offpolicy;
 pub mod persist;
 pub mod ppo;
 pub mod rollout;
-pub mod settings;
+pub mod run_config;
 pub mod shaping;
+pub mod side_config;
 pub mod train;
 pub mod undo;
 
-pub use crate::algorithm::Algorithm;
 pub use kind::kind;
 pub use learner::LearnerKind;
+pub use t2e_core::algorithm::Algorithm;

@@ -18,17 +18,17 @@ use super::learner::{
     file, optimizer_file, restore_optimizers, Learner, LearnerKind, NamedTensors,
 };
 use super::rollout::{BadUpdate, Rollout, UpdateStats};
-use super::settings::replay::{ReplayConfig, ReplaySettings};
-use super::settings::SideConfig;
+use super::side_config::replay::{ReplayConfig, ReplaySettings};
+use super::side_config::SideConfig;
 use super::undo::UndoPoint;
-use crate::algorithm::Algorithm;
-use crate::error::ConfigError;
 use crate::nn::checkpoint::{load_into, named_cpu_tensors};
 use crate::nn::{obs_tensors, Actor, NetConfig};
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
+use t2e_core::algorithm::Algorithm;
+use t2e_core::error::ConfigError;
 use tch::{nn, Device, Kind, Tensor};
 
 /// Sequences of `len` steps of `team` robots, in a ring of `capacity`.

@@ -5,7 +5,6 @@
 //! so the league's learners write and read the same folders.
 
 use super::learner::Learner;
-use crate::fs::Written;
 use crate::nn::checkpoint::{
     read_checked, read_meta, write_checkpoint, write_new_checkpoint, CheckpointError,
     CheckpointMeta,
@@ -13,6 +12,7 @@ use crate::nn::checkpoint::{
 pub use crate::nn::run_dir::{Recovery, RunDir, RunState};
 use anyhow::{bail, Context, Result};
 use std::path::Path;
+use t2e_core::fs::Written;
 
 /// Writes `learner` as the checkpoint folder `dir` with sidecar `meta`
 /// (its `learner_state` filled in here).

@@ -9,11 +9,9 @@ use super::learner::{
     file, optimizer_file, restore_optimizers, Learner, LearnerKind, NamedTensors,
 };
 use super::rollout::{BadUpdate, Rollout, UpdateStats};
-pub use super::settings::ppo::PpoConfig;
-use super::settings::SideConfig;
+pub use super::side_config::ppo::PpoConfig;
+use super::side_config::SideConfig;
 use super::undo::UndoPoint;
-use crate::algorithm::Algorithm;
-use crate::error::ConfigError;
 use crate::nn::checkpoint::{load_into, named_cpu_tensors};
 use crate::nn::prior::add_prior;
 use crate::nn::{Actor, Critic, NetConfig};
@@ -21,6 +19,8 @@ use rand::seq::SliceRandom;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
+use t2e_core::algorithm::Algorithm;
+use t2e_core::error::ConfigError;
 use tch::{nn, Device, Kind, Tensor};
 
 /// Generalised advantage estimation over a rollout of `steps` x `rows`

@@ -12,7 +12,7 @@
 //! ```
 //!
 //! Invariants:
-//! - A checkpoint folder is written whole or not at all (`crate::fs`): a
+//! - A checkpoint folder is written whole or not at all (`t2e_core::fs`): a
 //!   complete checkpoint is never removed before its replacement is in
 //!   place, and an identical one is not rewritten.
 //! - Loading verifies each weight file against its hash in `meta.json` and
@@ -23,14 +23,14 @@
 //!   store recorded (`verify_recorded`).
 
 use super::config::NetConfig;
-use crate::algorithm::Algorithm;
-use crate::env::sight::WALL_RAY_RANGE_M;
-use crate::env::{EnvConfig, Side, Sight};
-use crate::fs::{write_dir_atomically, write_new_dir_atomically, FsError, Written};
-use crate::util::sha256_file;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
+use t2e_core::algorithm::Algorithm;
+use t2e_core::env::sight::WALL_RAY_RANGE_M;
+use t2e_core::env::{EnvConfig, Side, Sight};
+use t2e_core::fs::{write_dir_atomically, write_new_dir_atomically, FsError, Written};
+use t2e_core::util::sha256_file;
 use tch::{nn, Device, Tensor};
 
 /// Version of the checkpoint layout; bumped when it changes incompatibly.
@@ -59,11 +59,11 @@ pub struct CheckpointMeta {
     pub iteration: u64,
     /// Hash of the training configuration (same hash, same settings).
     pub config_hash: String,
-    /// The protocol it was trained under (`crate::protocol`). Checkpoints
+    /// The protocol it was trained under (`t2e_core::protocol`). Checkpoints
     /// written before the field existed were trained held-out: the Gibson
     /// maps were refused for training from the start.
     #[serde(default)]
-    pub protocol: crate::protocol::Protocol,
+    pub protocol: t2e_core::protocol::Protocol,
     /// Crate version and git commit of the code that wrote it.
     pub code_version: String,
     /// Learner state that is not a tensor: value normaliser and Adam step.
@@ -124,7 +124,7 @@ impl CheckpointMeta {
 }
 
 /// Why a checkpoint folder cannot be read or written; each message names
-/// the file (a cause follows it in the message, as in `crate::fs`).
+/// the file (a cause follows it in the message, as in `t2e_core::fs`).
 #[derive(Debug, thiserror::Error)]
 pub enum CheckpointError {
     #[error("{}: missing", .0.display())]
@@ -517,7 +517,7 @@ pub fn read_meta_hashed(dir: &Path) -> Result<(CheckpointMeta, String), Checkpoi
         Ok(text) => text,
         Err(cause) => return Err(CheckpointError::Unreadable { path, cause }),
     };
-    let sha256 = crate::util::sha256_hex(text.as_bytes());
+    let sha256 = t2e_core::util::sha256_hex(text.as_bytes());
     #[derive(Deserialize)]
     struct Format {
         format: u32,
@@ -557,11 +557,11 @@ pub fn read_meta_hashed(dir: &Path) -> Result<(CheckpointMeta, String), Checkpoi
             meta.speed_ratio
         )));
     }
-    if meta.num_captors == 0 || meta.num_captors > crate::env::MAX_CAPTORS {
+    if meta.num_captors == 0 || meta.num_captors > t2e_core::env::MAX_CAPTORS {
         return Err(invalid(format!(
             "num_captors = {}: must be between 1 and {}",
             meta.num_captors,
-            crate::env::MAX_CAPTORS
+            t2e_core::env::MAX_CAPTORS
         )));
     }
     meta.net
@@ -689,7 +689,7 @@ fn verify_folder(dir: &Path, recorded: Option<&str>) -> Result<(), CheckpointErr
             }
             Ok(_) => {}
         }
-        let got = crate::util::sha256_file(&path)
+        let got = t2e_core::util::sha256_file(&path)
             .map_err(|e| refuse(path.clone(), format!("listed but unreadable ({e})")))?;
         if got != want.trim().to_ascii_lowercase() {
             return Err(refuse(

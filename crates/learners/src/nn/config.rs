@@ -4,9 +4,9 @@
 use super::egocentric::EgocentricVector;
 use super::prior;
 use super::vector::ScaledVector;
-use crate::env::{Sight, PATCH};
-use crate::error::{in_range, ConfigError};
 use serde::{Deserialize, Serialize};
+use t2e_core::env::{Sight, PATCH};
+use t2e_core::error::{in_range, ConfigError};
 
 /// Network sizes. Defaults are the paper's (hidden 128, one GRU layer); the
 /// patch is max-pooled before the CNN, which keeps every obstacle cell (an
@@ -32,7 +32,7 @@ pub struct NetConfig {
     /// Left out of the stored config while 0, as `vector_input`.
     #[serde(skip_serializing_if = "is_zero")]
     pub heuristic_prior: f64,
-    /// Inputs beyond the spec's (`crate::env::Sight`: wall rays across the
+    /// Inputs beyond the spec's (`t2e_core::env::Sight`: wall rays across the
     /// map), appended to the agent vector; the env is built to write them.
     /// Left out of the stored config while off, as `vector_input`.
     #[serde(skip_serializing_if = "Sight::is_off")]

@@ -137,9 +137,9 @@ impl EgocentricVector {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::env::observe::write_vector;
-    use crate::env::physics::Robot;
     use std::f64::consts::FRAC_PI_2;
+    use t2e_core::env::observe::write_vector;
+    use t2e_core::env::physics::Robot;
 
     fn robot(pos: [f64; 2], vel: [f64; 2], theta: f64) -> Robot {
         Robot {
@@ -190,7 +190,7 @@ mod tests {
     /// the same numbers as the network's batched one.
     #[test]
     fn the_core_egocentric_vector_is_the_networks() {
-        use crate::env::features::{egocentric_vector, egocentric_width};
+        use t2e_core::env::features::{egocentric_vector, egocentric_width};
         let robots = [
             robot([2.0, 3.0], [0.4, -0.2], 0.3),
             robot([4.0, 1.0], [-0.1, 0.7], 2.0),

@@ -18,10 +18,10 @@ mod seeding;
 pub mod stacked;
 mod vector;
 
-/// Pooling happens once per observation, outside the network.
-pub use crate::env::features::pool_patch;
 pub use checkpoint::CheckpointMeta;
 pub use policy::{CheckpointController, PolicyError, PolicySnapshot};
+/// Pooling happens once per observation, outside the network.
+pub use t2e_core::env::features::pool_patch;
 
 pub use config::{NetConfig, VectorInput};
 pub(crate) use net::Trunk;
@@ -32,7 +32,7 @@ pub use seeding::{sample, seed_torch, seeded};
 mod tests {
     use super::vector::ScaledVector;
     use super::*;
-    use crate::env::PATCH;
+    use t2e_core::env::PATCH;
     use tch::{nn, Device, Kind, Tensor};
 
     #[test]

@@ -4,7 +4,7 @@
 use super::config::{NetConfig, VectorInput};
 use super::egocentric::EgocentricVector;
 use super::vector::ScaledVector;
-use crate::env::Action;
+use t2e_core::env::Action;
 use tch::nn::{self, RNN};
 use tch::{Device, Kind, Tensor};
 

@@ -12,12 +12,12 @@ use super::checkpoint::{
 use super::net::{obs_tensors, Actor};
 use super::run_dir::{latest_checkpoint, RunDir, RunDirError};
 use super::seeding::sample;
-use crate::env::features::pool_patch;
-use crate::env::{Action, Controller, Side, TrapEnv, PATCH_LEN};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
+use t2e_core::env::features::pool_patch;
+use t2e_core::env::{Action, Controller, Side, TrapEnv, PATCH_LEN};
 use tch::{nn, Device, Kind, Tensor};
 
 /// Why a checkpoint cannot be loaded as a player: the folder itself, or the

@@ -20,8 +20,8 @@
 //! hints (`Rollout::hints`, `Learner::wants_hints`); `check_kl` is its
 //! side and learner check.
 
-use crate::env::{Action, Side, TrapEnv};
-use crate::error::ConfigError;
+use t2e_core::env::{Action, Side, TrapEnv};
+use t2e_core::error::ConfigError;
 use tch::{Kind, Tensor};
 
 /// The largest prior weight accepted: beyond it the policy is the rule-based
@@ -30,7 +30,7 @@ pub const MAX_WEIGHT: f64 = 20.0;
 
 /// The action index the rule-based target would take in `env`.
 pub fn target_hint(env: &TrapEnv) -> i64 {
-    crate::heuristics::target_action(env).index() as i64
+    t2e_core::heuristics::target_action(env).index() as i64
 }
 
 /// `logits` [..., 5] plus `weight` on each row's hinted action (`hints`

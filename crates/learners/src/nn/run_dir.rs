@@ -2,8 +2,12 @@
 //!
 //! ```text
 //! RUN/
+//!   config.toml                 the run's config, as `train` was given it
 //!   state.json                  where the run stands (`RunState`)
 //!   checkpoints/SIDE-ENVSTEPS/  one checkpoint folder per save (nn::checkpoint)
+//!   metrics.csv, curves.png     one row per iteration, and its curves (`train`)
+//!   evals/SIDE-ENVSTEPS/        `train --eval-every`'s evaluations, gathered
+//!                               in eval.csv, eval.png and departure.png
 //! ```
 //!
 //! `train`, the league's learners and `exploit`'s best responses all keep
@@ -13,10 +17,10 @@
 //! zero-padded); a folder whose name starts with a dot is a write in
 //! progress and never counts.
 
-use crate::env::Side;
-use crate::fs::{clean_stale_temporaries, write_file_atomically, FsError};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
+use t2e_core::env::Side;
+use t2e_core::fs::{clean_stale_temporaries, write_file_atomically, FsError};
 
 /// What went wrong with a run folder; each message names the file.
 #[derive(Debug, thiserror::Error)]
@@ -102,6 +106,39 @@ impl RunDir {
 
     pub fn state_path(&self) -> PathBuf {
         self.root.join("state.json")
+    }
+
+    pub fn config_path(&self) -> PathBuf {
+        self.root.join("config.toml")
+    }
+
+    pub fn metrics_path(&self) -> PathBuf {
+        self.root.join("metrics.csv")
+    }
+
+    pub fn curves_path(&self) -> PathBuf {
+        self.root.join("curves.png")
+    }
+
+    /// The folder of the periodic evaluation of `side`'s checkpoint at
+    /// `env_steps`.
+    pub fn eval_dir(&self, side: Side, env_steps: u64) -> PathBuf {
+        self.root
+            .join("evals")
+            .join(format!("{}-{env_steps:012}", side.name()))
+    }
+
+    /// The periodic evaluations' table and plots.
+    pub fn eval_csv_path(&self) -> PathBuf {
+        self.root.join("eval.csv")
+    }
+
+    pub fn eval_png_path(&self) -> PathBuf {
+        self.root.join("eval.png")
+    }
+
+    pub fn departure_png_path(&self) -> PathBuf {
+        self.root.join("departure.png")
     }
 
     /// Whether a run was saved here (its `state.json` exists).

@@ -16,7 +16,7 @@ use super::config::{NetConfig, VectorInput};
 use super::egocentric::EgocentricVector;
 use super::net::{Actor, VectorIn};
 use super::vector::ScaledVector;
-use crate::env::Action;
+use t2e_core::env::Action;
 use tch::{Kind, Tensor};
 
 /// One actor's weights, laid out for stacking (linear weights transposed to

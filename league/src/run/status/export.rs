@@ -1,8 +1,8 @@
 //! `export`: a player's checkpoint copied out of the league, by name or as the validation panel's best.
 
 use super::report::StatusReport;
-use crate::run::dir::LeagueDir;
-use crate::run::open::open_read_only as open;
+use crate::run::folder::layout::LeagueDir;
+use crate::run::folder::open::open_read_only as open;
 use crate::store::{Kind, Player};
 use anyhow::{bail, Context, Result};
 use std::fmt::Write as _;

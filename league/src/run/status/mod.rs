@@ -5,7 +5,7 @@
 use crate::rules::config::LeagueConfig;
 use crate::rules::players::EVALUATOR;
 use crate::rules::ratings::{bradley_terry, PairRecord};
-use crate::run::dir::LeagueDir;
+use crate::run::folder::layout::LeagueDir;
 use crate::store::{
     host_name, now_ms, ExploitRecord, Heartbeat, HeldOutResult, Kind, PairResult, Panel, Player,
     Store,
@@ -145,7 +145,7 @@ pub fn panel_rows(
 
 /// Opens a league directory for reading only (see `open::open_read_only`).
 pub fn open(dir: &LeagueDir) -> Result<(LeagueConfig, Store)> {
-    crate::run::open::open_read_only(dir)
+    crate::run::folder::open::open_read_only(dir)
 }
 
 /// Seconds without a heartbeat after which a process on another machine
@@ -168,7 +168,7 @@ fn pid_is_league_process(pid: i64) -> bool {
         return false;
     }
     match std::fs::read(format!("/proc/{pid}/cmdline")) {
-        Ok(cmd) => crate::run::child::ChildCommand::is_league_process(&cmd),
+        Ok(cmd) => crate::run::processes::child::ChildCommand::is_league_process(&cmd),
         Err(_) => false,
     }
 }

@@ -1,8 +1,8 @@
 //! `status --plot`: ratings over matches, the panel's curves over env steps, and the payoff heat map.
 
 use super::report::{PanelRow, PlayerRow, StatusReport};
-use crate::run::dir::LeagueDir;
-use crate::run::open::open_read_only as open;
+use crate::run::folder::layout::LeagueDir;
+use crate::run::folder::open::open_read_only as open;
 use crate::store::Kind;
 use anyhow::Result;
 use std::path::Path;
@@ -163,8 +163,8 @@ pub fn panel_curves(players: &[PlayerRow], panel: &[PanelRow]) -> Vec<PanelCurve
 /// captors, columns targets).
 pub fn plot(dir: &LeagueDir, r: &StatusReport, path: &Path) -> Result<()> {
     use image::{Rgb, RgbImage};
-    use t2e_learners::render::heat_map::{heat_map, HeatMap};
-    use t2e_learners::render::plot::{line_plot, palette, save_png, Series};
+    use t2e_learners::plots::heat_map::{heat_map, HeatMap};
+    use t2e_learners::plots::line::{line_plot, palette, save_png, Series};
     let (cfg, store) = open(dir)?;
     let mut history = Vec::new();
     for p in &r.players {

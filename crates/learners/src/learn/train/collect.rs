@@ -7,11 +7,11 @@ use super::super::shaping::shaping_term;
 use super::hooks::RolloutHooks;
 use super::metrics::RolloutTally;
 use super::trainer::{LearnerSide, Trainer};
-use crate::env::{Action, VecEnv};
 use crate::nn::obs_tensors;
 use crate::nn::prior::{add_prior, target_hint};
 use anyhow::{anyhow, Result};
 use std::time::Instant;
+use t2e_core::env::{Action, VecEnv};
 use tch::{Device, Kind, Tensor};
 
 impl Trainer {

@@ -1,8 +1,8 @@
 //! What a caller adds to the training loop's rollout (the league's
 //! network opponents), and the empty hooks of a plain run.
 
-use crate::env::{Action, VecEnv};
 use anyhow::Result;
+use t2e_core::env::{Action, VecEnv};
 
 /// What a caller adds to a rollout: actions for robots that neither a
 /// learner of the trainer nor a controller inside the vector env plays (the

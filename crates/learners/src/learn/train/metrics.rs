@@ -3,9 +3,9 @@
 
 use super::super::kind::kind;
 use super::super::rollout::UpdateStats;
-use crate::algorithm::Algorithm;
-use crate::env::Side;
 use serde::{Deserialize, Serialize};
+use t2e_core::algorithm::Algorithm;
+use t2e_core::env::Side;
 
 /// What a rollout's finished episodes and its clocks add up to.
 #[derive(Default)]

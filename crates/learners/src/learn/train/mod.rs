@@ -12,29 +12,30 @@
 //! Here: the `Trainer`, its start and resume, an iteration and its update.
 //! `collect.rs` plays the rollout, `save.rs` writes and reads checkpoints,
 //! `metrics.rs` is the row an iteration reports, `hooks.rs` what a caller
-//! adds to a rollout.
+//! adds to a rollout. `run.rs` is a whole run in its folder (the loop
+//! `train` drives: metrics, curves, resume), `periodic_eval.rs` its
+//! evaluations in child processes as it goes.
 
 mod collect;
+mod csv_rows;
 mod hooks;
 mod metrics;
+pub mod periodic_eval;
+pub mod run;
 mod save;
 mod trainer;
 pub use save::SideHandle;
 use trainer::LearnerSide;
 pub use trainer::Trainer;
 
-pub use super::config::{
-    check_rollout, DeviceChoice, Play, SideConfig, SideDefaults, TrainConfig, TrainDefaults,
-};
 use super::kind::kind;
 use super::learner::Learner;
 use super::offpolicy::sequence_bytes;
 use super::persist::{self, RunDir};
 use super::rollout::Rollout;
-use crate::algorithm::Algorithm;
-use crate::env::vec_env::episode_seed;
-use crate::env::{Action, Side, VecEnv};
-use crate::map::PreparedMap;
+pub use super::run_config::{
+    check_rollout, DeviceChoice, Play, SideConfig, SideDefaults, TrainConfig, TrainDefaults,
+};
 use anyhow::{anyhow, bail, Context, Result};
 pub use hooks::{NoHooks, RolloutHooks};
 pub use metrics::Metrics;
@@ -44,6 +45,10 @@ use rand_chacha::ChaCha8Rng;
 use std::path::Path;
 use std::sync::Arc;
 use std::time::Instant;
+use t2e_core::algorithm::Algorithm;
+use t2e_core::env::vec_env::episode_seed;
+use t2e_core::env::{Action, Side, VecEnv};
+use t2e_core::map::PreparedMap;
 use tch::{Device, Kind, Tensor};
 
 fn mix_seed(seed: u64, iteration: u64) -> u64 {
@@ -76,9 +81,9 @@ impl Trainer {
             maps
         } else {
             let spec = &cfg.extra_maps.maps;
-            let extra = crate::map::catalog::load_prepared(spec)
+            let extra = t2e_core::map::catalog::load_prepared(spec)
                 .with_context(|| format!("extra_maps.maps = \"{spec}\""))?;
-            crate::protocol::check_extra_maps(spec, &extra)
+            t2e_core::protocol::check_extra_maps(spec, &extra)
                 .map_err(|e| anyhow::anyhow!("extra_maps.{e}"))?;
             super::extra_maps::mix(&maps, &extra, cfg.extra_maps.share)
         };

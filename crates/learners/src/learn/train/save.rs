@@ -4,10 +4,10 @@
 
 use super::super::persist::{self, RunDir, RunState};
 use super::trainer::{LearnerSide, Trainer};
-use crate::env::Side;
 use crate::nn::checkpoint::{checkpoint_name, code_version, CheckpointMeta, FORMAT};
 use anyhow::{Context, Result};
 use std::path::{Path, PathBuf};
+use t2e_core::env::Side;
 
 impl Trainer {
     /// The sidecar of `side`'s checkpoint as of now.

@@ -2,11 +2,11 @@
 //! stands. Its work is in mod.rs (start, resume, iterate), collect.rs and
 //! save.rs.
 
-use super::super::config::TrainConfig;
 use super::super::learner::Learner;
 use super::super::rollout::Rollout;
-use crate::env::{Action, Side, VecEnv};
+use super::super::run_config::TrainConfig;
 use rand_chacha::ChaCha8Rng;
+use t2e_core::env::{Action, Side, VecEnv};
 use tch::{Device, Tensor};
 
 /// One learning side during training.
