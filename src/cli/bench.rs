@@ -283,14 +283,28 @@ pub fn run(args: BenchArgs) -> Result<()> {
     });
     let maps = map::catalog::load_prepared(&env_spec)?;
     let secs = args.seconds;
-    let mut rows = Vec::new();
     let cfg = EnvConfig {
         num_captors: 3,
         ..EnvConfig::default()
     };
-
-    let one_pool = rayon::ThreadPoolBuilder::new().num_threads(1).build()?;
     let on_gibson = env_spec == "gibson";
+    let mut rows = single_core_rows(&cfg, &maps, secs, on_gibson)?;
+    rows.extend(batched_rows(&cfg, &maps, secs, args.envs, on_gibson)?);
+    rows.extend(asz_rows(&cfg, secs)?);
+    print_rows(&rows, &env_spec, secs);
+    // The ASZ-greedy captor does 4 ASZ per captor per step.
+    super::bench_greedy::run(&cfg, &maps, &env_spec, secs)
+}
+
+/// The environment's step on one core, with and without observations.
+fn single_core_rows(
+    cfg: &EnvConfig,
+    maps: &Arc<Vec<Arc<PreparedMap>>>,
+    secs: f64,
+    on_gibson: bool,
+) -> Result<Vec<Row>> {
+    let mut rows = Vec::new();
+    let one_pool = rayon::ThreadPoolBuilder::new().num_threads(1).build()?;
     for (what, both, obs, reference, before_us) in [
         (
             "env step, 3v1, observations, rule-based target, random captors, 1 core",
@@ -326,27 +340,39 @@ pub fn run(args: BenchArgs) -> Result<()> {
         });
     }
 
+    Ok(rows)
+}
+
+/// The vector env on every thread, one observation build, and the
+/// held-out check of the generated training maps.
+fn batched_rows(
+    cfg: &EnvConfig,
+    maps: &Arc<Vec<Arc<PreparedMap>>>,
+    secs: f64,
+    envs: usize,
+    on_gibson: bool,
+) -> Result<Vec<Row>> {
+    let mut rows = Vec::new();
     let threads = rayon::current_num_threads();
-    let mut venv =
-        VecEnv::new(cfg.clone(), maps.clone(), args.envs, 3).map_err(anyhow::Error::msg)?;
+    let mut venv = VecEnv::new(cfg.clone(), maps.clone(), envs, 3).map_err(anyhow::Error::msg)?;
     venv.script(Side::Target, || Box::new(Heuristic));
     venv.reset()?;
     let mut rng = ChaCha8Rng::seed_from_u64(9);
-    let mut acts = vec![Action::Stop; args.envs * 4];
+    let mut acts = vec![Action::Stop; envs * 4];
     let per = measure(secs, || {
         for a in acts.iter_mut() {
             *a = Action::from_index(rng.gen_range(0..Action::COUNT));
         }
         venv.step(&acts).expect("placement");
-        args.envs as u64
+        envs as u64
     });
     rows.push(Row {
-        what: format!("vector env, {} worlds, 3v1, observations, rule-based target, random captors, {threads} cores", args.envs),
+        what: format!("vector env, {} worlds, 3v1, observations, rule-based target, random captors, {threads} cores", envs),
         per_op: per,
         unit: "steps/s",
         reference: Some(275.0 * threads as f64),
         // 65.7 k world-steps/s on one thread with 64 worlds.
-        before_us: (on_gibson && threads == 1 && args.envs == 64).then_some(1e6 / 65.7e3),
+        before_us: (on_gibson && threads == 1 && envs == 64).then_some(1e6 / 65.7e3),
     });
 
     // One observation build (vector + 48x48 patch) of one robot.
@@ -389,110 +415,154 @@ pub fn run(args: BenchArgs) -> Result<()> {
         before_us: None,
     });
 
-    // ASZ on the smallest, a medium and the largest Gibson map, over random placements.
-    if gibson {
-        let dir = map::catalog::gibson_dir().unwrap();
-        for (name, reference_ms, before_us) in [
-            ("Kettle_floor_trav_0_v3", Some(14.0), 202.0),
-            ("Ladue_floor_trav_0_v3", None, 587.0),
-            ("Graceville_floor_trav_0_v3", Some(23.0), 1185.0),
-        ] {
-            let m = Arc::new(PreparedMap::new(map::load_png(
-                &dir.join(format!("{name}.png")),
-            )?));
-            let free = m.grid.free_cells();
-            let mut env =
-                TrapEnv::new(cfg.clone(), Arc::new(vec![m.clone()])).map_err(anyhow::Error::msg)?;
-            let starts: Vec<_> = (0..64)
-                .map(|s| {
-                    env.reset_state(s).expect("placement");
-                    env.asz_sources()
-                })
-                .collect();
-            let mut fm = FastMarching::new();
-            let mut i = 0;
-            let per = measure(secs, || {
-                let (c, t) = &starts[i % starts.len()];
-                i += 1;
-                std::hint::black_box(fm.asz_cells(&*m, *t, c));
-                1
-            });
-            rows.push(Row {
-                what: format!("ASZ (3 captors, random starts) on {name}, {free} free cells"),
-                per_op: per,
-                unit: "ASZ/s",
-                reference: reference_ms.map(|ms: f64| 1000.0 / ms),
-                before_us: Some(before_us),
-            });
-            let mut fields = AszFields::new();
-            let per = measure(secs, || {
-                let (c, t) = &starts[i % starts.len()];
-                i += 1;
-                std::hint::black_box(fields.asz_cells(&*m, *t, c));
-                1
-            });
-            rows.push(Row {
-                what: format!(
-                    "ASZ by per-robot fields (3 captors, random starts, no field kept) on {name}"
-                ),
-                per_op: per,
-                unit: "ASZ/s",
-                reference: reference_ms.map(|ms: f64| 1000.0 / ms),
-                before_us: None,
-            });
-            // The planner's case: the other robots' fields kept, one captor
-            // moved. The fields keep the counts of the last moves of one
-            // state, so the captor visits more cells around its own in turn
-            // than they keep, and its field is marched every time.
-            let (c, t) = &starts[0];
-            fields.asz_cells(&*m, *t, c);
-            let moves: Vec<[f64; 2]> = (-6..=6i32)
-                .flat_map(|dr| (-6..=6i32).map(move |dc| (dr, dc)))
-                .filter(|&step| step != (0, 0))
-                .map(|(dr, dc)| {
-                    [
-                        c[0].pos[0] + map::CELL_SIZE * dc as f64,
-                        c[0].pos[1] + map::CELL_SIZE * dr as f64,
-                    ]
-                })
-                .filter(|&p| {
-                    let (r, col) = m.grid.cell_of(p);
-                    m.grid.is_free(r, col)
-                })
-                .collect();
-            let per = measure(secs, || {
-                i += 1;
-                let moved = moves[i % moves.len()];
-                std::hint::black_box(fields.with_moved_captor(&*m, *t, c, 0, moved));
-                1
-            });
-            rows.push(Row {
-                what: format!(
-                    "ASZ by per-robot fields, one captor moved, the others' fields kept, on {name}"
-                ),
-                per_op: per,
-                unit: "ASZ/s",
-                reference: reference_ms.map(|ms: f64| 1000.0 / ms),
-                before_us: None,
-            });
-            let per = measure(secs, || {
-                let (c, t) = &starts[i % starts.len()];
-                i += 1;
-                let mut sources = c.clone();
-                sources.push(*t);
-                fm.march(&*m, &sources, None);
-                1
-            });
-            rows.push(Row {
-                what: format!("full arrival-time march (4 fronts, every cell) on {name}"),
-                per_op: per,
-                unit: "marches/s",
-                reference: None,
-                before_us: None,
-            });
-        }
-    }
+    Ok(rows)
+}
 
+/// ASZ on the smallest, a medium and the largest Gibson map, over random
+/// placements (none without the Gibson maps).
+fn asz_rows(cfg: &EnvConfig, secs: f64) -> Result<Vec<Row>> {
+    let Some(dir) = map::catalog::gibson_dir() else {
+        return Ok(Vec::new());
+    };
+    let mut rows = Vec::new();
+    for (name, reference_ms, before_us) in [
+        ("Kettle_floor_trav_0_v3", Some(14.0), 202.0),
+        ("Ladue_floor_trav_0_v3", None, 587.0),
+        ("Graceville_floor_trav_0_v3", Some(23.0), 1185.0),
+    ] {
+        let m = Arc::new(PreparedMap::new(map::load_png(
+            &dir.join(format!("{name}.png")),
+        )?));
+        rows.extend(asz_rows_on(cfg, &m, name, secs, reference_ms, before_us)?);
+    }
+    Ok(rows)
+}
+
+/// One map's ASZ rows: the labelled march, the per-robot fields, the
+/// planner's case (one captor moved), and a full arrival-time march.
+fn asz_rows_on(
+    cfg: &EnvConfig,
+    m: &Arc<PreparedMap>,
+    name: &str,
+    secs: f64,
+    reference_ms: Option<f64>,
+    before_us: f64,
+) -> Result<Vec<Row>> {
+    let mut rows = Vec::new();
+    let free = m.grid.free_cells();
+    let mut env =
+        TrapEnv::new(cfg.clone(), Arc::new(vec![m.clone()])).map_err(anyhow::Error::msg)?;
+    let starts: Vec<_> = (0..64)
+        .map(|s| {
+            env.reset_state(s).expect("placement");
+            env.asz_sources()
+        })
+        .collect();
+    let mut fm = FastMarching::new();
+    let mut i = 0;
+    let per = measure(secs, || {
+        let (c, t) = &starts[i % starts.len()];
+        i += 1;
+        std::hint::black_box(fm.asz_cells(&**m, *t, c));
+        1
+    });
+    rows.push(Row {
+        what: format!("ASZ (3 captors, random starts) on {name}, {free} free cells"),
+        per_op: per,
+        unit: "ASZ/s",
+        reference: reference_ms.map(|ms: f64| 1000.0 / ms),
+        before_us: Some(before_us),
+    });
+    let mut fields = AszFields::new();
+    let per = measure(secs, || {
+        let (c, t) = &starts[i % starts.len()];
+        i += 1;
+        std::hint::black_box(fields.asz_cells(&**m, *t, c));
+        1
+    });
+    rows.push(Row {
+        what: format!(
+            "ASZ by per-robot fields (3 captors, random starts, no field kept) on {name}"
+        ),
+        per_op: per,
+        unit: "ASZ/s",
+        reference: reference_ms.map(|ms: f64| 1000.0 / ms),
+        before_us: None,
+    });
+    rows.push(moved_captor_row(
+        m,
+        name,
+        &starts,
+        &mut fields,
+        secs,
+        reference_ms,
+    ));
+    let per = measure(secs, || {
+        let (c, t) = &starts[i % starts.len()];
+        i += 1;
+        let mut sources = c.clone();
+        sources.push(*t);
+        fm.march(&**m, &sources, None);
+        1
+    });
+    rows.push(Row {
+        what: format!("full arrival-time march (4 fronts, every cell) on {name}"),
+        per_op: per,
+        unit: "marches/s",
+        reference: None,
+        before_us: None,
+    });
+    Ok(rows)
+}
+
+/// The planner's case: the other robots' fields kept, one captor moved.
+/// The fields keep the counts of the last moves of one state, so the
+/// captor visits more cells around its own in turn than they keep, and its
+/// field is marched every time.
+fn moved_captor_row(
+    m: &Arc<PreparedMap>,
+    name: &str,
+    starts: &[(Vec<t2e_core::asz::Source>, t2e_core::asz::Source)],
+    fields: &mut AszFields,
+    secs: f64,
+    reference_ms: Option<f64>,
+) -> Row {
+    let mut i = 0;
+    let (c, t) = &starts[0];
+    fields.asz_cells(&**m, *t, c);
+    let moves: Vec<[f64; 2]> = (-6..=6i32)
+        .flat_map(|dr| (-6..=6i32).map(move |dc| (dr, dc)))
+        .filter(|&step| step != (0, 0))
+        .map(|(dr, dc)| {
+            [
+                c[0].pos[0] + map::CELL_SIZE * dc as f64,
+                c[0].pos[1] + map::CELL_SIZE * dr as f64,
+            ]
+        })
+        .filter(|&p| {
+            let (r, col) = m.grid.cell_of(p);
+            m.grid.is_free(r, col)
+        })
+        .collect();
+    let per = measure(secs, || {
+        i += 1;
+        let moved = moves[i % moves.len()];
+        std::hint::black_box(fields.with_moved_captor(&**m, *t, c, 0, moved));
+        1
+    });
+    Row {
+        what: format!(
+            "ASZ by per-robot fields, one captor moved, the others' fields kept, on {name}"
+        ),
+        per_op: per,
+        unit: "ASZ/s",
+        reference: reference_ms.map(|ms: f64| 1000.0 / ms),
+        before_us: None,
+    }
+}
+
+fn print_rows(rows: &[Row], env_spec: &str, secs: f64) {
+    let threads = rayon::current_num_threads();
     println!(
         "maps for env rows: {env_spec}; {:.1} s per row; {threads} rayon threads\n",
         secs
@@ -520,6 +590,4 @@ pub fn run(args: BenchArgs) -> Result<()> {
     println!(
         "\n{BEFORE_DATE}: the same row measured with `bench --threads 1` on the Gibson maps before the environment's speed work; compare ratios measured side by side on a quiet machine"
     );
-    // The ASZ-greedy captor does 4 ASZ per captor per step.
-    super::bench_greedy::run(&cfg, &maps, &env_spec, secs)
 }

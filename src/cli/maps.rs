@@ -97,7 +97,7 @@ pub fn run(args: MapsArgs) -> Result<()> {
 fn list(spec: &str) -> Result<()> {
     let entries = resolve(spec)?;
     // Decoding a 1600 px PNG takes a while: load in parallel, report in order.
-    let loaded: Vec<Result<Grid>> = entries.par_iter().map(|e| e.load()).collect();
+    let loaded: Vec<Result<Grid>> = entries.par_iter().map(|e| Ok(e.load()?)).collect();
     let name_w = entries
         .iter()
         .map(|e| e.name.len())

@@ -17,6 +17,7 @@ pub mod render;
 pub mod status_text;
 pub mod table;
 pub mod train;
+pub mod tune_target;
 
 #[derive(Parser, Debug)]
 #[command(
@@ -54,6 +55,9 @@ pub enum Command {
     /// The paper's Tables II and III (Markdown, LaTeX) from eval folders,
     /// with the paper's numbers beside ours.
     Table(table::TableArgs),
+    /// Search the rule-based target's family (five constants) by CMA-ES for
+    /// the target a training panel of captor teams catches least.
+    TuneTarget(tune_target::TuneTargetArgs),
     /// Run a league (or resume the one in --dir): captor and target learners
     /// against pools of each other's snapshots.
     Run(league_commands::RunArgs),
@@ -106,6 +110,7 @@ pub fn main() -> anyhow::Result<()> {
         Command::Bench(a) => bench::run(a),
         Command::Table(a) => table::run(a),
         Command::Train(a) => train::run(a),
+        Command::TuneTarget(a) => tune_target::run(a),
         Command::Run(a) => league_commands::run(a),
         Command::Status(a) => league_commands::status(a),
         Command::Export(a) => league_commands::export(a),

@@ -712,3 +712,71 @@ fn the_robust_target_departs_only_where_every_model_agrees() {
         .to_string();
     assert!(why.contains("without memory"), "{why}");
 }
+
+#[test]
+fn the_tuned_targets_rule_is_the_rule_based_target_and_each_constant_changes_decisions() {
+    let mut env = gibson_3v1();
+    let spec: ControllerSpec = "tuned:0,0.6,1,0,0".parse().unwrap();
+    assert_eq!(spec, ControllerSpec::Tuned(TargetParams::RULE));
+    assert_eq!(spec.to_string(), "tuned:0,0.6,1,0,0");
+    let varied = [
+        TargetParams {
+            falloff: 3.0,
+            ..TargetParams::RULE
+        },
+        TargetParams {
+            wall_weight: 2.0,
+            ..TargetParams::RULE
+        },
+        TargetParams {
+            wall_range: 0.1,
+            ..TargetParams::RULE
+        },
+        TargetParams {
+            lead_s: 1.5,
+            ..TargetParams::RULE
+        },
+        TargetParams {
+            open_pull: 1.0,
+            ..TargetParams::RULE
+        },
+    ];
+    let mut differ = [0usize; 5];
+    let mut rewards = vec![0f32; 4];
+    let mut states = 0;
+    for seed in 0..8u64 {
+        env.reset_state(seed).unwrap();
+        for _ in 0..100 {
+            if env.is_done() {
+                break;
+            }
+            let rule = target_action(&env);
+            assert_eq!(
+                tuned_target_action(&env, &TargetParams::RULE),
+                rule,
+                "seed {seed}"
+            );
+            for (n, p) in differ.iter_mut().zip(&varied) {
+                *n += usize::from(tuned_target_action(&env, p) != rule);
+            }
+            states += 1;
+            let mut acts = [Action::Stop; 4];
+            Heuristic.act(&env, Side::Captors, &mut acts[..3]);
+            acts[3] = rule;
+            env.step_state(&acts, &mut rewards);
+        }
+    }
+    assert!(states > 300, "{states} states");
+    for (n, p) in differ.iter().zip(&varied) {
+        assert!(*n > 0, "{p:?} decided as the rule in all {states} states");
+    }
+    for bad in [
+        "tuned:0,0.6,1,0",
+        "tuned:0,0.6,1,0,x",
+        "tuned:-1,0.6,1,0,0",
+        "tuned:0,0.6,0,0,0",
+    ] {
+        assert!(bad.parse::<ControllerSpec>().is_err(), "{bad}");
+    }
+    assert!(spec.build(Side::Captors).is_err());
+}

@@ -37,8 +37,8 @@ fn map_folder(lists: &[(&str, &str)]) -> tempfile::TempDir {
     dir
 }
 
-fn err_of<T: std::fmt::Debug>(r: anyhow::Result<T>) -> String {
-    format!("{:#}", r.unwrap_err())
+fn err_of<T: std::fmt::Debug, E: Into<anyhow::Error>>(r: Result<T, E>) -> String {
+    format!("{:#}", r.map_err(Into::into).unwrap_err())
 }
 
 #[test]

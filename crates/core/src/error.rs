@@ -102,6 +102,24 @@ pub fn in_interval(
     }
 }
 
+/// An error and its causes (each `source()` in turn), each after `: `:
+/// how the command line prints a chain of errors (`{:#}`). An error that
+/// holds a cause prints it this way and does not hand it on as its own
+/// `source()`, so a chain printed whole names each part once.
+pub struct Chain<'a>(pub &'a (dyn std::error::Error + 'static));
+
+impl fmt::Display for Chain<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}", self.0)?;
+        let mut next = self.0.source();
+        while let Some(e) = next {
+            write!(f, ": {e}")?;
+            next = e.source();
+        }
+        Ok(())
+    }
+}
+
 /// A map set that does not fit its protocol, or extra maps that are test
 /// maps: the first offending map, and how many more there are.
 #[derive(Clone, Debug, PartialEq, Eq)]

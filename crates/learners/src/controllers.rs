@@ -12,6 +12,7 @@ use t2e_core::env::{Controller, EnvConfig, Side};
 use t2e_core::error::ConfigError;
 use t2e_core::heuristics::{
     AszGreedy, Heuristic, Lookahead, RandomActions, RandomisedExpert, RobustLookahead, Still,
+    TargetParams, TunedTarget,
 };
 
 /// Why a controller cannot be named, loaded or built for a side.
@@ -33,7 +34,11 @@ pub enum ControllerError {
     RobustLearnedModel(String),
     #[error("'{0}' plays the target only (it looks ahead against a model of the captors)")]
     LookaheadAsCaptors(String),
-    #[error("unknown controller '{0}' (expected heuristic, greedy, greedy:K, expert:SEED, lookahead:H[:CAPTORS], robust:H:MODELS, random, still, ckpt:PATH or sample:PATH)")]
+    #[error("'{0}' plays the target only (a hand-made target of the rule-based target's family)")]
+    TunedAsCaptors(String),
+    #[error("'{0}': tuned:FALLOFF,WALL,RANGE,LEAD,OPEN takes five numbers, the rule-based target's constants (tuned:0,0.6,1,0,0 is the rule): {1}")]
+    Tuned(String, String),
+    #[error("unknown controller '{0}' (expected heuristic, greedy, greedy:K, expert:SEED, lookahead:H[:CAPTORS], robust:H:MODELS, tuned:F,W,R,L,O, random, still, ckpt:PATH or sample:PATH)")]
     Unknown(String),
     #[error("expert:{0} is a captor team (the expert captors with randomised constants); it cannot play the target")]
     ExpertAsTarget(u64),
@@ -63,6 +68,9 @@ pub enum ControllerSpec {
         horizon: usize,
         captors: Box<ControllerSpec>,
     },
+    /// `tuned:FALLOFF,WALL,RANGE,LEAD,OPEN`: a hand-made target of the
+    /// rule-based target's family (`heuristics::TunedTarget`); target only.
+    Tuned(TargetParams),
     /// `robust:H:M1+M2+...`: the robust lookahead target
     /// (`heuristics::RobustLookahead`), simulating H steps of each action
     /// against every captor team M1, M2, ...; target only.
@@ -196,6 +204,20 @@ impl FromStr for ControllerSpec {
                 }
                 Ok(ControllerSpec::Robust { horizon, models })
             }
+            other if other.starts_with("tuned:") => {
+                let refuse = |why: String| ControllerError::Tuned(other.to_string(), why);
+                let values = other["tuned:".len()..]
+                    .split(',')
+                    .map(|x| x.trim().parse::<f64>())
+                    .collect::<Result<Vec<_>, _>>()
+                    .map_err(|e| refuse(e.to_string()))?;
+                let values: [f64; 5] = values
+                    .try_into()
+                    .map_err(|v: Vec<f64>| refuse(format!("{} values", v.len())))?;
+                TargetParams::from_array(values)
+                    .map(ControllerSpec::Tuned)
+                    .map_err(refuse)
+            }
             "random" => Ok(ControllerSpec::Random),
             "still" => Ok(ControllerSpec::Still),
             other if other.starts_with("ckpt:") => {
@@ -232,6 +254,10 @@ impl fmt::Display for ControllerSpec {
                 let names: Vec<String> = models.iter().map(|m| m.to_string()).collect();
                 write!(f, "robust:{horizon}:{}", names.join("+"))
             }
+            ControllerSpec::Tuned(p) => {
+                let v = p.to_array().map(|x| x.to_string());
+                write!(f, "tuned:{}", v.join(","))
+            }
             ControllerSpec::Random => f.write_str("random"),
             ControllerSpec::Still => f.write_str("still"),
             ControllerSpec::Checkpoint(c) if c.sampled => write!(f, "sample:{}", c.path.display()),
@@ -263,6 +289,10 @@ impl ControllerSpec {
                         .collect::<Result<_, _>>()?,
                 )),
                 Side::Captors => return Err(ControllerError::LookaheadAsCaptors(self.to_string())),
+            },
+            ControllerSpec::Tuned(params) => match side {
+                Side::Target => Box::new(TunedTarget { params: *params }),
+                Side::Captors => return Err(ControllerError::TunedAsCaptors(self.to_string())),
             },
             ControllerSpec::Random => Box::new(RandomActions::new()),
             ControllerSpec::Still => Box::new(Still),

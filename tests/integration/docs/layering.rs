@@ -117,16 +117,7 @@ fn the_league_crate_has_no_command_line_and_sits_below_the_cli() {
 }
 
 /// The words by which league code reaches the store or the processes.
-const STORE_OR_PROCESSES: [&str; 8] = [
-    "crate::store",
-    "crate::run",
-    "crate::process",
-    "crate::manager",
-    "crate::worker",
-    "crate::learner",
-    "sqlx",
-    "std::process",
-];
+const STORE_OR_PROCESSES: [&str; 4] = ["crate::store", "crate::run", "sqlx", "std::process"];
 
 #[test]
 fn the_league_rules_name_neither_the_store_nor_the_processes() {
@@ -231,4 +222,49 @@ fn the_learn_floor_has_no_import_circle_and_its_side_configs_are_a_leaf() {
         left.is_empty(),
         "import circle among learn modules: {left:?}"
     );
+}
+
+/// Every `.rs` file under `dir`, at any depth.
+fn rust_files(dir: &std::path::Path) -> Vec<std::path::PathBuf> {
+    let mut files = Vec::new();
+    for entry in std::fs::read_dir(dir).unwrap() {
+        let path = entry.unwrap().path();
+        if path.is_dir() {
+            files.extend(rust_files(&path));
+        } else if path.extension().is_some_and(|x| x == "rs") {
+            files.push(path);
+        }
+    }
+    files
+}
+
+#[test]
+fn the_library_crates_use_no_anyhow() {
+    // A library's errors are typed (`LearnError`, `MapLoadError`, ...), so a
+    // caller can tell them apart; anyhow belongs to the command line. Each
+    // entry is a crate's source folder, its manifest beside it.
+    let repo = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    for src in ["crates/core/src", "crates/learners/src"] {
+        let files = rust_files(&repo.join(src));
+        assert!(!files.is_empty(), "no .rs file under {src}");
+        for path in files {
+            let text = std::fs::read_to_string(&path).unwrap();
+            assert!(
+                !text.contains("anyhow"),
+                "{} mentions anyhow: a library crate's errors are typed",
+                path.display()
+            );
+        }
+        let manifest = repo.join(src).parent().unwrap().join("Cargo.toml");
+        let table: toml::Table = std::fs::read_to_string(&manifest).unwrap().parse().unwrap();
+        for section in ["dependencies", "build-dependencies"] {
+            if let Some(deps) = table.get(section).and_then(|d| d.as_table()) {
+                assert!(
+                    !deps.contains_key("anyhow"),
+                    "{}: [{section}] names anyhow",
+                    manifest.display()
+                );
+            }
+        }
+    }
 }

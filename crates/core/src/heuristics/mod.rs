@@ -1,10 +1,11 @@
 //! Rule-based robots (spec §7), the ASZ-greedy captor, and random and still
 //! robots, each behind the one `Controller` trait. The names users give
-//! controllers live one level up, in `crate::controllers`.
+//! controllers live one floor up, in `t2e_learners::controllers`.
 
 mod lookahead;
 mod robust;
 mod rule_based;
+mod tuned;
 
 pub use lookahead::Lookahead;
 pub use robust::RobustLookahead;
@@ -12,6 +13,7 @@ pub use rule_based::{
     expert_captor_action, expert_captor_action_with, force_to_action, target_action, wall_force,
     ExpertParams, Heuristic, RandomisedExpert,
 };
+pub use tuned::{tuned_target_action, TargetParams, TunedTarget};
 
 use crate::asz::{AszFields, CoarseLattice, FastMarching, Lattice, Source};
 use crate::env::physics;

@@ -3,13 +3,53 @@
 //! and the names users give them on the command line.
 
 use super::grid::{Grid, SizeClass};
-use super::load::load_png;
+use super::load::{load_png, MapError};
 use super::prepared::PreparedMap;
-use anyhow::{bail, Context, Result};
+use crate::error::Chain;
 use rayon::prelude::*;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
+
+/// Why a map set cannot be resolved or loaded; each message names the
+/// selection, the folder or the file.
+#[derive(Debug, thiserror::Error)]
+pub enum MapLoadError {
+    /// A selection (`--maps`, a config's `maps`) that names no usable set.
+    #[error("--maps '{spec}': {reason}")]
+    Spec { spec: String, reason: String },
+    /// A Gibson selection (`gibson`, `small`, ...) without the Gibson maps.
+    #[error("the Gibson maps were not found: set T2E_GIBSON_DIR or run from the project root with ../shared/maps/gibson beside it")]
+    NoGibson,
+    #[error("map folder {}: not found", .0.display())]
+    NoFolder(PathBuf),
+    #[error("cannot list {}: {}", .dir.display(), Chain(.cause))]
+    Unlistable { dir: PathBuf, cause: std::io::Error },
+    /// Two files of one folder that are the same map by name (`a.png`, `a.PNG`).
+    #[error("map folder {}: {} and {} are both map '{name}'; keep one", .dir.display(), .first.display(), .second.display())]
+    SameName {
+        dir: PathBuf,
+        name: String,
+        first: PathBuf,
+        second: PathBuf,
+    },
+    #[error("map folder {} holds no .png map", .0.display())]
+    Empty(PathBuf),
+    /// A class list (`splits.csv`, `manifest.csv`) that cannot be read, or
+    /// that gives a map two classes.
+    #[error("{}: {reason}", .file.display())]
+    ClassList { file: PathBuf, reason: String },
+    /// A map file that cannot be loaded.
+    #[error(transparent)]
+    Map(#[from] MapError),
+}
+
+fn spec_error(spec: &str, reason: impl Into<String>) -> MapLoadError {
+    MapLoadError::Spec {
+        spec: spec.to_string(),
+        reason: reason.into(),
+    }
+}
 
 /// One map file and the class its folder lists for it, if any.
 #[derive(Clone, Debug)]
@@ -20,8 +60,8 @@ pub struct MapEntry {
 }
 
 impl MapEntry {
-    pub fn load(&self) -> Result<Grid> {
-        Ok(load_png(&self.path)?)
+    pub fn load(&self) -> Result<Grid, MapError> {
+        load_png(&self.path)
     }
 }
 
@@ -80,44 +120,46 @@ impl Listed {
 /// same folder) is refused, naming both places: taking either class would
 /// silently move the map to another table row. A repeat with the same
 /// class says nothing new and is accepted.
-fn read_class_list(path: &Path, out: &mut BTreeMap<String, Listed>) -> Result<()> {
+fn read_class_list(path: &Path, out: &mut BTreeMap<String, Listed>) -> Result<(), MapLoadError> {
+    let refuse = |reason: String| MapLoadError::ClassList {
+        file: path.to_path_buf(),
+        reason,
+    };
     let mut reader =
-        csv::Reader::from_path(path).with_context(|| format!("{}: cannot read", path.display()))?;
+        csv::Reader::from_path(path).map_err(|e| refuse(format!("cannot read: {}", Chain(&e))))?;
     let headers = reader
         .headers()
-        .with_context(|| {
-            format!(
-                "{}: cannot read its header (a CSV file in UTF-8 is expected)",
-                path.display()
-            )
+        .map_err(|e| {
+            refuse(format!(
+                "cannot read its header (a CSV file in UTF-8 is expected): {}",
+                Chain(&e)
+            ))
         })?
         .clone();
     let col = |name: &str| headers.iter().position(|h| h.trim() == name);
     let (Some(map_col), Some(split_col)) = (col("map"), col("split")) else {
-        bail!(
-            "{}: needs the columns 'map' and 'split', found {:?}",
-            path.display(),
-            headers
-        );
+        return Err(refuse(format!(
+            "needs the columns 'map' and 'split', found {headers:?}"
+        )));
     };
     for (i, rec) in reader.records().enumerate() {
-        let rec = rec.with_context(|| {
-            format!(
-                "{}: row {} (a CSV file in UTF-8 is expected)",
-                path.display(),
-                i + 2
-            )
+        let rec = rec.map_err(|e| {
+            refuse(format!(
+                "row {} (a CSV file in UTF-8 is expected): {}",
+                i + 2,
+                Chain(&e)
+            ))
         })?;
         let line = rec.position().map_or(i as u64 + 2, |p| p.line());
         let class: SizeClass =
             rec[split_col]
                 .parse()
                 .map_err(|e: super::grid::UnknownSizeClass| {
-                    anyhow::anyhow!("{}: line {line}, field 'split': {e}", path.display())
+                    refuse(format!("line {line}, field 'split': {e}"))
                 })?;
         let map = rec[map_col].trim().to_string();
         if map.is_empty() {
-            bail!("{}: line {line}, field 'map': empty", path.display());
+            return Err(refuse(format!("line {line}, field 'map': empty")));
         }
         let here = Listed {
             class,
@@ -125,13 +167,14 @@ fn read_class_list(path: &Path, out: &mut BTreeMap<String, Listed>) -> Result<()
             line,
         };
         match out.get(&map) {
-            Some(before) if before.class != class => bail!(
-                "{}: map '{map}' is listed as {} and as {} ({}): which class is it? Remove one of the rows",
-                path.display(),
-                before.class,
-                class,
-                [before.place(), here.place()].join(" and ")
-            ),
+            Some(before) if before.class != class => {
+                return Err(refuse(format!(
+                    "map '{map}' is listed as {} and as {} ({}): which class is it? Remove one of the rows",
+                    before.class,
+                    class,
+                    [before.place(), here.place()].join(" and ")
+                )))
+            }
             Some(_) => {}
             None => {
                 out.insert(map, here);
@@ -142,7 +185,7 @@ fn read_class_list(path: &Path, out: &mut BTreeMap<String, Listed>) -> Result<()
 }
 
 /// The classes a folder's `splits.csv` and `manifest.csv` give its maps.
-pub fn class_lists(dir: &Path) -> Result<BTreeMap<String, Listed>> {
+pub fn class_lists(dir: &Path) -> Result<BTreeMap<String, Listed>, MapLoadError> {
     let mut classes = BTreeMap::new();
     for list in ["splits.csv", "manifest.csv"] {
         let p = dir.join(list);
@@ -154,14 +197,18 @@ pub fn class_lists(dir: &Path) -> Result<BTreeMap<String, Listed>> {
 }
 
 /// All PNG maps of a folder, sorted by name, with their listed classes.
-pub fn list_dir(dir: &Path) -> Result<Vec<MapEntry>> {
+pub fn list_dir(dir: &Path) -> Result<Vec<MapEntry>, MapLoadError> {
     if !dir.is_dir() {
-        bail!("map folder {}: not found", dir.display());
+        return Err(MapLoadError::NoFolder(dir.to_path_buf()));
     }
     let classes = class_lists(dir)?;
     let mut entries = Vec::new();
-    for e in std::fs::read_dir(dir).with_context(|| format!("cannot list {}", dir.display()))? {
-        let path = e?.path();
+    let unlistable = |cause| MapLoadError::Unlistable {
+        dir: dir.to_path_buf(),
+        cause,
+    };
+    for e in std::fs::read_dir(dir).map_err(unlistable)? {
+        let path = e.map_err(unlistable)?.path();
         // Any case: a folder of .PNG files (or a mix) is not silently
         // smaller than it looks.
         if !path
@@ -176,12 +223,12 @@ pub fn list_dir(dir: &Path) -> Result<Vec<MapEntry>> {
         // Maps are known by name (class lists, episode records): two files
         // of one name would be two maps nobody can tell apart.
         if let Some(other) = entries.iter().find(|e: &&MapEntry| e.name == name) {
-            bail!(
-                "map folder {}: {} and {} are both map '{name}'; keep one",
-                dir.display(),
-                other.path.display(),
-                path.display()
-            );
+            return Err(MapLoadError::SameName {
+                dir: dir.to_path_buf(),
+                name,
+                first: other.path.clone(),
+                second: path,
+            });
         }
         entries.push(MapEntry {
             listed_class: classes.get(&name).map(|l| l.class),
@@ -191,7 +238,7 @@ pub fn list_dir(dir: &Path) -> Result<Vec<MapEntry>> {
     }
     entries.sort_by(|a, b| a.name.cmp(&b.name));
     if entries.is_empty() {
-        bail!("map folder {} holds no .png map", dir.display());
+        return Err(MapLoadError::Empty(dir.to_path_buf()));
     }
     Ok(entries)
 }
@@ -201,10 +248,8 @@ pub fn list_dir(dir: &Path) -> Result<Vec<MapEntry>> {
 /// - `gibson`: all 26 Gibson maps; `shipped`: the project's generated maps;
 /// - a folder, or `FOLDER:CLASS` for one class of a folder;
 /// - a single `.png` file.
-pub fn resolve(spec: &str) -> Result<Vec<MapEntry>> {
-    let gibson = || {
-        gibson_dir().context("the Gibson maps were not found: set T2E_GIBSON_DIR or run from the project root with ../shared/maps/gibson beside it")
-    };
+pub fn resolve(spec: &str) -> Result<Vec<MapEntry>, MapLoadError> {
+    let gibson = || gibson_dir().ok_or(MapLoadError::NoGibson);
     let (source, class) = match spec.rsplit_once(':') {
         Some((dir, c)) if c.parse::<SizeClass>().is_ok() => {
             (dir.to_string(), Some(c.parse::<SizeClass>().unwrap()))
@@ -220,7 +265,10 @@ pub fn resolve(spec: &str) -> Result<Vec<MapEntry>> {
     } else {
         let p = PathBuf::from(&source);
         if source.to_ascii_lowercase().ends_with(".png") && !p.is_file() {
-            bail!("--maps '{spec}': map file {}: not found", p.display());
+            return Err(spec_error(
+                spec,
+                format!("map file {}: not found", p.display()),
+            ));
         }
         if p.is_file() {
             let name = p
@@ -236,12 +284,15 @@ pub fn resolve(spec: &str) -> Result<Vec<MapEntry>> {
         }
         if !p.is_dir() {
             if class.is_some() {
-                bail!("--maps '{spec}': folder {}: not found", p.display());
+                return Err(spec_error(
+                    spec,
+                    format!("folder {}: not found", p.display()),
+                ));
             }
             if let Some((_, bad)) = spec.rsplit_once(':') {
-                bail!("--maps '{spec}': '{bad}' is not a size class (small, medium, large), and no folder '{spec}' was found");
+                return Err(spec_error(spec, format!("'{bad}' is not a size class (small, medium, large), and no folder '{spec}' was found")));
             }
-            bail!("--maps '{spec}': not found: not a size class (small, medium, large), 'gibson', 'shipped', an existing folder or .png file");
+            return Err(spec_error(spec, "not found: not a size class (small, medium, large), 'gibson', 'shipped', an existing folder or .png file"));
         }
         (p, class)
     };
@@ -251,16 +302,22 @@ pub fn resolve(spec: &str) -> Result<Vec<MapEntry>> {
         // silently leave the set smaller than the table says.
         for (map, listed) in class_lists(&dir)? {
             if listed.class == c && !entries.iter().any(|e| e.name == map) {
-                bail!(
-                    "--maps '{spec}': {} lists the {c} map '{map}', but {} holds no {map}.png",
-                    listed.place(),
-                    dir.display()
-                );
+                return Err(spec_error(
+                    spec,
+                    format!(
+                        "{} lists the {c} map '{map}', but {} holds no {map}.png",
+                        listed.place(),
+                        dir.display()
+                    ),
+                ));
             }
         }
         entries.retain(|e| e.listed_class == Some(c));
         if entries.is_empty() {
-            bail!("--maps '{spec}': {} lists no {c} map", dir.display());
+            return Err(spec_error(
+                spec,
+                format!("{} lists no {c} map", dir.display()),
+            ));
         }
     }
     Ok(entries)
@@ -272,7 +329,7 @@ pub fn resolve(spec: &str) -> Result<Vec<MapEntry>> {
 /// seeds 1..=N, made in memory), `generated:N@S` (seeds S..S+N: other
 /// maps of the same generator, e.g. a validation set) and either with
 /// `:CLASS`.
-pub fn load_prepared(spec: &str) -> Result<Arc<Vec<Arc<PreparedMap>>>> {
+pub fn load_prepared(spec: &str) -> Result<Arc<Vec<Arc<PreparedMap>>>, MapLoadError> {
     let spec = spec.trim();
     if spec.contains(',') {
         // A list of sets is their union, in order; a map named twice (by
@@ -284,13 +341,13 @@ pub fn load_prepared(spec: &str) -> Result<Arc<Vec<Arc<PreparedMap>>>> {
             .sum();
         let most = MAX_GENERATED_PER_CLASS * SizeClass::ALL.len() as u64;
         if generated > most {
-            bail!("--maps '{spec}': {generated} generated maps; a map set holds at most {most} (each is prepared in memory)");
+            return Err(spec_error(spec, format!("{generated} generated maps; a map set holds at most {most} (each is prepared in memory)")));
         }
         let mut seen = std::collections::HashSet::new();
         let mut all = Vec::new();
         for part in spec.split(',').map(str::trim) {
             if part.is_empty() {
-                bail!("--maps '{spec}': an empty entry in the list");
+                return Err(spec_error(spec, "an empty entry in the list"));
             }
             for map in load_prepared(part)?.iter() {
                 if seen.insert(map.grid.content_hash()) {
@@ -307,7 +364,7 @@ pub fn load_prepared(spec: &str) -> Result<Arc<Vec<Arc<PreparedMap>>>> {
     let maps = entries
         .par_iter()
         .map(|e| Ok(Arc::new(PreparedMap::new(e.load()?))))
-        .collect::<Result<Vec<_>>>()?;
+        .collect::<Result<Vec<_>, MapLoadError>>()?;
     Ok(Arc::new(maps))
 }
 
@@ -340,19 +397,18 @@ pub fn generated_set(spec: &str) -> Option<(std::ops::Range<u64>, Vec<SizeClass>
     Some((generated_seeds(count)?, classes))
 }
 
-fn generated(spec: &str, rest: &str) -> Result<Arc<Vec<Arc<PreparedMap>>>> {
+fn generated(spec: &str, rest: &str) -> Result<Arc<Vec<Arc<PreparedMap>>>, MapLoadError> {
     use super::generate::{generate, GeneratorConfig};
     let (count, classes) = match rest.split_once(':') {
         Some((n, c)) => (
             n,
             vec![c
                 .parse::<SizeClass>()
-                .map_err(|e| anyhow::anyhow!("--maps '{spec}': {e}"))?],
+                .map_err(|e| spec_error(spec, e.to_string()))?],
         ),
         None => (rest, SizeClass::ALL.to_vec()),
     };
-    let seeds = generated_seeds(count)
-        .with_context(|| format!("--maps '{spec}': expected generated:N (seeds 1..=N) or generated:N@S (seeds S..S+N), N in 1..={MAX_GENERATED_PER_CLASS}, S >= 1, optionally :small|medium|large"))?;
+    let seeds = generated_seeds(count).ok_or_else(|| spec_error(spec, format!("expected generated:N (seeds 1..=N) or generated:N@S (seeds S..S+N), N in 1..={MAX_GENERATED_PER_CLASS}, S >= 1, optionally :small|medium|large")))?;
     let cfg = GeneratorConfig::default();
     let jobs: Vec<(u64, SizeClass)> = classes
         .iter()

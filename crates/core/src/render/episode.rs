@@ -15,15 +15,40 @@ use super::map_image::{FREE_COLOR, OBSTACLE_COLOR};
 use super::raster::{draw_circle, draw_line, fill_disc, fill_rect, mix};
 use crate::asz::{cells_to_m2, AszFields};
 use crate::env::config::{PROBE_DIST, RADIUS};
+use crate::env::placement::PlacementError;
 use crate::env::{Action, Controller, Side, TrapEnv};
+use crate::error::Chain;
+use crate::fs::FsError;
 use crate::map::prepared::PAD;
 use crate::map::{Grid, PreparedMap, CELL_SIZE};
-use anyhow::{anyhow, Context, Result};
 use image::codecs::gif::{GifEncoder, Repeat};
 use image::{Delay, Frame, Rgb, RgbImage, RgbaImage};
 use std::collections::VecDeque;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
+
+/// Why an episode could not be rendered; each message names the seed or
+/// the file.
+#[derive(Debug, thiserror::Error)]
+pub enum RenderError {
+    /// The episode's robots could not be placed.
+    #[error("episode seed {seed}: {cause}")]
+    Episode { seed: u64, cause: PlacementError },
+    /// The GIF encoder refused; `what` says at which step.
+    #[error("{what}: {}", Chain(.cause))]
+    Gif {
+        what: &'static str,
+        cause: image::ImageError,
+    },
+    #[error("cannot create folder {} for {}: {}", .folder.display(), .out.display(), Chain(.cause))]
+    Folder {
+        folder: PathBuf,
+        out: PathBuf,
+        cause: std::io::Error,
+    },
+    #[error("cannot write GIF {}: {cause}", .out.display())]
+    Write { out: PathBuf, cause: FsError },
+}
 
 /// How an episode is drawn.
 #[derive(Clone, Debug, PartialEq)]
@@ -564,9 +589,10 @@ pub fn render_episode(
     seed: u64,
     opts: &RenderOptions,
     out: &Path,
-) -> Result<EpisodeSummary> {
+) -> Result<EpisodeSummary, RenderError> {
     env.reset_state(seed)
-        .map_err(|e| anyhow!("episode seed {seed}: {e}"))?;
+        .map_err(|cause| RenderError::Episode { seed, cause })?;
+    let gif = |what| move |cause| RenderError::Gif { what, cause };
     captors.reset(env, seed);
     target.reset(env, seed);
     let k = env.num_captors();
@@ -581,7 +607,8 @@ pub fn render_episode(
     let mut final_asz = 0usize;
     {
         let mut enc = GifEncoder::new_with_speed(&mut bytes, 10);
-        enc.set_repeat(Repeat::Infinite).context("GIF encoder")?;
+        enc.set_repeat(Repeat::Infinite)
+            .map_err(gif("GIF encoder"))?;
         let mut pending: Option<RgbImage> = None;
         let mut acts = vec![Action::Stop; k + 1];
         let mut rewards = vec![0f32; k + 1];
@@ -592,7 +619,7 @@ pub fn render_episode(
                 final_asz = asz;
                 if let Some(prev) = pending.replace(img) {
                     enc.encode_frame(to_frame(prev, delay))
-                        .context("encoding a GIF frame")?;
+                        .map_err(gif("encoding a GIF frame"))?;
                 }
                 frames += 1;
             }
@@ -606,23 +633,23 @@ pub fn render_episode(
         }
         if let Some(last) = pending {
             enc.encode_frame(to_frame(last, delay.max(FINAL_HOLD_MS)))
-                .context("encoding a GIF frame")?;
+                .map_err(gif("encoding a GIF frame"))?;
         }
     } // the encoder writes the GIF trailer when dropped
     if let Some(parent) = out.parent().filter(|p| !p.as_os_str().is_empty()) {
-        std::fs::create_dir_all(parent).with_context(|| {
-            format!(
-                "cannot create folder {} for {}",
-                parent.display(),
-                out.display()
-            )
+        std::fs::create_dir_all(parent).map_err(|cause| RenderError::Folder {
+            folder: parent.to_path_buf(),
+            out: out.to_path_buf(),
+            cause,
         })?;
     }
     // Written to a temporary sibling, synced and renamed: a render killed
     // while writing leaves the previous GIF (or none), never half of one.
     remove_dead_temporaries(out);
-    crate::fs::write_file_atomically(out, &bytes)
-        .with_context(|| format!("cannot write GIF {}", out.display()))?;
+    crate::fs::write_file_atomically(out, &bytes).map_err(|cause| RenderError::Write {
+        out: out.to_path_buf(),
+        cause,
+    })?;
     Ok(EpisodeSummary {
         map: map.grid.name.clone(),
         seed,

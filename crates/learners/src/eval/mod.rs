@@ -4,6 +4,7 @@
 
 use crate::controllers::ControllerError;
 use crate::controllers::ControllerSpec;
+use crate::error::{LearnError, ResultExt};
 use t2e_core::asz::{cells_to_m2, AszFields};
 use t2e_core::env::vec_env::episode_seed;
 use t2e_core::env::{Action, CaptureRule, EnvConfig, Side, TrapEnv};
@@ -12,6 +13,7 @@ use t2e_core::map::PreparedMap;
 
 pub mod cross_table;
 pub mod paper_table;
+pub mod tune;
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -279,16 +281,10 @@ pub fn play_episode(
     maps: &Arc<Vec<Arc<PreparedMap>>>,
     episode: usize,
     asz_fields: &mut AszFields,
-) -> anyhow::Result<EpisodeRecord> {
-    let mut env = TrapEnv::new(setting.env_config(), maps.clone()).map_err(anyhow::Error::msg)?;
-    let mut captors = setting
-        .captors
-        .build(Side::Captors)
-        .map_err(anyhow::Error::msg)?;
-    let mut target = setting
-        .target
-        .build(Side::Target)
-        .map_err(anyhow::Error::msg)?;
+) -> Result<EpisodeRecord, LearnError> {
+    let mut env = TrapEnv::new(setting.env_config(), maps.clone())?;
+    let mut captors = setting.captors.build(Side::Captors)?;
+    let mut target = setting.target.build(Side::Target)?;
     let seed = episode_seed(setting.seed, 0, episode as u64);
     env.reset_state(seed)?;
     captors.reset(&env, seed);
@@ -342,17 +338,17 @@ pub fn run(
     maps: &Arc<Vec<Arc<PreparedMap>>>,
     maps_label: &str,
     progress: bool,
-) -> anyhow::Result<(Summary, Vec<EpisodeRecord>)> {
-    setting.validate().map_err(anyhow::Error::msg)?;
+) -> Result<(Summary, Vec<EpisodeRecord>), LearnError> {
+    setting.validate()?;
     let cfg = setting.env_config();
     setting
         .captors
         .check(Side::Captors, &cfg)
-        .map_err(|e| anyhow::anyhow!("--captors: {e}"))?;
+        .context("--captors")?;
     setting
         .target
         .check(Side::Target, &cfg)
-        .map_err(|e| anyhow::anyhow!("--target: {e}"))?;
+        .context("--target")?;
     if setting.captors.is_checkpoint() || setting.target.is_checkpoint() {
         // Episodes already run in parallel; torch's own threads would fight them.
         tch::set_num_threads(1);
@@ -381,7 +377,7 @@ pub fn run(
             bar.inc(1);
             r
         })
-        .collect::<anyhow::Result<Vec<_>>>()?;
+        .collect::<Result<Vec<_>, LearnError>>()?;
     bar.finish_and_clear();
     Ok((summarise(setting, maps_label, &records), records))
 }

@@ -13,6 +13,8 @@
 use super::adam::Adam;
 use super::rollout::{BadUpdate, Rollout, UpdateStats};
 use super::side_config::SideConfig;
+use crate::error::LearnError;
+use crate::nn::checkpoint::CheckpointError;
 use crate::nn::{Actor, NetConfig};
 use rand_chacha::ChaCha8Rng;
 use std::path::Path;
@@ -130,7 +132,7 @@ pub trait Learner {
         files: &[(&'static str, NamedTensors)],
         state: serde_json::Value,
         dir: &Path,
-    ) -> anyhow::Result<()>;
+    ) -> Result<(), LearnError>;
 }
 
 /// The tensors of `name` among a checkpoint's files.
@@ -174,13 +176,17 @@ pub fn restore_optimizers(
     (actor, actor_steps): (&mut Adam, u64),
     (critic, critic_steps): (&mut Adam, u64),
     dir: &Path,
-) -> anyhow::Result<()> {
+) -> Result<(), CheckpointError> {
     let optimizer = file(files, "optimizer.safetensors");
+    let invalid = |e: super::adam::OptimizerStateError| CheckpointError::Invalid {
+        path: dir.to_path_buf(),
+        what: e.to_string(),
+    };
     actor
         .load_state(&with_prefix(optimizer, "actor."), actor_steps)
-        .map_err(|e| anyhow::anyhow!("{}: {e}", dir.display()))?;
+        .map_err(invalid)?;
     critic
         .load_state(&with_prefix(optimizer, "critic."), critic_steps)
-        .map_err(|e| anyhow::anyhow!("{}: {e}", dir.display()))?;
+        .map_err(invalid)?;
     Ok(())
 }

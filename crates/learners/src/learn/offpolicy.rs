@@ -21,7 +21,8 @@ use super::rollout::{BadUpdate, Rollout, UpdateStats};
 use super::side_config::replay::{ReplayConfig, ReplaySettings};
 use super::side_config::SideConfig;
 use super::undo::UndoPoint;
-use crate::nn::checkpoint::{load_into, named_cpu_tensors};
+use crate::error::LearnError;
+use crate::nn::checkpoint::{load_into, named_cpu_tensors, CheckpointError};
 use crate::nn::{obs_tensors, Actor, NetConfig};
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
@@ -555,9 +556,12 @@ impl Params {
         files: &[(&'static str, NamedTensors)],
         state: serde_json::Value,
         dir: &Path,
-    ) -> anyhow::Result<()> {
-        let st: ParamsState = serde_json::from_value(state)
-            .map_err(|e| anyhow::anyhow!("{}: learner_state: {e}", dir.display()))?;
+    ) -> Result<(), LearnError> {
+        let st: ParamsState =
+            serde_json::from_value(state).map_err(|e| CheckpointError::Invalid {
+                path: dir.to_path_buf(),
+                what: format!("learner_state: {e}"),
+            })?;
         let stores = [
             &mut self.actor,
             &mut self.critic,
@@ -851,7 +855,7 @@ impl<T: OffPolicy> Learner for T {
         files: &[(&'static str, NamedTensors)],
         state: serde_json::Value,
         dir: &Path,
-    ) -> anyhow::Result<()> {
+    ) -> Result<(), LearnError> {
         let core = self.core_mut();
         core.params.restore(files, state, dir)?;
         core.replay.clear();

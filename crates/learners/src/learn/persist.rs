@@ -5,12 +5,12 @@
 //! so the league's learners write and read the same folders.
 
 use super::learner::Learner;
+use crate::error::LearnError;
 use crate::nn::checkpoint::{
     read_checked, read_meta, write_checkpoint, write_new_checkpoint, CheckpointError,
     CheckpointMeta,
 };
 pub use crate::nn::run_dir::{Recovery, RunDir, RunState};
-use anyhow::{bail, Context, Result};
 use std::path::Path;
 use t2e_core::fs::Written;
 
@@ -39,7 +39,7 @@ pub fn save_new_learner(
 /// keeps (weights, optimizer moments, target networks), each checked
 /// against its recorded hash, and its state. A checkpoint of another
 /// algorithm is refused before anything is loaded.
-pub fn load_learner(dir: &Path, learner: &mut dyn Learner) -> Result<CheckpointMeta> {
+pub fn load_learner(dir: &Path, learner: &mut dyn Learner) -> Result<CheckpointMeta, LearnError> {
     // A run's own checkpoint, named by its state.json; one written before
     // checkpoints carried a manifest resumes, and the next one has it.
     if std::fs::symlink_metadata(dir.join("SHA256SUMS")).is_ok() {
@@ -48,11 +48,14 @@ pub fn load_learner(dir: &Path, learner: &mut dyn Learner) -> Result<CheckpointM
     let meta = read_meta(dir)?;
     let algorithm = learner.algorithm();
     if meta.algorithm != algorithm {
-        bail!(
-            "{}: a {} checkpoint, but this learner is {algorithm}",
-            dir.join("meta.json").display(),
-            meta.algorithm
-        );
+        return Err(CheckpointError::Invalid {
+            path: dir.join("meta.json"),
+            what: format!(
+                "a {} checkpoint, but this learner is {algorithm}",
+                meta.algorithm
+            ),
+        }
+        .into());
     }
     let mut files = Vec::new();
     for (name, _) in learner.checkpoint_files() {
@@ -61,7 +64,10 @@ pub fn load_learner(dir: &Path, learner: &mut dyn Learner) -> Result<CheckpointM
     let state = meta
         .learner_state
         .clone()
-        .with_context(|| format!("{}: meta.json has no learner_state", dir.display()))?;
+        .ok_or_else(|| CheckpointError::Invalid {
+            path: dir.to_path_buf(),
+            what: "meta.json has no learner_state".into(),
+        })?;
     learner.restore(&files, state, dir)?;
     Ok(meta)
 }

@@ -12,7 +12,8 @@ use super::rollout::{BadUpdate, Rollout, UpdateStats};
 pub use super::side_config::ppo::PpoConfig;
 use super::side_config::SideConfig;
 use super::undo::UndoPoint;
-use crate::nn::checkpoint::{load_into, named_cpu_tensors};
+use crate::error::LearnError;
+use crate::nn::checkpoint::{load_into, named_cpu_tensors, CheckpointError};
 use crate::nn::prior::add_prior;
 use crate::nn::{Actor, Critic, NetConfig};
 use rand::seq::SliceRandom;
@@ -645,9 +646,11 @@ impl Learner for PpoLearner {
         files: &[(&'static str, NamedTensors)],
         state: serde_json::Value,
         dir: &Path,
-    ) -> anyhow::Result<()> {
-        let st: PpoState = serde_json::from_value(state)
-            .map_err(|e| anyhow::anyhow!("{}: learner_state: {e}", dir.display()))?;
+    ) -> Result<(), LearnError> {
+        let st: PpoState = serde_json::from_value(state).map_err(|e| CheckpointError::Invalid {
+            path: dir.to_path_buf(),
+            what: format!("learner_state: {e}"),
+        })?;
         load_into(
             &mut self.actor_vs,
             file(files, "actor.safetensors"),

@@ -48,6 +48,14 @@ pub enum RunDirError {
         path: PathBuf,
         cause: std::io::Error,
     },
+    /// `state.json` that the run resumed from it cannot follow: another
+    /// configuration, a checkpoint it does not name, one that is missing or
+    /// holds other counts; `what` says which.
+    #[error("{}: {what}", .state.display())]
+    StateDisagrees { state: PathBuf, what: String },
+    /// A new run asked for in a folder that holds one.
+    #[error("{} already holds a run: add --resume to continue it, or pick another --out or name", .0.display())]
+    HoldsARun(PathBuf),
     #[error(transparent)]
     Write(#[from] FsError),
 }

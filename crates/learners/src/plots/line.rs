@@ -6,7 +6,7 @@
 
 use super::canvas::Canvas;
 use super::plotters_font;
-use anyhow::{Context, Result};
+use crate::error::LearnError;
 use image::{ImageFormat, RgbImage};
 use plotters::coord::ranged1d::KeyPointHint;
 use plotters::coord::Shift;
@@ -621,19 +621,25 @@ fn legend_corner(
 }
 
 /// Writes `img` as a PNG, creating missing parent folders; errors name the path.
-pub fn save_png(img: &RgbImage, path: impl AsRef<Path>) -> Result<()> {
+pub fn save_png(img: &RgbImage, path: impl AsRef<Path>) -> Result<(), LearnError> {
     let path = path.as_ref();
     if let Some(parent) = path.parent().filter(|p| !p.as_os_str().is_empty()) {
-        std::fs::create_dir_all(parent).with_context(|| {
-            format!(
-                "cannot create folder {} for {}",
-                parent.display(),
-                path.display()
+        std::fs::create_dir_all(parent).map_err(|e| {
+            LearnError::io(
+                format!(
+                    "cannot create folder {} for {}",
+                    parent.display(),
+                    path.display()
+                ),
+                e,
             )
         })?;
     }
     img.save_with_format(path, ImageFormat::Png)
-        .with_context(|| format!("cannot write PNG {}", path.display()))
+        .map_err(|cause| LearnError::Image {
+            context: format!("cannot write PNG {}", path.display()),
+            cause,
+        })
 }
 
 #[cfg(test)]

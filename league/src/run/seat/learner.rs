@@ -27,6 +27,7 @@ use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 use t2e_core::env::{Action, Side, VecEnv};
+use t2e_learners::error::LearnError;
 use t2e_learners::learn::train::{RolloutHooks, Trainer};
 
 pub struct LeagueHooks<'a> {
@@ -266,18 +267,28 @@ impl<'a> LeagueHooks<'a> {
 }
 
 impl RolloutHooks for LeagueHooks<'_> {
-    fn before_step(&mut self, venv: &mut VecEnv, actions: &mut [Action]) -> Result<()> {
+    fn before_step(&mut self, venv: &mut VecEnv, actions: &mut [Action]) -> Result<(), LearnError> {
         self.vector_steps += 1;
-        self.nets.act(
-            venv,
-            &mut self.worlds,
-            self.cfg.num_captors,
-            &mut self.rng,
-            actions,
-        )
+        self.nets
+            .act(
+                venv,
+                &mut self.worlds,
+                self.cfg.num_captors,
+                &mut self.rng,
+                actions,
+            )
+            .map_err(LearnError::hooks)
     }
 
-    fn after_step(&mut self, venv: &mut VecEnv) -> Result<()> {
+    fn after_step(&mut self, venv: &mut VecEnv) -> Result<(), LearnError> {
+        self.record_finished(venv).map_err(LearnError::hooks)
+    }
+}
+
+impl LeagueHooks<'_> {
+    /// After a step: records the episodes that ended and draws their
+    /// worlds' next opponents.
+    fn record_finished(&mut self, venv: &mut VecEnv) -> Result<()> {
         let finished = venv.finished.clone();
         for s in &finished {
             let w = self.worlds[s.env].clone();

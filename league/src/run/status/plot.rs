@@ -276,5 +276,5 @@ pub fn plot(dir: &LeagueDir, r: &StatusReport, path: &Path) -> Result<()> {
         image::imageops::replace(&mut img, part, 0, y);
         y += part.height() as i64;
     }
-    save_png(&img, path)
+    Ok(save_png(&img, path)?)
 }

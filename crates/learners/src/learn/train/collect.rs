@@ -7,9 +7,9 @@ use super::super::shaping::shaping_term;
 use super::hooks::RolloutHooks;
 use super::metrics::RolloutTally;
 use super::trainer::{LearnerSide, Trainer};
+use crate::error::{Result, ResultExt};
 use crate::nn::obs_tensors;
 use crate::nn::prior::{add_prior, target_hint};
-use anyhow::{anyhow, Result};
 use std::time::Instant;
 use t2e_core::env::{Action, VecEnv};
 use tch::{Device, Kind, Tensor};
@@ -123,9 +123,7 @@ impl Trainer {
             // controllers that act inside the vector env.
             hooks.before_step(&mut self.venv, &mut self.actions)?;
             let phi_before = self.venv.potentials.clone();
-            self.venv
-                .step(&self.actions)
-                .map_err(|e| anyhow!("placing robots: {e}"))?;
+            self.venv.step(&self.actions).context("placing robots")?;
             hooks.after_step(&mut self.venv)?;
             let truncated_worlds: Vec<usize> = (0..self.cfg.num_envs)
                 .filter(|&e| self.venv.truncated[e])

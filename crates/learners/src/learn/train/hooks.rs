@@ -1,13 +1,14 @@
 //! What a caller adds to the training loop's rollout (the league's
 //! network opponents), and the empty hooks of a plain run.
 
-use anyhow::Result;
+use crate::error::Result;
 use t2e_core::env::{Action, VecEnv};
 
 /// What a caller adds to a rollout: actions for robots that neither a
 /// learner of the trainer nor a controller inside the vector env plays (the
 /// league's network opponents, batched per opponent), and a look at every
-/// step (finished episodes, opponents for the worlds that restarted).
+/// step (finished episodes, opponents for the worlds that restarted). An
+/// error of the caller's own comes back as `LearnError::Hooks`.
 pub trait RolloutHooks {
     /// Before each step: write the actions of the robots the hooks play.
     fn before_step(&mut self, venv: &mut VecEnv, actions: &mut [Action]) -> Result<()>;

@@ -36,7 +36,8 @@ use super::rollout::Rollout;
 pub use super::run_config::{
     check_rollout, DeviceChoice, Play, SideConfig, SideDefaults, TrainConfig, TrainDefaults,
 };
-use anyhow::{anyhow, bail, Context, Result};
+use crate::error::{LearnError, Result, ResultExt};
+use crate::nn::run_dir::RunDirError;
 pub use hooks::{NoHooks, RolloutHooks};
 pub use metrics::Metrics;
 use metrics::SideUpdate;
@@ -48,6 +49,7 @@ use std::time::Instant;
 use t2e_core::algorithm::Algorithm;
 use t2e_core::env::vec_env::episode_seed;
 use t2e_core::env::{Action, Side, VecEnv};
+use t2e_core::error::ConfigError;
 use t2e_core::map::PreparedMap;
 use tch::{Device, Kind, Tensor};
 
@@ -72,10 +74,8 @@ impl Trainer {
         maps: Arc<Vec<Arc<PreparedMap>>>,
         iteration: u64,
     ) -> Result<Trainer> {
-        cfg.validate().map_err(anyhow::Error::msg)?;
-        cfg.protocol
-            .check_training_maps(&cfg.maps, &maps)
-            .map_err(anyhow::Error::msg)?;
+        cfg.validate()?;
+        cfg.protocol.check_training_maps(&cfg.maps, &maps)?;
         let maps = super::map_sampling::sampling_list(&maps, cfg.map_sampling);
         let maps = if cfg.extra_maps.is_off() {
             maps
@@ -84,12 +84,12 @@ impl Trainer {
             let extra = t2e_core::map::catalog::load_prepared(spec)
                 .with_context(|| format!("extra_maps.maps = \"{spec}\""))?;
             t2e_core::protocol::check_extra_maps(spec, &extra)
-                .map_err(|e| anyhow::anyhow!("extra_maps.{e}"))?;
+                .map_err(LearnError::ExtraMapsRefused)?;
             super::extra_maps::mix(&maps, &extra, cfg.extra_maps.share)
         };
         let device = cfg.device();
         if cfg.device == DeviceChoice::Cuda && !tch::Cuda::is_available() {
-            bail!("device = \"cuda\" but tch sees no CUDA device; use \"auto\" or \"cpu\"");
+            return Err(LearnError::NoCuda);
         }
         let env_cfg = cfg.learning_env();
         let k = env_cfg.num_captors;
@@ -99,8 +99,7 @@ impl Trainer {
             maps,
             cfg.num_envs,
             mix_seed(cfg.seed, iteration),
-        )
-        .map_err(anyhow::Error::msg)?;
+        )?;
         let mut learners = Vec::new();
         for (side, side_cfg) in [(Side::Captors, &cfg.captors), (Side::Target, &cfg.target)] {
             match &side_cfg.play {
@@ -159,7 +158,7 @@ impl Trainer {
                 }
             }
         }
-        venv.reset().map_err(|e| anyhow!("placing robots: {e}"))?;
+        venv.reset().context("placing robots")?;
         let n = cfg.num_envs * env_cfg.num_agents();
         Ok(Trainer {
             rng: ChaCha8Rng::seed_from_u64(mix_seed(cfg.seed ^ 0xac7, iteration)),
@@ -185,13 +184,17 @@ impl Trainer {
         let run = RunDir::new(run_dir);
         let state_path = run.state_path();
         let state = run.read_state()?;
+        let disagrees = |what: String| RunDirError::StateDisagrees {
+            state: state_path.clone(),
+            what,
+        };
         if state.config_hash != cfg.hash() {
-            bail!(
-                "{}: the run was started with a different configuration (hash {} vs {}); start a new run instead",
-                state_path.display(),
+            return Err(disagrees(format!(
+                "the run was started with a different configuration (hash {} vs {}); start a new run instead",
                 state.config_hash,
                 cfg.hash()
-            );
+            ))
+            .into());
         }
         for p in run.clean_stale_temporaries()? {
             tracing::info!("removed {} (left by a killed run)", p.display());
@@ -200,32 +203,28 @@ impl Trainer {
         t.env_steps = state.env_steps;
         t.wall_s = state.wall_s;
         for ls in &mut t.learners {
-            let name = state.checkpoint_of(ls.side).with_context(|| {
-                format!(
-                    "{}: names no {} checkpoint",
-                    state_path.display(),
-                    ls.side.name()
-                )
-            })?;
+            let name = state
+                .checkpoint_of(ls.side)
+                .ok_or_else(|| disagrees(format!("names no {} checkpoint", ls.side.name())))?;
             let dir = run.checkpoint(name);
             if !dir.is_dir() {
-                bail!(
-                    "{}: names the checkpoint {}, which is missing",
-                    state_path.display(),
+                return Err(disagrees(format!(
+                    "names the checkpoint {}, which is missing",
                     dir.display()
-                );
+                ))
+                .into());
             }
             let meta = persist::load_learner(&dir, ls.learner.as_mut())?;
             if (meta.env_steps, meta.iteration) != (state.env_steps, state.iteration) {
-                bail!(
-                    "{}: says {} env steps at iteration {}, but the checkpoint it names ({}) holds {} at iteration {}; the run folder was changed by hand",
-                    state_path.display(),
+                return Err(disagrees(format!(
+                    "says {} env steps at iteration {}, but the checkpoint it names ({}) holds {} at iteration {}; the run folder was changed by hand",
                     state.env_steps,
                     state.iteration,
                     dir.display(),
                     meta.env_steps,
                     meta.iteration
-                );
+                ))
+                .into());
             }
         }
         Ok(t)
@@ -327,12 +326,12 @@ impl Trainer {
                         ls.bad_updates
                     );
                     if ls.bad_updates >= limit {
-                        bail!(
-                            "{} learner: {} updates in a row had a non-finite loss or gradient (last: {}); stopping with the last good weights (max_bad_updates = {limit})",
-                            ls.side.name(),
-                            ls.bad_updates,
-                            bad.0
-                        );
+                        return Err(LearnError::Diverged {
+                            side: ls.side,
+                            in_a_row: ls.bad_updates,
+                            last: bad.0,
+                            limit,
+                        });
                     }
                 }
             }
@@ -399,13 +398,16 @@ fn build_learner(
             * sequence_bytes(len, team, net.input_len(), vector_len, net.hidden as usize);
         const LIMIT: usize = 16 << 30;
         if bytes > LIMIT {
-            bail!(
-                "{}.{}.buffer_steps = {steps}: the replay would take {:.1} GiB (at most {} GiB); lower it or net.patch_pool / net.hidden",
-                side.name(),
-                k.settings_table(),
-                bytes as f64 / (1u64 << 30) as f64,
-                LIMIT >> 30
-            );
+            return Err(ConfigError::new(
+                format!("{}.{}.buffer_steps", side.name(), k.settings_table()),
+                steps,
+                format!(
+                    "the replay would take {:.1} GiB (at most {} GiB); lower it or net.patch_pool / net.hidden",
+                    bytes as f64 / (1u64 << 30) as f64,
+                    LIMIT >> 30
+                ),
+            )
+            .into());
         }
     }
     Ok(k.build(side_cfg, vector_len, team, device))

@@ -5,10 +5,10 @@
 //! cycles training leaves idle and never changes what training does. Rows
 //! land in `eval.csv` and `eval.png` of the run folder as children finish.
 
+use crate::error::{LearnError, Result};
 use crate::eval::Summary;
 use crate::nn::run_dir::RunDir;
 use crate::plots::line::{self, line_plot, Series};
-use anyhow::{Context, Result};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
@@ -96,15 +96,21 @@ impl PeriodicEval {
         for (side, dir) in checkpoints {
             let out = self.dir.eval_dir(*side, env_steps);
             std::fs::create_dir_all(&out)
-                .with_context(|| format!("cannot create {}", out.display()))?;
+                .map_err(|e| LearnError::io(format!("cannot create {}", out.display()), e))?;
             let ckpt = format!("ckpt:{}", dir.display());
             let (captors, target) = match side {
                 t2e_core::env::Side::Captors => (ckpt.as_str(), "heuristic"),
                 t2e_core::env::Side::Target => ("heuristic", ckpt.as_str()),
             };
-            let log = std::fs::File::create(out.join("eval.log"))
-                .with_context(|| format!("cannot write {}", out.join("eval.log").display()))?;
-            let mut cmd = t2e_core::util::own_command()?;
+            let log_path = out.join("eval.log");
+            let cannot_write =
+                |e| LearnError::io(format!("cannot write {}", log_path.display()), e);
+            let cannot_start = |cause| LearnError::Process {
+                what: "cannot start the periodic evaluation".into(),
+                cause,
+            };
+            let log = std::fs::File::create(&log_path).map_err(cannot_write)?;
+            let mut cmd = t2e_core::util::own_command().map_err(cannot_start)?;
             cmd.args(["eval", "--captors", captors, "--target", target])
                 .args(["--k", &self.plan.num_captors.to_string()])
                 .args(["--speed-ratio", &self.plan.speed_ratio.to_string()])
@@ -117,12 +123,10 @@ impl PeriodicEval {
                 .env("RAYON_NUM_THREADS", "1")
                 .env("OMP_NUM_THREADS", "1")
                 .stdin(Stdio::null())
-                .stdout(log.try_clone()?)
+                .stdout(log.try_clone().map_err(cannot_write)?)
                 .stderr(log);
             lowest_priority(&mut cmd);
-            let child = cmd
-                .spawn()
-                .context("cannot start the periodic evaluation")?;
+            let child = cmd.spawn().map_err(cannot_start)?;
             self.running.push(Running {
                 child,
                 side: side.name().to_string(),
@@ -141,10 +145,17 @@ impl PeriodicEval {
         let mut still = Vec::new();
         for mut r in self.running.drain(..) {
             let status = if wait {
-                Some(r.child.wait()?)
+                r.child.wait().map(Some)
             } else {
-                r.child.try_wait()?
-            };
+                r.child.try_wait()
+            }
+            .map_err(|cause| LearnError::Process {
+                what: format!(
+                    "cannot wait for the periodic evaluation at {} env steps",
+                    r.env_steps
+                ),
+                cause,
+            })?;
             match status {
                 None => still.push(r),
                 Some(s) if s.success() => {
@@ -190,9 +201,12 @@ fn lowest_priority(cmd: &mut Command) {
 fn rows_of(r: &Running) -> Result<Vec<EvalRow>> {
     let path = r.out.join("summary.json");
     let text = std::fs::read_to_string(&path)
-        .with_context(|| format!("cannot read {}", path.display()))?;
+        .map_err(|e| LearnError::io(format!("cannot read {}", path.display()), e))?;
     let summaries: Vec<Summary> =
-        serde_json::from_str(&text).with_context(|| format!("{}: malformed", path.display()))?;
+        serde_json::from_str(&text).map_err(|cause| LearnError::Json {
+            context: format!("{}: malformed", path.display()),
+            cause,
+        })?;
     Ok(summaries
         .into_iter()
         .map(|s| EvalRow {
@@ -216,11 +230,17 @@ pub fn read_rows(path: &Path) -> Result<Vec<EvalRow>> {
 }
 
 fn write_rows(path: &Path, rows: &[EvalRow]) -> Result<()> {
+    let context = || format!("cannot write {}", path.display());
     let mut w = csv::Writer::from_writer(Vec::new());
     for r in rows {
-        w.serialize(r)?;
+        w.serialize(r).map_err(|cause| LearnError::Csv {
+            context: context(),
+            cause,
+        })?;
     }
-    let bytes = w.into_inner().map_err(|e| anyhow::anyhow!("{e}"))?;
+    let bytes = w
+        .into_inner()
+        .map_err(|e| LearnError::io(context(), e.into_error()))?;
     Ok(t2e_core::fs::write_file_atomically(path, &bytes)?)
 }
 

@@ -14,10 +14,10 @@ use super::csv_rows::read_csv;
 use super::metrics::Metrics;
 use super::periodic_eval::PeriodicEval;
 use super::trainer::Trainer;
+use crate::error::{LearnError, Result};
 use crate::learn::run_config::TrainConfig;
-use crate::nn::run_dir::RunDir;
+use crate::nn::run_dir::{RunDir, RunDirError};
 use crate::plots::line::{self, line_plot, Series};
-use anyhow::{bail, Context, Result};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
@@ -77,19 +77,18 @@ impl TrainingRun {
     pub fn start(cfg: TrainConfig, maps: Arc<Vec<Arc<PreparedMap>>>, dir: &Path) -> Result<Self> {
         let dir = RunDir::new(dir);
         if dir.has_state() {
-            bail!(
-                "{} already holds a run: add --resume to continue it, or pick another --out or name",
-                dir.root().display()
-            );
+            return Err(RunDirError::HoldsARun(dir.root().to_path_buf()).into());
         }
         std::fs::create_dir_all(dir.root())
-            .with_context(|| format!("cannot create {}", dir.root().display()))?;
+            .map_err(|e| LearnError::io(format!("cannot create {}", dir.root().display()), e))?;
         // Written whole and renamed: a run killed here leaves no half config
         // for --resume to read.
-        t2e_core::fs::write_file_atomically(
-            &dir.config_path(),
-            toml::to_string_pretty(&cfg)?.as_bytes(),
-        )?;
+        let config = dir.config_path();
+        let text = toml::to_string_pretty(&cfg).map_err(|cause| LearnError::Toml {
+            context: format!("cannot write {}", config.display()),
+            cause,
+        })?;
+        t2e_core::fs::write_file_atomically(&config, text.as_bytes())?;
         let _ = std::fs::remove_file(dir.metrics_path());
         let trainer = Trainer::new(cfg.clone(), maps)?;
         Ok(TrainingRun::around(trainer, cfg, dir))
@@ -240,16 +239,20 @@ pub fn status_line(recent: &[Metrics]) -> String {
 
 fn append_metrics(path: &Path, m: &Metrics) -> Result<()> {
     let fresh = !path.exists();
+    let context = || format!("cannot write {}", path.display());
     let file = std::fs::OpenOptions::new()
         .create(true)
         .append(true)
         .open(path)
-        .with_context(|| format!("cannot write {}", path.display()))?;
+        .map_err(|e| LearnError::io(context(), e))?;
     let mut w = csv::WriterBuilder::new()
         .has_headers(fresh)
         .from_writer(file);
-    w.serialize(m)?;
-    w.flush()?;
+    w.serialize(m).map_err(|cause| LearnError::Csv {
+        context: context(),
+        cause,
+    })?;
+    w.flush().map_err(|e| LearnError::io(context(), e))?;
     Ok(())
 }
 

@@ -4,8 +4,8 @@
 
 use super::super::persist::{self, RunDir, RunState};
 use super::trainer::{LearnerSide, Trainer};
+use crate::error::{LearnError, Result};
 use crate::nn::checkpoint::{checkpoint_name, code_version, CheckpointMeta, FORMAT};
-use anyhow::{Context, Result};
 use std::path::{Path, PathBuf};
 use t2e_core::env::Side;
 
@@ -61,7 +61,7 @@ impl Trainer {
             .learners
             .iter()
             .position(|l| l.side == side)
-            .with_context(|| format!("no {} learner in this run", side.name()))?;
+            .ok_or(LearnError::NoLearner(side))?;
         Ok(SideHandle {
             trainer: self,
             index,
