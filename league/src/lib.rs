@@ -2,7 +2,9 @@
 //! other's checkpoints (AlphaStar's league, adapted), with ratings on one
 //! scale and a curriculum over the target's speed.
 //!
-//! Three floors, each a folder, each importing only the ones below it:
+//! Three floors, each a folder, each importing only the ones below it,
+//! beside `error`, the crate's one error type (`LeagueError`) that every
+//! floor above the store returns:
 //!
 //! - `data`: the league's data types (players, matches, ratings, seats,
 //!   panels), which the rules compute with and the store keeps.
@@ -46,6 +48,7 @@
 //! on, and a file's imports show its arrows.
 
 pub mod data;
+pub mod error;
 pub mod rules;
 pub mod run;
 pub mod store;

@@ -721,6 +721,38 @@ pub struct VectorEnv {
     controllers: (Option<String>, Option<String>),
 }
 
+/// A seed for `seed=None`, different each call; apart from `VectorEnv::new`
+/// because it is the one place the bindings read the clock.
+fn drawn_seed() -> u64 {
+    use std::hash::{BuildHasher, Hasher};
+    let mut h = std::collections::hash_map::RandomState::new().build_hasher();
+    h.write_u128(
+        std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map_or(0, |d| d.as_nanos()),
+    );
+    h.finish()
+}
+
+/// Hands each side named by a controller to Rust: its actions passed to
+/// `step` are ignored, and no Python code runs for it. Apart from
+/// `VectorEnv::new` so the refusal of an unknown name reads on its own.
+fn script_sides(venv: &mut VecEnv, captors: Option<&str>, target: Option<&str>) -> PyResult<()> {
+    for (side, name) in [(Side::Captors, captors), (Side::Target, target)] {
+        if let Some(name) = name {
+            controller_of(name).map_err(|_| {
+                value_error(
+                    side.name(),
+                    format!("'{name}'"),
+                    "must be heuristic, greedy, greedy:K, random or still",
+                )
+            })?;
+            venv.script(side, || controller_of(name).expect("checked above"));
+        }
+    }
+    Ok(())
+}
+
 #[pymethods]
 impl VectorEnv {
     #[new]
@@ -777,34 +809,12 @@ impl VectorEnv {
         // `seed` says which, so the run can be repeated.
         let seed = match seed.map(seed_of).transpose()? {
             Some(s) => s,
-            None => {
-                use std::hash::{BuildHasher, Hasher};
-                let mut h = std::collections::hash_map::RandomState::new().build_hasher();
-                h.write_u128(
-                    std::time::SystemTime::now()
-                        .duration_since(std::time::UNIX_EPOCH)
-                        .map_or(0, |d| d.as_nanos()),
-                );
-                h.finish()
-            }
+            None => drawn_seed(),
         };
         let mut venv = pool()?
             .install(|| VecEnv::new(cfg, maps, num_envs as usize, seed))
             .map_err(|e| PyValueError::new_err(e.to_string()))?;
-        // A side a controller plays in Rust: its actions passed to `step`
-        // are ignored, and no Python code runs for it.
-        for (side, name) in [(Side::Captors, captors), (Side::Target, target)] {
-            if let Some(name) = name {
-                controller_of(name).map_err(|_| {
-                    value_error(
-                        side.name(),
-                        format!("'{name}'"),
-                        "must be heuristic, greedy, greedy:K, random or still",
-                    )
-                })?;
-                venv.script(side, || controller_of(name).expect("checked above"));
-            }
-        }
+        script_sides(&mut venv, captors, target)?;
         Ok(VectorEnv {
             venv: Mutex::new(venv),
             started: false,
@@ -962,6 +972,37 @@ fn observations<'py>(
     )
 }
 
+/// Refuses a robot off the map's free cells, naming it; apart from
+/// `asz_area` because a robot in a wall has no arrival field to compute.
+fn check_on_free_cells(
+    map: &PreparedMap,
+    captors: &[(f64, f64)],
+    target: &(f64, f64),
+) -> PyResult<()> {
+    let inside = |p: &(f64, f64)| {
+        let (r, c) = map.grid.cell_of([p.0, p.1]);
+        map.grid.is_free(r, c)
+    };
+    let robots = captors
+        .iter()
+        .enumerate()
+        .map(|(i, p)| (format!("captors[{i}]"), p))
+        .chain(std::iter::once(("target".to_string(), target)));
+    for (name, p) in robots {
+        if !inside(p) {
+            return Err(value_error(
+                &name,
+                format!("{p:?}"),
+                format!(
+                    "is not on a free cell of the map {} (a robot in a wall or off the map has no arrival field)",
+                    map.grid.name
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// |ASZ| in m² of `env`'s map with the robots at other places: the free
 /// area the target (at `target`, speed `target_speed`) reaches before every
 /// captor (at `captors`, speed 1).
@@ -993,11 +1034,6 @@ fn asz_area(
             "asz_area(env, ...) before env.reset(): the env has no map yet",
         ));
     }
-    let map = env.env.map();
-    let inside = |p: &(f64, f64)| {
-        let (r, c) = map.grid.cell_of([p.0, p.1]);
-        map.grid.is_free(r, c)
-    };
     if !finite(&target) {
         return Err(value_error(
             "target",
@@ -1005,23 +1041,7 @@ fn asz_area(
             "must be a finite (x, y) position in metres",
         ));
     }
-    let robots = captors
-        .iter()
-        .enumerate()
-        .map(|(i, p)| (format!("captors[{i}]"), p))
-        .chain(std::iter::once(("target".to_string(), &target)));
-    for (name, p) in robots {
-        if !inside(p) {
-            return Err(value_error(
-                &name,
-                format!("{p:?}"),
-                format!(
-                    "is not on a free cell of the map {} (a robot in a wall or off the map has no arrival field)",
-                    map.grid.name
-                ),
-            ));
-        }
-    }
+    check_on_free_cells(env.env.map(), &captors, &target)?;
     if !(target_speed.is_finite() && target_speed > 0.0) {
         return Err(value_error(
             "target_speed",
@@ -1049,6 +1069,44 @@ fn asz_area(
     })
 }
 
+/// Splits a vector's `full` length into the spec's (5 + 5N) and the
+/// sight's that follow it, refusing lengths that do not split; apart from
+/// `shaped_observations` because of its messages.
+fn spec_and_sight_len(full: usize, wall_rays: usize, map_cells: usize) -> PyResult<(usize, usize)> {
+    if map_cells != 0 && !MAP_CELLS.contains(&map_cells) {
+        return Err(value_error(
+            "map_cells",
+            map_cells,
+            format!(
+                "must be 0 (no map) or between {} and {}",
+                MAP_CELLS.start(),
+                MAP_CELLS.end()
+            ),
+        ));
+    }
+    // The sight's numbers after the spec's: the rays, then the map.
+    let map_len = Sight {
+        wall_rays: 0,
+        map_cells,
+    }
+    .map_len();
+    let sight_len = wall_rays.saturating_add(map_len);
+    let len = full.saturating_sub(sight_len);
+    if len < 5 || (len - 5) % 5 != 0 {
+        let tail = if map_cells == 0 {
+            format!("the {wall_rays} wall rays")
+        } else {
+            format!("the {wall_rays} wall rays and the {map_len} numbers of the {map_cells} x {map_cells} map")
+        };
+        return Err(value_error(
+            "vectors",
+            format!("{full} numbers"),
+            format!("a vector has 5 + 5N numbers, then {tail}"),
+        ));
+    }
+    Ok((len, sight_len))
+}
+
 /// The arrays of `parallel_env`'s observation options (t2e/observations.py):
 /// for each row of spec vectors [A, 5 + 5N] and patches [A, 48, 48], the
 /// egocentric vector [A, 6 + 9N] and the patch max-pooled by `pool`
@@ -1072,38 +1130,9 @@ fn shaped_observations<'py>(
     if ![1, 2, 3, 4, 6].contains(&pool) {
         return Err(value_error("patch_pool", pool, "must be 1, 2, 3, 4 or 6"));
     }
-    if map_cells != 0 && !MAP_CELLS.contains(&map_cells) {
-        return Err(value_error(
-            "map_cells",
-            map_cells,
-            format!(
-                "must be 0 (no map) or between {} and {}",
-                MAP_CELLS.start(),
-                MAP_CELLS.end()
-            ),
-        ));
-    }
-    // The sight's numbers after the spec's: the rays, then the map.
-    let map_len = Sight {
-        wall_rays: 0,
-        map_cells,
-    }
-    .map_len();
-    let sight_len = wall_rays.saturating_add(map_len);
-    let (rows, full) = (vectors.shape()[0], vectors.shape()[1]);
-    let len = full.saturating_sub(sight_len);
-    if len < 5 || (len - 5) % 5 != 0 {
-        let tail = if map_cells == 0 {
-            format!("the {wall_rays} wall rays")
-        } else {
-            format!("the {wall_rays} wall rays and the {map_len} numbers of the {map_cells} x {map_cells} map")
-        };
-        return Err(value_error(
-            "vectors",
-            format!("{full} numbers"),
-            format!("a vector has 5 + 5N numbers, then {tail}"),
-        ));
-    }
+    let full = vectors.shape()[1];
+    let (len, sight_len) = spec_and_sight_len(full, wall_rays, map_cells)?;
+    let rows = vectors.shape()[0];
     if patches.shape() != [rows, PATCH, PATCH] {
         return Err(value_error(
             "patches",

@@ -59,7 +59,14 @@ pub fn run(
     secs: f64,
 ) -> Result<()> {
     let states = episode_states(cfg, maps)?;
-    let k = cfg.num_captors;
+    greedy_rows(&states, cfg.num_captors, env_spec, secs);
+    target_rows(&states, secs);
+    Ok(())
+}
+
+/// The captors' table: each coarsening's time and agreement with the spec's
+/// cells; apart from `run` so each table is one function.
+fn greedy_rows(states: &[TrapEnv], k: usize, env_spec: &str, secs: f64) {
     let decide = |greedy: &mut AszGreedy, env: &TrapEnv| {
         let mut acts = vec![Action::Stop; k];
         greedy.act(env, Side::Captors, &mut acts);
@@ -115,6 +122,12 @@ pub fn run(
             100.0 * same as f64 / total as f64
         );
     }
+}
+
+/// The target's table: the lookahead and robust lookahead targets' time and
+/// departures from the rule-based target; apart from `run` so each table is
+/// one function.
+fn target_rows(states: &[TrapEnv], secs: f64) {
     // The lookahead target's decision over the same states: five futures of
     // its horizon against the expert captors, each scored by a coarse ASZ.
     println!("\n| target controller | time per decision | decisions/s | moves other than the rule-based target's |");
@@ -176,5 +189,4 @@ pub fn run(
             states.len()
         );
     }
-    Ok(())
 }

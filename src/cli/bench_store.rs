@@ -43,31 +43,7 @@ pub fn run(url: &str, writers: &[usize], seconds: f64) -> Result<()> {
             let handles: Vec<_> = (0..n)
                 .map(|w| {
                     let (url, tag) = (url.clone(), tag.clone());
-                    scope.spawn(move || -> Result<Vec<f64>> {
-                        let store = Store::open_existing(&url)?;
-                        let mut lat = Vec::new();
-                        let mut i = 0u64;
-                        while Instant::now() < until {
-                            let m = MatchRecord {
-                                key: format!("bench/{tag}/{w}/{i}"),
-                                captor_player: c,
-                                target_player: t,
-                                map: "bench".into(),
-                                num_captors: 3,
-                                speed_ratio: 1.0,
-                                seed: i,
-                                captured: i.is_multiple_of(2),
-                                steps: 100,
-                                final_asz_m2: Some(1.0),
-                                recorded_by: format!("bench-{w}"),
-                            };
-                            let at = Instant::now();
-                            store.record_match(&m)?;
-                            lat.push(at.elapsed().as_secs_f64() * 1e3);
-                            i += 1;
-                        }
-                        Ok(lat)
-                    })
+                    scope.spawn(move || write_matches(&url, &tag, w, (c, t), until))
                 })
                 .collect();
             handles.into_iter().map(|h| h.join().unwrap()).collect()
@@ -96,6 +72,41 @@ pub fn run(url: &str, writers: &[usize], seconds: f64) -> Result<()> {
         std::fs::remove_dir_all(&tmp).ok();
     }
     Ok(())
+}
+
+/// One writer's loop, on its own connection as a league process has;
+/// returns each write's latency in ms. Apart from `run` because it is what
+/// each thread runs.
+fn write_matches(
+    url: &StoreUrl,
+    tag: &str,
+    w: usize,
+    (c, t): (i64, i64),
+    until: Instant,
+) -> Result<Vec<f64>> {
+    let store = Store::open_existing(url)?;
+    let mut lat = Vec::new();
+    let mut i = 0u64;
+    while Instant::now() < until {
+        let m = MatchRecord {
+            key: format!("bench/{tag}/{w}/{i}"),
+            captor_player: c,
+            target_player: t,
+            map: "bench".into(),
+            num_captors: 3,
+            speed_ratio: 1.0,
+            seed: i,
+            captured: i.is_multiple_of(2),
+            steps: 100,
+            final_asz_m2: Some(1.0),
+            recorded_by: format!("bench-{w}"),
+        };
+        let at = Instant::now();
+        store.record_match(&m)?;
+        lat.push(at.elapsed().as_secs_f64() * 1e3);
+        i += 1;
+    }
+    Ok(lat)
 }
 
 fn tempfile_dir() -> Result<std::path::PathBuf> {

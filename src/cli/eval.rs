@@ -321,10 +321,9 @@ fn no_repeats<T: PartialEq + std::fmt::Display>(option: &str, values: &[T]) -> R
     Ok(())
 }
 
-pub fn run(args: EvalArgs) -> Result<()> {
-    if args.captors.is_checkpoint() || args.target.is_checkpoint() {
-        tch::set_num_threads(1);
-    }
+/// Refuses the arguments before any map is loaded: repeats, settings out of
+/// range, and players that cannot play a K asked for.
+fn check_args(args: &EvalArgs) -> Result<()> {
     no_repeats("--k", &args.k)?;
     no_repeats("--speed-ratio", &args.speed_ratio)?;
     no_repeats("--maps", &args.maps)?;
@@ -353,6 +352,114 @@ pub fn run(args: EvalArgs) -> Result<()> {
             .check(Side::Target, &cfg)
             .map_err(|e| anyhow::anyhow!("--target: {e}"))?;
     }
+    Ok(())
+}
+
+/// One setting's summary: the finished one under `--resume`, else played and
+/// written; apart from `run` so the resume rule reads on its own.
+fn setting_summary(
+    args: &EvalArgs,
+    setting: &EvalSetting,
+    spec: &str,
+    maps: &Arc<Vec<Arc<PreparedMap>>>,
+) -> Result<(Summary, PathBuf)> {
+    let identity = SettingIdentity::of(setting, spec, maps).map_err(anyhow::Error::msg)?;
+    let dir = setting_dir(&args.out, setting, spec, &identity);
+    let finished = if args.resume {
+        finished_setting(&dir, &identity)
+    } else {
+        Err(None)
+    };
+    let summary = match finished {
+        Ok(done) => done,
+        Err(finished) => {
+            if args.resume {
+                if let Some(why) = why_not_resumed(&args.out, &dir, &identity, finished) {
+                    eprintln!(
+                        "--resume: {spec}, K = {}, ratio {}: starts again: {why}",
+                        setting.num_captors, setting.speed_ratio
+                    );
+                }
+            }
+            let (summary, records) = eval::run(setting, maps, spec, !args.quiet)?;
+            write_setting(&dir, &identity, &summary, &records)?;
+            summary
+        }
+    };
+    Ok((summary, dir))
+}
+
+/// A setting's mean-|ASZ| curve as a series, its own plot written to `dir`;
+/// apart from `run` because only settings with a curve have one.
+fn setting_curve(
+    args: &EvalArgs,
+    summary: &Summary,
+    (k, ratio, spec): (usize, f64, &str),
+    dir: &Path,
+    color: [u8; 3],
+) -> Result<Series> {
+    let points: Vec<(f64, f64)> = summary
+        .soa_curve
+        .iter()
+        .map(|&(t, m, _)| (t as f64, m))
+        .collect();
+    let label = format!("{}:1 x{} {}", k, ratio_label(ratio), spec);
+    let series = Series {
+        label: label.clone(),
+        points,
+        color,
+    };
+    let title = format!(
+        "mean |ASZ| over time: {} vs {}, {label}",
+        args.captors, args.target
+    );
+    line::save_png(
+        &line::line_plot(
+            std::slice::from_ref(&series),
+            &title,
+            "step",
+            "|ASZ| (m^2)",
+            800,
+            500,
+        ),
+        dir.join("soa.png"),
+    )?;
+    Ok(series)
+}
+
+/// The run's table, summaries and (with several curves) their joint plot;
+/// apart from `run` because it is written once, after every setting.
+fn write_outputs(args: &EvalArgs, summaries: &[Summary], curves: &[Series]) -> Result<()> {
+    let mut table = format!("{TABLE_HEADER}\n");
+    for s in summaries {
+        table.push_str(&s.table_row());
+        table.push('\n');
+    }
+    for (name, bytes) in [
+        ("table.md", table.into_bytes()),
+        (
+            "summary.json",
+            serde_json::to_string_pretty(&summaries)?.into_bytes(),
+        ),
+    ] {
+        t2e_core::fs::write_file_atomically(&args.out.join(name), &bytes)
+            .with_context(|| format!("cannot write {}", args.out.join(name).display()))?;
+    }
+    if curves.len() > 1 {
+        let title = format!("mean |ASZ| over time: {} vs {}", args.captors, args.target);
+        line::save_png(
+            &line::line_plot(curves, &title, "step", "|ASZ| (m^2)", 1000, 600),
+            args.out.join("soa.png"),
+        )?;
+    }
+    Ok(())
+}
+
+pub fn run(args: EvalArgs) -> Result<()> {
+    if args.captors.is_checkpoint() || args.target.is_checkpoint() {
+        tch::set_num_threads(1);
+    }
+    check_args(&args)?;
     let sets = load_map_sets(&args.maps)?;
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("cannot create {}", args.out.display()))?;
@@ -373,87 +480,18 @@ pub fn run(args: EvalArgs) -> Result<()> {
                     capture_rule: args.capture_rule,
                     soa_every: args.soa_every,
                 };
-                let identity =
-                    SettingIdentity::of(&setting, spec, &sets[spec]).map_err(anyhow::Error::msg)?;
-                let dir = setting_dir(&args.out, &setting, spec, &identity);
-                let finished = if args.resume {
-                    finished_setting(&dir, &identity)
-                } else {
-                    Err(None)
-                };
-                let summary = match finished {
-                    Ok(done) => done,
-                    Err(finished) => {
-                        if args.resume {
-                            if let Some(why) = why_not_resumed(&args.out, &dir, &identity, finished)
-                            {
-                                eprintln!(
-                                    "--resume: {spec}, K = {k}, ratio {ratio}: starts again: {why}"
-                                );
-                            }
-                        }
-                        let (summary, records) =
-                            eval::run(&setting, &sets[spec], spec, !args.quiet)?;
-                        write_setting(&dir, &identity, &summary, &records)?;
-                        summary
-                    }
-                };
+                let (summary, dir) = setting_summary(&args, &setting, spec, &sets[spec])?;
                 println!("{}", summary.table_row());
                 if !summary.soa_curve.is_empty() {
-                    let points: Vec<(f64, f64)> = summary
-                        .soa_curve
-                        .iter()
-                        .map(|&(t, m, _)| (t as f64, m))
-                        .collect();
-                    let label = format!("{}:1 x{} {}", k, ratio_label(ratio), spec);
-                    let series = Series {
-                        label: label.clone(),
-                        points,
-                        color: line::palette(curves.len()),
-                    };
-                    let title = format!(
-                        "mean |ASZ| over time: {} vs {}, {label}",
-                        args.captors, args.target
-                    );
-                    line::save_png(
-                        &line::line_plot(
-                            std::slice::from_ref(&series),
-                            &title,
-                            "step",
-                            "|ASZ| (m^2)",
-                            800,
-                            500,
-                        ),
-                        dir.join("soa.png"),
-                    )?;
-                    curves.push(series);
+                    let color = line::palette(curves.len());
+                    let at = (k, ratio, spec.as_str());
+                    curves.push(setting_curve(&args, &summary, at, &dir, color)?);
                 }
                 summaries.push(summary);
             }
         }
     }
-    let mut table = format!("{TABLE_HEADER}\n");
-    for s in &summaries {
-        table.push_str(&s.table_row());
-        table.push('\n');
-    }
-    for (name, bytes) in [
-        ("table.md", table.into_bytes()),
-        (
-            "summary.json",
-            serde_json::to_string_pretty(&summaries)?.into_bytes(),
-        ),
-    ] {
-        t2e_core::fs::write_file_atomically(&args.out.join(name), &bytes)
-            .with_context(|| format!("cannot write {}", args.out.join(name).display()))?;
-    }
-    if curves.len() > 1 {
-        let title = format!("mean |ASZ| over time: {} vs {}", args.captors, args.target);
-        line::save_png(
-            &line::line_plot(&curves, &title, "step", "|ASZ| (m^2)", 1000, 600),
-            args.out.join("soa.png"),
-        )?;
-    }
+    write_outputs(&args, &summaries, &curves)?;
     tracing::info!("wrote {}", args.out.display());
     Ok(())
 }

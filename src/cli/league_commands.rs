@@ -4,8 +4,9 @@
 use super::flag_error::as_flag;
 use super::progress::Bars;
 use anyhow::{bail, Context, Result};
+use league::error::LeagueError;
 use league::rules::players::Role;
-use league::rules::supervision::{CannotStart, Outcome};
+use league::rules::supervision::Outcome;
 use league::run::folder::layout::LeagueDir;
 use league::run::processes::child::{self, ChildCommand};
 use league::run::processes::worker::WorkerOptions;
@@ -239,13 +240,13 @@ pub fn run(args: RunArgs) -> Result<()> {
         if args.pool.is_some() || args.workers.is_some() {
             bail!("--pool and --workers go with --store URL (a league whose seats run on workers)");
         }
-        return manager::run(
+        return Ok(manager::run(
             &LeagueDir::new(dir),
             args.config.as_deref(),
             run_for,
             &STOP,
             &Bars::default(),
-        );
+        )?);
     };
     let url = StoreUrl::parse(store).map_err(anyhow::Error::msg)?;
     let Some(pool) = &args.pool else {
@@ -282,14 +283,14 @@ pub fn run(args: RunArgs) -> Result<()> {
         local: args.workers.unwrap_or(seats),
         logs: dir.join("logs"),
     };
-    manager::run_with(
+    Ok(manager::run_with(
         &league,
         args.config.as_deref(),
         run_for,
         &STOP,
         &launch,
         &Bars::default(),
-    )
+    )?)
 }
 
 /// Where status, export and exploit look for a league without --dir.
@@ -465,11 +466,11 @@ pub fn worker(args: WorkerArgs) -> Result<()> {
     // Children read the host name from the environment (heartbeats).
     std::env::set_var("T2E_HOST", &opts.host);
     on_ctrl_c()?;
-    league::run::processes::worker::run_worker(
+    Ok(league::run::processes::worker::run_worker(
         &LeagueDir::with_store(&args.pool, url),
         &opts,
         &STOP,
-    )
+    )?)
 }
 
 pub fn status(args: StatusArgs) -> Result<()> {
@@ -613,16 +614,16 @@ pub fn evaluator(args: SeatArgs) -> Result<()> {
 
 /// A league process's exit code (`league::rules::supervision`): the manager reads
 /// the outcome from it.
-fn exit_with(result: Result<Outcome>) -> Result<()> {
+fn exit_with(result: Result<Outcome, LeagueError>) -> Result<()> {
     use league::rules::supervision::{EXIT_CANNOT_START, EXIT_STOPPED};
     match result {
         Ok(Outcome::Done) => Ok(()),
         Ok(Outcome::Stopped) => std::process::exit(EXIT_STOPPED),
-        Err(e) if e.downcast_ref::<CannotStart>().is_some() => {
-            tracing::error!("{e:#}");
+        Err(e) if e.is_cannot_start() => {
+            tracing::error!("{}", e.chain());
             std::process::exit(EXIT_CANNOT_START)
         }
-        Err(e) => Err(e),
+        Err(e) => Err(e.into()),
     }
 }
 

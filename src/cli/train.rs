@@ -6,6 +6,8 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use t2e_core::map::PreparedMap;
 use t2e_learners::learn::train::periodic_eval::{EvalPlan, PeriodicEval};
 use t2e_learners::learn::train::run::{status_line, TrainingRun};
 use t2e_learners::learn::train::TrainConfig;
@@ -82,20 +84,7 @@ pub fn run(args: TrainArgs) -> Result<()> {
     tch::set_num_threads(threads as i32);
     let run_for = duration("--for", &args.run_for)?;
     let eval_every = duration("--eval-every", &args.eval_every)?;
-    let mut cfg = match (&args.config, &args.out, args.resume) {
-        (Some(p), _, _) => TrainConfig::load(p)?,
-        (None, Some(out), true) => TrainConfig::load_stored(&out.join("config.toml"))?,
-        _ => bail!("--config is required (or --resume --out RUN_FOLDER to reuse a run's config)"),
-    };
-    if let Some(s) = args.total_env_steps {
-        cfg.total_env_steps = s;
-    }
-    if let Some(d) = &args.device {
-        cfg.device = *d;
-    }
-    if cfg.protocol == t2e_core::protocol::Protocol::HeldOut {
-        refuse_test_maps(&cfg.maps)?;
-    }
+    let cfg = train_config(&args)?;
     let run_dir = args
         .out
         .clone()
@@ -105,18 +94,7 @@ pub fn run(args: TrainArgs) -> Result<()> {
         .transpose()?;
     let maps = t2e_core::map::catalog::load_prepared(&cfg.maps)
         .with_context(|| format!("maps = \"{}\"", cfg.maps))?;
-    let mut run = if args.resume {
-        let run = TrainingRun::resume(cfg.clone(), maps, &run_dir)?;
-        tracing::info!(
-            "resuming {} at iteration {}, {} env steps",
-            run_dir.display(),
-            run.trainer.iteration,
-            run.trainer.env_steps
-        );
-        run
-    } else {
-        TrainingRun::start(cfg.clone(), maps, &run_dir)?
-    };
+    let mut run = open_run(&args, &cfg, maps, &run_dir)?;
     if let Some(plan) = eval_plan {
         let periodic = PeriodicEval::new(plan, run.dir());
         run = run.with_periodic_eval(periodic);
@@ -124,33 +102,13 @@ pub fn run(args: TrainArgs) -> Result<()> {
     if let Some(d) = run_for {
         run.trainer.set_clock_budget(d.as_secs_f64());
     }
-    ctrlc::set_handler(|| {
-        if STOP.swap(true, Ordering::SeqCst) {
-            tracing::info!("\nsecond Ctrl-C: quitting without a final checkpoint");
-            std::process::exit(130);
-        }
-        tracing::info!("\nCtrl-C: finishing this iteration and writing a checkpoint (Ctrl-C again to quit now)");
-    })
-    .context("cannot install the Ctrl-C handler")?;
+    install_ctrl_c()?;
     tracing::info!(
         "{}, {threads} threads ({why}), run folder {}",
         what_trains(&run, &cfg),
         run_dir.display()
     );
-    let bar = if args.quiet {
-        ProgressBar::hidden()
-    } else {
-        let b = ProgressBar::new(cfg.total_env_steps);
-        b.set_style(
-            ProgressStyle::with_template(
-                "[{elapsed_precise}] [{bar:25}] {human_pos}/{human_len} steps {msg}",
-            )
-            .unwrap()
-            .progress_chars("=> "),
-        );
-        b.set_position(run.trainer.env_steps);
-        b
-    };
+    let bar = progress_bar(args.quiet, cfg.total_env_steps, run.trainer.env_steps);
     let finished = run.run(&STOP, run_for, |it| {
         bar.set_position(it.metrics.env_steps);
         bar.set_message(status_line(it.recent));
@@ -176,6 +134,80 @@ pub fn run(args: TrainArgs) -> Result<()> {
     }
     println!("curves {}", run.dir().curves_path().display());
     Ok(())
+}
+
+/// The run's config: `--config`, or a resumed run's stored one, with the
+/// flags that override it; apart from `run` so its start reads as steps.
+fn train_config(args: &TrainArgs) -> Result<TrainConfig> {
+    let mut cfg = match (&args.config, &args.out, args.resume) {
+        (Some(p), _, _) => TrainConfig::load(p)?,
+        (None, Some(out), true) => TrainConfig::load_stored(&out.join("config.toml"))?,
+        _ => bail!("--config is required (or --resume --out RUN_FOLDER to reuse a run's config)"),
+    };
+    if let Some(s) = args.total_env_steps {
+        cfg.total_env_steps = s;
+    }
+    if let Some(d) = &args.device {
+        cfg.device = *d;
+    }
+    if cfg.protocol == t2e_core::protocol::Protocol::HeldOut {
+        refuse_test_maps(&cfg.maps)?;
+    }
+    Ok(cfg)
+}
+
+/// A fresh run in `run_dir`, or the one there resumed; apart from `run`
+/// because resuming logs where it picks up.
+fn open_run(
+    args: &TrainArgs,
+    cfg: &TrainConfig,
+    maps: Arc<Vec<Arc<PreparedMap>>>,
+    run_dir: &Path,
+) -> Result<TrainingRun> {
+    Ok(if args.resume {
+        let run = TrainingRun::resume(cfg.clone(), maps, run_dir)?;
+        tracing::info!(
+            "resuming {} at iteration {}, {} env steps",
+            run_dir.display(),
+            run.trainer.iteration,
+            run.trainer.env_steps
+        );
+        run
+    } else {
+        TrainingRun::start(cfg.clone(), maps, run_dir)?
+    })
+}
+
+/// Ctrl-C once stops after the iteration with a checkpoint, twice quits now;
+/// apart from `run` because the handler is process-wide.
+fn install_ctrl_c() -> Result<()> {
+    ctrlc::set_handler(|| {
+        if STOP.swap(true, Ordering::SeqCst) {
+            tracing::info!("\nsecond Ctrl-C: quitting without a final checkpoint");
+            std::process::exit(130);
+        }
+        tracing::info!("\nCtrl-C: finishing this iteration and writing a checkpoint (Ctrl-C again to quit now)");
+    })
+    .context("cannot install the Ctrl-C handler")
+}
+
+/// The steps bar (hidden with `--quiet`), at `at` steps for a resumed run;
+/// apart from `run` to keep it to the run.
+fn progress_bar(quiet: bool, total: u64, at: u64) -> ProgressBar {
+    if quiet {
+        ProgressBar::hidden()
+    } else {
+        let b = ProgressBar::new(total);
+        b.set_style(
+            ProgressStyle::with_template(
+                "[{elapsed_precise}] [{bar:25}] {human_pos}/{human_len} steps {msg}",
+            )
+            .unwrap()
+            .progress_chars("=> "),
+        );
+        b.set_position(at);
+        b
+    }
 }
 
 /// The periodic evaluation `--eval-every` asks for, its settings and maps

@@ -6,7 +6,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use std::io::Write as _;
 use std::path::PathBuf;
 use t2e_learners::controllers::ControllerSpec;
-use t2e_learners::eval::tune::{tune, Candidate, TuneSettings};
+use t2e_learners::eval::tune::{tune, Candidate, TuneOutcome, TuneSettings};
 use t2e_learners::plots::line::{self, line_plot, Series};
 
 #[derive(clap::Args, Debug)]
@@ -118,6 +118,14 @@ pub fn run(args: TuneTargetArgs) -> Result<()> {
     bar.finish_and_clear();
     let json = serde_json::to_string_pretty(&outcome)?;
     t2e_core::fs::write_file_atomically(&args.out.join("tune.json"), json.as_bytes())?;
+    plot_outcome(&args, &outcome)?;
+    print_outcome(&args, &outcome);
+    Ok(())
+}
+
+/// tune.png: each candidate's worst capture rate, the best so far and the
+/// rule's; apart from `run` because it is drawn once, from the outcome.
+fn plot_outcome(args: &TuneTargetArgs, outcome: &TuneOutcome) -> Result<()> {
     let worst: Vec<(f64, f64)> = outcome
         .candidates
         .iter()
@@ -149,6 +157,12 @@ pub fn run(args: TuneTargetArgs) -> Result<()> {
         400,
     );
     line::save_png(&img, args.out.join("tune.png"))?;
+    Ok(())
+}
+
+/// The last table: the rule's and the best target's capture rates per team;
+/// apart from `run` because it is printed once, from the outcome.
+fn print_outcome(args: &TuneTargetArgs, outcome: &TuneOutcome) {
     println!("| target | worst | {} |", args.panel.join(" | "));
     println!("|---|---|{}", "---|".repeat(args.panel.len()));
     let best_label = if outcome.best.target == outcome.rule.target {
@@ -171,5 +185,4 @@ pub fn run(args: TuneTargetArgs) -> Result<()> {
         args.episodes,
         args.out.display()
     );
-    Ok(())
 }

@@ -152,72 +152,9 @@ impl FromStr for ControllerSpec {
                     Err(_) => Err(ControllerError::ExpertSeed(other.to_string())),
                 }
             }
-            other if other.starts_with("lookahead:") => {
-                let rest = &other["lookahead:".len()..];
-                let (horizon, captors) = match rest.split_once(':') {
-                    Some((h, model)) => (h, model.parse::<ControllerSpec>()?),
-                    None => (rest, ControllerSpec::Heuristic),
-                };
-                match horizon.parse::<usize>() {
-                    Ok(h)
-                        if (1..=Lookahead::MAX_HORIZON).contains(&h)
-                            && !matches!(captors, ControllerSpec::Lookahead { .. }) =>
-                    {
-                        Ok(ControllerSpec::Lookahead {
-                            horizon: h,
-                            captors: Box::new(captors),
-                        })
-                    }
-                    _ => Err(ControllerError::Lookahead(other.to_string())),
-                }
-            }
-            other if other.starts_with("robust:") => {
-                let refuse = || ControllerError::Robust(other.to_string());
-                let (horizon, models) = other["robust:".len()..]
-                    .split_once(':')
-                    .ok_or_else(refuse)?;
-                let horizon = horizon
-                    .parse::<usize>()
-                    .ok()
-                    .filter(|h| (1..=Lookahead::MAX_HORIZON).contains(h))
-                    .ok_or_else(refuse)?;
-                let models = models
-                    .split('+')
-                    .map(|m| m.parse::<ControllerSpec>())
-                    .collect::<Result<Vec<_>, _>>()?;
-                let planner = |m: &ControllerSpec| {
-                    matches!(
-                        m,
-                        ControllerSpec::Lookahead { .. } | ControllerSpec::Robust { .. }
-                    )
-                };
-                if models.is_empty()
-                    || models.len() > RobustLookahead::MAX_MODELS
-                    || models.iter().any(planner)
-                {
-                    return Err(refuse());
-                }
-                // A learned team's recurrent state would be advanced by every
-                // simulated step: its futures would not be the team's.
-                if models.iter().any(|m| m.is_checkpoint()) {
-                    return Err(ControllerError::RobustLearnedModel(other.to_string()));
-                }
-                Ok(ControllerSpec::Robust { horizon, models })
-            }
-            other if other.starts_with("tuned:") => {
-                let refuse = |why: String| ControllerError::Tuned(other.to_string(), why);
-                let values = other["tuned:".len()..]
-                    .split(',')
-                    .map(|x| x.trim().parse::<f64>())
-                    .collect::<Result<Vec<_>, _>>()
-                    .map_err(|e| refuse(e.to_string()))?;
-                let values: [f64; 5] = values
-                    .try_into()
-                    .map_err(|v: Vec<f64>| refuse(format!("{} values", v.len())))?;
-                TargetParams::from_array(values)
-                    .map(ControllerSpec::Tuned)
-                    .map_err(refuse)
-            }
+            other if other.starts_with("lookahead:") => parse_lookahead(other),
+            other if other.starts_with("robust:") => parse_robust(other),
+            other if other.starts_with("tuned:") => parse_tuned(other),
             "random" => Ok(ControllerSpec::Random),
             "still" => Ok(ControllerSpec::Still),
             other if other.starts_with("ckpt:") => {
@@ -237,6 +174,79 @@ impl FromStr for ControllerSpec {
             other => Err(ControllerError::Unknown(other.to_string())),
         }
     }
+}
+
+/// `lookahead:H[:MODEL]`; apart from `from_str` because its model is itself
+/// a spec, parsed recursively.
+fn parse_lookahead(other: &str) -> Result<ControllerSpec, ControllerError> {
+    let rest = &other["lookahead:".len()..];
+    let (horizon, captors) = match rest.split_once(':') {
+        Some((h, model)) => (h, model.parse::<ControllerSpec>()?),
+        None => (rest, ControllerSpec::Heuristic),
+    };
+    match horizon.parse::<usize>() {
+        Ok(h)
+            if (1..=Lookahead::MAX_HORIZON).contains(&h)
+                && !matches!(captors, ControllerSpec::Lookahead { .. }) =>
+        {
+            Ok(ControllerSpec::Lookahead {
+                horizon: h,
+                captors: Box::new(captors),
+            })
+        }
+        _ => Err(ControllerError::Lookahead(other.to_string())),
+    }
+}
+
+/// `robust:H:M1+M2+...`; apart from `from_str` because of its rules on which
+/// models a robust planner may imagine.
+fn parse_robust(other: &str) -> Result<ControllerSpec, ControllerError> {
+    let refuse = || ControllerError::Robust(other.to_string());
+    let (horizon, models) = other["robust:".len()..]
+        .split_once(':')
+        .ok_or_else(refuse)?;
+    let horizon = horizon
+        .parse::<usize>()
+        .ok()
+        .filter(|h| (1..=Lookahead::MAX_HORIZON).contains(h))
+        .ok_or_else(refuse)?;
+    let models = models
+        .split('+')
+        .map(|m| m.parse::<ControllerSpec>())
+        .collect::<Result<Vec<_>, _>>()?;
+    let planner = |m: &ControllerSpec| {
+        matches!(
+            m,
+            ControllerSpec::Lookahead { .. } | ControllerSpec::Robust { .. }
+        )
+    };
+    if models.is_empty() || models.len() > RobustLookahead::MAX_MODELS || models.iter().any(planner)
+    {
+        return Err(refuse());
+    }
+    // A learned team's recurrent state would be advanced by every
+    // simulated step: its futures would not be the team's.
+    if models.iter().any(|m| m.is_checkpoint()) {
+        return Err(ControllerError::RobustLearnedModel(other.to_string()));
+    }
+    Ok(ControllerSpec::Robust { horizon, models })
+}
+
+/// `tuned:a,b,c,d,e`; apart from `from_str` because its five numbers are
+/// checked by `TargetParams`.
+fn parse_tuned(other: &str) -> Result<ControllerSpec, ControllerError> {
+    let refuse = |why: String| ControllerError::Tuned(other.to_string(), why);
+    let values = other["tuned:".len()..]
+        .split(',')
+        .map(|x| x.trim().parse::<f64>())
+        .collect::<Result<Vec<_>, _>>()
+        .map_err(|e| refuse(e.to_string()))?;
+    let values: [f64; 5] = values
+        .try_into()
+        .map_err(|v: Vec<f64>| refuse(format!("{} values", v.len())))?;
+    TargetParams::from_array(values)
+        .map(ControllerSpec::Tuned)
+        .map_err(refuse)
 }
 
 impl fmt::Display for ControllerSpec {

@@ -314,6 +314,7 @@ impl LeagueConfig {
         Ok(())
     }
 
+    // Long on purpose: one check per field, in the order docs/reference/league-config.md lists them, so a reader finds each rule beside its neighbours.
     pub fn validate(&self) -> Result<(), ConfigError> {
         self.matchmaking
             .validate()

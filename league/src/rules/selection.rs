@@ -46,6 +46,7 @@ pub enum NoChoice {
 /// snapshot. A snapshot whose validation is unfinished (the evaluator was
 /// stopped or killed mid-way) is not ranked, so a half result never
 /// chooses.
+// Long on purpose: the export rule read as one piece, which the hand-computed tests pin: keep the finished, score them, order by score and its tie-breaks.
 pub fn rank_validated(
     players: &[Player],
     results: &[HeldOutResult],

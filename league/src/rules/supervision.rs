@@ -54,12 +54,6 @@ pub enum Outcome {
     Stopped,
 }
 
-/// An error before the learner trained a step: restarting would fail the
-/// same way (`supervision::EXIT_CANNOT_START`).
-#[derive(Debug, thiserror::Error)]
-#[error("{0}")]
-pub struct CannotStart(pub String);
-
 /// How many crashes of one cause, within how long, stop the league.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct CrashBudget {

@@ -378,6 +378,7 @@ impl Store {
         Ok(store)
     }
 
+    // Long on purpose: open, check the schema's version, migrate and register, one sequence per backend whose order is the store's contract.
     fn connect(url: &StoreUrl, access: Access) -> Result<Store, StoreError> {
         sqlx::any::install_default_drivers();
         let rt = tokio::runtime::Builder::new_current_thread()

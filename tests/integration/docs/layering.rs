@@ -240,11 +240,12 @@ fn rust_files(dir: &std::path::Path) -> Vec<std::path::PathBuf> {
 
 #[test]
 fn the_library_crates_use_no_anyhow() {
-    // A library's errors are typed (`LearnError`, `MapLoadError`, ...), so a
-    // caller can tell them apart; anyhow belongs to the command line. Each
-    // entry is a crate's source folder, its manifest beside it.
+    // A library's errors are typed (`LearnError`, `MapLoadError`,
+    // `LeagueError`, ...), so a caller can tell them apart; anyhow belongs
+    // to the command line. Each entry is a crate's source folder, its
+    // manifest beside it.
     let repo = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
-    for src in ["crates/core/src", "crates/learners/src"] {
+    for src in ["crates/core/src", "crates/learners/src", "league/src"] {
         let files = rust_files(&repo.join(src));
         assert!(!files.is_empty(), "no .rs file under {src}");
         for path in files {

@@ -614,6 +614,56 @@ impl RegionSearch {
         })
     }
 
+    /// Moves the waiting cells the target's field settles before `bound`
+    /// into the candidates; apart from `run` to keep its search loop short,
+    /// inlined because it runs once per candidate.
+    #[inline]
+    fn release_waiting(&mut self, target: &mut DistanceField, bound: f64) {
+        while self.waiting_count > 0 {
+            let Some(cell) = target.step(bound, None) else {
+                break;
+            };
+            if self.waiting[cell] {
+                self.waiting[cell] = false;
+                self.waiting_count -= 1;
+                self.candidates.push(Candidate {
+                    distance: target.at(cell),
+                    cell: cell as u32,
+                });
+            }
+        }
+    }
+
+    /// Offers a region cell's unseen free neighbours: as candidates when the
+    /// target's field has reached them, else as waiting; inlined because it
+    /// runs once per region cell.
+    #[inline]
+    fn offer_neighbours(
+        &mut self,
+        free: &[u8],
+        stride: usize,
+        cell: usize,
+        target: &DistanceField,
+    ) {
+        for nb in [cell - 1, cell + 1, cell - stride, cell + stride] {
+            if free[nb] != 0 || self.seen[nb] {
+                continue;
+            }
+            self.seen[nb] = true;
+            self.seen_cells.push(nb as u32);
+            let d = target.at(nb);
+            if d.is_finite() {
+                self.candidates.push(Candidate {
+                    distance: d,
+                    cell: nb as u32,
+                });
+            } else {
+                self.waiting[nb] = true;
+                self.waiting_count += 1;
+            }
+        }
+    }
+
     /// The target's region (its connected part of the cells it reaches
     /// strictly first), searched in the order of its arrival time; then the
     /// second march inside it. Fills `asz`; returns its size.
@@ -644,19 +694,7 @@ impl RegionSearch {
             // Cells offered before the target's field reached them join the
             // candidates once it settles them, before any later candidate.
             let bound = self.candidates.peek().map_or(f64::INFINITY, |c| c.distance);
-            while self.waiting_count > 0 {
-                let Some(cell) = target.step(bound, None) else {
-                    break;
-                };
-                if self.waiting[cell] {
-                    self.waiting[cell] = false;
-                    self.waiting_count -= 1;
-                    self.candidates.push(Candidate {
-                        distance: target.at(cell),
-                        cell: cell as u32,
-                    });
-                }
-            }
+            self.release_waiting(target, bound);
             let Some(Candidate { distance, cell }) = self.candidates.pop() else {
                 break;
             };
@@ -666,23 +704,7 @@ impl RegionSearch {
             }
             self.region[cell] = true;
             self.region_cells.push(cell as u32);
-            for nb in [cell - 1, cell + 1, cell - stride, cell + stride] {
-                if free[nb] != 0 || self.seen[nb] {
-                    continue;
-                }
-                self.seen[nb] = true;
-                self.seen_cells.push(nb as u32);
-                let d = target.at(nb);
-                if d.is_finite() {
-                    self.candidates.push(Candidate {
-                        distance: d,
-                        cell: nb as u32,
-                    });
-                } else {
-                    self.waiting[nb] = true;
-                    self.waiting_count += 1;
-                }
-            }
+            self.offer_neighbours(free, stride, cell, target);
         }
         if !self.region[target_cell] {
             return 0;

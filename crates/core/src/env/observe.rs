@@ -191,6 +191,9 @@ fn lookup_run(cells: &[u8], at: &PatchAt, mut dc: i32, mut dr: i32, out: &mut [u
 /// inside the grid of the map `cells` belongs to.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
+// Long on purpose: an AVX2 kernel, whose intrinsics read as one piece
+// (load, shift, mask, store per run); helpers would each need
+// `#[target_feature]` and `unsafe`, and the data flow would be lost.
 unsafe fn patch_rows_avx2(cells: &[u8], at: &PatchAt, out: &mut [u8]) {
     use std::arch::x86_64::*;
     const RUNS: usize = PATCH / RUN;

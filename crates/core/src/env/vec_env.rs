@@ -222,6 +222,10 @@ impl VecEnv {
 
     /// One step of every world. `actions` holds one action per agent per
     /// world ([env][agent]); scripted sides overwrite theirs.
+    // Long on purpose: every world's step in one rayon pass over a zip of
+    // all per-world buffers (scripted actions, physics, rewards, shaping,
+    // auto-reset); the training hot path, kept whole so the zip is built
+    // once and nothing new is allocated or indirected per step.
     pub fn step(&mut self, actions: &[Action]) -> Result<(), PlacementError> {
         let na = self.num_agents();
         assert_eq!(

@@ -374,27 +374,7 @@ fn build_plan(
 ) -> Option<FloorPlan> {
     let mut rng = ChaCha8Rng::seed_from_u64(layout_seed);
     let side = GENERATED_SIDE;
-    let margin = cells(cfg.border_margin_m).clamp(1, side / 4);
-    let max_side = side - 2 * margin;
-
-    // Footprint rectangle, placed anywhere inside the margin.
-    let aspect = uniform(&mut rng, cfg.aspect_ratio);
-    let long_m = (footprint_m2 * aspect).sqrt();
-    let (mut h, mut w) = (
-        cells(footprint_m2 / long_m).clamp(1, max_side),
-        cells(long_m).clamp(1, max_side),
-    );
-    if rng.gen_bool(0.5) {
-        std::mem::swap(&mut h, &mut w);
-    }
-    let r0 = margin + rng.gen_range(0..=max_side - h);
-    let c0 = margin + rng.gen_range(0..=max_side - w);
-    let footprint = CellRect {
-        r0,
-        c0,
-        r1: r0 + h,
-        c1: c0 + w,
-    };
+    let footprint = place_footprint(footprint_m2, cfg, &mut rng);
 
     // Walls straddle partition lines: `lo` cells before the line, `hi` after.
     let wall = cells(cfg.wall_thickness_m).max(1);
@@ -424,95 +404,9 @@ fn build_plan(
         cut_corner_room(&mut rooms, &mut candidates, &footprint, &mut rng);
     }
 
-    // Spanning tree by Kruskal on random weights, corridors first.
-    let mut weighted: Vec<(f64, usize)> = candidates
-        .iter()
-        .enumerate()
-        .map(|(k, cand)| {
-            let corridor = rooms[cand.a].kind == RoomKind::Corridor
-                || rooms[cand.b].kind == RoomKind::Corridor;
-            (rng.gen::<f64>() + if corridor { 0.0 } else { 0.7 }, k)
-        })
-        .collect();
-    weighted.sort_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
-    let mut sets = UnionFind::new(rooms.len());
-    let mut chosen = Vec::new();
-    let mut spare = Vec::new();
-    for &(_, k) in &weighted {
-        if sets.union(candidates[k].a, candidates[k].b) {
-            chosen.push(k);
-        } else {
-            spare.push(k);
-        }
-    }
-    if (0..rooms.len()).any(|i| sets.find(i) != sets.find(0)) {
-        return None;
-    }
-    let extra = rng.gen_range(cfg.extra_doors.0..=cfg.extra_doors.1.max(cfg.extra_doors.0));
-    for _ in 0..extra.min(spare.len()) {
-        let pick = rng.gen_range(0..spare.len());
-        chosen.push(spare.swap_remove(pick));
-    }
-
-    // Door widths: some narrow passages, at least one when there is a door,
-    // preferably on a loop door so that no room hangs on it alone.
-    let mut narrow: Vec<bool> = chosen
-        .iter()
-        .map(|_| rng.gen_bool(cfg.narrow_passage_fraction.clamp(0.0, 1.0)))
-        .collect();
-    if !narrow.is_empty() && !narrow.iter().any(|&n| n) {
-        let n = narrow.len();
-        narrow[n - 1] = true; // extra doors come last
-    }
-    let clearance = cells(cfg.door_clearance_m);
-    let keep_side = cells(0.15);
-    let mut doors = Vec::new();
-    for (&k, &is_narrow) in chosen.iter().zip(&narrow) {
-        let cand = &candidates[k];
-        let width_range = if is_narrow {
-            cfg.narrow_passage_width_m
-        } else {
-            cfg.door_width_m
-        };
-        let width = cells(uniform(&mut rng, width_range)).clamp(1, cand.span.1 - cand.span.0);
-        let start = cand.span.0 + rng.gen_range(0..=cand.span.1 - cand.span.0 - width);
-        let (cells_rect, keep_clear) = if cand.vertical {
-            let r = CellRect {
-                r0: start,
-                r1: start + width,
-                c0: cand.line - lo,
-                c1: cand.line + hi,
-            };
-            (r, r.grown(keep_side, clearance))
-        } else {
-            let r = CellRect {
-                r0: cand.line - lo,
-                r1: cand.line + hi,
-                c0: start,
-                c1: start + width,
-            };
-            (r, r.grown(clearance, keep_side))
-        };
-        doors.push(Door {
-            cells: cells_rect,
-            rooms: (cand.a, cand.b),
-            width_m: width as f64 * CELL_SIZE,
-            narrow: is_narrow,
-            keep_clear,
-        });
-    }
-
-    let mut grid = Grid::blocked(name, side);
-    for room in &rooms {
-        room.interior
-            .iter()
-            .for_each(|(r, c)| grid.set_free(r, c, true));
-    }
-    for door in &doors {
-        door.cells
-            .iter()
-            .for_each(|(r, c)| grid.set_free(r, c, true));
-    }
+    let chosen = choose_doors(&rooms, &candidates, cfg, &mut rng)?;
+    let doors = place_doors(&chosen, &candidates, (lo, hi), cfg, &mut rng);
+    let mut grid = carve_grid(name, side, &rooms, &doors);
 
     let mut space = RobotSpace::new(
         &grid,
@@ -544,6 +438,148 @@ fn build_plan(
         target_area_m2: 0.0,
         attempts: 0,
     })
+}
+
+/// The footprint's size and place are the layout's first draws; apart so
+/// `build_plan` reads as the sequence of stages.
+fn place_footprint(footprint_m2: f64, cfg: &GeneratorConfig, rng: &mut ChaCha8Rng) -> CellRect {
+    let side = GENERATED_SIDE;
+    let margin = cells(cfg.border_margin_m).clamp(1, side / 4);
+    let max_side = side - 2 * margin;
+
+    // Footprint rectangle, placed anywhere inside the margin.
+    let aspect = uniform(rng, cfg.aspect_ratio);
+    let long_m = (footprint_m2 * aspect).sqrt();
+    let (mut h, mut w) = (
+        cells(footprint_m2 / long_m).clamp(1, max_side),
+        cells(long_m).clamp(1, max_side),
+    );
+    if rng.gen_bool(0.5) {
+        std::mem::swap(&mut h, &mut w);
+    }
+    let r0 = margin + rng.gen_range(0..=max_side - h);
+    let c0 = margin + rng.gen_range(0..=max_side - w);
+    CellRect {
+        r0,
+        c0,
+        r1: r0 + h,
+        c1: c0 + w,
+    }
+}
+
+/// Which candidate doors open: a spanning tree plus a few loop doors; `None`
+/// when the rooms cannot all be joined, so the caller tries another seed.
+fn choose_doors(
+    rooms: &[Room],
+    candidates: &[DoorCandidate],
+    cfg: &GeneratorConfig,
+    rng: &mut ChaCha8Rng,
+) -> Option<Vec<usize>> {
+    // Spanning tree by Kruskal on random weights, corridors first.
+    let mut weighted: Vec<(f64, usize)> = candidates
+        .iter()
+        .enumerate()
+        .map(|(k, cand)| {
+            let corridor = rooms[cand.a].kind == RoomKind::Corridor
+                || rooms[cand.b].kind == RoomKind::Corridor;
+            (rng.gen::<f64>() + if corridor { 0.0 } else { 0.7 }, k)
+        })
+        .collect();
+    weighted.sort_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
+    let mut sets = UnionFind::new(rooms.len());
+    let mut chosen = Vec::new();
+    let mut spare = Vec::new();
+    for &(_, k) in &weighted {
+        if sets.union(candidates[k].a, candidates[k].b) {
+            chosen.push(k);
+        } else {
+            spare.push(k);
+        }
+    }
+    if (0..rooms.len()).any(|i| sets.find(i) != sets.find(0)) {
+        return None;
+    }
+    let extra = rng.gen_range(cfg.extra_doors.0..=cfg.extra_doors.1.max(cfg.extra_doors.0));
+    for _ in 0..extra.min(spare.len()) {
+        let pick = rng.gen_range(0..spare.len());
+        chosen.push(spare.swap_remove(pick));
+    }
+    Some(chosen)
+}
+
+/// Widths and positions of the chosen doors, with the clear zone each keeps;
+/// apart from the choice of doors because it is geometry, not topology.
+fn place_doors(
+    chosen: &[usize],
+    candidates: &[DoorCandidate],
+    (lo, hi): (usize, usize),
+    cfg: &GeneratorConfig,
+    rng: &mut ChaCha8Rng,
+) -> Vec<Door> {
+    // Door widths: some narrow passages, at least one when there is a door,
+    // preferably on a loop door so that no room hangs on it alone.
+    let mut narrow: Vec<bool> = chosen
+        .iter()
+        .map(|_| rng.gen_bool(cfg.narrow_passage_fraction.clamp(0.0, 1.0)))
+        .collect();
+    if !narrow.is_empty() && !narrow.iter().any(|&n| n) {
+        let n = narrow.len();
+        narrow[n - 1] = true; // extra doors come last
+    }
+    let clearance = cells(cfg.door_clearance_m);
+    let keep_side = cells(0.15);
+    let mut doors = Vec::new();
+    for (&k, &is_narrow) in chosen.iter().zip(&narrow) {
+        let cand = &candidates[k];
+        let width_range = if is_narrow {
+            cfg.narrow_passage_width_m
+        } else {
+            cfg.door_width_m
+        };
+        let width = cells(uniform(rng, width_range)).clamp(1, cand.span.1 - cand.span.0);
+        let start = cand.span.0 + rng.gen_range(0..=cand.span.1 - cand.span.0 - width);
+        let (cells_rect, keep_clear) = if cand.vertical {
+            let r = CellRect {
+                r0: start,
+                r1: start + width,
+                c0: cand.line - lo,
+                c1: cand.line + hi,
+            };
+            (r, r.grown(keep_side, clearance))
+        } else {
+            let r = CellRect {
+                r0: cand.line - lo,
+                r1: cand.line + hi,
+                c0: start,
+                c1: start + width,
+            };
+            (r, r.grown(clearance, keep_side))
+        };
+        doors.push(Door {
+            cells: cells_rect,
+            rooms: (cand.a, cand.b),
+            width_m: width as f64 * CELL_SIZE,
+            narrow: is_narrow,
+            keep_clear,
+        });
+    }
+    doors
+}
+
+/// The blocked grid with room interiors and door openings freed; no draws.
+fn carve_grid(name: &str, side: usize, rooms: &[Room], doors: &[Door]) -> Grid {
+    let mut grid = Grid::blocked(name, side);
+    for room in rooms {
+        room.interior
+            .iter()
+            .for_each(|(r, c)| grid.set_free(r, c, true));
+    }
+    for door in doors {
+        door.cells
+            .iter()
+            .for_each(|(r, c)| grid.set_free(r, c, true));
+    }
+    grid
 }
 
 /// Recursive binary split of `rect` into rooms (and corridors).

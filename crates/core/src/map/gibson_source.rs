@@ -86,55 +86,8 @@ pub fn read_checkout(checkout: &Path) -> Result<Vec<(ImportedMap, PathBuf)>, Gib
             .collect();
         paths.sort();
         for path in paths {
-            let refuse = |reason: String| GibsonSourceError::Map {
-                path: path.clone(),
-                reason,
-            };
-            let name = path
-                .file_stem()
-                .and_then(|s| s.to_str())
-                .ok_or_else(|| refuse("its name is not UTF-8".into()))?
-                .to_string();
-            let Some(want_hash) = expected.get(name.as_str()) else {
-                return Err(refuse(
-                    "not one of the 26 Gibson test maps the project knows (an upstream change?)"
-                        .into(),
-                ));
-            };
-            refuse_unless_regular(&path).map_err(refuse)?;
-            let grid = load_png(&path).map_err(|e| refuse(e.reason))?;
-            let hash = grid.content_hash();
-            if hash != *want_hash {
-                return Err(refuse(format!(
-                    "its content (working grid SHA-256 {hash}) is not the test map's ({want_hash}): the file differs from the one the benchmark's figures were measured on"
-                )));
-            }
-            let embedded = gibson_class(&name);
-            if embedded != Some(class) {
-                return Err(refuse(format!(
-                    "it is in the {folder}/ folder ({}), but the test set lists it as {}",
-                    class.name(),
-                    embedded.map_or("unclassed", |c| c.name())
-                )));
-            }
-            if let Some((other, other_path)) = found.get(&name) {
-                return Err(refuse(format!(
-                    "listed twice: also {} ({})",
-                    other_path.display(),
-                    other.class.name()
-                )));
-            }
-            found.insert(
-                name.clone(),
-                (
-                    ImportedMap {
-                        name,
-                        class,
-                        content_hash: hash,
-                    },
-                    path,
-                ),
-            );
+            let map = check_map(&path, (folder, class), &expected, &found)?;
+            found.insert(map.name.clone(), (map, path));
         }
     }
     let missing: Vec<String> = expected
@@ -153,6 +106,59 @@ pub fn read_checkout(checkout: &Path) -> Result<Vec<(ImportedMap, PathBuf)>, Gib
     Ok(maps)
 }
 
+/// One PNG of a checkout against the embedded hash and class, and against
+/// the maps already `found`; apart from `read_checkout` so each refusal
+/// reads beside its rule.
+fn check_map(
+    path: &Path,
+    (folder, class): (&str, SizeClass),
+    expected: &BTreeMap<&str, &str>,
+    found: &BTreeMap<String, (ImportedMap, PathBuf)>,
+) -> Result<ImportedMap, GibsonSourceError> {
+    let refuse = |reason: String| GibsonSourceError::Map {
+        path: path.to_path_buf(),
+        reason,
+    };
+    let name = path
+        .file_stem()
+        .and_then(|s| s.to_str())
+        .ok_or_else(|| refuse("its name is not UTF-8".into()))?
+        .to_string();
+    let Some(want_hash) = expected.get(name.as_str()) else {
+        return Err(refuse(
+            "not one of the 26 Gibson test maps the project knows (an upstream change?)".into(),
+        ));
+    };
+    refuse_unless_regular(path).map_err(refuse)?;
+    let grid = load_png(path).map_err(|e| refuse(e.reason))?;
+    let hash = grid.content_hash();
+    if hash != *want_hash {
+        return Err(refuse(format!(
+            "its content (working grid SHA-256 {hash}) is not the test map's ({want_hash}): the file differs from the one the benchmark's figures were measured on"
+        )));
+    }
+    let embedded = gibson_class(&name);
+    if embedded != Some(class) {
+        return Err(refuse(format!(
+            "it is in the {folder}/ folder ({}), but the test set lists it as {}",
+            class.name(),
+            embedded.map_or("unclassed", |c| c.name())
+        )));
+    }
+    if let Some((other, other_path)) = found.get(&name) {
+        return Err(refuse(format!(
+            "listed twice: also {} ({})",
+            other_path.display(),
+            other.class.name()
+        )));
+    }
+    Ok(ImportedMap {
+        name,
+        class,
+        content_hash: hash,
+    })
+}
+
 /// Checks the checkout at `checkout` (`read_checkout`), then writes the 26
 /// PNGs, byte for byte, and a `splits.csv` (`map,split`, the project's
 /// class names) into `out`. The folder is filled under a temporary name and
@@ -164,51 +170,9 @@ pub fn import_checkout(checkout: &Path, out: &Path) -> Result<Vec<ImportedMap>, 
         out: out.to_path_buf(),
         reason,
     };
-    // Every link on the way must lead somewhere: a dangling one or a loop
-    // would otherwise surface as "File exists" from create_dir_all.
-    for at in out.ancestors().filter(|a| !a.as_os_str().is_empty()) {
-        let Ok(link) = std::fs::read_link(at) else {
-            continue;
-        };
-        let what = if at == out {
-            "it is".to_string()
-        } else {
-            format!("{} is", at.display())
-        };
-        match std::fs::metadata(at) {
-            Ok(_) => {}
-            Err(e) if e.raw_os_error() == Some(libc_eloop()) => {
-                return Err(refuse(format!(
-                    "{what} a loop of symbolic links (through {}); remove a link of the loop",
-                    link.display()
-                )))
-            }
-            Err(_) => {
-                return Err(refuse(format!(
-                    "{what} a symbolic link to {}, which does not exist; remove the link or give the folder it should name",
-                    link.display()
-                )))
-            }
-        }
-    }
+    refuse_broken_links(out)?;
     if out.exists() {
-        if !out.is_dir() {
-            return Err(refuse(
-                "exists and is not a folder; choose another --out".into(),
-            ));
-        }
-        // Idempotent: a second fetch into a finished folder is not an error.
-        if let Ok(existing) = read_flat(out) {
-            if existing == maps.iter().map(|(m, _)| m.clone()).collect::<Vec<_>>() {
-                return Ok(existing);
-            }
-        }
-        let empty = std::fs::read_dir(out).is_ok_and(|mut d| d.next().is_none());
-        return Err(refuse(if empty {
-            "exists (an empty folder); remove it, or choose a folder that does not exist yet".into()
-        } else {
-            "exists and is not this set of maps; choose another folder or remove it".into()
-        }));
+        return existing_out(out, &maps);
     }
     let parent = match out.parent() {
         Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
@@ -243,6 +207,73 @@ pub fn import_checkout(checkout: &Path, out: &Path) -> Result<Vec<ImportedMap>, 
         other => other,
     })?;
     Ok(maps.into_iter().map(|(m, _)| m).collect())
+}
+
+/// Refuses a dangling link or a loop of links on the way to `out`, which
+/// would otherwise surface as "File exists" from create_dir_all.
+fn refuse_broken_links(out: &Path) -> Result<(), GibsonSourceError> {
+    let refuse = |reason: String| GibsonSourceError::Out {
+        out: out.to_path_buf(),
+        reason,
+    };
+    // Every link on the way must lead somewhere: a dangling one or a loop
+    // would otherwise surface as "File exists" from create_dir_all.
+    for at in out.ancestors().filter(|a| !a.as_os_str().is_empty()) {
+        let Ok(link) = std::fs::read_link(at) else {
+            continue;
+        };
+        let what = if at == out {
+            "it is".to_string()
+        } else {
+            format!("{} is", at.display())
+        };
+        match std::fs::metadata(at) {
+            Ok(_) => {}
+            Err(e) if e.raw_os_error() == Some(libc_eloop()) => {
+                return Err(refuse(format!(
+                    "{what} a loop of symbolic links (through {}); remove a link of the loop",
+                    link.display()
+                )))
+            }
+            Err(_) => {
+                return Err(refuse(format!(
+                    "{what} a symbolic link to {}, which does not exist; remove the link or give the folder it should name",
+                    link.display()
+                )))
+            }
+        }
+    }
+    Ok(())
+}
+
+/// An `out` that already exists: the finished set itself (a second fetch is
+/// not an error), else refused; apart so `import_checkout` reads as checks,
+/// staging, rename.
+fn existing_out(
+    out: &Path,
+    maps: &[(ImportedMap, PathBuf)],
+) -> Result<Vec<ImportedMap>, GibsonSourceError> {
+    let refuse = |reason: String| GibsonSourceError::Out {
+        out: out.to_path_buf(),
+        reason,
+    };
+    if !out.is_dir() {
+        return Err(refuse(
+            "exists and is not a folder; choose another --out".into(),
+        ));
+    }
+    // Idempotent: a second fetch into a finished folder is not an error.
+    if let Ok(existing) = read_flat(out) {
+        if existing == maps.iter().map(|(m, _)| m.clone()).collect::<Vec<_>>() {
+            return Ok(existing);
+        }
+    }
+    let empty = std::fs::read_dir(out).is_ok_and(|mut d| d.next().is_none());
+    Err(refuse(if empty {
+        "exists (an empty folder); remove it, or choose a folder that does not exist yet".into()
+    } else {
+        "exists and is not this set of maps; choose another folder or remove it".into()
+    }))
 }
 
 /// The 26 PNGs, byte for byte, and `splits.csv` into `staging`.

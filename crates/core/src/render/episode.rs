@@ -16,7 +16,7 @@ use super::raster::{draw_circle, draw_line, fill_disc, fill_rect, mix};
 use crate::asz::{cells_to_m2, AszFields};
 use crate::env::config::{PROBE_DIST, RADIUS};
 use crate::env::placement::PlacementError;
-use crate::env::{Action, Controller, Side, TrapEnv};
+use crate::env::{Action, Controller, Robot, Side, TrapEnv};
 use crate::error::Chain;
 use crate::fs::FsError;
 use crate::map::prepared::PAD;
@@ -342,34 +342,12 @@ impl Painter {
     /// Draws the current state; returns the frame and |ASZ| in cells.
     fn frame(&mut self, env: &TrapEnv) -> (RgbImage, usize) {
         let (asz, regions) = asz_regions(&mut self.fields, env);
-        let l = &self.layout;
         let mut img = self.base.clone();
         let k = env.num_captors();
-        let s = l.scale as i64;
         if self.show_asz {
-            let stride = self.map.stride;
-            for (cell, label) in regions {
-                let (color, alpha) = if label as usize == k {
-                    (ASZ_COLOR, ASZ_ALPHA)
-                } else {
-                    (captor_color(label as usize), CAPTOR_REGION_ALPHA)
-                };
-                let (r, c) = (
-                    (cell / stride) as i64 - PAD as i64,
-                    (cell % stride) as i64 - PAD as i64,
-                );
-                let (x, y) = ((c - l.col0) * s, (r - l.row0) * s + l.header_h as i64);
-                if x < 0 || y < l.header_h as i64 || x >= l.width as i64 || y >= l.height as i64 {
-                    continue;
-                }
-                for yy in y..(y + s).min(l.height as i64) {
-                    for xx in x..(x + s).min(l.width as i64) {
-                        let p = img.get_pixel_mut(xx as u32, yy as u32);
-                        *p = mix(*p, color, alpha);
-                    }
-                }
-            }
+            self.paint_regions(&mut img, regions, k);
         }
+        let l = &self.layout;
         let ppm = l.pixels_per_metre();
         let color_of = |i: usize| {
             if i == k {
@@ -398,61 +376,51 @@ impl Painter {
                 CAPTURED_COLOR,
             );
         }
-        // Robots: outline, disc, heading nose, captor index.
-        let r_px = RADIUS * ppm;
-        let outline = (0.025 * ppm).max(1.0);
         for (i, robot) in env.robots.iter().enumerate() {
-            let (x, y) = l.to_pixel(robot.pos);
-            let edge = if robot.collided {
-                COLLIDED_OUTLINE
+            draw_robot(&mut img, l, robot, color_of(i), (i < k).then_some(i));
+        }
+        self.draw_header(&mut img, env, asz);
+        (img, asz)
+    }
+
+    /// Tints each ASZ / captor-region cell; apart from `frame` because it is
+    /// the one per-cell loop, and it runs only with `show_asz`.
+    fn paint_regions(&self, img: &mut RgbImage, regions: Vec<(usize, u8)>, k: usize) {
+        let l = &self.layout;
+        let s = l.scale as i64;
+        let stride = self.map.stride;
+        for (cell, label) in regions {
+            let (color, alpha) = if label as usize == k {
+                (ASZ_COLOR, ASZ_ALPHA)
             } else {
-                OUTLINE
+                (captor_color(label as usize), CAPTOR_REGION_ALPHA)
             };
-            fill_disc(&mut img, x, y, r_px + outline, edge);
-            fill_disc(&mut img, x, y, r_px, color_of(i));
-            let (dx, dy) = (robot.theta.cos(), -robot.theta.sin());
-            draw_line(
-                &mut img,
-                x + dx * r_px * 0.3,
-                y + dy * r_px * 0.3,
-                x + dx * r_px * 1.6,
-                y + dy * r_px * 1.6,
-                (0.04 * ppm).max(1.0),
-                OUTLINE,
+            let (r, c) = (
+                (cell / stride) as i64 - PAD as i64,
+                (cell % stride) as i64 - PAD as i64,
             );
-            if i < k {
-                let label = i.to_string();
-                let digit_scale = ((r_px / 7.0).floor() as u32).max(1);
-                let (tw, th) = text_size(&label, digit_scale);
-                if r_px >= 6.0 {
-                    // Centred in the disc, shifted against the nose.
-                    let (cx, cy) = (x - dx * r_px * 0.2, y - dy * r_px * 0.2);
-                    draw_text(
-                        &mut img,
-                        (cx - tw as f64 / 2.0).round() as i32,
-                        (cy - th as f64 / 2.0).round() as i32,
-                        &label,
-                        HEADER_TEXT,
-                        digit_scale,
-                    );
-                } else {
-                    draw_text(
-                        &mut img,
-                        (x + r_px + 2.0) as i32,
-                        (y - r_px - th as f64) as i32,
-                        &label,
-                        OUTLINE,
-                        1,
-                    );
+            let (x, y) = ((c - l.col0) * s, (r - l.row0) * s + l.header_h as i64);
+            if x < 0 || y < l.header_h as i64 || x >= l.width as i64 || y >= l.height as i64 {
+                continue;
+            }
+            for yy in y..(y + s).min(l.height as i64) {
+                for xx in x..(x + s).min(l.width as i64) {
+                    let p = img.get_pixel_mut(xx as u32, yy as u32);
+                    *p = mix(*p, color, alpha);
                 }
             }
         }
-        // Header.
+    }
+
+    /// The header's step line, capture flag and footer; apart so `frame`
+    /// reads as map, trails, robots, header.
+    fn draw_header(&self, img: &mut RgbImage, env: &TrapEnv, asz: usize) {
+        let l = &self.layout;
         let ts = l.text_scale;
         let pad = 4 * ts as i32;
         let line_h = line_height(ts) as i32;
         draw_text(
-            &mut img,
+            img,
             pad,
             pad,
             &head_line(env.steps, env.cfg.episode_length, asz),
@@ -462,7 +430,7 @@ impl Painter {
         if env.captured {
             let (w, _) = text_size(CAPTURED, ts);
             draw_text(
-                &mut img,
+                img,
                 l.width as i32 - pad - w as i32,
                 pad,
                 CAPTURED,
@@ -470,15 +438,64 @@ impl Painter {
                 ts,
             );
         }
+        draw_text(img, pad, 2 * pad + line_h, &self.footer, HEADER_MUTED, ts);
+    }
+}
+
+/// One robot: outline, disc, heading nose, and the captor index when it has
+/// one; apart from `frame` because the label placement is its own rule.
+fn draw_robot(
+    img: &mut RgbImage,
+    l: &FrameLayout,
+    robot: &Robot,
+    fill: Rgb<u8>,
+    captor: Option<usize>,
+) {
+    let ppm = l.pixels_per_metre();
+    let r_px = RADIUS * ppm;
+    let outline = (0.025 * ppm).max(1.0);
+    let (x, y) = l.to_pixel(robot.pos);
+    let edge = if robot.collided {
+        COLLIDED_OUTLINE
+    } else {
+        OUTLINE
+    };
+    fill_disc(img, x, y, r_px + outline, edge);
+    fill_disc(img, x, y, r_px, fill);
+    let (dx, dy) = (robot.theta.cos(), -robot.theta.sin());
+    draw_line(
+        img,
+        x + dx * r_px * 0.3,
+        y + dy * r_px * 0.3,
+        x + dx * r_px * 1.6,
+        y + dy * r_px * 1.6,
+        (0.04 * ppm).max(1.0),
+        OUTLINE,
+    );
+    let Some(i) = captor else { return };
+    let label = i.to_string();
+    let digit_scale = ((r_px / 7.0).floor() as u32).max(1);
+    let (tw, th) = text_size(&label, digit_scale);
+    if r_px >= 6.0 {
+        // Centred in the disc, shifted against the nose.
+        let (cx, cy) = (x - dx * r_px * 0.2, y - dy * r_px * 0.2);
         draw_text(
-            &mut img,
-            pad,
-            2 * pad + line_h,
-            &self.footer,
-            HEADER_MUTED,
-            ts,
+            img,
+            (cx - tw as f64 / 2.0).round() as i32,
+            (cy - th as f64 / 2.0).round() as i32,
+            &label,
+            HEADER_TEXT,
+            digit_scale,
         );
-        (img, asz)
+    } else {
+        draw_text(
+            img,
+            (x + r_px + 2.0) as i32,
+            (y - r_px - th as f64) as i32,
+            &label,
+            OUTLINE,
+            1,
+        );
     }
 }
 

@@ -101,7 +101,7 @@ fn pairs(summaries: &[Sourced]) -> Result<(Sections<'_>, usize), TableError> {
     let mut sections: Sections = BTreeMap::new();
     let mut left_out = 0;
     for sourced in summaries {
-        let (source, s) = sourced;
+        let (_, s) = sourced;
         let Some(class) = CLASSES.iter().position(|c| *c == s.maps) else {
             left_out += 1;
             continue;
@@ -133,57 +133,178 @@ fn pairs(summaries: &[Sourced]) -> Result<(Sections<'_>, usize), TableError> {
             s.protocol,
             target_name(&s.target)
         );
-        if pairs[i].protocol != s.protocol {
-            let (other_source, _) = pairs[i].cells.iter().flatten().next().expect("a cell");
-            return Err(TableError::NotOneSetting {
-                row: what,
-                conflict: format!(
-                    "pool results of players trained under the {} protocol ({other_source}) and the {} protocol ({source}): other weights behind one name; give one of them",
-                    pairs[i].protocol, s.protocol
-                ),
-            });
-        }
-        if let Some((other_source, other)) = pairs[i].cells[class] {
-            if other == s {
-                continue;
-            }
-            return Err(TableError::TwoResults {
-                cell: format!("{what}, {}", CLASSES[class]),
-                first: other_source.to_string(),
-                second: source.to_string(),
-                differences: differences(other, s),
-            });
-        }
-        for (other_source, other) in pairs[i].cells.iter().flatten() {
-            if !same_play(other, s) {
-                return Err(TableError::NotOneSetting {
-                    row: what,
-                    conflict: format!(
-                        "pool {} from {other_source} and {} from {source}, which differ in {}: pooled classes must be one setting; evaluate them alike",
-                        other.maps,
-                        s.maps,
-                        differences(other, s)
-                    ),
-                });
-            }
+        if !admits(&pairs[i], class, sourced, what)? {
+            continue;
         }
         pairs[i].cells[class] = Some(sourced);
     }
     for pairs in sections.values_mut() {
-        pairs.sort_by(|a, b| {
-            a.captors
-                .cmp(&b.captors)
-                // The rule-based target first, as in the paper.
-                .then((a.target != "heuristic").cmp(&(b.target != "heuristic")))
-                .then(a.target.cmp(&b.target))
-                .then(a.protocol.cmp(&b.protocol))
-        });
+        sort_pairs(pairs);
     }
     Ok((sections, left_out))
 }
 
+/// Whether `sourced` may fill `class` of `pair`: `false` for the same result
+/// met twice, an error for a conflict. Apart from `pairs` so each refusal
+/// reads beside its message.
+fn admits(pair: &Pair, class: usize, sourced: &Sourced, what: String) -> Result<bool, TableError> {
+    let (source, s) = sourced;
+    if pair.protocol != s.protocol {
+        let (other_source, _) = pair.cells.iter().flatten().next().expect("a cell");
+        return Err(TableError::NotOneSetting {
+            row: what,
+            conflict: format!(
+                "pool results of players trained under the {} protocol ({other_source}) and the {} protocol ({source}): other weights behind one name; give one of them",
+                pair.protocol, s.protocol
+            ),
+        });
+    }
+    if let Some((other_source, other)) = pair.cells[class] {
+        if other == s {
+            return Ok(false);
+        }
+        return Err(TableError::TwoResults {
+            cell: format!("{what}, {}", CLASSES[class]),
+            first: other_source.to_string(),
+            second: source.to_string(),
+            differences: differences(other, s),
+        });
+    }
+    for (other_source, other) in pair.cells.iter().flatten() {
+        if !same_play(other, s) {
+            return Err(TableError::NotOneSetting {
+                row: what,
+                conflict: format!(
+                    "pool {} from {other_source} and {} from {source}, which differ in {}: pooled classes must be one setting; evaluate them alike",
+                    other.maps,
+                    s.maps,
+                    differences(other, s)
+                ),
+            });
+        }
+    }
+    Ok(true)
+}
+
+/// The order a section's pairs are shown in; one place so the grid and the
+/// full rows agree.
+fn sort_pairs(pairs: &mut [Pair]) {
+    pairs.sort_by(|a, b| {
+        a.captors
+            .cmp(&b.captors)
+            // The rule-based target first, as in the paper.
+            .then((a.target != "heuristic").cmp(&(b.target != "heuristic")))
+            .then(a.target.cmp(&b.target))
+            .then(a.protocol.cmp(&b.protocol))
+    });
+}
+
 fn pooled_of(p: &Pair) -> Option<Pooled> {
     pool(p.cells.iter().flatten().map(|(_, s)| s))
+}
+
+/// A section's grid of pooled SR, captors by target; apart from `markdown`
+/// so each of its two tables is one function.
+fn write_grid(out: &mut String, pairs: &[Pair]) {
+    // The grid: one line per captors (and protocol), one column per target.
+    let mut targets: Vec<&str> = pairs.iter().map(|p| p.target.as_str()).collect();
+    targets.sort_by(|a, b| (*a != "heuristic").cmp(&(*b != "heuristic")).then(a.cmp(b)));
+    targets.dedup();
+    out.push_str(
+        "SR % pooled over the classes played [95% Wilson interval]:\n\n| captors | protocol |",
+    );
+    for t in &targets {
+        let _ = write!(out, " vs {} |", target_name(t));
+    }
+    out.push_str("\n|---|---|");
+    out.push_str(&"---|".repeat(targets.len()));
+    out.push('\n');
+    // One line per captors: a heuristic's pairs say "-" against the
+    // rule-based target and the learned target's protocol otherwise.
+    let mut lines: Vec<&str> = pairs.iter().map(|p| p.captors.as_str()).collect();
+    lines.dedup();
+    for captors in &lines {
+        let mut protocols: Vec<&str> = pairs
+            .iter()
+            .filter(|p| p.captors == *captors && p.protocol != "-")
+            .map(|p| p.protocol.as_str())
+            .collect();
+        protocols.sort();
+        protocols.dedup();
+        let protocols = if protocols.is_empty() {
+            "-".to_string()
+        } else {
+            protocols.join(", ")
+        };
+        let _ = write!(out, "| {captors} | {protocols} |");
+        for t in &targets {
+            let cell = pairs
+                .iter()
+                .find(|p| p.captors == *captors && p.target == *t)
+                .and_then(pooled_of);
+            match cell {
+                Some(c) => {
+                    let _ = write!(out, " {:.1} [{:.1}, {:.1}] |", c.sr, c.sr_low, c.sr_high);
+                }
+                None => out.push_str(" - |"),
+            }
+        }
+        out.push('\n');
+    }
+}
+
+/// One pair's line of the full table; apart from `markdown` because its
+/// per-class columns are the bulk of the formatting.
+fn write_full_row(out: &mut String, p: &Pair) {
+    let sr: Vec<String> = p
+        .cells
+        .iter()
+        .map(|c| match c {
+            Some((_, s)) => format!("{:.1} [{:.1}, {:.1}]", s.sr, s.sr_low, s.sr_high),
+            None => "-".into(),
+        })
+        .collect();
+    let per_class = |f: &dyn Fn(&Summary) -> String| -> Vec<String> {
+        p.cells
+            .iter()
+            .map(|c| c.map(|(_, s)| f(s)).unwrap_or_else(|| "-".into()))
+            .collect()
+    };
+    let pooled = pooled_of(p).expect("a pair holds at least one cell");
+    let mut time = per_class(&|s| format!("{:.0}", s.time));
+    time.push(format!("{:.0}", pooled.time));
+    let mut path = per_class(&|s| format!("{:.1}", s.path_len));
+    path.push(format!("{:.1}", pooled.path_len));
+    let episodes = per_class(&|s| s.episodes.to_string()).join(" / ");
+    let (_, first) = p.cells.iter().flatten().next().expect("a cell");
+    let length = format!(
+        "{episodes} x {} steps{}",
+        first.episode_length,
+        match first.capture_rule {
+            CaptureRule::Fast => "",
+            CaptureRule::Strict => ", strict capture",
+        }
+    );
+    let paper = match paper_cell(&p.learner, p.target != "heuristic") {
+        Some((sr, time, path)) => format!("{sr:.1} / {time:.0} / {path:.1}"),
+        None => "-".into(),
+    };
+    let _ = writeln!(
+        out,
+        "| {} | {} | {} | {} | {} | {} | {} | {:.1} [{:.1}, {:.1}] | {} | {} | {length} | {paper} |",
+        p.captors,
+        p.learner,
+        p.protocol,
+        target_name(&p.target),
+        sr[0],
+        sr[1],
+        sr[2],
+        pooled.sr,
+        pooled.sr_low,
+        pooled.sr_high,
+        time.join(" / "),
+        path.join(" / "),
+    );
 }
 
 /// Markdown: per (K, speed ratio) a grid of the pooled SR (rows captors,
@@ -203,104 +324,12 @@ pub fn markdown(summaries: &[Sourced]) -> Result<String, TableError> {
             out,
             "### {k}:1 at v_p:v_e 1.0:{ratio}, captors against each target (paper Table V)\n"
         );
-        // The grid: one line per captors (and protocol), one column per target.
-        let mut targets: Vec<&str> = pairs.iter().map(|p| p.target.as_str()).collect();
-        targets.sort_by(|a, b| (*a != "heuristic").cmp(&(*b != "heuristic")).then(a.cmp(b)));
-        targets.dedup();
-        out.push_str(
-            "SR % pooled over the classes played [95% Wilson interval]:\n\n| captors | protocol |",
-        );
-        for t in &targets {
-            let _ = write!(out, " vs {} |", target_name(t));
-        }
-        out.push_str("\n|---|---|");
-        out.push_str(&"---|".repeat(targets.len()));
-        out.push('\n');
-        // One line per captors: a heuristic's pairs say "-" against the
-        // rule-based target and the learned target's protocol otherwise.
-        let mut lines: Vec<&str> = pairs.iter().map(|p| p.captors.as_str()).collect();
-        lines.dedup();
-        for captors in &lines {
-            let mut protocols: Vec<&str> = pairs
-                .iter()
-                .filter(|p| p.captors == *captors && p.protocol != "-")
-                .map(|p| p.protocol.as_str())
-                .collect();
-            protocols.sort();
-            protocols.dedup();
-            let protocols = if protocols.is_empty() {
-                "-".to_string()
-            } else {
-                protocols.join(", ")
-            };
-            let _ = write!(out, "| {captors} | {protocols} |");
-            for t in &targets {
-                let cell = pairs
-                    .iter()
-                    .find(|p| p.captors == *captors && p.target == *t)
-                    .and_then(pooled_of);
-                match cell {
-                    Some(c) => {
-                        let _ = write!(out, " {:.1} [{:.1}, {:.1}] |", c.sr, c.sr_low, c.sr_high);
-                    }
-                    None => out.push_str(" - |"),
-                }
-            }
-            out.push('\n');
-        }
+        write_grid(&mut out, pairs);
         out.push_str("\nEvery pair in full (- where a class was not played):\n\n");
         out.push_str("| captors | learner | protocol | target | SR % small | SR % medium | SR % large | SR % pooled | Time (steps) s / m / l / pooled | Path Len (m) s / m / l / pooled | episodes per class | paper's Table V, same learner: SR / Time / Path Len |\n");
         out.push_str("|---|---|---|---|---|---|---|---|---|---|---|---|\n");
         for p in pairs {
-            let sr: Vec<String> = p
-                .cells
-                .iter()
-                .map(|c| match c {
-                    Some((_, s)) => format!("{:.1} [{:.1}, {:.1}]", s.sr, s.sr_low, s.sr_high),
-                    None => "-".into(),
-                })
-                .collect();
-            let per_class = |f: &dyn Fn(&Summary) -> String| -> Vec<String> {
-                p.cells
-                    .iter()
-                    .map(|c| c.map(|(_, s)| f(s)).unwrap_or_else(|| "-".into()))
-                    .collect()
-            };
-            let pooled = pooled_of(p).expect("a pair holds at least one cell");
-            let mut time = per_class(&|s| format!("{:.0}", s.time));
-            time.push(format!("{:.0}", pooled.time));
-            let mut path = per_class(&|s| format!("{:.1}", s.path_len));
-            path.push(format!("{:.1}", pooled.path_len));
-            let episodes = per_class(&|s| s.episodes.to_string()).join(" / ");
-            let (_, first) = p.cells.iter().flatten().next().expect("a cell");
-            let length = format!(
-                "{episodes} x {} steps{}",
-                first.episode_length,
-                match first.capture_rule {
-                    CaptureRule::Fast => "",
-                    CaptureRule::Strict => ", strict capture",
-                }
-            );
-            let paper = match paper_cell(&p.learner, p.target != "heuristic") {
-                Some((sr, time, path)) => format!("{sr:.1} / {time:.0} / {path:.1}"),
-                None => "-".into(),
-            };
-            let _ = writeln!(
-                out,
-                "| {} | {} | {} | {} | {} | {} | {} | {:.1} [{:.1}, {:.1}] | {} | {} | {length} | {paper} |",
-                p.captors,
-                p.learner,
-                p.protocol,
-                target_name(&p.target),
-                sr[0],
-                sr[1],
-                sr[2],
-                pooled.sr,
-                pooled.sr_low,
-                pooled.sr_high,
-                time.join(" / "),
-                path.join(" / "),
-            );
+            write_full_row(&mut out, p);
         }
         out.push('\n');
     }

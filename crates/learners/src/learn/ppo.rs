@@ -375,6 +375,9 @@ impl PpoLearner {
         }
     }
 
+    // Long on purpose: the learners read like CleanRL, one algorithm top to
+    // bottom (advantages, epochs, minibatches, losses, step); split, the
+    // update would be read across helpers that each hold half a loss.
     fn update_unguarded(
         &mut self,
         ro: &Rollout,

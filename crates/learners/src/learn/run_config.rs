@@ -176,37 +176,8 @@ impl TrainConfig {
         ] {
             match &side_cfg.play {
                 Play::Learn(algorithm) => {
-                    let algorithm = *algorithm;
                     learners += 1;
-                    side_cfg
-                        .validate_learner(algorithm)
-                        .map_err(|e| e.within(name))?;
-                    let k = kind(algorithm);
-                    crate::nn::prior::check(side_cfg.net.heuristic_prior, side, !k.off_policy())
-                        .map_err(|e| e.within("net").within(name))?;
-                    crate::nn::prior::check_kl(side_cfg.ppo.heuristic_kl, side, !k.off_policy())
-                        .map_err(|e| e.within("ppo").within(name))?;
-                    let chunk_len = side_cfg.chunk_len(algorithm);
-                    let field = k.settings_table();
-                    if !self.rollout_steps.is_multiple_of(chunk_len) {
-                        return Err(ConfigError::new(
-                            "rollout_steps",
-                            self.rollout_steps,
-                            format!("not a multiple of {name}.{field}.chunk_len = {chunk_len}"),
-                        ));
-                    }
-                    // A replayed sequence holds the state of at most one
-                    // truncation to bootstrap from.
-                    if k.off_policy() && self.env.episode_length as usize <= chunk_len {
-                        return Err(ConfigError::new(
-                            "env.episode_length",
-                            self.env.episode_length,
-                            format!(
-                                "must exceed {name}.{field}.chunk_len = {chunk_len} for {}",
-                                algorithm.name()
-                            ),
-                        ));
-                    }
+                    self.validate_learning_side(name, side_cfg, side, *algorithm)?;
                 }
                 Play::Script(spec) => spec.check(side, &env).map_err(|e| {
                     ConfigError::new(format!("{name}.play"), format!("\"{spec}\""), e.to_string())
@@ -226,6 +197,48 @@ impl TrainConfig {
                 format!(
                     "neither is a learner ({}): nothing to train",
                     learner_names("or")
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    /// The checks on one learning side that depend on the run as well (its
+    /// rollout, episode length); apart from `validate` so that one reads as
+    /// the list of what a run must satisfy.
+    fn validate_learning_side(
+        &self,
+        name: &str,
+        side_cfg: &SideConfig,
+        side: Side,
+        algorithm: Algorithm,
+    ) -> Result<(), ConfigError> {
+        side_cfg
+            .validate_learner(algorithm)
+            .map_err(|e| e.within(name))?;
+        let k = kind(algorithm);
+        crate::nn::prior::check(side_cfg.net.heuristic_prior, side, !k.off_policy())
+            .map_err(|e| e.within("net").within(name))?;
+        crate::nn::prior::check_kl(side_cfg.ppo.heuristic_kl, side, !k.off_policy())
+            .map_err(|e| e.within("ppo").within(name))?;
+        let chunk_len = side_cfg.chunk_len(algorithm);
+        let field = k.settings_table();
+        if !self.rollout_steps.is_multiple_of(chunk_len) {
+            return Err(ConfigError::new(
+                "rollout_steps",
+                self.rollout_steps,
+                format!("not a multiple of {name}.{field}.chunk_len = {chunk_len}"),
+            ));
+        }
+        // A replayed sequence holds the state of at most one
+        // truncation to bootstrap from.
+        if k.off_policy() && self.env.episode_length as usize <= chunk_len {
+            return Err(ConfigError::new(
+                "env.episode_length",
+                self.env.episode_length,
+                format!(
+                    "must exceed {name}.{field}.chunk_len = {chunk_len} for {}",
+                    algorithm.name()
                 ),
             ));
         }

@@ -613,29 +613,7 @@ fn verify_folder(dir: &Path, recorded: Option<&str>) -> Result<(), CheckpointErr
         });
     }
     if !manifest.is_file() {
-        let meta = dir.join("meta.json");
-        match recorded {
-            Some(want) if meta.is_file() => {
-                let got = sha256_file(&meta).map_err(|cause| CheckpointError::Unreadable {
-                    path: meta.clone(),
-                    cause,
-                })?;
-                if got != want {
-                    return Err(CheckpointError::HashMismatch {
-                        path: meta,
-                        got,
-                        want: want.to_string(),
-                    });
-                }
-                return Ok(());
-            }
-            _ => {
-                return Err(CheckpointError::NoManifest {
-                    manifest,
-                    dir: dir.to_path_buf(),
-                })
-            }
-        }
+        return verify_without_manifest(dir, manifest, recorded);
     }
     let refuse = |path: PathBuf, what: String| CheckpointError::Manifest {
         path,
@@ -653,53 +631,7 @@ fn verify_folder(dir: &Path, recorded: Option<&str>) -> Result<(), CheckpointErr
         .enumerate()
         .filter(|(_, l)| !l.trim().is_empty())
     {
-        let Some((want, name)) = line.split_once("  ") else {
-            return Err(refuse(
-                manifest.clone(),
-                format!("line {} is not `<sha256>  <file>`", i + 1),
-            ));
-        };
-        if name.is_empty() {
-            return Err(refuse(
-                manifest.clone(),
-                format!("line {} names no file", i + 1),
-            ));
-        }
-        if name == "SHA256SUMS" {
-            return Err(refuse(
-                manifest.clone(),
-                format!(
-                    "line {} lists the manifest itself, whose hash it cannot hold",
-                    i + 1
-                ),
-            ));
-        }
-        if name.contains('/') || name.contains('\\') || name == ".." || name == "." {
-            return Err(refuse(
-                manifest.clone(),
-                format!("line {} names {name:?}, not a file of the folder", i + 1),
-            ));
-        }
-        let path = dir.join(name);
-        // Asked before reading, so a FIFO listed here cannot block the read.
-        match std::fs::metadata(&path) {
-            Err(_) => return Err(refuse(path, "listed, but missing".into())),
-            Ok(m) if !m.is_file() => {
-                return Err(refuse(path, "listed, but not a regular file".into()))
-            }
-            Ok(_) => {}
-        }
-        let got = t2e_core::util::sha256_file(&path)
-            .map_err(|e| refuse(path.clone(), format!("listed but unreadable ({e})")))?;
-        if got != want.trim().to_ascii_lowercase() {
-            return Err(refuse(
-                path,
-                format!(
-                    "SHA-256 {got} is not the {} listed: the folder changed after its manifest was written",
-                    want.trim()
-                ),
-            ));
-        }
+        let name = verify_manifest_line(dir, &manifest, i, line)?;
         listed_meta |= name == "meta.json";
         listed.push(name.to_string());
     }
@@ -717,6 +649,97 @@ fn verify_folder(dir: &Path, recorded: Option<&str>) -> Result<(), CheckpointErr
         }
     }
     Ok(())
+}
+
+/// A folder without a manifest plays only on a store's record of its
+/// meta.json; apart from `verify_folder` because it is the legacy path.
+fn verify_without_manifest(
+    dir: &Path,
+    manifest: PathBuf,
+    recorded: Option<&str>,
+) -> Result<(), CheckpointError> {
+    let meta = dir.join("meta.json");
+    match recorded {
+        Some(want) if meta.is_file() => {
+            let got = sha256_file(&meta).map_err(|cause| CheckpointError::Unreadable {
+                path: meta.clone(),
+                cause,
+            })?;
+            if got != want {
+                return Err(CheckpointError::HashMismatch {
+                    path: meta,
+                    got,
+                    want: want.to_string(),
+                });
+            }
+            Ok(())
+        }
+        _ => Err(CheckpointError::NoManifest {
+            manifest,
+            dir: dir.to_path_buf(),
+        }),
+    }
+}
+
+/// Checks one `<sha256>  <file>` line (0-based `i`) against the folder and
+/// returns the file it names; apart so each refusal reads beside its rule.
+fn verify_manifest_line<'l>(
+    dir: &Path,
+    manifest: &Path,
+    i: usize,
+    line: &'l str,
+) -> Result<&'l str, CheckpointError> {
+    let refuse = |path: PathBuf, what: String| CheckpointError::Manifest {
+        path,
+        manifest: manifest.to_path_buf(),
+        what,
+    };
+    let Some((want, name)) = line.split_once("  ") else {
+        return Err(refuse(
+            manifest.to_path_buf(),
+            format!("line {} is not `<sha256>  <file>`", i + 1),
+        ));
+    };
+    if name.is_empty() {
+        return Err(refuse(
+            manifest.to_path_buf(),
+            format!("line {} names no file", i + 1),
+        ));
+    }
+    if name == "SHA256SUMS" {
+        return Err(refuse(
+            manifest.to_path_buf(),
+            format!(
+                "line {} lists the manifest itself, whose hash it cannot hold",
+                i + 1
+            ),
+        ));
+    }
+    if name.contains('/') || name.contains('\\') || name == ".." || name == "." {
+        return Err(refuse(
+            manifest.to_path_buf(),
+            format!("line {} names {name:?}, not a file of the folder", i + 1),
+        ));
+    }
+    let path = dir.join(name);
+    // Asked before reading, so a FIFO listed here cannot block the read.
+    match std::fs::metadata(&path) {
+        Err(_) => return Err(refuse(path, "listed, but missing".into())),
+        Ok(m) if !m.is_file() => return Err(refuse(path, "listed, but not a regular file".into())),
+        Ok(_) => {}
+    }
+    let got = t2e_core::util::sha256_file(&path)
+        .map_err(|e| refuse(path.clone(), format!("listed but unreadable ({e})")))?;
+    if got != want.trim().to_ascii_lowercase() {
+        return Err(refuse(
+            path,
+            format!(
+                "SHA-256 {got} is not the {} listed: the folder changed after its manifest was written",
+                want.trim()
+            ),
+        ));
+    }
+    Ok(name)
 }
 
 /// An export's `player.json` and its `meta.json` must name one side: the

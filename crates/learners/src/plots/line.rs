@@ -432,16 +432,7 @@ fn draw_chart(
             .map(|i| labels[i].clone())
             .unwrap_or_default()
     };
-    let y_label_w = y_labels
-        .iter()
-        .map(|l| root.estimate_text_size(l, &label_font).map(|(w, _)| w))
-        .collect::<Result<Vec<u32>, _>>()?
-        .into_iter()
-        .max()
-        .unwrap_or(0);
-    let x_last_w = root
-        .estimate_text_size(x_labels.last().map_or("", |l| l.as_str()), &label_font)?
-        .0;
+    let (y_label_w, x_last_w) = label_widths(root, &x_labels, &y_labels, &label_font)?;
     let pad = label_px / 2;
     let desc = |s: &str| if s.is_empty() { 0 } else { label_px + pad };
     let mut builder = ChartBuilder::on(root);
@@ -477,43 +468,7 @@ fn draw_chart(
     let plot_area = chart.plotting_area().clone();
     let mut any_data = false;
     for s in series {
-        let color = RGBColor(s.color[0], s.color[1], s.color[2]);
-        let style = color.stroke_width(if label_px > 20 { 3 } else { 2 });
-        let finite: Vec<Option<(f64, f64)>> = s
-            .points
-            .iter()
-            .map(|&(x, y)| (x.is_finite() && y.is_finite()).then_some((x, y)))
-            .collect();
-        let n_finite = finite.iter().flatten().count();
-        any_data |= n_finite > 0;
-        // A line per run of finite points: a NaN leaves a gap.
-        let runs: Vec<Vec<(f64, f64)>> = finite
-            .split(|p| p.is_none())
-            .map(|run| run.iter().flatten().copied().collect::<Vec<_>>())
-            .filter(|run| !run.is_empty())
-            .collect();
-        let mut labelled = false;
-        for run in runs.iter().map(|r| r.as_slice()).chain(
-            // A labelled series without data still gets its legend entry.
-            (runs.is_empty()).then_some(&[][..]),
-        ) {
-            let drawn = chart.draw_series(LineSeries::new(run.iter().copied(), style))?;
-            if !labelled && !s.label.is_empty() {
-                drawn
-                    .label(s.label.as_str())
-                    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], style));
-                labelled = true;
-            }
-        }
-        let marker = label_px as f64 * 0.18;
-        for (i, p) in finite.iter().enumerate() {
-            let Some(p) = *p else { continue };
-            let prev = i > 0 && finite[i - 1].is_some();
-            let next = i + 1 < finite.len() && finite[i + 1].is_some();
-            if n_finite <= 25 || !(prev || next) {
-                plot_area.draw(&Circle::new(p, marker.round() as i32, color.filled()))?;
-            }
-        }
+        any_data |= draw_series(&mut chart, &plot_area, s, label_px)?;
     }
     if !any_data {
         let (xm, ym) = ((x0 + x1) / 2.0, (y0 + y1) / 2.0);
@@ -525,13 +480,95 @@ fn draw_chart(
                 .pos(Pos::new(HPos::Center, VPos::Center)),
         ))?;
     }
+    draw_legend(&mut chart, series, &label_font, pad)?;
+    Ok(chart.plotting_area().get_pixel_range())
+}
+
+/// The widest y label and the last x label's width, which size the margins;
+/// apart from `draw_chart` to keep it to the drawing.
+fn label_widths(
+    root: &Area,
+    x_labels: &[String],
+    y_labels: &[String],
+    label_font: &TextStyle,
+) -> DrawResult<(u32, u32)> {
+    let y_label_w = y_labels
+        .iter()
+        .map(|l| root.estimate_text_size(l, label_font).map(|(w, _)| w))
+        .collect::<Result<Vec<u32>, _>>()?
+        .into_iter()
+        .max()
+        .unwrap_or(0);
+    let x_last_w = root
+        .estimate_text_size(x_labels.last().map_or("", |l| l.as_str()), label_font)?
+        .0;
+    Ok((y_label_w, x_last_w))
+}
+
+type Chart<'a, 'b> = ChartContext<'a, Canvas<'b>, Cartesian2d<TickAxis, TickAxis>>;
+
+/// One series' lines and markers; apart from `draw_chart` so the gaps-at-NaN
+/// rule reads on its own. Returns whether the series had a finite point.
+fn draw_series<'a, 'b: 'a>(
+    chart: &mut Chart<'a, 'b>,
+    plot_area: &DrawingArea<Canvas<'_>, Cartesian2d<TickAxis, TickAxis>>,
+    s: &Series,
+    label_px: u32,
+) -> DrawResult<bool> {
+    let color = RGBColor(s.color[0], s.color[1], s.color[2]);
+    let style = color.stroke_width(if label_px > 20 { 3 } else { 2 });
+    let finite: Vec<Option<(f64, f64)>> = s
+        .points
+        .iter()
+        .map(|&(x, y)| (x.is_finite() && y.is_finite()).then_some((x, y)))
+        .collect();
+    let n_finite = finite.iter().flatten().count();
+    // A line per run of finite points: a NaN leaves a gap.
+    let runs: Vec<Vec<(f64, f64)>> = finite
+        .split(|p| p.is_none())
+        .map(|run| run.iter().flatten().copied().collect::<Vec<_>>())
+        .filter(|run| !run.is_empty())
+        .collect();
+    let mut labelled = false;
+    for run in runs.iter().map(|r| r.as_slice()).chain(
+        // A labelled series without data still gets its legend entry.
+        (runs.is_empty()).then_some(&[][..]),
+    ) {
+        let drawn = chart.draw_series(LineSeries::new(run.iter().copied(), style))?;
+        if !labelled && !s.label.is_empty() {
+            drawn
+                .label(s.label.as_str())
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], style));
+            labelled = true;
+        }
+    }
+    let marker = label_px as f64 * 0.18;
+    for (i, p) in finite.iter().enumerate() {
+        let Some(p) = *p else { continue };
+        let prev = i > 0 && finite[i - 1].is_some();
+        let next = i + 1 < finite.len() && finite[i + 1].is_some();
+        if n_finite <= 25 || !(prev || next) {
+            plot_area.draw(&Circle::new(p, marker.round() as i32, color.filled()))?;
+        }
+    }
+    Ok(n_finite > 0)
+}
+
+/// The legend box, when any series is labelled; apart from `draw_chart`
+/// because its placement depends on where the data lies.
+fn draw_legend<'a, 'b: 'a>(
+    chart: &mut Chart<'a, 'b>,
+    series: &[Series],
+    label_font: &TextStyle,
+    pad: u32,
+) -> DrawResult<()> {
     let legend_entries: Vec<&str> = series
         .iter()
         .filter(|s| !s.label.is_empty())
         .map(|s| s.label.as_str())
         .collect();
     if !legend_entries.is_empty() {
-        let corner = legend_corner(&chart, series, &legend_entries, &label_font, pad as i32);
+        let corner = legend_corner(chart, series, &legend_entries, label_font, pad as i32);
         chart
             .configure_series_labels()
             .position(corner)
@@ -542,7 +579,7 @@ fn draw_chart(
             .border_style(RGBColor(190, 190, 190))
             .draw()?;
     }
-    Ok(chart.plotting_area().get_pixel_range())
+    Ok(())
 }
 
 /// The corner of the data area where the legend hides the fewest points

@@ -8,14 +8,14 @@
 //! to the matches the ratings and the matchmaker read. Bounded to a share of one
 //! core: after each episode it sleeps in proportion to the episode's time.
 
+use crate::error::{LeagueError, Result, ResultExt};
 use crate::rules::config::LeagueConfig;
 use crate::rules::players::{heuristic_name, learner_name, Seat, EVALUATOR};
-use crate::rules::supervision::{CannotStart, Outcome};
+use crate::rules::supervision::Outcome;
 use crate::run::evaluation::panels::{load_panels, Panels};
 use crate::run::evaluation::preflight::check_maps_apart;
 use crate::run::folder::layout::LeagueDir;
 use crate::store::{BeatState, HeldOutEpisode, Kind, MatchRecord, Panel, Player, Store};
-use anyhow::{Context, Result};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -49,38 +49,23 @@ fn evaluate_pending(
     done_before: u64,
 ) -> Result<usize> {
     let players = store.players()?;
+    let pass = Pass {
+        cfg,
+        store,
+        stop,
+        done_before,
+    };
     let mut played = 0;
     for (member, validates) in panel_queue(&players) {
-        let mut opponents: Vec<PanelOpponent> = players
-            .iter()
-            .filter(|p| p.name == heuristic_name(member.side.other()))
-            .map(PanelOpponent::Member)
-            .collect();
-        for (panel, list) in [
-            (Panel::HeldOut, &panels.held_out),
-            (Panel::Validation, &panels.validation),
-        ] {
-            if panel == Panel::Validation && !validates {
-                continue;
-            }
-            for (side, specs) in list {
-                if *side == member.side {
-                    opponents.extend(
-                        specs
-                            .iter()
-                            .map(|(n, s)| PanelOpponent::Controller(panel, n, s)),
-                    );
-                }
-            }
-        }
+        let opponents = panel_opponents(&players, member, validates, panels);
         let (rel, _) = member
             .checkpoint
             .as_ref()
-            .context("snapshot without a checkpoint")?;
+            .ok_or_else(|| LeagueError::Pool("snapshot without a checkpoint".into()))?;
         let spec = ControllerSpec::Checkpoint(t2e_learners::controllers::CheckpointSpec::new(
             dir.root.join(rel),
         ));
-        'opponents: for opponent in &opponents {
+        for opponent in &opponents {
             let other = match opponent {
                 PanelOpponent::Member(_) => ControllerSpec::Heuristic,
                 PanelOpponent::Controller(_, _, s) => (*s).clone(),
@@ -109,84 +94,170 @@ fn evaluate_pending(
                 capture_rule: CaptureRule::Fast,
                 soa_every: 0,
             };
-            let mut asz_fields = t2e_core::asz::AszFields::new();
-            for episode in 0..cfg.evaluator.episodes {
-                if stop.load(Ordering::SeqCst) {
-                    return Ok(played);
-                }
-                let recorded = match opponent {
-                    PanelOpponent::Member(panel) => store.has_match(&format!(
-                        "evaluator/{}/{}/{episode}",
-                        member.name, panel.name
-                    ))?,
-                    PanelOpponent::Controller(panel, name, _) => store
-                        .has_held_out(&panel_episode_key(*panel, &member.name, name, episode))?,
-                };
-                if recorded {
-                    continue;
-                }
-                let started = Instant::now();
-                let record = match play_episode(&setting, panel_maps, episode, &mut asz_fields) {
-                    Ok(r) => r,
-                    Err(e) => {
-                        store.quarantine(
-                            member.id,
-                            &format!("evaluator could not play it: {e:#}"),
-                        )?;
-                        break 'opponents;
-                    }
-                };
-                match opponent {
-                    PanelOpponent::Member(panel) => {
-                        let (captor_player, target_player) = match member.side {
-                            Side::Captors => (member.id, panel.id),
-                            Side::Target => (panel.id, member.id),
-                        };
-                        store.record_match(&MatchRecord {
-                            key: format!("evaluator/{}/{}/{episode}", member.name, panel.name),
-                            captor_player,
-                            target_player,
-                            map: record.map,
-                            num_captors: cfg.num_captors,
-                            speed_ratio: setting.speed_ratio,
-                            seed: record.seed,
-                            captured: record.captured,
-                            steps: record.steps,
-                            final_asz_m2: None,
-                            recorded_by: EVALUATOR.into(),
-                        })?;
-                    }
-                    PanelOpponent::Controller(panel, name, _) => {
-                        store.record_held_out(&HeldOutEpisode {
-                            key: panel_episode_key(*panel, &member.name, name, episode),
-                            panel: *panel,
-                            member: member.id,
-                            opponent: name.to_string(),
-                            map: record.map,
-                            speed_ratio: setting.speed_ratio,
-                            seed: record.seed,
-                            captured: record.captured,
-                            steps: record.steps,
-                        })?;
-                    }
-                }
-                played += 1;
-                // A heartbeat per episode: a backlog of snapshots can take
-                // this loop longer than the silence after which `status`
-                // calls a process on another host dead.
-                store.heartbeat(
-                    EVALUATOR,
-                    BeatState::Evaluating,
-                    done_before + played as u64,
-                    None,
-                )?;
-                let busy = started.elapsed().as_secs_f64();
-                let idle = busy * (1.0 - cfg.evaluator.cpu_share) / cfg.evaluator.cpu_share;
-                std::thread::sleep(Duration::from_secs_f64(idle.min(10.0)));
+            match pass.play(member, opponent, &setting, panel_maps, &mut played)? {
+                Next::Opponent => {}
+                Next::Member => break,
+                Next::Stop => return Ok(played),
             }
         }
     }
     Ok(played)
+}
+
+/// Who `member` plays on the panel: the other side's heuristic member,
+/// then the held-out teams and (for a main learner's snapshot, `validates`)
+/// the validation teams of its side.
+fn panel_opponents<'a>(
+    players: &'a [Player],
+    member: &Player,
+    validates: bool,
+    panels: &'a Panels,
+) -> Vec<PanelOpponent<'a>> {
+    let mut opponents: Vec<PanelOpponent> = players
+        .iter()
+        .filter(|p| p.name == heuristic_name(member.side.other()))
+        .map(PanelOpponent::Member)
+        .collect();
+    for (panel, list) in [
+        (Panel::HeldOut, &panels.held_out),
+        (Panel::Validation, &panels.validation),
+    ] {
+        if panel == Panel::Validation && !validates {
+            continue;
+        }
+        for (side, specs) in list {
+            if *side == member.side {
+                opponents.extend(
+                    specs
+                        .iter()
+                        .map(|(n, s)| PanelOpponent::Controller(panel, n, s)),
+                );
+            }
+        }
+    }
+    opponents
+}
+
+/// What one pass of the evaluator plays with: the league, its store, the
+/// stop flag and the episodes counted before the pass (for heartbeats).
+struct Pass<'a> {
+    cfg: &'a LeagueConfig,
+    store: &'a Store,
+    stop: &'a AtomicBool,
+    done_before: u64,
+}
+
+/// Where the pass goes after one opponent's episodes.
+enum Next {
+    /// On to the member's next opponent.
+    Opponent,
+    /// The member could not be played (quarantined): on to the next member.
+    Member,
+    /// Stopped: the pass ends.
+    Stop,
+}
+
+impl Pass<'_> {
+    /// Plays `member`'s unrecorded episodes against `opponent`, recording
+    /// each at once (`played` counts them over the pass).
+    fn play(
+        &self,
+        member: &Player,
+        opponent: &PanelOpponent,
+        setting: &EvalSetting,
+        panel_maps: &Arc<Vec<Arc<PreparedMap>>>,
+        played: &mut usize,
+    ) -> Result<Next> {
+        let (cfg, store) = (self.cfg, self.store);
+        let mut asz_fields = t2e_core::asz::AszFields::new();
+        for episode in 0..cfg.evaluator.episodes {
+            if self.stop.load(Ordering::SeqCst) {
+                return Ok(Next::Stop);
+            }
+            let recorded = match opponent {
+                PanelOpponent::Member(panel) => store.has_match(&format!(
+                    "evaluator/{}/{}/{episode}",
+                    member.name, panel.name
+                ))?,
+                PanelOpponent::Controller(panel, name, _) => {
+                    store.has_held_out(&panel_episode_key(*panel, &member.name, name, episode))?
+                }
+            };
+            if recorded {
+                continue;
+            }
+            let started = Instant::now();
+            let record = match play_episode(setting, panel_maps, episode, &mut asz_fields) {
+                Ok(r) => r,
+                Err(e) => {
+                    store.quarantine(member.id, &format!("evaluator could not play it: {e:#}"))?;
+                    return Ok(Next::Member);
+                }
+            };
+            self.record(member, opponent, setting, episode, record)?;
+            *played += 1;
+            // A heartbeat per episode: a backlog of snapshots can take
+            // this loop longer than the silence after which `status`
+            // calls a process on another host dead.
+            store.heartbeat(
+                EVALUATOR,
+                BeatState::Evaluating,
+                self.done_before + *played as u64,
+                None,
+            )?;
+            let busy = started.elapsed().as_secs_f64();
+            let idle = busy * (1.0 - cfg.evaluator.cpu_share) / cfg.evaluator.cpu_share;
+            std::thread::sleep(Duration::from_secs_f64(idle.min(10.0)));
+        }
+        Ok(Next::Opponent)
+    }
+
+    /// Records one panel episode: a match against the heuristic member, a
+    /// held-out episode against any other panel team.
+    fn record(
+        &self,
+        member: &Player,
+        opponent: &PanelOpponent,
+        setting: &EvalSetting,
+        episode: usize,
+        record: t2e_learners::eval::EpisodeRecord,
+    ) -> Result<()> {
+        match opponent {
+            PanelOpponent::Member(panel) => {
+                let (captor_player, target_player) = match member.side {
+                    Side::Captors => (member.id, panel.id),
+                    Side::Target => (panel.id, member.id),
+                };
+                self.store.record_match(&MatchRecord {
+                    key: format!("evaluator/{}/{}/{episode}", member.name, panel.name),
+                    captor_player,
+                    target_player,
+                    map: record.map,
+                    num_captors: self.cfg.num_captors,
+                    speed_ratio: setting.speed_ratio,
+                    seed: record.seed,
+                    captured: record.captured,
+                    steps: record.steps,
+                    final_asz_m2: None,
+                    recorded_by: EVALUATOR.into(),
+                })?;
+            }
+            PanelOpponent::Controller(panel, name, _) => {
+                self.store.record_held_out(&HeldOutEpisode {
+                    key: panel_episode_key(*panel, &member.name, name, episode),
+                    panel: *panel,
+                    member: member.id,
+                    opponent: name.to_string(),
+                    map: record.map,
+                    speed_ratio: setting.speed_ratio,
+                    seed: record.seed,
+                    captured: record.captured,
+                    steps: record.steps,
+                })?;
+            }
+        }
+        Ok(())
+    }
 }
 
 /// The snapshots the evaluator plays, in order, each with whether it plays
@@ -213,14 +284,44 @@ pub fn panel_queue(players: &[Player]) -> Vec<(&Player, bool)> {
     queue
 }
 
+/// The league's maps and its panels, a league whose validation maps are
+/// training maps refused: errors here are `CannotStart`, since a restart
+/// would load the same files.
+fn load_maps_and_panels(
+    dir: &LeagueDir,
+    cfg: &LeagueConfig,
+) -> Result<(Arc<Vec<Arc<PreparedMap>>>, Panels)> {
+    let maps = t2e_core::map::catalog::load_prepared(&cfg.maps)
+        .with_context(|| format!("maps = \"{}\"", cfg.maps))
+        .map_err(LeagueError::cannot_start)?;
+    let panels = load_panels(cfg)
+        .and_then(|panels| {
+            // A league stored before maps were compared by content is
+            // refused here rather than validated on its training maps.
+            check_maps_apart(
+                "evaluator.validation_maps",
+                cfg.evaluator.validation_maps.as_deref().unwrap_or(""),
+                &panels.validation_maps,
+                &cfg.maps,
+                &maps,
+            )?;
+            Ok(panels)
+        })
+        .map_err(|e| {
+            LeagueError::cannot_start(
+                LeagueError::from(e).context(dir.config_path().display().to_string()),
+            )
+        })?;
+    Ok((maps, panels))
+}
+
 /// Runs until Ctrl-C / SIGINT (`Outcome::Stopped`), or until both learners
 /// are done and every snapshot has its panel games (`Outcome::Done`).
 pub fn run_evaluator(dir: &LeagueDir, stop: &AtomicBool) -> Result<Outcome> {
-    let opened = crate::run::folder::open::open_process(dir)
-        .map_err(|e| anyhow::Error::new(CannotStart(format!("{e:#}"))))?;
+    let opened = crate::run::folder::open::open_process(dir).map_err(LeagueError::cannot_start)?;
     let (cfg, store) = (opened.cfg, opened.store);
     if !cfg.evaluator.enabled {
-        return Err(anyhow::Error::new(CannotStart(format!(
+        return Err(LeagueError::cannot_start(LeagueError::Refused(format!(
             "{}: this league has no evaluator ([evaluator] enabled = false)",
             dir.config_path().display()
         ))));
@@ -240,25 +341,7 @@ pub fn run_evaluator(dir: &LeagueDir, stop: &AtomicBool) -> Result<Outcome> {
     let _ = rayon::ThreadPoolBuilder::new()
         .num_threads(1)
         .build_global();
-    let maps = t2e_core::map::catalog::load_prepared(&cfg.maps)
-        .with_context(|| format!("maps = \"{}\"", cfg.maps))
-        .map_err(|e| anyhow::Error::new(CannotStart(format!("{e:#}"))))?;
-    let panels = load_panels(&cfg)
-        .and_then(|panels| {
-            // A league stored before maps were compared by content is
-            // refused here rather than validated on its training maps.
-            check_maps_apart(
-                "evaluator.validation_maps",
-                cfg.evaluator.validation_maps.as_deref().unwrap_or(""),
-                &panels.validation_maps,
-                &cfg.maps,
-                &maps,
-            )?;
-            Ok(panels)
-        })
-        .map_err(|e| {
-            anyhow::Error::new(CannotStart(format!("{}: {e}", dir.config_path().display())))
-        })?;
+    let (maps, panels) = load_maps_and_panels(dir, &cfg)?;
     // The count covers every evaluator process of this league, not only this one.
     let mut total = store.matches_recorded_by(EVALUATOR)? + store.held_out_count()?;
     store.heartbeat(EVALUATOR, BeatState::Evaluating, total, None)?;

@@ -17,9 +17,9 @@
 //!                          frozen player), run/ (the best response's run)
 //! ```
 
+use crate::error::{IoResultExt, LeagueError, Result};
 use crate::rules::config::LeagueConfig;
 use crate::store::StoreUrl;
-use anyhow::{bail, Context, Result};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use t2e_core::env::Side;
@@ -94,20 +94,28 @@ impl LeagueDir {
             return Ok(None);
         }
         let text = std::fs::read_to_string(&path)
-            .with_context(|| format!("{}: cannot read", path.display()))?;
-        let id: LeagueIdentity = serde_json::from_str(&text)
-            .with_context(|| format!("{}: not a league identity", path.display()))?;
+            .io_context(|| format!("{}: cannot read", path.display()))?;
+        let id: LeagueIdentity =
+            serde_json::from_str(&text).map_err(|cause| LeagueError::Json {
+                context: format!("{}: not a league identity", path.display()),
+                cause,
+            })?;
         if id.league_id.is_empty() {
-            bail!("{}: league_id is empty", path.display());
+            return Err(LeagueError::Folder(format!(
+                "{}: league_id is empty",
+                path.display()
+            )));
         }
         Ok(Some(id))
     }
 
     pub fn write_identity(&self, id: &LeagueIdentity) -> Result<()> {
-        Ok(t2e_core::fs::write_file_atomically(
-            &self.identity_path(),
-            serde_json::to_string_pretty(id)?.as_bytes(),
-        )?)
+        let path = self.identity_path();
+        let text = serde_json::to_string_pretty(id).map_err(|cause| LeagueError::Json {
+            context: format!("{}: cannot write the league's identity", path.display()),
+            cause,
+        })?;
+        Ok(t2e_core::fs::write_file_atomically(&path, text.as_bytes())?)
     }
 
     /// What on disk shows that a league lived here, beside its store: the

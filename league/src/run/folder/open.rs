@@ -14,11 +14,19 @@
 //!   checks its identity against `league.json`.
 //! - `open_read_only` (`status`, `export`) changes nothing on disk.
 
+use crate::error::{LeagueError, Result};
 use crate::rules::config::LeagueConfig;
 use crate::run::folder::layout::{LeagueDir, LeagueIdentity};
 use crate::store::{Presence, Store, StoreUrl};
-use anyhow::{bail, Context, Result};
 use std::path::Path;
+
+/// Ends the function with a `LeagueError::Folder`: the directory (or the
+/// store beside it) is not the league it should be.
+macro_rules! refuse {
+    ($($why:tt)*) => {
+        return Err(LeagueError::Folder(format!($($why)*)))
+    };
+}
 
 /// A league directory opened by a process of the league.
 pub struct Opened {
@@ -48,140 +56,21 @@ pub enum StartPlan {
 /// Decides how `run` starts in `dir` (with `--config given`, if any),
 /// reading only.
 pub fn plan_start(dir: &LeagueDir, given: Option<&Path>) -> Result<StartPlan> {
-    let root = dir.root.display().to_string();
     let db = &dir.store;
     let files = dir.league_files();
-    let restore = match db {
-        StoreUrl::Sqlite(_) => {
-            "Restore league.db (with league.db-wal beside it, if there was one) from a backup"
-        }
-        StoreUrl::Postgres(_) => "Point --store at this league's database",
-    };
     let given_cfg = given.map(LeagueConfig::load).transpose()?;
-    let lost = |what: &str| -> anyhow::Error {
-        anyhow::anyhow!(
-            "{db}: {what}, but {root} holds a league ({}). Refusing to start: a new store would not know its pool, matches or learners. \
-             {restore}, or move {root} aside and start a new league in an empty directory",
-            files.join(", ")
-        )
-    };
-    let held = match Store::presence(db)? {
-        Presence::Missing => Err("missing"),
-        Presence::Empty => Err("empty (0 bytes)"),
-        Presence::Present => {
-            // Read-only: a file that is not this league's store (another
-            // program's database, a corrupt one) is refused untouched.
-            let store = Store::inspect(db).map_err(|e| {
-                anyhow::anyhow!(
-                    "{e}. Nothing was changed; restore the store from a backup, or move {root} aside"
-                )
-            })?;
-            match store.stored_config()? {
-                Some(toml) => Ok((store, toml)),
-                None => Err("holds no league (its tables are empty: truncated, or its write-ahead log league.db-wal was lost)"),
-            }
-        }
-    };
-    let (store, stored_toml) = match held {
+    let (store, stored_toml) = match held_store(dir)? {
         Ok(held) => held,
-        Err(what) if !files.is_empty() => return Err(lost(what)),
-        Err(_) => {
-            // A new league writes its store, players/ and learners/ here:
-            // never among a user's own files, where a later `move it aside`
-            // or cleanup would take them too.
-            if let Ok(entries) = std::fs::read_dir(&dir.root) {
-                let owned = [
-                    "league.db",
-                    "league.db-wal",
-                    "league.db-shm",
-                    "league.db-journal",
-                    "league.json",
-                    "config.toml",
-                    "league.lock",
-                    "players",
-                    "learners",
-                    "logs",
-                    "exploits",
-                ];
-                let mut foreign: Vec<String> = entries
-                    .flatten()
-                    .map(|e| e.file_name().to_string_lossy().into_owned())
-                    .filter(|n| !n.starts_with('.') && !owned.contains(&n.as_str()))
-                    .collect();
-                if !foreign.is_empty() {
-                    foreign.sort();
-                    let shown: Vec<&str> = foreign.iter().take(5).map(String::as_str).collect();
-                    bail!(
-                        "{root}: holds files that are not a league's ({}{}); a new league starts in an empty or new folder: give another --dir{}",
-                        shown.join(", "),
-                        if foreign.len() > shown.len() { ", ..." } else { "" },
-                        if matches!(db, StoreUrl::Postgres(_)) || dir.store != StoreUrl::in_dir(&dir.root) { " (or --pool)" } else { "" }
-                    );
-                }
-            }
-            // No store and nothing of a league: a new league, or a start
-            // that was interrupted before anything but its config existed.
-            let cfg = match (given_cfg, dir.config_path().is_file()) {
-                (Some(cfg), _) => cfg,
-                (None, true) => dir.config()?,
-                (None, false) => bail!(
-                    "{root} holds no league: give --config configs/league-*.toml to start one"
-                ),
-            };
-            return Ok(StartPlan::New(cfg));
-        }
+        Err(what) if !files.is_empty() => return Err(lost_store(dir, what, &files)),
+        Err(_) => return plan_new(dir, given_cfg),
     };
-    let stored_cfg = LeagueConfig::parse(&stored_toml)
-        .map_err(|e| anyhow::anyhow!("{db}: the config it holds is invalid: {e}"))?;
-    let on_disk = if dir.config_path().is_file() {
-        Some(dir.config()?)
-    } else {
-        None
-    };
-    if let Some(cfg) = &on_disk {
-        if *cfg != stored_cfg {
-            bail!(
-                "{}: differs from the config the league's store ({db}) was started with; put the league's config back, or pick another --dir",
-                dir.config_path().display(),
-            );
-        }
-    }
-    if let Some(cfg) = &given_cfg {
-        if *cfg != stored_cfg {
-            bail!(
-                "{root} already holds a league started with another config ({}); resume it without --config, or pick another --dir",
-                if on_disk.is_some() {
-                    dir.config_path().display().to_string()
-                } else {
-                    format!("the one in {db}")
-                }
-            );
-        }
-    }
+    let stored_cfg = LeagueConfig::parse(&stored_toml).map_err(|e| {
+        LeagueError::from(e).context(format!("{db}: the config it holds is invalid"))
+    })?;
+    let on_disk = check_configs(dir, &stored_cfg, given_cfg.as_ref())?;
     let file_identity = dir.identity()?;
     let store_identity = store.league_id()?;
-    let identity = match (&store_identity, &file_identity) {
-        (Some(s), Some(f)) if *s != f.league_id => bail!(
-            "{db}: belongs to another league (id {s}) than {} (id {}, league {}); put this league's own store back, or pick another --dir",
-            dir.identity_path().display(),
-            f.league_id,
-            f.name
-        ),
-        (None, Some(f)) => bail!(
-            "{db}: has no league identity, but {} names league {} (id {}): the store is not this league's; put its own store back",
-            dir.identity_path().display(),
-            f.name,
-            f.league_id
-        ),
-        (Some(s), _) => LeagueIdentity {
-            league_id: s.clone(),
-            name: stored_cfg.name.clone(),
-        },
-        (None, None) => LeagueIdentity {
-            league_id: crate::run::folder::layout::new_league_id(),
-            name: stored_cfg.name.clone(),
-        },
-    };
+    let identity = resume_identity(dir, &stored_cfg, &store_identity, &file_identity)?;
     check_pool_identity(dir, &identity.league_id, db)?;
     if dir.store != StoreUrl::in_dir(&dir.root) {
         check_pool_holds_league(dir, &store, file_identity.is_some())?;
@@ -195,16 +84,182 @@ pub fn plan_start(dir: &LeagueDir, given: Option<&Path>) -> Result<StartPlan> {
     })
 }
 
+/// The store and the config it holds, opened read-only; else what is
+/// wrong with it (missing, empty, holding no league), for `plan_start` to
+/// decide whether that is a new league or a lost store.
+fn held_store(dir: &LeagueDir) -> Result<std::result::Result<(Store, String), &'static str>> {
+    let (root, db) = (dir.root.display(), &dir.store);
+    Ok(match Store::presence(db)? {
+        Presence::Missing => Err("missing"),
+        Presence::Empty => Err("empty (0 bytes)"),
+        Presence::Present => {
+            // Read-only: a file that is not this league's store (another
+            // program's database, a corrupt one) is refused untouched.
+            let store = Store::inspect(db).map_err(|e| {
+                LeagueError::Folder(format!(
+                    "{e}. Nothing was changed; restore the store from a backup, or move {root} aside"
+                ))
+            })?;
+            match store.stored_config()? {
+                Some(toml) => Ok((store, toml)),
+                None => Err("holds no league (its tables are empty: truncated, or its write-ahead log league.db-wal was lost)"),
+            }
+        }
+    })
+}
+
+/// The refusal when the store is `what` but the folder holds a league's
+/// `files`: a new store would not know the league.
+fn lost_store(dir: &LeagueDir, what: &str, files: &[String]) -> LeagueError {
+    let (root, db) = (dir.root.display(), &dir.store);
+    let restore = match db {
+        StoreUrl::Sqlite(_) => {
+            "Restore league.db (with league.db-wal beside it, if there was one) from a backup"
+        }
+        StoreUrl::Postgres(_) => "Point --store at this league's database",
+    };
+    LeagueError::Folder(format!(
+        "{db}: {what}, but {root} holds a league ({}). Refusing to start: a new store would not know its pool, matches or learners. \
+         {restore}, or move {root} aside and start a new league in an empty directory",
+        files.join(", ")
+    ))
+}
+
+/// A new league, where there is no store and nothing of a league: its
+/// config is the one given, or the config.toml an interrupted start left.
+fn plan_new(dir: &LeagueDir, given_cfg: Option<LeagueConfig>) -> Result<StartPlan> {
+    let root = dir.root.display();
+    refuse_foreign_files(dir)?;
+    // No store and nothing of a league: a new league, or a start
+    // that was interrupted before anything but its config existed.
+    let cfg = match (given_cfg, dir.config_path().is_file()) {
+        (Some(cfg), _) => cfg,
+        (None, true) => dir.config()?,
+        (None, false) => {
+            refuse!("{root} holds no league: give --config configs/league-*.toml to start one")
+        }
+    };
+    Ok(StartPlan::New(cfg))
+}
+
+/// A new league writes its store, players/ and learners/ in its folder:
+/// never among a user's own files, where a later `move it aside` or
+/// cleanup would take them too.
+fn refuse_foreign_files(dir: &LeagueDir) -> Result<()> {
+    let (root, db) = (dir.root.display(), &dir.store);
+    let Ok(entries) = std::fs::read_dir(&dir.root) else {
+        return Ok(());
+    };
+    let owned = [
+        "league.db",
+        "league.db-wal",
+        "league.db-shm",
+        "league.db-journal",
+        "league.json",
+        "config.toml",
+        "league.lock",
+        "players",
+        "learners",
+        "logs",
+        "exploits",
+    ];
+    let mut foreign: Vec<String> = entries
+        .flatten()
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .filter(|n| !n.starts_with('.') && !owned.contains(&n.as_str()))
+        .collect();
+    if !foreign.is_empty() {
+        foreign.sort();
+        let shown: Vec<&str> = foreign.iter().take(5).map(String::as_str).collect();
+        refuse!(
+            "{root}: holds files that are not a league's ({}{}); a new league starts in an empty or new folder: give another --dir{}",
+            shown.join(", "),
+            if foreign.len() > shown.len() { ", ..." } else { "" },
+            if matches!(db, StoreUrl::Postgres(_)) || dir.store != StoreUrl::in_dir(&dir.root) { " (or --pool)" } else { "" }
+        );
+    }
+    Ok(())
+}
+
+/// The config on disk and the one given must be the store's; returns the
+/// one on disk (None: config.toml is missing and is restored).
+fn check_configs(
+    dir: &LeagueDir,
+    stored_cfg: &LeagueConfig,
+    given_cfg: Option<&LeagueConfig>,
+) -> Result<Option<LeagueConfig>> {
+    let (root, db) = (dir.root.display(), &dir.store);
+    let on_disk = if dir.config_path().is_file() {
+        Some(dir.config()?)
+    } else {
+        None
+    };
+    if let Some(cfg) = &on_disk {
+        if cfg != stored_cfg {
+            refuse!(
+                "{}: differs from the config the league's store ({db}) was started with; put the league's config back, or pick another --dir",
+                dir.config_path().display(),
+            );
+        }
+    }
+    if let Some(cfg) = given_cfg {
+        if cfg != stored_cfg {
+            refuse!(
+                "{root} already holds a league started with another config ({}); resume it without --config, or pick another --dir",
+                if on_disk.is_some() {
+                    dir.config_path().display().to_string()
+                } else {
+                    format!("the one in {db}")
+                }
+            );
+        }
+    }
+    Ok(on_disk)
+}
+
+/// The identity a resumed league goes on with: the store's, which
+/// league.json must match; a new one for a league from before identities.
+fn resume_identity(
+    dir: &LeagueDir,
+    stored_cfg: &LeagueConfig,
+    store_identity: &Option<String>,
+    file_identity: &Option<LeagueIdentity>,
+) -> Result<LeagueIdentity> {
+    let db = &dir.store;
+    Ok(match (store_identity, file_identity) {
+        (Some(s), Some(f)) if *s != f.league_id => refuse!(
+            "{db}: belongs to another league (id {s}) than {} (id {}, league {}); put this league's own store back, or pick another --dir",
+            dir.identity_path().display(),
+            f.league_id,
+            f.name
+        ),
+        (None, Some(f)) => refuse!(
+            "{db}: has no league identity, but {} names league {} (id {}): the store is not this league's; put its own store back",
+            dir.identity_path().display(),
+            f.name,
+            f.league_id
+        ),
+        (Some(s), _) => LeagueIdentity {
+            league_id: s.clone(),
+            name: stored_cfg.name.clone(),
+        },
+        (None, None) => LeagueIdentity {
+            league_id: crate::run::folder::layout::new_league_id(),
+            name: stored_cfg.name.clone(),
+        },
+    })
+}
+
 /// Opens the league for one of its processes (a learner, the evaluator),
 /// which the manager starts only after `plan_start`'s checks.
 pub fn open_process(dir: &LeagueDir) -> Result<Opened> {
     let store = Store::open_existing(&dir.store)?;
-    let league_id = check_identity(dir, &store)?.with_context(|| {
-        format!(
+    let league_id = check_identity(dir, &store)?.ok_or_else(|| {
+        LeagueError::Folder(format!(
             "{}: has no league identity; start the league with `t2e-league run --dir {}`",
             store.url(),
             dir.root.display()
-        )
+        ))
     })?;
     Ok(Opened {
         cfg: dir.config()?,
@@ -218,29 +273,30 @@ pub fn open_process(dir: &LeagueDir) -> Result<Opened> {
 pub fn open_read_only(dir: &LeagueDir) -> Result<(LeagueConfig, Store)> {
     let db = &dir.store;
     match db {
-        StoreUrl::Sqlite(path) if !path.is_file() => bail!(
+        StoreUrl::Sqlite(path) if !path.is_file() => refuse!(
             "{}: holds no league (no league.db); start one with `t2e-league run --config configs/league-default.toml --dir {}`",
             dir.root.display(),
             dir.root.display()
         ),
-        StoreUrl::Postgres(_) if Store::presence(db)? == Presence::Missing => bail!(
+        StoreUrl::Postgres(_) if Store::presence(db)? == Presence::Missing => refuse!(
             "{db}: holds no league; start one with `t2e-league run --config configs/league-default.toml --store URL --pool DIR`"
         ),
         _ => {}
     }
     let store = Store::open_read_only(db)?;
     let Some(stored) = store.stored_config()? else {
-        bail!(
+        refuse!(
             "{db}: holds no league (its tables are empty: truncated, or its write-ahead log was lost)"
         );
     };
-    let stored_cfg = LeagueConfig::parse(&stored)
-        .map_err(|e| anyhow::anyhow!("{db}: the config it holds is invalid: {e}"))?;
+    let stored_cfg = LeagueConfig::parse(&stored).map_err(|e| {
+        LeagueError::from(e).context(format!("{db}: the config it holds is invalid"))
+    })?;
     if let Some(id) = check_identity(dir, &store)? {
         check_pool_identity(dir, &id, db)?;
     }
     if dir.config_path().is_file() && dir.config()? != stored_cfg {
-        bail!(
+        refuse!(
             "{}: differs from the config {db} holds: the store is another league's, or config.toml was edited",
             dir.config_path().display(),
         );
@@ -268,11 +324,11 @@ fn check_pool_holds_league(dir: &LeagueDir, store: &Store, has_identity: bool) -
         .iter()
         .filter(|rel| dir.root.join(rel).exists())
         .count();
-    let refuse = |what: String| -> anyhow::Error {
-        anyhow::anyhow!(
+    let refuse = |what: String| -> LeagueError {
+        LeagueError::Pool(format!(
             "{db} holds a league, but the pool folder {pool} is not its pool: {what}. Nothing was changed. \
              Give the pool folder this league was started with (--pool, the folder every host shares)"
-        )
+        ))
     };
     if !snapshots.is_empty() && seen == 0 {
         return Err(refuse(format!(
@@ -309,7 +365,7 @@ fn check_pool_identity(dir: &LeagueDir, league_id: &str, db: &StoreUrl) -> Resul
         if let Ok(meta) = t2e_learners::nn::checkpoint::read_meta(&e.path()) {
             if let Ok(Some(m)) = crate::run::folder::pool::PoolMembership::of(&meta) {
                 if m.league_id != league_id {
-                    bail!(
+                    refuse!(
                         "{}: belongs to league {}, but {db} is league {league_id}: the store and the pool are from different leagues",
                         e.path().display(),
                         m.league_id,
@@ -328,14 +384,14 @@ fn check_identity(dir: &LeagueDir, store: &Store) -> Result<Option<String>> {
     let stored = store.league_id()?;
     match (stored, file) {
         (Some(s), Some(f)) if s == f.league_id => Ok(Some(s)),
-        (Some(s), Some(f)) => bail!(
+        (Some(s), Some(f)) => refuse!(
             "{}: belongs to another league (id {s}) than {} (id {}, league {})",
             store.url(),
             dir.identity_path().display(),
             f.league_id,
             f.name
         ),
-        (None, Some(f)) => bail!(
+        (None, Some(f)) => refuse!(
             "{}: has no league identity, but {} names league {} (id {}): the store is not this league's",
             store.url(),
             dir.identity_path().display(),

@@ -13,11 +13,11 @@
 //! - Rows whose files are missing or fail their hashes are quarantined: the
 //!   league goes on without them.
 
+use crate::error::{IoResultExt, LeagueError, Result, ResultExt};
 use crate::rules::config::LeagueConfig;
 use crate::rules::players::{learner_name, Seat};
 use crate::run::folder::layout::LeagueDir;
 use crate::store::{Kind, NewPlayer, Player, Store};
-use anyhow::{anyhow, bail, Context, Result};
 use t2e_core::env::Side;
 use t2e_core::protocol::Protocol;
 use t2e_learners::controllers::ControllerSpec;
@@ -49,8 +49,10 @@ impl PoolMembership {
         meta.pool_label
             .as_ref()
             .map(|label| {
-                serde_json::from_value(label.clone())
-                    .context("meta.json's `league` is not a pool membership")
+                serde_json::from_value(label.clone()).map_err(|cause| LeagueError::Json {
+                    context: "meta.json's `league` is not a pool membership".into(),
+                    cause,
+                })
             })
             .transpose()
     }
@@ -138,10 +140,12 @@ pub fn add_snapshot(
         parent: seat.name(),
         curriculum_stage: stage,
     };
-    trainer
-        .side(seat.side)?
-        .save_new(&folder, serde_json::to_value(&membership)?)?;
-    let sha = t2e_core::util::sha256_file(&folder.join("meta.json"))?;
+    let label = serde_json::to_value(&membership).map_err(|cause| LeagueError::Json {
+        context: format!("{name}: its pool membership"),
+        cause,
+    })?;
+    trainer.side(seat.side)?.save_new(&folder, label)?;
+    let sha = sha256_of_meta(&folder)?;
     store.add_player(&NewPlayer {
         name: name.clone(),
         side: seat.side,
@@ -180,7 +184,7 @@ pub fn reconcile(dir: &LeagueDir, store: &Store, league_id: &str) -> Result<Reco
     for (rel, adopted) in adopt_unrecorded(dir, store, league_id, None)? {
         match adopted {
             Ok(()) => out.adopted.push(rel),
-            Err(why) => out.unrecorded.push((rel, format!("{why:#}"))),
+            Err(why) => out.unrecorded.push((rel, why.chain())),
         }
     }
     // Every snapshot row against its files: one whose files are missing or
@@ -275,26 +279,36 @@ fn adopt(
     players: &[crate::store::Player],
 ) -> Result<()> {
     let meta = read_meta(path)?;
-    let member = PoolMembership::of(&meta)?
-        .context("its meta.json names no league pool (not a snapshot this league wrote)")?;
+    let member = PoolMembership::of(&meta)?.ok_or_else(|| {
+        LeagueError::Pool(
+            "its meta.json names no league pool (not a snapshot this league wrote)".into(),
+        )
+    })?;
     if member.league_id != league_id {
-        anyhow::bail!(
+        return Err(LeagueError::Pool(format!(
             "it belongs to league {}, not this one ({league_id})",
             member.league_id
-        );
+        )));
     }
     if member.player != name {
-        anyhow::bail!("its meta.json names it {}", member.player);
+        return Err(LeagueError::Pool(format!(
+            "its meta.json names it {}",
+            member.player
+        )));
     }
     if players.iter().any(|p| p.name == name) {
-        anyhow::bail!("the store records {name} with other files");
+        return Err(LeagueError::Pool(format!(
+            "the store records {name} with other files"
+        )));
     }
     // Every weight file against its hash, and finite.
     PolicySnapshot::load(path, meta.side)?;
     let parent = players
         .iter()
         .find(|p| p.name == member.parent)
-        .with_context(|| format!("its learner {} is not in the store", member.parent))?;
+        .ok_or_else(|| {
+            LeagueError::Pool(format!("its learner {} is not in the store", member.parent))
+        })?;
     store.add_player(&NewPlayer {
         name: name.to_string(),
         side: meta.side,
@@ -302,12 +316,16 @@ fn adopt(
         parent: Some(parent.id),
         env_steps: meta.env_steps,
         curriculum_stage: member.curriculum_stage,
-        checkpoint: Some((
-            dir.relative(path),
-            t2e_core::util::sha256_file(&path.join("meta.json"))?,
-        )),
+        checkpoint: Some((dir.relative(path), sha256_of_meta(path)?)),
     })?;
     Ok(())
+}
+
+/// The SHA-256 of a checkpoint folder's meta.json, which the store records
+/// beside its row; the error names the file.
+pub(crate) fn sha256_of_meta(folder: &std::path::Path) -> Result<String> {
+    let meta = folder.join("meta.json");
+    t2e_core::util::sha256_file(&meta).io_context(|| format!("cannot read {}", meta.display()))
 }
 
 /// Adds each side's permanent members (the default heuristic and the
@@ -319,7 +337,7 @@ pub fn ensure_members(dir: &LeagueDir, store: &Store, cfg: &LeagueConfig) -> Res
     let recorded = store.players()?;
     for side in [Side::Captors, Side::Target] {
         let field = format!("members.{}", side.name());
-        let members = cfg.members.of(side).map_err(|e| anyhow!("members.{e}"))?;
+        let members = cfg.members.of(side).map_err(|e| e.within("members"))?;
         for (name, spec) in members {
             match &spec {
                 ControllerSpec::Checkpoint(c) => {
@@ -350,7 +368,7 @@ pub fn ensure_members(dir: &LeagueDir, store: &Store, cfg: &LeagueConfig) -> Res
 /// mended (a started league keeps its config).
 pub fn check_trained_members(cfg: &LeagueConfig) -> Result<()> {
     for side in [Side::Captors, Side::Target] {
-        for (_, spec) in cfg.members.of(side).map_err(|e| anyhow!("members.{e}"))? {
+        for (_, spec) in cfg.members.of(side).map_err(|e| e.within("members"))? {
             if let ControllerSpec::Checkpoint(c) = &spec {
                 verified_member(cfg, side, &c.path)
                     .with_context(|| format!("members.{} = \"{spec}\"", side.name()))?;
@@ -373,13 +391,16 @@ fn verified_member(
     let env = cfg.train_config(side.other()).learning_env();
     snap.meta
         .check_reads(side, &env)
-        .map_err(|e| anyhow!("{}: {e}", snap.dir.display()))?;
+        .map_err(|cause| LeagueError::DoesNotFit {
+            checkpoint: snap.dir.clone(),
+            cause,
+        })?;
     if cfg.protocol == Protocol::HeldOut && snap.meta.protocol != Protocol::HeldOut {
-        bail!(
+        return Err(LeagueError::Pool(format!(
             "{}: trained under the {} protocol, on the Gibson maps a held-out league tests on",
             snap.dir.display(),
             snap.meta.protocol.name()
-        );
+        )));
     }
     Ok(snap)
 }
@@ -402,10 +423,10 @@ fn import_member(
             .is_ok_and(|sha| sha == snap.meta_sha256)
             && PolicySnapshot::load(&target, side).is_ok();
         if !same {
-            bail!(
+            return Err(LeagueError::Pool(format!(
                 "{} exists and is not this checkpoint: move it away",
                 target.display()
-            );
+            )));
         }
     } else {
         t2e_core::fs::write_new_dir_atomically(&target, |tmp| {
@@ -421,10 +442,7 @@ fn import_member(
         parent: None,
         env_steps: snap.meta.env_steps,
         curriculum_stage: 0,
-        checkpoint: Some((
-            dir.relative(&target),
-            t2e_core::util::sha256_file(&target.join("meta.json"))?,
-        )),
+        checkpoint: Some((dir.relative(&target), sha256_of_meta(&target)?)),
     })?;
     tracing::info!(
         "{name}: {} joins the pool as a permanent member",

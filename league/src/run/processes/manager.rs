@@ -15,6 +15,7 @@
 //! `PR_SET_PDEATHSIG`), and each learner holds a lock of its own, so a
 //! killed manager never leaves a learner running twice.
 
+use crate::error::{IoResultExt, LeagueError, Result, ResultExt};
 use crate::rules::config::LeagueConfig;
 use crate::rules::players::Seat;
 use crate::rules::supervision::{CrashBudget, Exit, Next};
@@ -22,11 +23,12 @@ use crate::run::folder::layout::{new_league_id, LeagueDir, LeagueIdentity};
 use crate::run::folder::open::{plan_start, StartPlan};
 use crate::run::folder::pool::{ensure_members, reconcile};
 use crate::run::processes::manager_lease::ManagerGuard;
-use crate::run::processes::spawn::{lock_holder, spawn, try_lock, Ended, Role, Supervised};
+use crate::run::processes::spawn::{
+    lock_holder, reap_error, spawn, try_lock, Ended, Role, Supervised,
+};
 use crate::run::processes::supervising_loop::{supervise, Pass, Policy};
 use crate::run::view::{SeatProgress, View};
 use crate::store::Store;
-use anyhow::{bail, Context, Result};
 use std::fs::File;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
@@ -57,6 +59,7 @@ pub fn run(
 }
 
 /// `run`, with the seats run as `launch` says.
+// Long on purpose: lock, plan, lease, write the league, start its seats: each step may only run once the one before holds, and the order reads top to bottom.
 pub fn run_with(
     dir: &LeagueDir,
     config: Option<&Path>,
@@ -112,13 +115,12 @@ pub fn run_with(
                 .with_context(|| format!("{origin}: maps = \"{}\"", cfg.maps))?;
             cfg.protocol
                 .check_training_maps(&cfg.maps, &maps)
-                .map_err(|e| anyhow::anyhow!("{origin}: {e}"))?;
-            crate::run::folder::pool::check_trained_members(&cfg)
-                .map_err(|e| anyhow::anyhow!("{origin}: {e:#}"))?;
+                .context(origin.as_str())?;
+            crate::run::folder::pool::check_trained_members(&cfg).context(origin.as_str())?;
             crate::run::evaluation::preflight::check_new_league(&cfg, &maps)
-                .map_err(|e| anyhow::anyhow!("{origin}: {e}"))?;
+                .context(origin.as_str())?;
             std::fs::create_dir_all(&dir.root)
-                .with_context(|| format!("cannot create {}", dir.root.display()))?;
+                .io_context(|| format!("cannot create {}", dir.root.display()))?;
             (cfg, None)
         }
         StartPlan::Resume {
@@ -129,10 +131,7 @@ pub fn run_with(
             set_store_identity,
         } => {
             if restore_config {
-                write_file_atomically(
-                    &dir.config_path(),
-                    toml::to_string_pretty(&cfg)?.as_bytes(),
-                )?;
+                write_file_atomically(&dir.config_path(), config_text(&cfg)?.as_bytes())?;
                 tracing::warn!(
                     "{}: was missing; restored from the league's store",
                     dir.config_path().display()
@@ -140,8 +139,9 @@ pub fn run_with(
             }
             if set_store_identity {
                 // A resumed league's store is open already (`early`).
-                let (store, _) = early.as_ref().context("a resumed league's store is open")?;
-                store.set_league_id_once(&identity.league_id)?;
+                if let Some((store, _)) = &early {
+                    store.set_league_id_once(&identity.league_id)?;
+                }
             }
             if write_identity {
                 dir.write_identity(&identity)?;
@@ -188,48 +188,26 @@ fn run_league(
         None => {
             // A new league: the store first (config, identity), then
             // league.json and config.toml; a start killed in between resumes.
-            let stored = store.config_once(&toml::to_string_pretty(&cfg)?)?;
+            let stored = store.config_once(&config_text(&cfg)?)?;
             if LeagueConfig::parse(&stored).ok().as_ref() != Some(&cfg) {
-                bail!(
+                return Err(LeagueError::Folder(format!(
                     "{}: its store was started with another config",
                     dir.root.display()
-                );
+                )));
             }
             let id = store.set_league_id_once(&new_league_id())?;
             dir.write_identity(&LeagueIdentity {
                 league_id: id.clone(),
                 name: cfg.name.clone(),
             })?;
-            write_file_atomically(&dir.config_path(), toml::to_string_pretty(&cfg)?.as_bytes())?;
+            write_file_atomically(&dir.config_path(), config_text(&cfg)?.as_bytes())?;
             tracing::info!("starting the league {} in {}", cfg.name, dir.root.display());
             id
         }
     };
     ensure_members(dir, store, &cfg)?;
-    let found = reconcile(dir, store, &league_id)?;
-    for r in &found.removed_temporaries {
-        tracing::info!("removed {r}: a temporary its writer left when it was killed");
-    }
-    for a in &found.adopted {
-        tracing::info!("adopted {a}: a complete snapshot whose row its writer did not live to add");
-    }
-    for (u, why) in &found.unrecorded {
-        tracing::warn!(
-            "left {u} in place, out of the pool: no row names it and it cannot be adopted ({why})"
-        );
-    }
-    for q in &found.quarantined {
-        tracing::warn!("quarantined {q}: its checkpoint files are missing or corrupt");
-    }
-    for r in &found.reinstated {
-        tracing::info!("reinstated {r}: its files are back and verify against its recorded hash");
-    }
-    let mut seats = vec![Seat::main(Side::Captors), Seat::main(Side::Target)];
-    for side in [Side::Captors, Side::Target] {
-        if cfg.exploiters.enabled(side) {
-            seats.push(Seat::exploiter(side));
-        }
-    }
+    log_reconciled(&reconcile(dir, store, &league_id)?);
+    let seats = league_seats(&cfg);
     for seat in &seats {
         t2e_learners::learn::persist::RunDir::new(dir.seat_dir(*seat)).clean_stale_temporaries()?;
     }
@@ -271,6 +249,39 @@ fn run_league(
     result
 }
 
+/// Says what `reconcile` found in the pool at start, one line each.
+fn log_reconciled(found: &crate::run::folder::pool::Reconciled) {
+    for r in &found.removed_temporaries {
+        tracing::info!("removed {r}: a temporary its writer left when it was killed");
+    }
+    for a in &found.adopted {
+        tracing::info!("adopted {a}: a complete snapshot whose row its writer did not live to add");
+    }
+    for (u, why) in &found.unrecorded {
+        tracing::warn!(
+            "left {u} in place, out of the pool: no row names it and it cannot be adopted ({why})"
+        );
+    }
+    for q in &found.quarantined {
+        tracing::warn!("quarantined {q}: its checkpoint files are missing or corrupt");
+    }
+    for r in &found.reinstated {
+        tracing::info!("reinstated {r}: its files are back and verify against its recorded hash");
+    }
+}
+
+/// The league's learner seats: both main learners, then the exploiters
+/// its config enables.
+fn league_seats(cfg: &LeagueConfig) -> Vec<Seat> {
+    let mut seats = vec![Seat::main(Side::Captors), Seat::main(Side::Target)];
+    for side in [Side::Captors, Side::Target] {
+        if cfg.exploiters.enabled(side) {
+            seats.push(Seat::exploiter(side));
+        }
+    }
+    seats
+}
+
 /// The manager of a league on one host: its seats are its own children.
 struct Manager<'a> {
     dir: &'a LeagueDir,
@@ -297,7 +308,9 @@ impl Policy for Manager<'_> {
                 exit,
                 next,
                 crash_text,
-            }) = p.reap(pass.asked, self.budget)?
+            }) = p
+                .reap(pass.asked, self.budget)
+                .map_err(|e| reap_error(&p.role, e))?
             {
                 let log = p.role.log_path(&self.logs);
                 match next {
@@ -330,7 +343,7 @@ impl Policy for Manager<'_> {
             }
         }
         if let Err(e) = self.guard.renew(self.store) {
-            pass.fail(format!("{e:#}"));
+            pass.fail(e.chain());
         }
         if self.last_view.elapsed() >= Duration::from_secs(2) {
             self.last_view = Instant::now();
@@ -383,10 +396,18 @@ fn lock(dir: &LeagueDir) -> Result<File> {
     let lock_path = dir.root.join("league.lock");
     match try_lock(&lock_path)? {
         Some(l) => Ok(l),
-        None => bail!(
+        None => Err(LeagueError::Busy(format!(
             "{}: a manager (pid {}) is already running this league; stop it first (Ctrl-C) or pick another --dir",
             dir.root.display(),
             lock_holder(&lock_path)
-        ),
+        ))),
     }
+}
+
+/// The league's config as the store and config.toml hold it.
+fn config_text(cfg: &LeagueConfig) -> Result<String> {
+    toml::to_string_pretty(cfg).map_err(|cause| LeagueError::Toml {
+        context: "cannot write the league's config".into(),
+        cause,
+    })
 }

@@ -2,9 +2,9 @@
 //! wherever it runs. Its own file because the manager and `seats.rs` (the
 //! manager's side of a league on workers) both hold it.
 
+use crate::error::{LeagueError, Result};
 use crate::run::folder::layout::{new_league_id, LeagueDir};
 use crate::store::Store;
-use anyhow::{bail, Result};
 use std::time::{Duration, Instant};
 
 /// How long the manager's lease in the store lasts without renewal, and how
@@ -53,7 +53,7 @@ impl ManagerGuard {
             }),
             Err(other) => {
                 let now = store.clock_ms().unwrap_or(other.updated_at_ms);
-                bail!(
+                Err(LeagueError::Busy(format!(
                     "{}: another manager runs this league (pid {} on {}, pool {}; it renewed its lease {:.0} s ago). Nothing was changed. \
                      Stop that manager first (Ctrl-C); a manager that was killed loses the lease {} s after its last renewal",
                     store.url(),
@@ -62,7 +62,7 @@ impl ManagerGuard {
                     other.pool,
                     (now - other.updated_at_ms).max(0) as f64 / 1000.0,
                     MANAGER_LEASE.as_secs()
-                )
+                )))
             }
         }
     }
@@ -93,22 +93,22 @@ impl ManagerGuard {
                         updated_at_ms: 0,
                     };
                     match store.claim_manager(&me, MANAGER_LEASE.as_millis() as i64, None) {
-                        Ok(Err(other)) => bail!(
+                        Ok(Err(other)) => Err(LeagueError::Busy(format!(
                             "{}: another manager took this league over (pid {} on {}); stopping this one",
                             store.url(),
                             other.pid,
                             other.host
-                        ),
+                        ))),
                         _ => Ok(()),
                     }
                 }
-                Ok(Some(other)) => bail!(
+                Ok(Some(other)) => Err(LeagueError::Busy(format!(
                     "{}: another manager took this league over (pid {} on {}, pool {}); stopping this one",
                     store.url(),
                     other.pid,
                     other.host,
                     other.pool
-                ),
+                ))),
                 Err(_) => Ok(()),
             },
             Err(_) => Ok(()),

@@ -4,12 +4,12 @@
 //! `--for` passes or Ctrl-C. Workers on other hosts (`t2e-league worker`)
 //! take seats the same way as the local ones; the manager only reads.
 
+use crate::error::{LeagueError, Result, ResultExt};
 use crate::rules::config::LeagueConfig;
 use crate::run::folder::layout::LeagueDir;
 use crate::run::processes::spawn::Role;
 use crate::run::processes::supervising_loop::{supervise, Pass, Policy};
 use crate::store::{SeatRow, SeatState, Store, StoreUrl};
-use anyhow::{Context, Result};
 use std::path::Path;
 use std::process::Child;
 use std::sync::atomic::AtomicBool;
@@ -24,7 +24,7 @@ pub fn spawn_worker(dir: &LeagueDir, logs: &Path, index: usize) -> Result<Child>
     };
     let mut cmd = child
         .command()
-        .context("cannot find this program to spawn workers")?;
+        .map_err(|e| LeagueError::process("cannot find this program to spawn workers", e))?;
     match &dir.store {
         StoreUrl::Postgres(_) => cmd.env("T2E_STORE", dir.store.secret()),
         StoreUrl::Sqlite(path) => cmd.env("T2E_STORE", path),
@@ -118,13 +118,16 @@ impl Policy for Seats<'_> {
         if self.last_look.elapsed() >= Duration::from_secs(1) {
             self.last_look = Instant::now();
             if let Err(e) = self.guard.renew(self.store) {
-                pass.fail(format!("{e:#}"));
+                pass.fail(e.chain());
             }
             self.look(pass)?;
         }
         for (i, slot) in self.workers.iter_mut().enumerate() {
             if let Some(c) = slot {
-                if let Some(status) = c.try_wait()? {
+                let exited = c
+                    .try_wait()
+                    .map_err(|e| LeagueError::process(format!("cannot wait for worker {i}"), e))?;
+                if let Some(status) = exited {
                     *slot = None;
                     if !pass.stopping && !self.all_done && !status.success() {
                         tracing::warn!(

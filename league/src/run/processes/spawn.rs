@@ -2,12 +2,12 @@
 //! roles a seat can hold, spawning one as a child of this binary, the locks
 //! that keep a seat from running twice on a host, and their logs.
 
+use crate::error::{LeagueError, Result, ResultExt};
 pub use crate::rules::players::Role;
 use crate::rules::supervision::{classify, decide, last_error_line, CrashBudget, Exit, Next};
 use crate::run::folder::layout::LeagueDir;
 use crate::run::processes::child::ChildCommand;
 use crate::store::{now_ms, StoreUrl};
-use anyhow::{Context, Result};
 use std::collections::VecDeque;
 use std::fs::{File, TryLockError};
 use std::path::{Path, PathBuf};
@@ -26,16 +26,20 @@ pub fn try_lock(path: &Path) -> Result<Option<File>> {
         .write(true)
         .read(true)
         .open(path)
-        .with_context(|| format!("cannot open {}", path.display()))?;
+        .map_err(|e| LeagueError::process(format!("cannot open {}", path.display()), e))?;
     match f.try_lock() {
         Ok(()) => {}
         Err(TryLockError::WouldBlock) => return Ok(None),
         Err(TryLockError::Error(e)) => {
-            return Err(e).with_context(|| format!("cannot lock {}", path.display()))
+            return Err(LeagueError::process(
+                format!("cannot lock {}", path.display()),
+                e,
+            ))
         }
     }
-    f.set_len(0)?;
-    writeln!(f, "{}", std::process::id())?;
+    f.set_len(0)
+        .and_then(|()| writeln!(f, "{}", std::process::id()))
+        .map_err(|e| LeagueError::process(format!("cannot write {}", path.display()), e))?;
     Ok(Some(f))
 }
 
@@ -156,6 +160,11 @@ impl Supervised {
     }
 }
 
+/// A child that could not be waited for, as its supervisor's error.
+pub fn reap_error(role: &Role, e: std::io::Error) -> LeagueError {
+    LeagueError::process(format!("cannot wait for the {}", role.name()), e)
+}
+
 /// Asks a child to stop (SIGINT): it finishes its iteration and checkpoints.
 pub fn interrupt(child: &Child) {
     // SAFETY: signalling our own child by pid.
@@ -254,7 +263,7 @@ pub fn spawn(
 ) -> Result<(Child, Output)> {
     let mut cmd = ChildCommand::seat(role, dir)
         .command()
-        .context("cannot find this program to spawn learners")?;
+        .map_err(|e| LeagueError::process("cannot find this program to spawn learners", e))?;
     // Any store but the default league.db in the pool folder reaches the
     // child, or a worker's learner would look for one there and refuse.
     match &dir.store {
@@ -286,12 +295,19 @@ pub fn spawn_logged(mut cmd: Command, log_path: &Path) -> Result<(Child, Output)
                 .append(true)
                 .open(&log_path)
         });
-    let (reader, writer) = std::io::pipe().context("cannot make a pipe for a child's output")?;
-    cmd.stdin(Stdio::null())
-        .stdout(writer.try_clone()?)
-        .stderr(writer);
+    let (reader, writer) = std::io::pipe()
+        .map_err(|e| LeagueError::process("cannot make a pipe for a child's output", e))?;
+    let stdout = writer
+        .try_clone()
+        .map_err(|e| LeagueError::process("cannot make a pipe for a child's output", e))?;
+    cmd.stdin(Stdio::null()).stdout(stdout).stderr(writer);
     die_with_parent(&mut cmd);
-    let child = cmd.spawn()?;
+    let child = cmd.spawn().map_err(|e| {
+        LeagueError::process(
+            format!("cannot run {}", cmd.get_program().to_string_lossy()),
+            e,
+        )
+    })?;
     // The parent's copies of the write end went with `cmd`: the reader sees
     // the end of the output when the child exits.
     drop(cmd);
@@ -370,7 +386,7 @@ pub fn tail(text: &str, n: usize) -> String {
 pub fn dir_from_env(root: &Path) -> Result<LeagueDir> {
     match std::env::var("T2E_STORE") {
         Ok(url) if !url.is_empty() => {
-            let store = StoreUrl::parse(&url).map_err(anyhow::Error::msg)?;
+            let store = StoreUrl::parse(&url)?;
             Ok(LeagueDir::with_store(root, store))
         }
         _ => Ok(LeagueDir::new(root)),

@@ -6,7 +6,7 @@
 //! stop (Ctrl-C, `--for`, a failure), asking what runs to stop exactly
 //! once, the pace of the passes, and the one failure the process ends with.
 
-use anyhow::{bail, Result};
+use crate::error::{LeagueError, Result};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
@@ -75,7 +75,7 @@ pub fn supervise(
         std::thread::sleep(PASS_EVERY);
     }
     match failure {
-        Some(why) => bail!("{why}"),
+        Some(why) => Err(LeagueError::Failed(why)),
         None => Ok(()),
     }
 }

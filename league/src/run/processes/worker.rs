@@ -19,13 +19,13 @@
 //! - The pool folder must be the one every host shares: a worker that
 //!   cannot see a file the store names refuses to start, naming the file.
 
+use crate::error::{LeagueError, Result};
 use crate::rules::supervision::{CrashBudget, Exit, Next};
 use crate::run::folder::layout::LeagueDir;
 use crate::run::folder::open::open_process;
-use crate::run::processes::spawn::{spawn, Ended, Role, Supervised};
+use crate::run::processes::spawn::{reap_error, spawn, Ended, Role, Supervised};
 use crate::run::processes::supervising_loop::{supervise, Pass, Policy};
 use crate::store::{SeatLease, SeatRow, SeatState, Store};
-use anyhow::{bail, Result};
 use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
 use std::time::{Duration, Instant};
@@ -104,17 +104,17 @@ fn check_pool(dir: &LeagueDir, store: &Store) -> Result<()> {
     for p in store.players()? {
         if let Some((path, _)) = &p.checkpoint {
             if !crate::store::inside_pool(path) {
-                bail!(
+                return Err(LeagueError::Pool(format!(
                     "{}: player {} names {path}, outside the pool folder; refusing it",
                     store.url(),
                     p.name
-                );
+                )));
             }
             if !dir.root.join(path).exists() {
-                bail!(
+                return Err(LeagueError::Pool(format!(
                     "{pool}: cannot see {path}, which the store names for player {} (written by another host?): the pool folder is not shared. Every worker's --pool must be the one folder all hosts share",
                     p.name
-                );
+                )));
             }
         }
     }
@@ -166,11 +166,11 @@ pub fn run_worker(dir: &LeagueDir, opts: &WorkerOptions, stop: &AtomicBool) -> R
     // error to show, before anything about the pool folder.
     drop(Store::open_existing(&dir.store)?);
     if !dir.identity_path().is_file() {
-        bail!(
+        return Err(LeagueError::Pool(format!(
             "{}: holds no league.json, so it is not this league's pool folder (the store is {}). --pool must be the folder the manager's --pool names, shared by every host",
             dir.root.display(),
             dir.store
-        );
+        )));
     }
     let opened = open_process(dir)?;
     let store = opened.store;
@@ -304,7 +304,9 @@ impl Worker<'_> {
                 exit,
                 next,
                 crash_text,
-            }) = p.reap(pass.asked, self.budget)?
+            }) = p
+                .reap(pass.asked, self.budget)
+                .map_err(|e| reap_error(&p.role, e))?
             {
                 let name = p.role.name();
                 match next {
@@ -367,11 +369,11 @@ impl Worker<'_> {
         if let Some(lease) = store.claim_seat(&claim, &self.opts.host, self.lease_ms)? {
             let Some(role) = Role::from_name(&lease.seat) else {
                 store.release_seat(&lease)?;
-                bail!(
+                return Err(LeagueError::Refused(format!(
                     "{}: seat {} is not one this build runs (a newer manager?)",
                     store.url(),
                     lease.seat
-                );
+                )));
             };
             tracing::info!(
                 "worker {holder}: took {} (taken {} times so far)",

@@ -8,6 +8,7 @@
 //! finished episode is recorded in the store (once), and the learner adds
 //! frozen copies of itself to the pool.
 
+use crate::error::{LeagueError, Result, ResultExt};
 use crate::rules::config::LeagueConfig;
 use crate::rules::curriculum::Curriculum;
 use crate::rules::matchmaking::{
@@ -15,12 +16,11 @@ use crate::rules::matchmaking::{
 };
 use crate::rules::players::{learner_name, Seat};
 use crate::rules::roles::{seat_of_row, should_snapshot, should_wait, SeatRules};
-use crate::rules::supervision::{CannotStart, Outcome};
+use crate::rules::supervision::Outcome;
 use crate::run::folder::layout::LeagueDir;
 use crate::run::folder::pool::{add_snapshot, SnapshotOutcome};
 use crate::run::seat::opponents::{OpponentNets, WorldOpponent};
 use crate::store::{BeatState, Kind, MatchRecord, NewPlayer, Player, Store};
-use anyhow::{bail, Context, Result};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::path::PathBuf;
@@ -175,39 +175,45 @@ impl<'a> LeagueHooks<'a> {
         Ok(())
     }
 
-    /// Draws world `e`'s opponent and speed for its current episode and sets
-    /// the world up for them.
-    fn draw(&mut self, venv: &mut VecEnv, e: usize) -> Result<WorldOpponent> {
-        let other = self.other();
-        let seed = draw_seed(self.cfg.seed, self.learner_id, e, venv.env(e).seed);
+    /// The opponent drawn with `seed`: by PFSP for this world alone, or
+    /// from this window's slots (drawn again when a new window starts).
+    fn pick(&mut self, seed: u64) -> Option<Opponent> {
         let mm = &self.matchmaking;
         let fixed = Fixed {
             main: self.main,
             extras: &self.extras,
             target_exploiter: self.target_exploiter,
         };
-        let pick = if mm.slots == 0 {
-            choose_opponent(&self.candidates, fixed, mm, seed)
-        } else {
-            let window = self.vector_steps / self.cfg.episode_length as u64;
-            if self.slots_window != Some(window) {
-                self.slots = (0..mm.slots)
-                    .filter_map(|s| {
-                        let seed = slot_seed(self.cfg.seed, self.learner_id, s, window);
-                        choose_opponent(&self.candidates, fixed, mm, seed)
-                    })
-                    .collect();
-                self.slots_window = Some(window);
-            }
-            self.slots.get(pick_slot(self.slots.len(), seed)).copied()
-        };
-        let player = match pick {
+        if mm.slots == 0 {
+            return choose_opponent(&self.candidates, fixed, mm, seed);
+        }
+        let window = self.vector_steps / self.cfg.episode_length as u64;
+        if self.slots_window != Some(window) {
+            self.slots = (0..mm.slots)
+                .filter_map(|s| {
+                    let seed = slot_seed(self.cfg.seed, self.learner_id, s, window);
+                    choose_opponent(&self.candidates, fixed, mm, seed)
+                })
+                .collect();
+            self.slots_window = Some(window);
+        }
+        self.slots.get(pick_slot(self.slots.len(), seed)).copied()
+    }
+
+    /// Draws world `e`'s opponent and speed for its current episode and sets
+    /// the world up for them.
+    fn draw(&mut self, venv: &mut VecEnv, e: usize) -> Result<WorldOpponent> {
+        let other = self.other();
+        let seed = draw_seed(self.cfg.seed, self.learner_id, e, venv.env(e).seed);
+        let player = match self.pick(seed) {
             Some(Opponent::Main) => self.main.expect("main drawn only when there is one"),
             Some(Opponent::Member(id)) => id,
-            None => bail!(
-                "the {} pool is empty: the heuristic member is missing",
-                other.name()
-            ),
+            None => {
+                return Err(LeagueError::Pool(format!(
+                    "the {} pool is empty: the heuristic member is missing",
+                    other.name()
+                )))
+            }
         };
         let Some(member) = self.members.iter().find(|m| m.id == player).cloned() else {
             if self.slots_window.is_some() {
@@ -215,27 +221,21 @@ impl<'a> LeagueHooks<'a> {
                 self.slots_window = None;
                 return self.draw(venv, e);
             }
-            bail!("drawn member {player} is not in the pool");
+            return Err(LeagueError::Pool(format!(
+                "drawn member {player} is not in the pool"
+            )));
         };
         let u: f64 = ChaCha8Rng::seed_from_u64(seed ^ 0x5BEED).gen();
         let speed = self
             .curriculum
             .sample_speed(&self.cfg.curriculum, self.side, u);
-        venv.set_world_speeds(e, 1.0, speed)
-            .map_err(anyhow::Error::msg)?;
+        venv.set_world_speeds(e, 1.0, speed)?;
         let network = match member.kind {
             Kind::Heuristic => {
                 let Some(spec) = self.cfg.members.spec_of(other, &member.name) else {
-                    bail!(
-                        "{} is a heuristic member the league's config does not name ([members])",
-                        member.name
-                    );
+                    return Err(LeagueError::UnnamedHeuristic(member.name.clone()));
                 };
-                venv.script_world(
-                    e,
-                    other,
-                    Some(spec.build(other).map_err(anyhow::Error::msg)?),
-                );
+                venv.script_world(e, other, Some(spec.build(other)?));
                 None
             }
             _ => match {
@@ -248,8 +248,9 @@ impl<'a> LeagueHooks<'a> {
                 }
                 Err(err) => {
                     // A member whose files are gone or corrupt leaves the pool; the league goes on.
-                    tracing::warn!("quarantining {}: {err:#}", member.name);
-                    self.store.quarantine(member.id, &format!("{err:#}"))?;
+                    let why = err.chain();
+                    tracing::warn!("quarantining {}: {why}", member.name);
+                    self.store.quarantine(member.id, &why)?;
                     self.refresh()?;
                     self.slots_window = None;
                     return self.draw(venv, e);
@@ -391,32 +392,28 @@ fn wait_for_other_main(
     Ok(started.elapsed().as_secs_f64())
 }
 
-fn cannot_start(e: anyhow::Error) -> anyhow::Error {
-    anyhow::Error::new(CannotStart(format!("{e:#}")))
-}
-
 /// Runs one learner (main or exploiter) until its budget is spent or `stop`
 /// is set; checkpoints its own state and adds snapshots of itself to the
 /// pool (an exploiter then starts again from its initial weights). Errors
 /// before the first iteration are `CannotStart`.
 pub fn run_learner(dir: &LeagueDir, seat: Seat, stop: &AtomicBool) -> Result<Outcome> {
-    let opened = crate::run::folder::open::open_process(dir).map_err(cannot_start)?;
+    let opened = crate::run::folder::open::open_process(dir).map_err(LeagueError::cannot_start)?;
     let (cfg, store, league_id) = (opened.cfg, opened.store, opened.league_id);
     if !SeatRules::of(&cfg, seat).enabled {
-        return Err(cannot_start(anyhow::anyhow!(
+        return Err(LeagueError::cannot_start(LeagueError::Refused(format!(
             "{}: this league has no {} (exploiters.{} = false in {})",
             dir.root.display(),
             seat.name(),
             seat.side.name(),
             dir.config_path().display()
-        )));
+        ))));
     }
     let threads = dir.threads_per_learner(&cfg);
     tch::set_num_threads(threads as i32);
     let _ = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build_global();
-    let started = start_learner(dir, &cfg, &store, seat).map_err(cannot_start)?;
+    let started = start_learner(dir, &cfg, &store, seat).map_err(LeagueError::cannot_start)?;
     train_learner(dir, &cfg, &store, &league_id, seat, started, stop)
 }
 
@@ -446,14 +443,15 @@ fn start_learner(
         .players()?
         .into_iter()
         .find(|p| p.id == learner_id)
-        .context("the learner's own row vanished")?;
+        .ok_or_else(|| LeagueError::Pool("the learner's own row vanished".into()))?;
     let maps = t2e_core::map::catalog::load_prepared(&cfg.maps)
         .with_context(|| format!("maps = \"{}\"", cfg.maps))?;
     let tcfg = SeatRules::of(cfg, seat).train_config(cfg);
     let run_dir = dir.seat_dir(seat);
     let trainer = match resume_point(dir, store, &row, &tcfg)? {
         ResumePoint::Fresh => {
-            std::fs::create_dir_all(&run_dir)?;
+            std::fs::create_dir_all(&run_dir)
+                .map_err(|e| LeagueError::io(format!("cannot create {}", run_dir.display()), e))?;
             Trainer::new(tcfg, maps)?
         }
         ResumePoint::State => {
@@ -485,18 +483,20 @@ fn resume_point(
 ) -> Result<ResumePoint> {
     use t2e_learners::learn::persist::{Recovery, RunDir};
     let seat = seat_of_row(row.side, row.kind)
-        .with_context(|| format!("{} is no learner's row", row.name))?;
+        .ok_or_else(|| LeagueError::Pool(format!("{} is no learner's row", row.name)))?;
     let run = RunDir::new(dir.seat_dir(seat));
     let state_path = run.state_path();
     let rejected = match run.recover(row.side, &tcfg.hash(), row.env_steps)? {
-        Recovery::Kept { env_steps } if env_steps < row.env_steps => bail!(
-            "{}: at {} env steps, but the store ({}) recorded {} at {} env steps; it would train again over steps it already played. Put the newer state.json back",
-            state_path.display(),
-            env_steps,
-            store.url(),
-            row.name,
-            row.env_steps
-        ),
+        Recovery::Kept { env_steps } if env_steps < row.env_steps => {
+            return Err(LeagueError::Folder(format!(
+                "{}: at {} env steps, but the store ({}) recorded {} at {} env steps; it would train again over steps it already played. Put the newer state.json back",
+                state_path.display(),
+                env_steps,
+                store.url(),
+                row.name,
+                row.env_steps
+            )))
+        }
         Recovery::Kept { .. } => return Ok(ResumePoint::State),
         Recovery::Rebuilt {
             checkpoint,
@@ -517,7 +517,7 @@ fn resume_point(
         Recovery::Empty => Vec::new(),
         Recovery::Unusable(rejected) => rejected,
     };
-    bail!(
+    Err(LeagueError::Folder(format!(
         "{}: missing, and no checkpoint in {} can stand in for it (the store ({}) records {} at {} env steps{}); refusing to start it over. Put state.json back",
         state_path.display(),
         run.checkpoints_dir().display(),
@@ -529,7 +529,7 @@ fn resume_point(
         } else {
             format!("; {}", rejected.join("; "))
         }
-    )
+    )))
 }
 
 /// Trains the seat's learner to the league's budget, or until `stop`.
@@ -608,7 +608,7 @@ impl<'a> LearnerRun<'a> {
                 Ok(()) => tracing::warn!(
                     "{name}: adopted {rel}, a snapshot whose row it did not live to add"
                 ),
-                Err(e) => tracing::warn!("{name}: left {rel} out of the pool ({e:#})"),
+                Err(e) => tracing::warn!("{name}: left {rel} out of the pool ({})", e.chain()),
             }
         }
         let mut hooks = LeagueHooks::new(store, dir, cfg, seat, learner_id)?;
@@ -808,7 +808,7 @@ fn save_learner(
     let run_dir = dir.seat_dir(seat);
     let written = trainer.save(&run_dir)?;
     if let Some(ckpt) = written.first() {
-        let sha = t2e_core::util::sha256_file(&ckpt.join("meta.json"))?;
+        let sha = crate::run::folder::pool::sha256_of_meta(ckpt)?;
         let rel = dir.relative(ckpt);
         store.update_learner(id, trainer.env_steps, (&rel, &sha))?;
     }

@@ -4,8 +4,8 @@
 //! play them. Heuristic opponents play inside the vector env and never
 //! come here.
 
+use crate::error::{IoResultExt, LeagueError, Result};
 use crate::store::Player;
-use anyhow::{bail, Context, Result};
 use rand_chacha::ChaCha8Rng;
 use std::collections::{BTreeMap, HashMap};
 use std::path::Path;
@@ -85,7 +85,7 @@ impl OpponentNets {
             let p = &self
                 .cache
                 .get(&id)
-                .context("opponent network not loaded")?
+                .ok_or_else(|| LeagueError::Pool("opponent network not loaded".into()))?
                 .prepared;
             match parts
                 .iter_mut()
@@ -103,7 +103,7 @@ impl OpponentNets {
             }
             let prepared: Vec<&PreparedActor> =
                 part.iter().map(|id| &self.cache[id].prepared).collect();
-            let actors = StackedActors::new(&prepared).map_err(anyhow::Error::msg)?;
+            let actors = StackedActors::new(&prepared)?;
             self.stacks.push(Stack { ids: part, actors });
         }
         Ok(())
@@ -122,15 +122,15 @@ impl OpponentNets {
         let (rel, meta_sha) = member
             .checkpoint
             .clone()
-            .with_context(|| format!("{} has no checkpoint", member.name))?;
+            .ok_or_else(|| LeagueError::NoWeights(format!("{} has no checkpoint", member.name)))?;
         let dir = root.join(&rel);
         let got = t2e_core::util::sha256_file(&dir.join("meta.json"))
-            .with_context(|| format!("{}: meta.json missing", dir.display()))?;
+            .io_context(|| format!("{}: meta.json missing", dir.display()))?;
         if got != meta_sha {
-            bail!(
+            return Err(LeagueError::Corrupt(format!(
                 "{}: meta.json does not match the sha256 the store recorded",
                 dir.display()
-            );
+            )));
         }
         let snapshot = Arc::new(PolicySnapshot::load_recorded(&dir, self.side, &meta_sha)?);
         let (vs, actor) = snapshot.build_actor(Device::Cpu)?;
@@ -162,6 +162,7 @@ impl OpponentNets {
     /// Acts for the opponents' robots in every world a network plays
     /// (writing their entries of `actions`), one stacked forward pass per
     /// architecture, and carries each world's recurrent state.
+    // Long on purpose: the per-step hot path of a league learner: one stacked forward per architecture over every world, holding the worlds' recurrent state and the action buffer at once.
     pub fn act(
         &mut self,
         venv: &VecEnv,
@@ -187,14 +188,13 @@ impl OpponentNets {
             let net = &first.snapshot.meta.net;
             // The stacked network reads the env's vectors as they are.
             if net.sight != venv.cfg.sight {
-                bail!(
-                    "{}: {}",
-                    first.snapshot.dir.display(),
-                    DoesNotFit::Sight {
+                return Err(LeagueError::DoesNotFit {
+                    checkpoint: first.snapshot.dir.clone(),
+                    cause: DoesNotFit::Sight {
                         trained: net.sight,
-                        env: venv.cfg.sight
-                    }
-                );
+                        env: venv.cfg.sight,
+                    },
+                });
             }
             let (g, h) = (stack.ids.len(), stack.actors.hidden as usize);
             let (vl, pl) = (venv.cfg.vector_len(), net.input_len());

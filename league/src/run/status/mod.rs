@@ -2,6 +2,7 @@
 //! runs (the store is read in short queries under WAL). The report's rows
 //! and its JSON shape are in report.rs.
 
+use crate::error::Result;
 use crate::rules::config::LeagueConfig;
 use crate::rules::players::EVALUATOR;
 use crate::rules::ratings::{bradley_terry, PairRecord};
@@ -10,7 +11,6 @@ use crate::store::{
     host_name, now_ms, ExploitRecord, Heartbeat, HeldOutResult, Kind, PairResult, Panel, Player,
     Store,
 };
-use anyhow::Result;
 use t2e_core::env::Side;
 
 mod export;
@@ -183,11 +183,68 @@ pub fn shown_state(beat: &Heartbeat, age_s: f64) -> String {
     }
 }
 
+/// Everything `status` shows, read from the league's store in one pass.
 pub fn report(dir: &LeagueDir) -> Result<StatusReport> {
     let (cfg, store) = open(dir)?;
     let players = store.players_flagged()?;
     let ratings = store.ratings()?;
     let payoff = store.payoff()?;
+    let rows = player_rows(&players, &ratings, &payoff);
+    let history = stage_rows(store.curriculum_history()?);
+    let stage = history.last().map(|h| h.stage).unwrap_or(0);
+    let now = now_ms();
+    let seats = store.seats()?;
+    // Leases are judged by the store's clock, as the workers write them.
+    let store_now = if seats.is_empty() {
+        now
+    } else {
+        store.clock_ms().unwrap_or(now)
+    };
+    let panel_episodes = store.matches_recorded_by(EVALUATOR)? + store.held_out_count()?;
+    let panel = panel_rows(
+        &players,
+        &store.payoff_recorded_by(EVALUATOR)?,
+        &store.held_out_results()?,
+    );
+    let exploits = exploit_rows(&players, store.exploits()?);
+    let matches = store.match_count()?;
+    let clock = Clock { now, store_now };
+    let learners = learner_rows(store.heartbeats()?, &seats, clock, panel_episodes);
+    let crashes = store.crashes()?.into_iter().map(crash_row).collect();
+    Ok(StatusReport {
+        panel,
+        exploits,
+        league: cfg.name.clone(),
+        dir: dir.root.display().to_string(),
+        matches,
+        players: rows,
+        curriculum: Curriculum {
+            stage,
+            speed_ratio: cfg.curriculum.stages[stage.min(cfg.curriculum.stages.len() - 1)],
+            history,
+        },
+        learners,
+        payoff: payoff
+            .iter()
+            .map(|r| PayoffRow {
+                captor: r.captor,
+                target: r.target,
+                captor_wins: r.captor_wins,
+                games: r.games,
+            })
+            .collect(),
+        crashes,
+        seats: seats.into_iter().map(|s| seat_row(s, store_now)).collect(),
+    })
+}
+
+/// Every player's row: its record, live rating and Bradley-Terry Elo (the
+/// fit over the whole payoff, so it is computed once for all rows).
+fn player_rows(
+    players: &[Player],
+    ratings: &std::collections::HashMap<i64, crate::rules::ratings::Rating>,
+    payoff: &[PairResult],
+) -> Vec<PlayerRow> {
     let index = |id: i64| players.iter().position(|p| p.id == id);
     let pairs: Vec<PairRecord> = payoff
         .iter()
@@ -201,11 +258,11 @@ pub fn report(dir: &LeagueDir) -> Result<StatusReport> {
         })
         .collect();
     let bt = bradley_terry(players.len(), &pairs);
-    let rows = players
+    players
         .iter()
         .enumerate()
         .map(|(i, p)| {
-            let rec = crate::rules::payoff::record(&payoff, p.id, p.side, None);
+            let rec = crate::rules::payoff::record(payoff, p.id, p.side, None);
             let rating = ratings.get(&p.id).copied().unwrap_or_default();
             PlayerRow {
                 id: p.id,
@@ -224,9 +281,12 @@ pub fn report(dir: &LeagueDir) -> Result<StatusReport> {
                 quarantined: p.quarantined.clone(),
             }
         })
-        .collect();
-    let history: Vec<StageRow> = store
-        .curriculum_history()?
+        .collect()
+}
+
+/// The curriculum's stage changes as `status` lists them.
+fn stage_rows(history: Vec<crate::store::StageChange>) -> Vec<StageRow> {
+    history
         .into_iter()
         .map(|c| StageRow {
             stage: c.stage,
@@ -234,103 +294,83 @@ pub fn report(dir: &LeagueDir) -> Result<StatusReport> {
             reason: c.reason,
             at_ms: c.at_ms,
         })
-        .collect();
-    let stage = history.last().map(|h| h.stage).unwrap_or(0);
-    let now = now_ms();
-    let seats = store.seats()?;
-    // Leases are judged by the store's clock, as the workers write them.
-    let store_now = if seats.is_empty() {
-        now
-    } else {
-        store.clock_ms().unwrap_or(now)
-    };
-    let panel_episodes = store.matches_recorded_by(EVALUATOR)? + store.held_out_count()?;
-    let panel = panel_rows(
-        &players,
-        &store.payoff_recorded_by(EVALUATOR)?,
-        &store.held_out_results()?,
-    );
-    let exploits = exploit_rows(&players, store.exploits()?);
-    Ok(StatusReport {
-        panel,
-        exploits,
-        league: cfg.name.clone(),
-        dir: dir.root.display().to_string(),
-        matches: store.match_count()?,
-        players: rows,
-        curriculum: Curriculum {
-            stage,
-            speed_ratio: cfg.curriculum.stages[stage.min(cfg.curriculum.stages.len() - 1)],
-            history,
-        },
-        learners: store
-            .heartbeats()?
-            .into_iter()
-            .map(|b| {
-                let age = (now - b.at_ms) as f64 / 1000.0;
-                // The evaluator beats after each pass; the store counts
-                // every panel episode the moment it is recorded.
-                let env_steps = if b.learner == EVALUATOR {
-                    panel_episodes
-                } else {
-                    b.env_steps
-                };
-                // On workers, a process runs only while its worker holds the
-                // seat's lease: without one (a worker killed, a seat row
-                // deleted) its last heartbeat's "training" is history.
-                let seated = seats.is_empty()
-                    || seats
-                        .iter()
-                        .any(|s| s.name == b.learner && s.held_at(store_now));
-                let state = if b.state.is_working() && !seated {
-                    "dead".to_string()
-                } else {
-                    shown_state(&b, age)
-                };
-                LearnerRow {
-                    state,
-                    name: b.learner,
-                    pid: b.pid,
-                    host: b.host,
-                    env_steps,
-                    steps_per_s: b.steps_per_s,
-                    heartbeat_age_s: age,
-                }
-            })
-            .collect(),
-        payoff: payoff
-            .iter()
-            .map(|r| PayoffRow {
-                captor: r.captor,
-                target: r.target,
-                captor_wins: r.captor_wins,
-                games: r.games,
-            })
-            .collect(),
-        crashes: store
-            .crashes()?
-            .into_iter()
-            .map(|c| CrashRow {
-                learner: c.learner,
-                exit_status: c.exit_status,
-                message: c.message,
-                at_ms: c.at_ms,
-            })
-            .collect(),
-        seats: seats
-            .into_iter()
-            .map(|s| SeatStatus {
-                state: s.state.name().into(),
-                host: s.held_at(store_now).then(|| s.host.clone()).flatten(),
-                lease_left_s: s
-                    .held_at(store_now)
-                    .then(|| (s.lease_until_ms - store_now) as f64 / 1000.0),
-                claims: s.claims,
-                reason: s.reason,
-                name: s.name,
-            })
-            .collect(),
-    })
+        .collect()
+}
+
+/// This machine's clock and the store's, both in ms: heartbeats age by the
+/// first, seat leases by the second.
+#[derive(Clone, Copy)]
+struct Clock {
+    now: i64,
+    store_now: i64,
+}
+
+/// Every process's row from its heartbeat: its state judged alive or dead
+/// (by its pid, its heartbeat's age, and on workers its seat's lease).
+fn learner_rows(
+    beats: Vec<Heartbeat>,
+    seats: &[crate::store::SeatRow],
+    clock: Clock,
+    panel_episodes: u64,
+) -> Vec<LearnerRow> {
+    beats
+        .into_iter()
+        .map(|b| {
+            let age = (clock.now - b.at_ms) as f64 / 1000.0;
+            // The evaluator beats after each pass; the store counts
+            // every panel episode the moment it is recorded.
+            let env_steps = if b.learner == EVALUATOR {
+                panel_episodes
+            } else {
+                b.env_steps
+            };
+            // On workers, a process runs only while its worker holds the
+            // seat's lease: without one (a worker killed, a seat row
+            // deleted) its last heartbeat's "training" is history.
+            let seated = seats.is_empty()
+                || seats
+                    .iter()
+                    .any(|s| s.name == b.learner && s.held_at(clock.store_now));
+            let state = if b.state.is_working() && !seated {
+                "dead".to_string()
+            } else {
+                shown_state(&b, age)
+            };
+            LearnerRow {
+                state,
+                name: b.learner,
+                pid: b.pid,
+                host: b.host,
+                env_steps,
+                steps_per_s: b.steps_per_s,
+                heartbeat_age_s: age,
+            }
+        })
+        .collect()
+}
+
+/// A recorded crash as `status` lists it.
+fn crash_row(c: crate::store::Crash) -> CrashRow {
+    CrashRow {
+        learner: c.learner,
+        exit_status: c.exit_status,
+        message: c.message,
+        at_ms: c.at_ms,
+    }
+}
+
+/// A seat as `status` lists it: its host and lease only while it is held.
+fn seat_row(s: crate::store::SeatRow, store_now: i64) -> SeatStatus {
+    SeatStatus {
+        state: s.state.name().into(),
+        host: s.held_at(store_now).then(|| s.host.clone()).flatten(),
+        lease_left_s: s
+            .held_at(store_now)
+            .then(|| (s.lease_until_ms - store_now) as f64 / 1000.0),
+        claims: s.claims,
+        reason: s.reason,
+        name: s.name,
+    }
 }
 
 #[cfg(test)]

@@ -1,10 +1,10 @@
 //! `status --plot`: ratings over matches, the panel's curves over env steps, and the payoff heat map.
 
 use super::report::{PanelRow, PlayerRow, StatusReport};
+use crate::error::Result;
 use crate::run::folder::layout::LeagueDir;
 use crate::run::folder::open::open_read_only as open;
 use crate::store::Kind;
-use anyhow::Result;
 use std::path::Path;
 use t2e_core::env::Side;
 
@@ -161,6 +161,7 @@ pub fn panel_curves(players: &[PlayerRow], panel: &[PanelRow]) -> Vec<PanelCurve
 /// evaluator's panel as curves over the snapshots' env steps (when it has
 /// played), then the payoff matrix as a heat map (captor win rate, rows
 /// captors, columns targets).
+// Long on purpose: one image whose three panels share its size, its palette and the players' order.
 pub fn plot(dir: &LeagueDir, r: &StatusReport, path: &Path) -> Result<()> {
     use image::{Rgb, RgbImage};
     use t2e_learners::plots::heat_map::{heat_map, HeatMap};

@@ -19,6 +19,9 @@ impl Trainer {
     /// its actor (and values the states with its critic) batched over all
     /// its robots, `hooks` act for the rest, and every step's observations,
     /// actions and rewards (plus any shaping) go into the sides' rollouts.
+    // Long on purpose: the rollout hot loop; its per-step buffers and
+    // tensors are borrowed across act, step and store, and splitting it
+    // would pass a dozen of them through each helper for no reader's gain.
     pub(super) fn collect(&mut self, hooks: &mut dyn RolloutHooks) -> Result<RolloutTally> {
         let k = self.cfg.env.num_captors;
         let na = k + 1;

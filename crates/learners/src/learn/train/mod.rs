@@ -48,7 +48,7 @@ use std::sync::Arc;
 use std::time::Instant;
 use t2e_core::algorithm::Algorithm;
 use t2e_core::env::vec_env::episode_seed;
-use t2e_core::env::{Action, Side, VecEnv};
+use t2e_core::env::{Action, EnvConfig, Side, VecEnv};
 use t2e_core::error::ConfigError;
 use t2e_core::map::PreparedMap;
 use tch::{Device, Kind, Tensor};
@@ -76,23 +76,12 @@ impl Trainer {
     ) -> Result<Trainer> {
         cfg.validate()?;
         cfg.protocol.check_training_maps(&cfg.maps, &maps)?;
-        let maps = super::map_sampling::sampling_list(&maps, cfg.map_sampling);
-        let maps = if cfg.extra_maps.is_off() {
-            maps
-        } else {
-            let spec = &cfg.extra_maps.maps;
-            let extra = t2e_core::map::catalog::load_prepared(spec)
-                .with_context(|| format!("extra_maps.maps = \"{spec}\""))?;
-            t2e_core::protocol::check_extra_maps(spec, &extra)
-                .map_err(LearnError::ExtraMapsRefused)?;
-            super::extra_maps::mix(&maps, &extra, cfg.extra_maps.share)
-        };
+        let maps = training_maps(&cfg, &maps)?;
         let device = cfg.device();
         if cfg.device == DeviceChoice::Cuda && !tch::Cuda::is_available() {
             return Err(LearnError::NoCuda);
         }
         let env_cfg = cfg.learning_env();
-        let k = env_cfg.num_captors;
         // Later segments of a resumed run play fresh episodes.
         let mut venv = VecEnv::new(
             env_cfg.clone(),
@@ -107,54 +96,9 @@ impl Trainer {
                     venv.script(side, || spec.build(side).expect("checked by validate"));
                 }
                 &Play::Learn(algorithm) => {
-                    let team = side.agents(k).len();
-                    let rows = team * cfg.num_envs;
-                    // Each side's initial weights from its own seed, drawn
-                    // while no other trainer in the process can reseed torch.
-                    let init_seed = mix_seed(cfg.seed ^ 0x5eed ^ side as u64, iteration);
-                    let learner = crate::nn::seeded(init_seed, || {
-                        build_learner(
-                            algorithm,
-                            side,
-                            side_cfg,
-                            env_cfg.vector_len(),
-                            team,
-                            device,
-                        )
-                    })?;
-                    let h = side_cfg.net.hidden;
-                    learners.push(LearnerSide {
-                        side,
-                        rollout: Rollout::new(
-                            cfg.rollout_steps,
-                            rows,
-                            env_cfg.vector_len(),
-                            &side_cfg.net,
-                            side_cfg.chunk_len(algorithm),
-                        ),
-                        learner,
-                        team,
-                        rows,
-                        actor_h: Tensor::zeros([rows as i64, h], (Kind::Float, device)),
-                        critic_h: Tensor::zeros([rows as i64, h], (Kind::Float, device)),
-                        next_mask: vec![0.0; rows],
-                        bad_updates: 0,
-                        shaping: side_cfg
-                            .shaping
-                            .potential
-                            .filter(|_| !side_cfg.shaping.is_off())
-                            .map(|potential| {
-                                venv.track_potential(potential);
-                                let sign = match side {
-                                    Side::Captors => 1.0,
-                                    Side::Target => -1.0,
-                                };
-                                (
-                                    sign * side_cfg.shaping.weight as f32,
-                                    side_cfg.gamma(algorithm),
-                                )
-                            }),
-                    });
+                    let env = (&env_cfg, &mut venv);
+                    let learner = learner_side(&cfg, side, algorithm, env, device, iteration)?;
+                    learners.push(learner);
                 }
             }
         }
@@ -380,6 +324,90 @@ impl Trainer {
             .map(|l| (l.side, l.learner.algorithm()))
             .collect()
     }
+}
+
+/// The list the worlds sample episodes from: the protocol's maps by the
+/// run's sampling, mixed with any extra maps; apart from `starting_at`
+/// because it is the one step that reads map files.
+fn training_maps(
+    cfg: &TrainConfig,
+    maps: &[Arc<PreparedMap>],
+) -> Result<Arc<Vec<Arc<PreparedMap>>>> {
+    let maps = super::map_sampling::sampling_list(maps, cfg.map_sampling);
+    Ok(if cfg.extra_maps.is_off() {
+        maps
+    } else {
+        let spec = &cfg.extra_maps.maps;
+        let extra = t2e_core::map::catalog::load_prepared(spec)
+            .with_context(|| format!("extra_maps.maps = \"{spec}\""))?;
+        t2e_core::protocol::check_extra_maps(spec, &extra).map_err(LearnError::ExtraMapsRefused)?;
+        super::extra_maps::mix(&maps, &extra, cfg.extra_maps.share)
+    })
+}
+
+/// A learning side with its network, rollout buffer and recurrent state;
+/// apart from `starting_at` so a run's start reads as maps, worlds, sides.
+fn learner_side(
+    cfg: &TrainConfig,
+    side: Side,
+    algorithm: Algorithm,
+    (env_cfg, venv): (&EnvConfig, &mut VecEnv),
+    device: Device,
+    iteration: u64,
+) -> Result<LearnerSide> {
+    let side_cfg = match side {
+        Side::Captors => &cfg.captors,
+        Side::Target => &cfg.target,
+    };
+    let k = env_cfg.num_captors;
+    let team = side.agents(k).len();
+    let rows = team * cfg.num_envs;
+    // Each side's initial weights from its own seed, drawn
+    // while no other trainer in the process can reseed torch.
+    let init_seed = mix_seed(cfg.seed ^ 0x5eed ^ side as u64, iteration);
+    let learner = crate::nn::seeded(init_seed, || {
+        build_learner(
+            algorithm,
+            side,
+            side_cfg,
+            env_cfg.vector_len(),
+            team,
+            device,
+        )
+    })?;
+    let h = side_cfg.net.hidden;
+    Ok(LearnerSide {
+        side,
+        rollout: Rollout::new(
+            cfg.rollout_steps,
+            rows,
+            env_cfg.vector_len(),
+            &side_cfg.net,
+            side_cfg.chunk_len(algorithm),
+        ),
+        learner,
+        team,
+        rows,
+        actor_h: Tensor::zeros([rows as i64, h], (Kind::Float, device)),
+        critic_h: Tensor::zeros([rows as i64, h], (Kind::Float, device)),
+        next_mask: vec![0.0; rows],
+        bad_updates: 0,
+        shaping: side_cfg
+            .shaping
+            .potential
+            .filter(|_| !side_cfg.shaping.is_off())
+            .map(|potential| {
+                venv.track_potential(potential);
+                let sign = match side {
+                    Side::Captors => 1.0,
+                    Side::Target => -1.0,
+                };
+                (
+                    sign * side_cfg.shaping.weight as f32,
+                    side_cfg.gamma(algorithm),
+                )
+            }),
+    })
 }
 
 /// The learner `algorithm` for `side`, its replay (if any) checked to fit in memory.
