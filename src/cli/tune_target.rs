@@ -88,9 +88,18 @@ pub fn run(args: TuneTargetArgs) -> Result<()> {
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("cannot create {}", args.out.display()))?;
     let csv_path = args.out.join("candidates.csv");
-    // Appended and flushed per candidate: a killed search keeps what it played.
-    let mut csv = std::fs::File::create(&csv_path)
-        .with_context(|| format!("cannot write {}", csv_path.display()))?;
+    // Appended and flushed per candidate: a killed search keeps what it
+    // played, and a second search never truncates it.
+    let mut csv = std::fs::OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .open(&csv_path)
+        .with_context(|| {
+            format!(
+                "cannot create {} (a search already there is kept: pick another --out)",
+                csv_path.display()
+            )
+        })?;
     writeln!(csv, "generation,target,worst,{}", args.panel.join(","))?;
     let total = 1 + args.generations * args.population;
     let bar = ProgressBar::new(total as u64);

@@ -63,12 +63,13 @@ impl Default for TuneSettings {
 pub enum TuneError {
     #[error("{0}")]
     Setting(String),
-    #[error("playing {team} against {target}: {source}")]
+    // The cause is printed, not handed on as `source()`, so that the CLI's
+    // `{:#}` at the edge prints it once (the project's convention).
+    #[error("playing {team} against {target}: {cause}")]
     Play {
         team: String,
         target: String,
-        #[source]
-        source: Box<dyn std::error::Error + Send + Sync>,
+        cause: Box<dyn std::error::Error + Send + Sync>,
     },
 }
 
@@ -78,6 +79,8 @@ pub struct Candidate {
     pub generation: usize,
     /// The controller's name (`tuned:...`).
     pub target: String,
+    /// Its constants, in the order of `TargetParams::RANGES`.
+    pub params: [f64; 5],
     /// Capture rate (%) by each panel team, in panel order.
     pub capture: Vec<f64>,
     /// The largest of them: what the search minimises.
@@ -138,7 +141,7 @@ pub fn play_candidate(
             run_setting(&setting, maps, "panel", false).map_err(|e| TuneError::Play {
                 team: team.to_string(),
                 target: target.to_string(),
-                source: e.into(),
+                cause: e.into(),
             })?;
         capture.push(summary.sr);
     }
@@ -146,6 +149,7 @@ pub fn play_candidate(
     Ok(Candidate {
         generation,
         target: target.to_string(),
+        params: params.to_array(),
         capture,
         worst,
     })
@@ -221,10 +225,7 @@ pub fn tune(
         .min_by(|a, b| a.worst.total_cmp(&b.worst))
         .cloned()
         .expect("the rule is a candidate");
-    let best_params = match best.target.parse::<ControllerSpec>() {
-        Ok(ControllerSpec::Tuned(p)) => p.to_array(),
-        _ => TargetParams::RULE.to_array(),
-    };
+    let best_params = best.params;
     Ok(TuneOutcome {
         candidates,
         rule,
