@@ -216,22 +216,7 @@ impl LeagueError {
     }
 }
 
-/// `.context(...)` and `.with_context(|| ...)` on a result whose error
-/// converts into a `LeagueError`: the error becomes `context: error`.
-pub trait ResultExt<T> {
-    fn context(self, context: impl Into<String>) -> Result<T>;
-    fn with_context<C: Into<String>>(self, context: impl FnOnce() -> C) -> Result<T>;
-}
-
-impl<T, E: Into<LeagueError>> ResultExt<T> for std::result::Result<T, E> {
-    fn context(self, context: impl Into<String>) -> Result<T> {
-        self.map_err(|e| e.into().context(context))
-    }
-
-    fn with_context<C: Into<String>>(self, context: impl FnOnce() -> C) -> Result<T> {
-        self.map_err(|e| e.into().context(context()))
-    }
-}
+t2e_core::result_ext!(LeagueError);
 
 /// `.io_context(...)` on a result of file I/O: the error names the file.
 pub trait IoResultExt<T> {

@@ -239,16 +239,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
     if args.iterations == 0 {
         anyhow::bail!("--iterations 0: needs at least one timed iteration");
     }
-    if args.threads > 256 {
-        anyhow::bail!("--threads {}: at most 256", args.threads);
-    }
-    let (threads, why) = t2e_core::util::thread_count(args.threads);
-    // An error means this process already started the pool (a library
-    // caller running a second command): that pool stays.
-    let _ = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build_global();
-    tch::set_num_threads(threads as i32);
+    let (threads, why) = super::threads::size_pools(args.threads)?;
     tracing::info!("bench: {threads} threads ({why})");
     if let Some(load) = t2e_core::util::load_average() {
         // Timings on a shared machine measure the other processes too.

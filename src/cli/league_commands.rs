@@ -524,9 +524,11 @@ pub fn export(args: ExportArgs) -> Result<()> {
         (None, Some(side)) => {
             let chosen = status::best_validated(&dir, side.into())?;
             println!(
-                "{}: the best of the validation panel ({}), {:.1}% won, {:.0} steps a game on average over {} episodes",
+                "{}: the best worst case of the validation panel ({}): {:.1}% won against {}, its worst team; {:.1}% on average, {:.0} steps a game, over {} episodes",
                 chosen.player.name,
                 chosen.opponents,
+                100.0 * chosen.worst_win_rate,
+                chosen.worst_opponent,
                 100.0 * chosen.win_rate,
                 chosen.mean_steps,
                 chosen.episodes

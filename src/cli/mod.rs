@@ -16,6 +16,7 @@ mod progress;
 pub mod render;
 pub mod status_text;
 pub mod table;
+pub mod threads;
 pub mod train;
 pub mod tune_target;
 

@@ -14,7 +14,8 @@ pub struct Bars {
     best_response: Mutex<Option<ProgressBar>>,
 }
 
-fn style(template: &str) -> ProgressStyle {
+/// The bars' one look: `=> ` filling a bar of the template's width.
+pub(crate) fn style(template: &str) -> ProgressStyle {
     ProgressStyle::with_template(template)
         .expect("a valid progress template")
         .progress_chars("=> ")

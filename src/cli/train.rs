@@ -1,9 +1,11 @@
 //! `t2e-league train`: one training run from a TOML config (see configs/),
 //! a `TrainingRun` with its flags, its progress bar and its last words.
 
+use super::progress::style;
+use super::threads::size_pools;
 use anyhow::{bail, Context, Result};
 use clap::Args;
-use indicatif::{ProgressBar, ProgressStyle};
+use indicatif::ProgressBar;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
@@ -71,17 +73,8 @@ pub fn run(args: TrainArgs) -> Result<()> {
             .transpose()
             .map_err(anyhow::Error::msg)
     };
-    if args.threads > 256 {
-        bail!("--threads {}: at most 256", args.threads);
-    }
-    let (threads, why) = t2e_core::util::thread_count(args.threads);
     // Before anything uses the global pool, so the environments get it too.
-    // An error means this process already started the pool (a library
-    // caller running a second command): that pool stays.
-    let _ = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build_global();
-    tch::set_num_threads(threads as i32);
+    let (threads, why) = size_pools(args.threads)?;
     let run_for = duration("--for", &args.run_for)?;
     let eval_every = duration("--eval-every", &args.eval_every)?;
     let cfg = train_config(&args)?;
@@ -90,7 +83,19 @@ pub fn run(args: TrainArgs) -> Result<()> {
         .clone()
         .unwrap_or_else(|| PathBuf::from("runs").join(&cfg.name));
     let eval_plan = eval_every
-        .map(|every| eval_plan(&args, &cfg, every))
+        .map(|every| -> Result<EvalPlan> {
+            let plan = EvalPlan {
+                every,
+                maps: args.eval_maps.clone(),
+                episodes: args.eval_episodes,
+                episode_length: args.eval_episode_length,
+                seed: 0,
+                num_captors: cfg.env.num_captors,
+                speed_ratio: cfg.env.speed_ratio(),
+            };
+            plan.validate()?;
+            Ok(plan)
+        })
         .transpose()?;
     let maps = t2e_core::map::catalog::load_prepared(&cfg.maps)
         .with_context(|| format!("maps = \"{}\"", cfg.maps))?;
@@ -105,7 +110,7 @@ pub fn run(args: TrainArgs) -> Result<()> {
     install_ctrl_c()?;
     tracing::info!(
         "{}, {threads} threads ({why}), run folder {}",
-        what_trains(&run, &cfg),
+        run.describe(),
         run_dir.display()
     );
     let bar = progress_bar(args.quiet, cfg.total_env_steps, run.trainer.env_steps);
@@ -137,7 +142,7 @@ pub fn run(args: TrainArgs) -> Result<()> {
 }
 
 /// The run's config: `--config`, or a resumed run's stored one, with the
-/// flags that override it; apart from `run` so its start reads as steps.
+/// flags that override it.
 fn train_config(args: &TrainArgs) -> Result<TrainConfig> {
     let mut cfg = match (&args.config, &args.out, args.resume) {
         (Some(p), _, _) => TrainConfig::load(p)?,
@@ -150,36 +155,32 @@ fn train_config(args: &TrainArgs) -> Result<TrainConfig> {
     if let Some(d) = &args.device {
         cfg.device = *d;
     }
-    if cfg.protocol == t2e_core::protocol::Protocol::HeldOut {
-        refuse_test_maps(&cfg.maps)?;
-    }
+    cfg.protocol.refuse_test_map_names(&cfg.maps)?;
     Ok(cfg)
 }
 
-/// A fresh run in `run_dir`, or the one there resumed; apart from `run`
-/// because resuming logs where it picks up.
+/// A fresh run in `run_dir`, or the one there resumed (logging where it
+/// picks up).
 fn open_run(
     args: &TrainArgs,
     cfg: &TrainConfig,
     maps: Arc<Vec<Arc<PreparedMap>>>,
     run_dir: &Path,
 ) -> Result<TrainingRun> {
-    Ok(if args.resume {
-        let run = TrainingRun::resume(cfg.clone(), maps, run_dir)?;
-        tracing::info!(
-            "resuming {} at iteration {}, {} env steps",
-            run_dir.display(),
-            run.trainer.iteration,
-            run.trainer.env_steps
-        );
-        run
-    } else {
-        TrainingRun::start(cfg.clone(), maps, run_dir)?
-    })
+    if !args.resume {
+        return Ok(TrainingRun::start(cfg.clone(), maps, run_dir)?);
+    }
+    let run = TrainingRun::resume(cfg.clone(), maps, run_dir)?;
+    tracing::info!(
+        "resuming {} at iteration {}, {} env steps",
+        run_dir.display(),
+        run.trainer.iteration,
+        run.trainer.env_steps
+    );
+    Ok(run)
 }
 
-/// Ctrl-C once stops after the iteration with a checkpoint, twice quits now;
-/// apart from `run` because the handler is process-wide.
+/// Ctrl-C once stops after the iteration with a checkpoint, twice quits now.
 fn install_ctrl_c() -> Result<()> {
     ctrlc::set_handler(|| {
         if STOP.swap(true, Ordering::SeqCst) {
@@ -191,116 +192,22 @@ fn install_ctrl_c() -> Result<()> {
     .context("cannot install the Ctrl-C handler")
 }
 
-/// The steps bar (hidden with `--quiet`), at `at` steps for a resumed run;
-/// apart from `run` to keep it to the run.
+/// The steps bar (hidden with `--quiet`), at `at` steps for a resumed run.
 fn progress_bar(quiet: bool, total: u64, at: u64) -> ProgressBar {
     if quiet {
-        ProgressBar::hidden()
-    } else {
-        let b = ProgressBar::new(total);
-        b.set_style(
-            ProgressStyle::with_template(
-                "[{elapsed_precise}] [{bar:25}] {human_pos}/{human_len} steps {msg}",
-            )
-            .unwrap()
-            .progress_chars("=> "),
-        );
-        b.set_position(at);
-        b
+        return ProgressBar::hidden();
     }
-}
-
-/// The periodic evaluation `--eval-every` asks for, its settings and maps
-/// checked before training starts.
-fn eval_plan(args: &TrainArgs, cfg: &TrainConfig, every: std::time::Duration) -> Result<EvalPlan> {
-    let plan = EvalPlan {
-        every,
-        maps: args.eval_maps.clone(),
-        episodes: args.eval_episodes,
-        episode_length: args.eval_episode_length,
-        seed: 0,
-        num_captors: cfg.env.num_captors,
-        speed_ratio: cfg.env.speed_ratio(),
-    };
-    t2e_learners::eval::EvalSetting {
-        num_captors: plan.num_captors,
-        speed_ratio: plan.speed_ratio,
-        episodes: plan.episodes,
-        episode_length: plan.episode_length,
-        ..Default::default()
-    }
-    .validate()
-    .map_err(|e| anyhow::anyhow!("--eval-episodes / --eval-episode-length: {e}"))?;
-    for m in &plan.maps {
-        t2e_core::map::catalog::load_prepared(m).with_context(|| format!("--eval-maps {m}"))?;
-    }
-    Ok(plan)
-}
-
-/// Who learns, on which maps, in how many worlds, on which device.
-fn what_trains(run: &TrainingRun, cfg: &TrainConfig) -> String {
-    let learners: Vec<String> = run
-        .trainer
-        .learner_sides()
-        .iter()
-        .map(|(s, a)| format!("{} {}", s.name(), a.name()))
-        .collect();
-    let extra = if cfg.extra_maps.is_off() {
-        String::new()
-    } else {
-        format!(
-            " + extra maps {:?} for {:.0}% of the episodes (a training option: not the protocol's maps alone)",
-            cfg.extra_maps.maps,
-            100.0 * cfg.extra_maps.share
-        )
-    };
-    let sampling = match cfg.map_sampling {
-        t2e_learners::learn::map_sampling::MapSampling::Uniform => "",
-        t2e_learners::learn::map_sampling::MapSampling::ClassBalanced => {
-            " drawn class-balanced (a training option: each size class a third of the episodes)"
-        }
-    };
-    format!(
-        "training {} on maps {:?}{sampling}{extra}, {} worlds, device {:?}",
-        learners.join(" + "),
-        cfg.maps,
-        cfg.num_envs,
-        run.trainer.device
-    )
-}
-
-/// Under the held-out protocol the Gibson maps are the test set: never
-/// train on them (by name here; `Trainer` checks every map's content).
-fn refuse_test_maps(spec: &str) -> Result<()> {
-    let head = spec.split(':').next().unwrap_or("");
-    let named_test = ["small", "medium", "large", "gibson"].contains(&head);
-    let gibson = t2e_core::map::catalog::gibson_dir().and_then(|d| d.canonicalize().ok());
-    let is_gibson_dir = Path::new(head)
-        .canonicalize()
-        .ok()
-        .is_some_and(|p| gibson.as_ref().is_some_and(|g| p.starts_with(g)));
-    if named_test || is_gibson_dir {
-        bail!("maps = \"{spec}\": the Gibson maps are the test set of protocol = \"held-out\"; train on generated maps (generated:N, shipped or a folder of your own), or set protocol = \"paper\" to train on them as the paper did");
-    }
-    Ok(())
+    let bar = ProgressBar::new(total);
+    bar.set_style(style(
+        "[{elapsed_precise}] [{bar:25}] {human_pos}/{human_len} steps {msg}",
+    ));
+    bar.set_position(at);
+    bar
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn the_test_maps_are_refused_for_training() {
-        for spec in ["small", "medium:x", "gibson", "large"] {
-            let err = refuse_test_maps(spec).unwrap_err().to_string();
-            assert!(err.contains("test set"), "{spec}: {err}");
-        }
-        assert!(refuse_test_maps("generated:20").is_ok());
-        assert!(refuse_test_maps("shipped").is_ok());
-        if let Some(g) = t2e_core::map::catalog::gibson_dir() {
-            assert!(refuse_test_maps(&g.display().to_string()).is_err());
-        }
-    }
 
     #[test]
     fn a_config_typo_names_the_file_and_the_field() {
@@ -356,9 +263,7 @@ mod tests {
             }
             if p.extension().and_then(|x| x.to_str()) == Some("toml") {
                 let cfg = TrainConfig::load(&p).unwrap();
-                if cfg.protocol == t2e_core::protocol::Protocol::HeldOut {
-                    refuse_test_maps(&cfg.maps).unwrap();
-                }
+                cfg.protocol.refuse_test_map_names(&cfg.maps).unwrap();
                 n += 1;
             }
         }

@@ -1,8 +1,9 @@
 //! `t2e-league tune-target`: CMA-ES over the rule-based target's family
 //! (`eval::tune`), its flags, progress bar, files and last table.
 
+use super::progress::style;
 use anyhow::{bail, Context, Result};
-use indicatif::{ProgressBar, ProgressStyle};
+use indicatif::ProgressBar;
 use std::io::Write as _;
 use std::path::PathBuf;
 use t2e_learners::controllers::ControllerSpec;
@@ -103,11 +104,9 @@ pub fn run(args: TuneTargetArgs) -> Result<()> {
     writeln!(csv, "generation,target,worst,{}", args.panel.join(","))?;
     let total = 1 + args.generations * args.population;
     let bar = ProgressBar::new(total as u64);
-    bar.set_style(
-        ProgressStyle::with_template("[{elapsed_precise}] [{bar:25}] {pos}/{len} candidates {msg}")
-            .expect("a valid progress template")
-            .progress_chars("=> "),
-    );
+    bar.set_style(style(
+        "[{elapsed_precise}] [{bar:25}] {pos}/{len} candidates {msg}",
+    ));
     let mut best = f64::INFINITY;
     let outcome = tune(&settings, &maps, |c: &Candidate| {
         let cells: Vec<String> = c.capture.iter().map(|x| format!("{x:.1}")).collect();

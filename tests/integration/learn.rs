@@ -593,6 +593,73 @@ fn a_target_leaning_on_the_rule_based_one_plays_it_and_learns_from_its_own_logit
     assert!(err.starts_with("captors.net.heuristic_prior"), "{err}");
 }
 
+/// A target trained by IPPO for 20 iterations against the expert captor in
+/// a room, with a KL of weight `kl` towards `teacher` (the rule-based target
+/// when None), saved in a fresh folder.
+fn kl_trained_target(kl: f64, teacher: Option<&str>) -> tempfile::TempDir {
+    tch::set_num_threads(1);
+    let mut cfg = chase_config(8);
+    cfg.captors.play = "heuristic".parse().unwrap();
+    cfg.target = SideConfig {
+        play: "ippo".parse().unwrap(),
+        net: cfg.captors.net.clone(),
+        ppo: t2e_learners::learn::ppo::PpoConfig {
+            lr: 2e-3,
+            epochs: 4,
+            minibatches: 2,
+            heuristic_kl: kl,
+            teacher: teacher.map(str::to_string),
+            ..Default::default()
+        },
+        ..SideConfig::default()
+    };
+    cfg.validate().unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let mut t = Trainer::new(cfg, maps(room(60, 260, 60, 260))).unwrap();
+    for _ in 0..20 {
+        t.iterate().unwrap();
+    }
+    t.save(dir.path()).unwrap();
+    dir
+}
+
+/// The share of the rule-based target's states (against the expert
+/// captor, 8 episodes) where `agrees(learned, rule)` holds of the most
+/// likely action of the target in `dir` and the rule-based target's.
+fn share_of_rule_states(
+    dir: &Path,
+    agrees: impl Fn(t2e_core::env::Action, t2e_core::env::Action) -> bool,
+) -> f64 {
+    use t2e_core::env::controller::Controller;
+    use t2e_core::heuristics::{expert_captor_action, target_action};
+    use t2e_learners::nn::CheckpointController;
+    let snap = Arc::new(PolicySnapshot::load(dir, Side::Target).unwrap());
+    let mut ckpt = CheckpointController::new(snap).unwrap();
+    let cfg = EnvConfig {
+        num_captors: 1,
+        episode_length: 40,
+        ..EnvConfig::default()
+    };
+    let mut env = TrapEnv::new(cfg, maps(room(60, 260, 60, 260))).unwrap();
+    let (mut same, mut states) = (0, 0);
+    for seed in 0..8 {
+        env.reset(seed).unwrap();
+        ckpt.reset(&env, seed);
+        for _ in 0..40 {
+            let mut learned = [t2e_core::env::Action::Stop];
+            ckpt.act(&env, Side::Target, &mut learned);
+            let rule = target_action(&env);
+            same += usize::from(agrees(learned[0], rule));
+            states += 1;
+            let actions = [expert_captor_action(&env, 0), rule];
+            if env.step(&actions).terminations.iter().any(|&t| t) {
+                break;
+            }
+        }
+    }
+    same as f64 / states as f64
+}
+
 /// A target trained with a KL towards the rule-based target
 /// (`ppo.heuristic_kl`) takes the rule-based action in more of the states
 /// the rule-based target visits than the same target trained without it
@@ -600,65 +667,9 @@ fn a_target_leaning_on_the_rule_based_one_plays_it_and_learns_from_its_own_logit
 /// towards that action while it learns. The captors may not have one.
 #[test]
 fn a_kl_towards_the_rule_based_target_pulls_the_learned_target_to_its_actions() {
-    use t2e_core::env::controller::Controller;
-    use t2e_core::heuristics::{expert_captor_action, target_action};
-    use t2e_learners::nn::CheckpointController;
-    tch::set_num_threads(1);
-    let room_maps = || maps(room(60, 260, 60, 260));
-    let trained = |kl: f64| {
-        let mut cfg = chase_config(8);
-        cfg.captors.play = "heuristic".parse().unwrap();
-        cfg.target = SideConfig {
-            play: "ippo".parse().unwrap(),
-            net: cfg.captors.net.clone(),
-            ppo: t2e_learners::learn::ppo::PpoConfig {
-                lr: 2e-3,
-                epochs: 4,
-                minibatches: 2,
-                heuristic_kl: kl,
-                ..Default::default()
-            },
-            ..SideConfig::default()
-        };
-        let dir = tempfile::tempdir().unwrap();
-        let mut t = Trainer::new(cfg, room_maps()).unwrap();
-        for _ in 0..20 {
-            t.iterate().unwrap();
-        }
-        t.save(dir.path()).unwrap();
-        dir
-    };
-    // Share of the rule-based target's states (against the expert captor)
-    // where the checkpoint's most likely action is the rule-based one.
-    let agreement = |dir: &Path| {
-        let snap = Arc::new(PolicySnapshot::load(dir, Side::Target).unwrap());
-        let mut ckpt = CheckpointController::new(snap).unwrap();
-        let cfg = EnvConfig {
-            num_captors: 1,
-            episode_length: 40,
-            ..EnvConfig::default()
-        };
-        let mut env = TrapEnv::new(cfg, room_maps()).unwrap();
-        let (mut same, mut states) = (0, 0);
-        for seed in 0..8 {
-            env.reset(seed).unwrap();
-            ckpt.reset(&env, seed);
-            for _ in 0..40 {
-                let mut learned = [t2e_core::env::Action::Stop];
-                ckpt.act(&env, Side::Target, &mut learned);
-                let rule = target_action(&env);
-                same += usize::from(learned[0] == rule);
-                states += 1;
-                let actions = [expert_captor_action(&env, 0), rule];
-                if env.step(&actions).terminations.iter().any(|&t| t) {
-                    break;
-                }
-            }
-        }
-        same as f64 / states as f64
-    };
-    let with_kl = agreement(trained(20.0).path());
-    let without = agreement(trained(0.0).path());
+    let agreement = |dir: &Path| share_of_rule_states(dir, |learned, rule| learned == rule);
+    let with_kl = agreement(kl_trained_target(20.0, None).path());
+    let without = agreement(kl_trained_target(0.0, None).path());
     eprintln!("agreement with the rule-based action: kl {with_kl:.3}, none {without:.3}");
     assert!(
         with_kl > 0.5 && with_kl > without + 0.2,
@@ -672,4 +683,31 @@ fn a_kl_towards_the_rule_based_target_pulls_the_learned_target_to_its_actions() 
     bad.captors.ppo.heuristic_kl = f64::NAN;
     let err = bad.validate().unwrap_err().to_string();
     assert!(err.starts_with("captors.ppo.heuristic_kl"), "{err}");
+}
+
+/// With a teacher (`ppo.teacher`), the KL pulls the learned target towards
+/// the teacher's moves, not the rule-based target's: a target trained with
+/// a KL towards `still` stops in more of the rule-based target's states
+/// than one trained with the same KL towards the rule-based target (same
+/// seed). The teacher needs the KL, and is refused for the captors.
+#[test]
+fn a_teacher_replaces_the_rule_based_target_as_the_kls_anchor() {
+    use t2e_core::env::Action;
+    let stops = |dir: &Path| share_of_rule_states(dir, |learned, _| learned == Action::Stop);
+    let taught = stops(kl_trained_target(20.0, Some("still")).path());
+    let rule = stops(kl_trained_target(20.0, None).path());
+    eprintln!("share of Stop: teacher still {taught:.3}, rule-based anchor {rule:.3}");
+    assert!(
+        taught > 0.5 && taught > rule + 0.2,
+        "still {taught}, rule {rule}"
+    );
+
+    let mut bad = chase_config(8);
+    bad.captors.ppo.teacher = Some("still".into());
+    bad.captors.ppo.heuristic_kl = 0.0;
+    let err = bad.validate().unwrap_err().to_string();
+    assert!(err.starts_with("captors.ppo.teacher = \"still\""), "{err}");
+    bad.captors.ppo.heuristic_kl = 1.0;
+    let err = bad.validate().unwrap_err().to_string();
+    assert!(err.starts_with("captors.ppo."), "{err}");
 }

@@ -120,6 +120,40 @@ impl fmt::Display for Chain<'_> {
     }
 }
 
+/// Writes a library crate's `ResultExt` for its error type: `.context(..)`
+/// and `.with_context(|| ..)` on any result whose error converts into it,
+/// the error becoming `context: error` through the type's own `context`
+/// method. A macro and not one trait generic over the error, because with
+/// the error a type parameter `?` could not tell which one a call means.
+#[macro_export]
+macro_rules! result_ext {
+    ($error:ty) => {
+        /// `.context(...)` and `.with_context(|| ...)` on a result whose
+        /// error converts into this crate's error: the error becomes
+        /// `context: error`.
+        pub trait ResultExt<T> {
+            fn context(self, context: impl Into<String>) -> std::result::Result<T, $error>;
+            fn with_context<C: Into<String>>(
+                self,
+                context: impl FnOnce() -> C,
+            ) -> std::result::Result<T, $error>;
+        }
+
+        impl<T, E: Into<$error>> ResultExt<T> for std::result::Result<T, E> {
+            fn context(self, context: impl Into<String>) -> std::result::Result<T, $error> {
+                self.map_err(|e| e.into().context(context))
+            }
+
+            fn with_context<C: Into<String>>(
+                self,
+                context: impl FnOnce() -> C,
+            ) -> std::result::Result<T, $error> {
+                self.map_err(|e| e.into().context(context()))
+            }
+        }
+    };
+}
+
 /// A map set that does not fit its protocol, or extra maps that are test
 /// maps: the first offending map, and how many more there are.
 #[derive(Clone, Debug, PartialEq, Eq)]

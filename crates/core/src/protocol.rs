@@ -42,6 +42,32 @@ impl Protocol {
         }
     }
 
+    /// Refuses, before any map is loaded, a training `maps` value that names
+    /// the test set under held-out: a Gibson class (`small`, `medium:x`),
+    /// `gibson`, or a folder inside the Gibson maps. The maps' content is
+    /// checked after loading (`check_training_maps`); this catches the
+    /// name first, so the message says what the user wrote.
+    pub fn refuse_test_map_names(self, spec: &str) -> Result<(), ConfigError> {
+        if self == Protocol::Paper {
+            return Ok(());
+        }
+        let head = spec.split(':').next().unwrap_or("");
+        let named_test = ["small", "medium", "large", "gibson"].contains(&head);
+        let gibson = crate::map::catalog::gibson_dir().and_then(|d| d.canonicalize().ok());
+        let in_gibson_dir = std::path::Path::new(head)
+            .canonicalize()
+            .ok()
+            .is_some_and(|p| gibson.as_ref().is_some_and(|g| p.starts_with(g)));
+        if named_test || in_gibson_dir {
+            return Err(ConfigError::new(
+                "maps",
+                format!("\"{spec}\""),
+                "the Gibson maps are the test set of protocol = \"held-out\"; train on generated maps (generated:N, shipped or a folder of your own), or set protocol = \"paper\" to train on them as the paper did",
+            ));
+        }
+        Ok(())
+    }
+
     /// Checks that the training maps fit the protocol: none of the Gibson
     /// test maps under held-out, neither as they are (recognised by content)
     /// nor as near-copies (mirrored, turned, padded, shifted or a few pixels
@@ -180,6 +206,27 @@ pub fn require_named(text: &str) -> Result<(), ConfigError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_test_maps_are_refused_for_training_by_name() {
+        for spec in ["small", "medium:x", "gibson", "large"] {
+            let err = Protocol::HeldOut
+                .refuse_test_map_names(spec)
+                .unwrap_err()
+                .to_string();
+            assert!(err.starts_with(&format!("maps = \"{spec}\": ")), "{err}");
+            assert!(err.contains("test set"), "{spec}: {err}");
+            assert!(Protocol::Paper.refuse_test_map_names(spec).is_ok());
+        }
+        assert!(Protocol::HeldOut
+            .refuse_test_map_names("generated:20")
+            .is_ok());
+        assert!(Protocol::HeldOut.refuse_test_map_names("shipped").is_ok());
+        if let Some(g) = crate::map::catalog::gibson_dir() {
+            let inside = g.display().to_string();
+            assert!(Protocol::HeldOut.refuse_test_map_names(&inside).is_err());
+        }
+    }
 
     #[test]
     fn configs_must_name_it_and_names_round_trip() {

@@ -136,22 +136,7 @@ impl LearnError {
     }
 }
 
-/// `.context(...)` and `.with_context(|| ...)` on a result whose error
-/// converts into a `LearnError`: the error becomes `context: error`.
-pub trait ResultExt<T> {
-    fn context(self, context: impl Into<String>) -> Result<T>;
-    fn with_context<C: Into<String>>(self, context: impl FnOnce() -> C) -> Result<T>;
-}
-
-impl<T, E: Into<LearnError>> ResultExt<T> for std::result::Result<T, E> {
-    fn context(self, context: impl Into<String>) -> Result<T> {
-        self.map_err(|e| e.into().context(context))
-    }
-
-    fn with_context<C: Into<String>>(self, context: impl FnOnce() -> C) -> Result<T> {
-        self.map_err(|e| e.into().context(context()))
-    }
-}
+t2e_core::result_ext!(LearnError);
 
 #[cfg(test)]
 mod tests {

@@ -5,7 +5,7 @@ paired difference of captures (robust minus rule-based) with its 95%
 normal interval, and the share (%) of the robust target's decisions that
 departed from the rule-based move. Prints a Markdown table.
 
-    python paired.py OUT   (the folders run.sh wrote)
+    python paired.py OUT   (the folders run.sh or sight.sh wrote)
 """
 
 import csv
@@ -32,7 +32,7 @@ def setting(folder: Path):
 def main(out: Path) -> None:
     print("| captors | v_p:v_e | maps | episodes | rule-based SR % [95%] | Time | robust SR % [95%] | Time | paired difference, points [95%] | departures % |")
     print("|---|---|---|---|---|---|---|---|---|---|")
-    for team in ["expert", "expert7", "mappo", "greedy2", "lomo"]:
+    for team in ["expert", "expert7", "mappo", "mappo-sight", "greedy2", "lomo"]:
         for ratio, maps in [("1.0", "large"), ("1.2", "small"), ("1.2", "medium"), ("1.2", "large")]:
             suffix = "" if maps == "large" else f"-{maps}"
             rule_dir, robust_dir = out / f"{team}-heuristic-{ratio}{suffix}", out / f"{team}-robust-{ratio}{suffix}"

@@ -266,7 +266,7 @@ impl LeagueConfig {
 
     /// Validation shares nothing with training: no validation map is a
     /// training map (`maps`) and no validation team is a league member
-    /// (`[members]`). The test side (Gibson maps, `greedy:K`) is refused by
+    /// (`[members]`). The test side (Gibson maps, `greedy:2`) is refused by
     /// `EvaluatorConfig::validate`; the maps' content by the evaluator.
     fn check_validation_apart(&self) -> Result<(), ConfigError> {
         if let Some(spec) = &self.evaluator.validation_maps {
@@ -659,9 +659,9 @@ mod tests {
 
     #[test]
     fn validation_shares_no_team_and_no_map_with_training_or_test() {
-        let ok = "maps = \"generated:20\"\n[evaluator]\nvalidation_maps = \"generated:4@1001\"\nvalidation_captors = [\"expert:1\", \"expert:2\"]\n";
+        let ok = "maps = \"generated:20\"\n[evaluator]\nvalidation_maps = \"generated:4@1001\"\nvalidation_captors = [\"expert:1\", \"expert:2\", \"greedy:4\"]\n";
         let cfg = LeagueConfig::parse(ok).unwrap();
-        assert_eq!(cfg.evaluator.validation(Side::Target).unwrap().len(), 2);
+        assert_eq!(cfg.evaluator.validation(Side::Target).unwrap().len(), 3);
         for (text, says) in [
             // A member of the league is not a team it never met.
             (
@@ -672,10 +672,10 @@ mod tests {
                 "validation_maps = \"generated:4@1001\"\nvalidation_targets = [\"rule\"]",
                 "evaluator.validation_targets = \"rule\": the rule-based target is a member",
             ),
-            // The test planner's family.
+            // The test's own planner (a relative, greedy:4, is accepted above).
             (
-                "validation_maps = \"generated:4@1001\"\nvalidation_captors = [\"greedy:4\"]",
-                "evaluator.validation_captors = \"greedy:4\": the ASZ-greedy planner",
+                "validation_maps = \"generated:4@1001\"\nvalidation_captors = [\"greedy:2\"]",
+                "evaluator.validation_captors = \"greedy:2\": the ASZ-greedy planner on 0.1 m cells is the test panel's team",
             ),
             // Also a held-out opponent.
             (

@@ -8,6 +8,10 @@ use t2e_core::env::Side;
 use t2e_core::error::{in_interval, in_range, ConfigError};
 use t2e_learners::controllers::ControllerSpec;
 
+/// The test panel's ASZ-greedy team is `greedy:2` (0.1 m cells): the one
+/// `greedy:K` validation may not play, so the test stays unseen.
+pub const TEST_GREEDY_COARSENING: usize = 2;
+
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct EvaluatorConfig {
@@ -39,8 +43,9 @@ pub struct EvaluatorConfig {
     /// the league never meets and no test panel holds (`expert:SEED`, the
     /// expert captors with randomised constants; `ckpt:PATH` of a team
     /// trained elsewhere, such as a cooperative team of another seed or
-    /// naive co-evolution's captors). Not the expert (a member) and not
-    /// `greedy:K` (the test planner's family). Stored only when set.
+    /// naive co-evolution's captors; `greedy:K` for K other than 2, a
+    /// relative of the ASZ planner the test plays). Not the expert (a
+    /// member) and not `greedy:2` (the test's team). Stored only when set.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub validation_captors: Vec<String>,
     /// The validation opponents of the captor snapshots (target
@@ -139,8 +144,8 @@ impl EvaluatorConfig {
                     Side::Target => "rule-based target",
                 }
             )),
-            ControllerSpec::Greedy { .. } => Some(
-                "the ASZ-greedy planner (greedy:K) is the test panel's team; validation shares no team with the test (use expert:SEED or a trained team)"
+            ControllerSpec::Greedy { coarsening: TEST_GREEDY_COARSENING } => Some(
+                "the ASZ-greedy planner on 0.1 m cells is the test panel's team; validation shares no team with the test (a relative of it, greedy:3 or greedy:4, is not the test's team; or expert:SEED, or a trained team)"
                     .into(),
             ),
             _ => None,

@@ -1,19 +1,30 @@
-//! Which snapshot to export: the main learner's snapshot that did best on
-//! the validation panel (`[evaluator] validation_*`, on the validation
-//! maps). The league keeps every snapshot; the last one is not always the
+//! Which snapshot to export: the main learner's snapshot whose worst
+//! result over the validation panel (`[evaluator] validation_*`, on the
+//! validation maps) is best. The league keeps every snapshot; the last one is not always the
 //! best for teams it never met (a target can drift towards beating only the
 //! captors it trains against), and the test panel must not choose, or its
-//! figures would be tuned to it. Pure: the store's rows in, a choice out.
+//! figures would be tuned to it. The worst case, not the mean, because a
+//! target that departs from the rule-based one can escape one team more
+//! and be caught by another far more (the single-model lookahead target:
+//! never caught by its model, caught 86% by the ASZ planner); a mean over
+//! the panel would trade the second for the first. Pure: the store's rows
+//! in, a choice out.
 
 use crate::data::{HeldOutResult, Kind, Panel, Player};
 use crate::rules::players::learner_name;
 use t2e_core::env::Side;
 
-/// One snapshot's validation result: the mean over the validation teams
-/// of the rate the snapshot wins and of the episodes' length.
+/// One snapshot's validation result: its lowest win rate over the
+/// validation teams, and the means over them of the win rate and of the
+/// episodes' length.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Validated {
     pub player: Player,
+    /// The snapshot's win rate against the validation team it did worst
+    /// against.
+    pub worst_win_rate: f64,
+    /// That team.
+    pub worst_opponent: String,
     /// Mean over the validation opponents of the snapshot's win rate
     /// (escapes for a target, captures for captors).
     pub win_rate: f64,
@@ -40,8 +51,9 @@ pub enum NoChoice {
 }
 
 /// The main learner of `side`'s snapshots that have played every
-/// validation opponent `episodes` times, best first: highest mean win rate;
-/// at equal rate, the episodes' length in the snapshot's favour (a target
+/// validation opponent `episodes` times, best first: highest worst-case
+/// win rate; at an equal worst case, the higher mean win rate; then the
+/// episodes' length in the snapshot's favour (a target
 /// that lasts longer, captors that capture sooner); then the later
 /// snapshot. A snapshot whose validation is unfinished (the evaluator was
 /// stopped or killed mid-way) is not ranked, so a half result never
@@ -96,7 +108,7 @@ pub fn rank_validated(
                 return None;
             }
             let n = rows.len() as f64;
-            let win_rate = rows
+            let rates: Vec<f64> = rows
                 .iter()
                 .map(|r| {
                     let wins = match side {
@@ -105,8 +117,18 @@ pub fn rank_validated(
                     };
                     wins as f64 / r.episodes as f64
                 })
-                .sum::<f64>()
-                / n;
+                .collect();
+            let win_rate = rates.iter().sum::<f64>() / n;
+            // The first of equal worst results, in the panel's order.
+            let (worst, worst_win_rate) =
+                rates
+                    .iter()
+                    .copied()
+                    .enumerate()
+                    .fold(
+                        (0, f64::INFINITY),
+                        |best, (i, r)| if r < best.1 { (i, r) } else { best },
+                    );
             let mean_steps = rows
                 .iter()
                 .map(|r| r.steps as f64 / r.episodes as f64)
@@ -114,6 +136,8 @@ pub fn rank_validated(
                 / n;
             Some(Validated {
                 player: (*p).clone(),
+                worst_win_rate,
+                worst_opponent: rows[worst].opponent.clone(),
                 win_rate,
                 mean_steps,
                 episodes: rows.iter().map(|r| r.episodes).sum(),
@@ -134,8 +158,9 @@ pub fn rank_validated(
         Side::Captors => -1.0,
     };
     ranked.sort_by(|a, b| {
-        b.win_rate
-            .total_cmp(&a.win_rate)
+        b.worst_win_rate
+            .total_cmp(&a.worst_win_rate)
+            .then(b.win_rate.total_cmp(&a.win_rate))
             .then((steps_sign * b.mean_steps).total_cmp(&(steps_sign * a.mean_steps)))
             .then(b.player.env_steps.cmp(&a.player.env_steps))
     });
@@ -252,6 +277,41 @@ mod tests {
         // Mean of 100 and 200 steps per episode.
         assert!((ranked[1].mean_steps - 150.0).abs() < 1e-12);
         assert_eq!(ranked[0].episodes, 20);
+    }
+
+    #[test]
+    fn the_worst_team_decides_before_the_mean() {
+        let opponents = vec!["expert:1".to_string(), "greedy:4".to_string()];
+        let v = Panel::Validation;
+        let results = vec![
+            // 200: escapes 9/10 and 1/10 -> mean 0.50, worst 0.10 (greedy:4).
+            result(5, v, "expert:1", 1, 10, 4000),
+            result(5, v, "greedy:4", 9, 10, 1000),
+            // 400: escapes 4/10 and 4/10 -> mean 0.40, worst 0.40: chosen.
+            result(6, v, "expert:1", 6, 10, 3000),
+            result(6, v, "greedy:4", 6, 10, 3000),
+            // 600: escapes 3/10 and 8/10 -> mean 0.55, worst 0.30 (expert:1).
+            result(7, v, "expert:1", 7, 10, 2000),
+            result(7, v, "greedy:4", 2, 10, 4000),
+        ];
+        let ranked = rank_validated(&league(), &results, Side::Target, &opponents, 10).unwrap();
+        let names: Vec<_> = ranked.iter().map(|r| r.player.name.as_str()).collect();
+        assert_eq!(
+            names,
+            ["target-main-400", "target-main-600", "target-main-200"]
+        );
+        assert!((ranked[0].worst_win_rate - 0.4).abs() < 1e-12);
+        assert!((ranked[1].worst_win_rate - 0.3).abs() < 1e-12);
+        assert_eq!(ranked[1].worst_opponent, "expert:1");
+        assert!((ranked[1].win_rate - 0.55).abs() < 1e-12);
+        assert_eq!(ranked[2].worst_opponent, "greedy:4");
+        // Equal worst cases: the higher mean first (400's worst raised to 0.30).
+        let mut equal = results.clone();
+        equal[2] = result(6, v, "expert:1", 7, 10, 3000);
+        equal[3] = result(6, v, "greedy:4", 7, 10, 3000);
+        let ranked = rank_validated(&league(), &equal, Side::Target, &opponents, 10).unwrap();
+        assert_eq!(ranked[0].player.name, "target-main-600");
+        assert_eq!(ranked[1].player.name, "target-main-400");
     }
 
     #[test]

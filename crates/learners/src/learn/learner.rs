@@ -68,6 +68,11 @@ pub trait Learner {
     fn wants_hints(&self) -> bool {
         false
     }
+    /// The teacher whose moves the rollout must hold for each row
+    /// (`Rollout::teacher_hints`), where the KL pulls towards one.
+    fn teacher(&self) -> Option<&str> {
+        None
+    }
     /// The policy every robot of the side acts with (and that eval, render
     /// and the league's pools load from `actor.safetensors`).
     fn actor(&self) -> &Actor;

@@ -20,6 +20,7 @@ pub mod rollout;
 pub mod run_config;
 pub mod shaping;
 pub mod side_config;
+pub mod teacher;
 pub mod train;
 pub mod undo;
 

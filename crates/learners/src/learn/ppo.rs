@@ -440,6 +440,13 @@ impl PpoLearner {
         let hints = self
             .wants_hints()
             .then(|| Tensor::from_slice(&ro.hints).to_device(dev));
+        // The KL's anchor: the teacher's moves where one is set, else the
+        // rule-based target's (the prior's hints).
+        let teacher_hints = self
+            .cfg
+            .teacher
+            .is_some()
+            .then(|| Tensor::from_slice(&ro.teacher_hints).to_device(dev));
         let old_logp = t(&ro.logp);
         let adv = t(&adv);
         let targets = t(&targets);
@@ -478,6 +485,7 @@ impl PpoLearner {
                     &m,
                 );
                 let mb_hints = hints.as_ref().map(|h| h.index_select(0, &idx));
+                let mb_anchor = teacher_hints.as_ref().map(|h| h.index_select(0, &idx));
                 let logits = match &mb_hints {
                     Some(hints) => add_prior(logits, hints, prior),
                     None => logits,
@@ -503,9 +511,12 @@ impl PpoLearner {
                 let mut loss =
                     &policy_loss - cfg.entropy_coef * &entropy + cfg.value_coef * &value_loss;
                 if self.kl_weight > 0.0 {
-                    let hints = mb_hints.as_ref().expect("wants_hints covers heuristic_kl");
+                    let anchor = mb_anchor
+                        .as_ref()
+                        .or(mb_hints.as_ref())
+                        .expect("wants_hints covers heuristic_kl");
                     let kl = -logp_all
-                        .gather(1, &hints.unsqueeze(1), false)
+                        .gather(1, &anchor.unsqueeze(1), false)
                         .mean(Kind::Float);
                     loss = loss + self.kl_weight * kl;
                 }
@@ -577,6 +588,9 @@ impl Learner for PpoLearner {
     }
     fn wants_hints(&self) -> bool {
         self.net.heuristic_prior > 0.0 || self.cfg.heuristic_kl > 0.0
+    }
+    fn teacher(&self) -> Option<&str> {
+        self.cfg.teacher.as_deref()
     }
     fn actor(&self) -> &Actor {
         &self.actor

@@ -20,6 +20,9 @@ pub struct Rollout {
     /// The rule-based target's action in each row's state, where the
     /// network leans on it (`NetConfig::heuristic_prior`); 0 elsewhere.
     pub hints: Vec<i64>,
+    /// The teacher's action in each row's state, where the KL pulls
+    /// towards a teacher (`PpoConfig::teacher`); 0 elsewhere.
+    pub teacher_hints: Vec<i64>,
     pub logp: Vec<f32>,
     /// Critic outputs (normalised units when value normalisation is on).
     pub values: Vec<f32>,
@@ -70,6 +73,7 @@ impl Rollout {
             vectors: vec![0.0; n * vector_len],
             actions: vec![0; n],
             hints: vec![0; n],
+            teacher_hints: vec![0; n],
             logp: vec![0.0; n],
             values: vec![0.0; n],
             rewards: vec![0.0; n],

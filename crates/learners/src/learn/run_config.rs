@@ -221,6 +221,10 @@ impl TrainConfig {
             .map_err(|e| e.within("net").within(name))?;
         crate::nn::prior::check_kl(side_cfg.ppo.heuristic_kl, side, !k.off_policy())
             .map_err(|e| e.within("ppo").within(name))?;
+        if let Some(teacher) = &side_cfg.ppo.teacher {
+            super::teacher::check(teacher, side, !k.off_policy())
+                .map_err(|e| e.within("ppo").within(name))?;
+        }
         let chunk_len = side_cfg.chunk_len(algorithm);
         let field = k.settings_table();
         if !self.rollout_steps.is_multiple_of(chunk_len) {

@@ -118,6 +118,9 @@ fn write(path: &Path, text: impl AsRef<[u8]>) -> Result<()> {
 /// The validation-best snapshot of a side's main learner, and the panel.
 pub struct BestValidated {
     pub player: Player,
+    /// Its win rate against the validation team it did worst against.
+    pub worst_win_rate: f64,
+    pub worst_opponent: String,
     pub win_rate: f64,
     pub mean_steps: f64,
     pub episodes: u64,
@@ -162,6 +165,8 @@ pub fn best_validated(dir: &LeagueDir, side: Side) -> Result<BestValidated> {
         .expect("rank_validated never returns an empty list");
     Ok(BestValidated {
         player: best.player,
+        worst_win_rate: best.worst_win_rate,
+        worst_opponent: best.worst_opponent,
         win_rate: best.win_rate,
         mean_steps: best.mean_steps,
         episodes: best.episodes,

@@ -68,6 +68,18 @@ pub struct PpoConfig {
     /// after. 0: the weight stays (the default). Left out while 0.
     #[serde(skip_serializing_if = "is_zero")]
     pub heuristic_kl_anneal: f64,
+    /// The target `heuristic_kl` pulls towards in place of the rule-based
+    /// one: a scripted target controller (`robust:H:MODELS`,
+    /// `lookahead:H`, `tuned:...`), whose move is computed in every state
+    /// of the learner's own play. The KL then distils it on the states the
+    /// learner reaches (DAgger's states, the teacher's labels), imitation
+    /// first and RL after when `heuristic_kl_anneal` is set. The network's
+    /// `heuristic_prior` stays the rule-based target's: it is part of the
+    /// network, and a checkpoint plays the same wherever it is loaded,
+    /// with no teacher beside it. Needs `heuristic_kl` > 0. Left out of the
+    /// stored config while unset.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub teacher: Option<String>,
 }
 
 fn is_zero(x: &f64) -> bool {
@@ -95,6 +107,7 @@ impl Default for PpoConfig {
             lr_anneal: false,
             heuristic_kl: 0.0,
             heuristic_kl_anneal: 0.0,
+            teacher: None,
         }
     }
 }
@@ -124,6 +137,15 @@ impl PpoConfig {
                 self.heuristic_kl_anneal,
                 "anneals heuristic_kl, which is 0 (off): set heuristic_kl too",
             ));
+        }
+        if let Some(teacher) = &self.teacher {
+            if self.heuristic_kl == 0.0 {
+                return Err(ConfigError::new(
+                    "teacher",
+                    format!("\"{teacher}\""),
+                    "is what heuristic_kl pulls towards, and heuristic_kl is 0 (off): set heuristic_kl too",
+                ));
+            }
         }
         for (name, v) in [
             ("epochs", self.epochs),

@@ -78,6 +78,13 @@ impl Trainer {
                     }
                     Tensor::from_slice(&ro.hints[base..base + rows])
                 });
+                if !ls.teachers.is_empty() {
+                    crate::learn::teacher::label_worlds(
+                        &mut ls.teachers,
+                        &self.venv,
+                        &mut ro.teacher_hints[base..base + rows],
+                    );
+                }
                 let (probs, values, ha, hc) = tch::no_grad(|| {
                     let (logits, ha) = lr.actor().step(&p, &v, &(&ls.actor_h * &m));
                     let logits = match &hints {

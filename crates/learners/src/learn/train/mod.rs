@@ -407,6 +407,15 @@ fn learner_side(
                     side_cfg.gamma(algorithm),
                 )
             }),
+        teachers: match &side_cfg.ppo.teacher {
+            // Checked by the config's validation: a target, one robot a world.
+            Some(teacher) if !kind(algorithm).off_policy() => {
+                let spec = crate::learn::teacher::check(teacher, side, true)
+                    .map_err(|e| e.within("ppo").within(side.name()))?;
+                crate::learn::teacher::Teacher::per_world(&spec, cfg.num_envs)?
+            }
+            _ => Vec::new(),
+        },
     })
 }
 

@@ -5,7 +5,7 @@
 //! cycles training leaves idle and never changes what training does. Rows
 //! land in `eval.csv` and `eval.png` of the run folder as children finish.
 
-use crate::error::{LearnError, Result};
+use crate::error::{LearnError, Result, ResultExt};
 use crate::eval::Summary;
 use crate::nn::run_dir::RunDir;
 use crate::plots::line::{self, line_plot, Series};
@@ -45,6 +45,27 @@ pub struct EvalPlan {
     pub seed: u64,
     pub num_captors: usize,
     pub speed_ratio: f64,
+}
+
+impl EvalPlan {
+    /// Checks the plan before training starts, so a typo in an evaluation
+    /// flag fails now and not at the first period: its settings, and that
+    /// every map set loads. Errors name the flag.
+    pub fn validate(&self) -> Result<()> {
+        crate::eval::EvalSetting {
+            num_captors: self.num_captors,
+            speed_ratio: self.speed_ratio,
+            episodes: self.episodes,
+            episode_length: self.episode_length,
+            ..Default::default()
+        }
+        .validate()
+        .context("--eval-episodes / --eval-episode-length")?;
+        for m in &self.maps {
+            t2e_core::map::catalog::load_prepared(m).with_context(|| format!("--eval-maps {m}"))?;
+        }
+        Ok(())
+    }
 }
 
 struct Running {

@@ -15,6 +15,7 @@ use super::metrics::Metrics;
 use super::periodic_eval::PeriodicEval;
 use super::trainer::Trainer;
 use crate::error::{LearnError, Result};
+use crate::learn::map_sampling::MapSampling;
 use crate::learn::run_config::TrainConfig;
 use crate::nn::run_dir::{RunDir, RunDirError};
 use crate::plots::line::{self, line_plot, Series};
@@ -110,6 +111,40 @@ impl TrainingRun {
             periodic: None,
             recent: Vec::new(),
         }
+    }
+
+    /// Who learns, on which maps, in how many worlds, on which device:
+    /// the line a run's log starts with.
+    pub fn describe(&self) -> String {
+        let cfg = &self.cfg;
+        let learners: Vec<String> = self
+            .trainer
+            .learner_sides()
+            .iter()
+            .map(|(s, a)| format!("{} {}", s.name(), a.name()))
+            .collect();
+        let extra = if cfg.extra_maps.is_off() {
+            String::new()
+        } else {
+            format!(
+                " + extra maps {:?} for {:.0}% of the episodes (a training option: not the protocol's maps alone)",
+                cfg.extra_maps.maps,
+                100.0 * cfg.extra_maps.share
+            )
+        };
+        let sampling = match cfg.map_sampling {
+            MapSampling::Uniform => "",
+            MapSampling::ClassBalanced => {
+                " drawn class-balanced (a training option: each size class a third of the episodes)"
+            }
+        };
+        format!(
+            "training {} on maps {:?}{sampling}{extra}, {} worlds, device {:?}",
+            learners.join(" + "),
+            cfg.maps,
+            cfg.num_envs,
+            self.trainer.device
+        )
     }
 
     pub fn dir(&self) -> &RunDir {

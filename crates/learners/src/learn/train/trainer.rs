@@ -24,6 +24,8 @@ pub(crate) struct LearnerSide {
     pub(super) bad_updates: u32,
     /// (phi's signed weight for this side, the side's gamma) when it shapes.
     pub(super) shaping: Option<(f32, f64)>,
+    /// One per world where the KL pulls towards a teacher; empty elsewhere.
+    pub(super) teachers: Vec<crate::learn::teacher::Teacher>,
 }
 
 pub struct Trainer {
