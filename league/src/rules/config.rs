@@ -658,6 +658,33 @@ mod tests {
     }
 
     #[test]
+    fn a_teacher_reaches_the_target_learner_and_is_checked() {
+        let cfg = LeagueConfig::parse(
+            "[target.ppo]\nheuristic_kl = 2.0\nteacher = \"robust:10:heuristic+expert:1\"\n",
+        )
+        .unwrap();
+        assert_eq!(
+            cfg.train_config(Side::Target).target.ppo.teacher.as_deref(),
+            Some("robust:10:heuristic+expert:1")
+        );
+        for (text, says) in [
+            (
+                "heuristic_kl = 2.0\nteacher = \"ckpt:x\"",
+                "not a checkpoint",
+            ),
+            ("teacher = \"still\"", "set heuristic_kl too"),
+        ] {
+            let err = LeagueConfig::parse(&format!("[target.ppo]\n{text}\n"))
+                .unwrap_err()
+                .to_string();
+            assert!(
+                err.starts_with("target.ppo.teacher") && err.contains(says),
+                "{text}: {err}"
+            );
+        }
+    }
+
+    #[test]
     fn validation_shares_no_team_and_no_map_with_training_or_test() {
         let ok = "maps = \"generated:20\"\n[evaluator]\nvalidation_maps = \"generated:4@1001\"\nvalidation_captors = [\"expert:1\", \"expert:2\", \"greedy:4\"]\n";
         let cfg = LeagueConfig::parse(ok).unwrap();
