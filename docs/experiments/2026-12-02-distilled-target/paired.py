@@ -35,7 +35,7 @@ def main(out: Path, sight_out: Path) -> None:
         base = sight_out if team == "mappo-sight" else out
         rule = episodes(base / f"{team}-heuristic-{ratio}")
         caught_rule = [e["captured"] == "true" for e in rule]
-        for name in ["heuristic", "robust", "teacher", "rule", "teacher-no-prior", "rule-no-prior"]:
+        for name in ["heuristic", "robust", "teacher", "rule", "teacher-no-prior", "rule-no-prior", "teacher-kl50"]:
             folder = (base if name in ("heuristic", "robust") else out) / f"{team}-{name}-{ratio}"
             if not (folder.exists() and any((x / "episodes.csv").exists() for x in folder.iterdir())):
                 continue
@@ -52,6 +52,7 @@ def main(out: Path, sight_out: Path) -> None:
                 "rule": "control (KL to the rule), prior 10",
                 "teacher-no-prior": "distilled, no prior",
                 "rule-no-prior": "control (KL to the rule), no prior",
+                "teacher-kl50": "distilled, prior 10, KL 50",
             }[name]
             if name == "heuristic":
                 diff = "–"

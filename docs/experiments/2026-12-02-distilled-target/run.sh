@@ -7,7 +7,8 @@
 # Gibson maps. Held-out protocol, one thread per command.
 #   bash run.sh BIN OUT SIGHT_TEAM
 # VARIANTS (default "teacher rule"): the configs here to train and play;
-# "teacher-no-prior rule-no-prior" are the same without the logit prior.
+# "teacher-no-prior rule-no-prior" are the same without the logit prior,
+# "teacher-kl50" the distilled one with a KL ten times as strong.
 # SIGHT_TEAM: the cooperative MAPPO team with sight that
 # ../2026-12-01-robust-target/sight.sh trains (its OUT/mappo-sight-s0); its
 # rule-based and robust rows are that script's, on the same starts.
