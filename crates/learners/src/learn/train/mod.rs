@@ -408,13 +408,15 @@ fn learner_side(
                 )
             }),
         teachers: match &side_cfg.ppo.teacher {
-            // Checked by the config's validation: a target, one robot a world.
-            Some(teacher) if !kind(algorithm).off_policy() => {
-                let spec = crate::learn::teacher::check(teacher, side, true)
-                    .map_err(|e| e.within("ppo").within(side.name()))?;
+            // The config's check again, for its parsed spec: a target of a
+            // PPO learner, one robot a world.
+            Some(teacher) => {
+                let spec =
+                    crate::learn::teacher::check(teacher, side, !kind(algorithm).off_policy())
+                        .map_err(|e| e.within("ppo").within(side.name()))?;
                 crate::learn::teacher::Teacher::per_world(&spec, cfg.num_envs)?
             }
-            _ => Vec::new(),
+            None => Vec::new(),
         },
     })
 }
