@@ -597,6 +597,18 @@ fn a_target_leaning_on_the_rule_based_one_plays_it_and_learns_from_its_own_logit
 /// a room, with a KL of weight `kl` towards `teacher` (the rule-based target
 /// when None), saved in a fresh folder.
 fn kl_trained_target(kl: f64, teacher: Option<&str>) -> tempfile::TempDir {
+    let cfg = kl_config(kl, teacher);
+    let dir = tempfile::tempdir().unwrap();
+    let mut t = Trainer::new(cfg, maps(room(60, 260, 60, 260))).unwrap();
+    for _ in 0..20 {
+        t.iterate().unwrap();
+    }
+    t.save(dir.path()).unwrap();
+    dir
+}
+
+/// `kl_trained_target`'s config.
+fn kl_config(kl: f64, teacher: Option<&str>) -> TrainConfig {
     tch::set_num_threads(1);
     let mut cfg = chase_config(8);
     cfg.captors.play = "heuristic".parse().unwrap();
@@ -614,13 +626,7 @@ fn kl_trained_target(kl: f64, teacher: Option<&str>) -> tempfile::TempDir {
         ..SideConfig::default()
     };
     cfg.validate().unwrap();
-    let dir = tempfile::tempdir().unwrap();
-    let mut t = Trainer::new(cfg, maps(room(60, 260, 60, 260))).unwrap();
-    for _ in 0..20 {
-        t.iterate().unwrap();
-    }
-    t.save(dir.path()).unwrap();
-    dir
+    cfg
 }
 
 /// The share of the rule-based target's states (against the expert
@@ -710,4 +716,78 @@ fn a_teacher_replaces_the_rule_based_target_as_the_kls_anchor() {
     bad.captors.ppo.heuristic_kl = 1.0;
     let err = bad.validate().unwrap_err().to_string();
     assert!(err.starts_with("captors.ppo."), "{err}");
+}
+
+/// `ppo.teacher_departure_weight` multiplies the KL where the teacher's
+/// move is not the rule-based target's. Behind a logit prior of 10 on the
+/// rule, a KL of 0.01 towards `still` (which departs from the rule in
+/// nearly every state) barely moves the target in 20 iterations; with the
+/// departures weighted 20 times it stops in most of the rule-based
+/// target's states. The run's `teacher.csv` counts, per iteration, the
+/// teacher's departures and how many the policy followed. The weight needs
+/// a teacher and is at least 1.
+#[test]
+fn a_departure_weight_makes_the_teachers_departures_outweigh_the_prior() {
+    use std::sync::atomic::AtomicBool;
+    use t2e_core::env::Action;
+    use t2e_learners::learn::train::run::TrainingRun;
+    let trained = |weight: f64| {
+        let mut cfg = kl_config(0.01, Some("still"));
+        cfg.target.net.heuristic_prior = 10.0;
+        cfg.target.ppo.teacher_departure_weight = weight;
+        cfg.total_env_steps = 20 * (cfg.num_envs * cfg.rollout_steps) as u64;
+        cfg.validate().unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        let mut run = TrainingRun::start(cfg, maps(room(60, 260, 60, 260)), dir.path()).unwrap();
+        run.run(&AtomicBool::new(false), None, |_| {}).unwrap();
+        let csv = std::fs::read_to_string(dir.path().join("teacher.csv")).unwrap();
+        let rows: Vec<Vec<f64>> = csv
+            .lines()
+            .skip(1)
+            .map(|l| l.split(',').map(|x| x.parse().unwrap()).collect())
+            .collect();
+        (dir, rows)
+    };
+    let stops = |dir: &Path| share_of_rule_states(dir, |learned, _| learned == Action::Stop);
+    let (weighted_dir, weighted) = trained(20.0);
+    let (plain_dir, plain) = trained(1.0);
+    let (w, p) = (stops(weighted_dir.path()), stops(plain_dir.path()));
+    eprintln!("share of Stop behind a prior of 10: departures weighted {w:.3}, not {p:.3}");
+    assert!(w > 0.5 && w > p + 0.2, "weighted {w}, not {p}");
+
+    // iteration, env_steps, decisions, teacher_departures, followed, strayed, followed_share
+    for rows in [&weighted, &plain] {
+        assert_eq!(rows.len(), 20);
+        for (i, r) in rows.iter().enumerate() {
+            assert_eq!(r[0], (i + 1) as f64);
+            assert_eq!(r[2], 16.0 * 40.0, "one decision per world and step");
+            assert!(
+                r[3] > 0.5 * r[2],
+                "still departs from the rule nearly everywhere: {r:?}"
+            );
+            assert!(r[4] <= r[3] && r[5] <= r[2] - r[3], "{r:?}");
+            assert!((r[6] - r[4] / r[3]).abs() < 1e-9, "{r:?}");
+        }
+    }
+    let last = |rows: &Vec<Vec<f64>>| rows.last().unwrap()[6];
+    assert!(
+        last(&weighted) > last(&plain) + 0.2,
+        "{weighted:?} against {plain:?}"
+    );
+
+    let mut bad = kl_config(1.0, None);
+    bad.target.ppo.teacher_departure_weight = 2.0;
+    let err = bad.validate().unwrap_err().to_string();
+    assert!(
+        err.starts_with("target.ppo.teacher_departure_weight = 2"),
+        "{err}"
+    );
+    assert!(err.contains("set teacher too"), "{err}");
+    let mut bad = kl_config(1.0, Some("still"));
+    bad.target.ppo.teacher_departure_weight = 0.5;
+    let err = bad.validate().unwrap_err().to_string();
+    assert!(
+        err.starts_with("target.ppo.teacher_departure_weight = 0.5"),
+        "{err}"
+    );
 }

@@ -11,6 +11,7 @@ use super::learner::{
 use super::rollout::{BadUpdate, Rollout, UpdateStats};
 pub use super::side_config::ppo::PpoConfig;
 use super::side_config::SideConfig;
+use super::teacher::TeacherAgreement;
 use super::undo::UndoPoint;
 use crate::error::LearnError;
 use crate::nn::checkpoint::{load_into, named_cpu_tensors, CheckpointError};
@@ -460,7 +461,8 @@ impl PpoLearner {
         let per_batch = sequences.div_ceil(cfg.minibatches);
         let mut order: Vec<usize> = (0..sequences).collect();
         let mut stats = UpdateStats::default();
-        for _ in 0..cfg.epochs {
+        let mut agreement = teacher_hints.as_ref().map(|_| TeacherAgreement::default());
+        for epoch in 0..cfg.epochs {
             order.shuffle(rng);
             for mb in order.chunks(per_batch) {
                 // Time-major rows of the minibatch: [l, mb] flattened.
@@ -491,6 +493,18 @@ impl PpoLearner {
                     None => logits,
                 };
                 let logp_all = logits.log_softmax(-1, Kind::Float);
+                // The first pass sees every decision once, before this
+                // update has changed the policy.
+                if let (0, Some(agreement), Some(anchor), Some(rule)) =
+                    (epoch, agreement.as_mut(), &mb_anchor, &mb_hints)
+                {
+                    let moves = |t: &Tensor| Vec::<i64>::try_from(t).expect("action indices");
+                    agreement.add(TeacherAgreement::count(
+                        &moves(&logp_all.argmax(-1, false)),
+                        &moves(anchor),
+                        &moves(rule),
+                    ));
+                }
                 let a = actions.index_select(0, &idx);
                 let new_logp = logp_all.gather(1, &a.unsqueeze(1), false).squeeze_dim(1);
                 let entropy = -(logp_all.exp() * &logp_all)
@@ -515,9 +529,17 @@ impl PpoLearner {
                         .as_ref()
                         .or(mb_hints.as_ref())
                         .expect("wants_hints covers heuristic_kl");
-                    let kl = -logp_all
+                    let log_anchor = logp_all
                         .gather(1, &anchor.unsqueeze(1), false)
-                        .mean(Kind::Float);
+                        .squeeze_dim(1);
+                    let kl = match (&mb_anchor, &mb_hints) {
+                        (Some(teacher), Some(rule)) if cfg.teacher_departure_weight != 1.0 => {
+                            let departs = teacher.ne_tensor(rule).to_kind(Kind::Float);
+                            let weight = departs * (cfg.teacher_departure_weight - 1.0) + 1.0;
+                            -(log_anchor * weight).mean(Kind::Float)
+                        }
+                        _ => -log_anchor.mean(Kind::Float),
+                    };
                     loss = loss + self.kl_weight * kl;
                 }
                 let loss_value = loss.double_value(&[]);
@@ -557,6 +579,7 @@ impl PpoLearner {
             }
         }
         stats.average();
+        stats.teacher = agreement;
         Ok(stats)
     }
 }

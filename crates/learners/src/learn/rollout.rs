@@ -106,6 +106,9 @@ pub struct UpdateStats {
     /// Gradient steps the numbers above average over (0: the learner did
     /// not learn this time, e.g. an off-policy replay still filling).
     pub gradient_steps: usize,
+    /// A target with a teacher (`ppo.teacher`): how its greedy moves
+    /// matched the teacher's on this rollout, before the update.
+    pub teacher: Option<super::teacher::TeacherAgreement>,
 }
 
 impl UpdateStats {

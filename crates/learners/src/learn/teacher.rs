@@ -92,6 +92,55 @@ pub fn label_worlds(teachers: &mut [Teacher], venv: &VecEnv, out: &mut [i64]) {
         });
 }
 
+/// How close the policy came to its teacher on one rollout, counted over
+/// every target decision before the update: where the teacher departs
+/// from the rule-based target, and whether the policy's greedy move
+/// follows it there and keeps the rule elsewhere. A row of the run's
+/// `teacher.csv`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct TeacherAgreement {
+    /// Decisions counted.
+    pub decisions: u64,
+    /// Of those, the teacher's departures: its move is not the rule's.
+    pub teacher_departures: u64,
+    /// Departures where the policy's greedy move is the teacher's.
+    pub followed: u64,
+    /// Other decisions where the policy's greedy move is not the rule's
+    /// (a departure the teacher did not make).
+    pub strayed: u64,
+}
+
+impl TeacherAgreement {
+    /// Counts one batch: the policy's greedy moves, the teacher's and the
+    /// rule-based target's, as action indices of the same decisions.
+    pub fn count(greedy: &[i64], teacher: &[i64], rule: &[i64]) -> TeacherAgreement {
+        let mut a = TeacherAgreement::default();
+        for ((&g, &t), &r) in greedy.iter().zip(teacher).zip(rule) {
+            a.decisions += 1;
+            if t != r {
+                a.teacher_departures += 1;
+                a.followed += u64::from(g == t);
+            } else {
+                a.strayed += u64::from(g != r);
+            }
+        }
+        a
+    }
+
+    pub fn add(&mut self, other: TeacherAgreement) {
+        self.decisions += other.decisions;
+        self.teacher_departures += other.teacher_departures;
+        self.followed += other.followed;
+        self.strayed += other.strayed;
+    }
+
+    /// The share of the teacher's departures the policy follows (NaN with
+    /// none).
+    pub fn followed_share(&self) -> f64 {
+        self.followed as f64 / self.teacher_departures as f64
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -107,5 +156,28 @@ mod tests {
         assert!(err("expert:3", Side::Target, true)
             .starts_with("teacher = \"expert:3\": expert:3 is a captor team"));
         assert!(err("robots", Side::Target, true).contains("unknown controller"));
+    }
+
+    #[test]
+    fn agreement_counts_departures_followed_and_strays() {
+        // Decisions: the teacher departs in 0, 1 and 2; the policy follows
+        // it in 0 and 2 (in 1 it keeps the rule), and strays in 4.
+        let greedy = [3, 2, 4, 1, 0];
+        let teacher = [3, 1, 4, 1, 2];
+        let rule = [2, 2, 0, 1, 2];
+        let a = TeacherAgreement::count(&greedy, &teacher, &rule);
+        assert_eq!(
+            a,
+            TeacherAgreement {
+                decisions: 5,
+                teacher_departures: 3,
+                followed: 2,
+                strayed: 1
+            }
+        );
+        assert!((a.followed_share() - 2.0 / 3.0).abs() < 1e-12);
+        let mut twice = a;
+        twice.add(a);
+        assert_eq!((twice.decisions, twice.followed, twice.strayed), (10, 4, 2));
     }
 }

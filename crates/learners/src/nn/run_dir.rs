@@ -6,6 +6,8 @@
 //!   state.json                  where the run stands (`RunState`)
 //!   checkpoints/SIDE-ENVSTEPS/  one checkpoint folder per save (nn::checkpoint)
 //!   metrics.csv, curves.png     one row per iteration, and its curves (`train`)
+//!   teacher.csv                 a target with `ppo.teacher`: one row per
+//!                               iteration, how its moves match the teacher's
 //!   evals/SIDE-ENVSTEPS/        `train --eval-every`'s evaluations, gathered
 //!                               in eval.csv, eval.png and departure.png
 //! ```
@@ -122,6 +124,10 @@ impl RunDir {
 
     pub fn metrics_path(&self) -> PathBuf {
         self.root.join("metrics.csv")
+    }
+
+    pub fn teacher_path(&self) -> PathBuf {
+        self.root.join("teacher.csv")
     }
 
     pub fn curves_path(&self) -> PathBuf {

@@ -80,10 +80,22 @@ pub struct PpoConfig {
     /// stored config while unset.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub teacher: Option<String>,
+    /// The KL's weight, times this, in the states where the teacher's move
+    /// is not the rule-based target's (its departures). A robust teacher
+    /// departs in a few percent of states, and there a logit prior of 10
+    /// holds the policy to the rule: with the same weight everywhere the
+    /// departures are a few percent of the KL and are never learned. 1:
+    /// every state alike (the default). Needs `teacher`. Left out while 1.
+    #[serde(skip_serializing_if = "is_one")]
+    pub teacher_departure_weight: f64,
 }
 
 fn is_zero(x: &f64) -> bool {
     *x == 0.0
+}
+
+fn is_one(x: &f64) -> bool {
+    *x == 1.0
 }
 
 impl Default for PpoConfig {
@@ -108,6 +120,7 @@ impl Default for PpoConfig {
             heuristic_kl: 0.0,
             heuristic_kl_anneal: 0.0,
             teacher: None,
+            teacher_departure_weight: 1.0,
         }
     }
 }
@@ -146,6 +159,20 @@ impl PpoConfig {
                     "is what heuristic_kl pulls towards, and heuristic_kl is 0 (off): set heuristic_kl too",
                 ));
             }
+        }
+        in_interval(
+            "teacher_departure_weight",
+            self.teacher_departure_weight,
+            1.0,
+            1000.0,
+            true,
+        )?;
+        if self.teacher_departure_weight != 1.0 && self.teacher.is_none() {
+            return Err(ConfigError::new(
+                "teacher_departure_weight",
+                self.teacher_departure_weight,
+                "weighs the states where the teacher departs from the rule, and no teacher is set: set teacher too",
+            ));
         }
         for (name, v) in [
             ("epochs", self.epochs),

@@ -21,3 +21,86 @@ pub fn read_csv<T: serde::de::DeserializeOwned>(
             cause,
         })
 }
+
+/// Appends `row` to the CSV file at `path`, with a header when the file is
+/// new.
+pub fn append_row<T: serde::Serialize>(
+    path: &std::path::Path,
+    row: &T,
+) -> Result<(), crate::error::LearnError> {
+    use crate::error::LearnError;
+    let fresh = !path.exists();
+    let context = || format!("cannot write {}", path.display());
+    let file = std::fs::OpenOptions::new()
+        .create(true)
+        .append(true)
+        .open(path)
+        .map_err(|e| LearnError::io(context(), e))?;
+    let mut w = csv::WriterBuilder::new()
+        .has_headers(fresh)
+        .from_writer(file);
+    w.serialize(row).map_err(|cause| LearnError::Csv {
+        context: context(),
+        cause,
+    })?;
+    w.flush().map_err(|e| LearnError::io(context(), e))?;
+    Ok(())
+}
+
+/// Keeps the rows of the CSV file at `path` that `keep` accepts: on
+/// resume, the rows of iterations past the last checkpoint go, since the
+/// resumed run plays them again.
+pub fn keep_rows<T: serde::Serialize + serde::de::DeserializeOwned>(
+    path: &std::path::Path,
+    keep: impl Fn(&T) -> bool,
+) -> Result<(), crate::error::LearnError> {
+    let rows: Vec<T> = read_csv::<T>(path)?
+        .into_iter()
+        .filter(|r| keep(r))
+        .collect();
+    let _ = std::fs::remove_file(path);
+    for row in &rows {
+        append_row(path, row)?;
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[derive(Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+    struct Row {
+        iteration: u64,
+        share: f64,
+    }
+
+    #[test]
+    fn rows_past_the_resume_point_are_dropped_and_the_rest_kept() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("rows.csv");
+        for iteration in 1..=4 {
+            let share = iteration as f64 / 8.0;
+            append_row(&path, &Row { iteration, share }).unwrap();
+        }
+        keep_rows(&path, |r: &Row| r.iteration <= 2).unwrap();
+        append_row(
+            &path,
+            &Row {
+                iteration: 3,
+                share: 1.0,
+            },
+        )
+        .unwrap();
+        let rows: Vec<Row> = read_csv(&path).unwrap();
+        let got: Vec<(u64, f64)> = rows.iter().map(|r| (r.iteration, r.share)).collect();
+        assert_eq!(got, [(1, 0.125), (2, 0.25), (3, 1.0)]);
+        assert_eq!(
+            std::fs::read_to_string(&path)
+                .unwrap()
+                .matches("iteration")
+                .count(),
+            1
+        );
+    }
+}

@@ -3,6 +3,7 @@
 
 use super::super::kind::kind;
 use super::super::rollout::UpdateStats;
+use super::super::teacher::TeacherAgreement;
 use serde::{Deserialize, Serialize};
 use t2e_core::algorithm::Algorithm;
 use t2e_core::env::Side;
@@ -61,6 +62,9 @@ impl SideUpdate {
         let Some(u) = self.stats else {
             return;
         };
+        if self.side == Side::Target {
+            m.teacher = u.teacher;
+        }
         let fields = match self.side {
             Side::Captors => [
                 &mut m.captor_policy_loss,
@@ -125,4 +129,36 @@ pub struct Metrics {
     /// under `lr_anneal`).
     pub captor_lr: Option<f64>,
     pub target_lr: Option<f64>,
+    /// A target with a teacher: its agreement with the teacher, written to
+    /// `teacher.csv` rather than here, so that runs without one keep the
+    /// columns they always had.
+    #[serde(skip)]
+    pub teacher: Option<TeacherAgreement>,
+}
+
+/// One row of `teacher.csv`: an iteration's `TeacherAgreement`, with the
+/// share of the teacher's departures that the policy follows.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct TeacherRow {
+    pub iteration: u64,
+    pub env_steps: u64,
+    pub decisions: u64,
+    pub teacher_departures: u64,
+    pub followed: u64,
+    pub strayed: u64,
+    pub followed_share: f64,
+}
+
+impl TeacherRow {
+    pub fn of(m: &Metrics) -> Option<TeacherRow> {
+        m.teacher.map(|a| TeacherRow {
+            iteration: m.iteration,
+            env_steps: m.env_steps,
+            decisions: a.decisions,
+            teacher_departures: a.teacher_departures,
+            followed: a.followed,
+            strayed: a.strayed,
+            followed_share: a.followed_share(),
+        })
+    }
 }

@@ -1,17 +1,17 @@
 //! A training run from its first iteration to its last: `t2e-league train`
 //! is this type's command line. It owns what a run folder holds beside the
-//! checkpoints (`config.toml`, `metrics.csv`, `curves.png`, the periodic
-//! evaluations), starts or resumes the `Trainer`, and runs the loop:
+//! checkpoints (`config.toml`, `metrics.csv`, `teacher.csv`, `curves.png`,
+//! the periodic evaluations), starts or resumes the `Trainer`, and runs the loop:
 //! iterate, append the metrics, checkpoint every `checkpoint_every`
 //! iterations (and whenever a periodic evaluation is due), redraw the
 //! curves, hand checkpoints to the periodic evaluation.
 //!
-//! On resume, metrics rows past the last checkpoint are dropped: they
+//! On resume, metrics (and teacher) rows past the last checkpoint are dropped: they
 //! describe iterations the resumed run plays again, and a kill -9 between
 //! a row and its checkpoint would otherwise leave them twice.
 
-use super::csv_rows::read_csv;
-use super::metrics::Metrics;
+use super::csv_rows::{append_row, keep_rows, read_csv};
+use super::metrics::{Metrics, TeacherRow};
 use super::periodic_eval::PeriodicEval;
 use super::trainer::Trainer;
 use crate::error::{LearnError, Result};
@@ -91,6 +91,7 @@ impl TrainingRun {
         })?;
         t2e_core::fs::write_file_atomically(&config, text.as_bytes())?;
         let _ = std::fs::remove_file(dir.metrics_path());
+        let _ = std::fs::remove_file(dir.teacher_path());
         let trainer = Trainer::new(cfg.clone(), maps)?;
         Ok(TrainingRun::around(trainer, cfg, dir))
     }
@@ -99,7 +100,11 @@ impl TrainingRun {
     pub fn resume(cfg: TrainConfig, maps: Arc<Vec<Arc<PreparedMap>>>, dir: &Path) -> Result<Self> {
         let dir = RunDir::new(dir);
         let trainer = Trainer::resume(cfg.clone(), maps, dir.root())?;
-        keep_metrics_up_to(&dir.metrics_path(), trainer.iteration)?;
+        let iteration = trainer.iteration;
+        keep_rows(&dir.metrics_path(), |m: &Metrics| m.iteration <= iteration)?;
+        keep_rows(&dir.teacher_path(), |t: &TeacherRow| {
+            t.iteration <= iteration
+        })?;
         Ok(TrainingRun::around(trainer, cfg, dir))
     }
 
@@ -178,7 +183,10 @@ impl TrainingRun {
                 break;
             }
             let m = self.trainer.iterate()?;
-            append_metrics(&self.dir.metrics_path(), &m)?;
+            append_row(&self.dir.metrics_path(), &m)?;
+            if let Some(row) = TeacherRow::of(&m) {
+                append_row(&self.dir.teacher_path(), &row)?;
+            }
             self.recent.push(m.clone());
             if self.recent.len() > 5 {
                 self.recent.remove(0);
@@ -272,40 +280,9 @@ pub fn status_line(recent: &[Metrics]) -> String {
     )
 }
 
-fn append_metrics(path: &Path, m: &Metrics) -> Result<()> {
-    let fresh = !path.exists();
-    let context = || format!("cannot write {}", path.display());
-    let file = std::fs::OpenOptions::new()
-        .create(true)
-        .append(true)
-        .open(path)
-        .map_err(|e| LearnError::io(context(), e))?;
-    let mut w = csv::WriterBuilder::new()
-        .has_headers(fresh)
-        .from_writer(file);
-    w.serialize(m).map_err(|cause| LearnError::Csv {
-        context: context(),
-        cause,
-    })?;
-    w.flush().map_err(|e| LearnError::io(context(), e))?;
-    Ok(())
-}
-
 /// The rows of a run's `metrics.csv` (none before its first iteration).
 pub fn read_metrics(dir: &RunDir) -> Result<Vec<Metrics>> {
     read_csv(&dir.metrics_path())
-}
-
-fn keep_metrics_up_to(path: &Path, iteration: u64) -> Result<()> {
-    let rows: Vec<Metrics> = read_csv::<Metrics>(path)?
-        .into_iter()
-        .filter(|m| m.iteration <= iteration)
-        .collect();
-    let _ = std::fs::remove_file(path);
-    for m in &rows {
-        append_metrics(path, m)?;
-    }
-    Ok(())
 }
 
 /// Capture rate and returns against environment steps, each point the
