@@ -24,8 +24,12 @@ def wilson(k: int, n: int) -> tuple[float, float]:
 
 
 def episodes(folder: Path) -> list[dict]:
-    (d,) = [x for x in folder.iterdir() if (x / "episodes.csv").exists()]
-    return list(csv.DictReader(open(d / "episodes.csv")))
+    # A setting played again by a newer build is a second folder (the code
+    # version is part of its name); its episodes must be the same.
+    runs = sorted(x for x in folder.iterdir() if (x / "episodes.csv").exists())
+    played = [list(csv.DictReader(open(d / "episodes.csv"))) for d in runs]
+    assert played and all(p == played[0] for p in played), folder
+    return played[0]
 
 
 def main(out: Path, sight_out: Path) -> None:
@@ -35,7 +39,8 @@ def main(out: Path, sight_out: Path) -> None:
         base = sight_out if team == "mappo-sight" else out
         rule = episodes(base / f"{team}-heuristic-{ratio}")
         caught_rule = [e["captured"] == "true" for e in rule]
-        for name in ["heuristic", "robust", "teacher", "rule", "teacher-no-prior", "rule-no-prior", "teacher-kl50"]:
+        for name in ["heuristic", "robust", "teacher", "rule", "teacher-no-prior", "rule-no-prior", "teacher-kl50",
+                     "teacher-departures100", "teacher-departures100-sight"]:
             folder = (base if name in ("heuristic", "robust") else out) / f"{team}-{name}-{ratio}"
             if not (folder.exists() and any((x / "episodes.csv").exists() for x in folder.iterdir())):
                 continue
@@ -53,6 +58,8 @@ def main(out: Path, sight_out: Path) -> None:
                 "teacher-no-prior": "distilled, no prior",
                 "rule-no-prior": "control (KL to the rule), no prior",
                 "teacher-kl50": "distilled, prior 10, KL 50",
+                "teacher-departures100": "distilled, prior 10, departures x100",
+                "teacher-departures100-sight": "distilled, prior 10, departures x100, sight",
             }[name]
             if name == "heuristic":
                 diff = "–"

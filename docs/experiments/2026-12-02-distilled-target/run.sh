@@ -8,7 +8,9 @@
 #   bash run.sh BIN OUT SIGHT_TEAM
 # VARIANTS (default "teacher rule"): the configs here to train and play;
 # "teacher-no-prior rule-no-prior" are the same without the logit prior,
-# "teacher-kl50" the distilled one with a KL ten times as strong.
+# "teacher-kl50" the distilled one with a KL ten times as strong,
+# "teacher-departures100" (and -sight, and teacher-departures20) the KL 100
+# (20) times as strong where the teacher departs from the rule.
 # SIGHT_TEAM: the cooperative MAPPO team with sight that
 # ../2026-12-01-robust-target/sight.sh trains (its OUT/mappo-sight-s0); its
 # rule-based and robust rows are that script's, on the same starts.
