@@ -229,7 +229,7 @@ fn short_league_without_evaluator() -> String {
 #[test]
 fn exploiters_play_the_main_learners_join_the_pool_and_start_again() {
     let tmp = tempfile::tempdir().unwrap();
-    let dir = LeagueDir::new(&tmp.path().join("league"));
+    let dir = LeagueDir::new(tmp.path().join("league"));
     let config = tmp.path().join("league.toml");
     let text = short_league_without_evaluator()
         + "[exploiters]\ncaptors = true\ntarget = true\nwin_rate = 0.99\ntimeout_env_steps = 960\n";

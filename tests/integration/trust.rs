@@ -354,7 +354,7 @@ fn checkpoints_are_never_lost_and_never_silently_replaced() {
         .unwrap()
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
         .collect();
-    assert_eq!(left, [name.clone()]);
+    assert_eq!(left, std::slice::from_ref(&name));
 
     // ckpt:RUN plays the checkpoint state.json names, and fails rather than
     // falling back to an older one when that one is gone.

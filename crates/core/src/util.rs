@@ -161,6 +161,33 @@ pub fn free_cores(cores: usize, load: f64) -> usize {
     cores.saturating_sub(busy).clamp(1, cores.max(1))
 }
 
+/// The running binary, for spawning copies of this program (learners,
+/// workers, periodic evaluations). On Linux `/proc/self/exe`, which still
+/// opens the file this process was started from after a rebuild replaced
+/// it on disk; `current_exe` then names a path that is gone (" (deleted)"),
+/// and a training run beside a `cargo build` would lose every periodic
+/// evaluation.
+pub fn own_exe() -> std::io::Result<std::path::PathBuf> {
+    let proc_exe = std::path::Path::new("/proc/self/exe");
+    if proc_exe.exists() {
+        Ok(proc_exe.to_path_buf())
+    } else {
+        std::env::current_exe()
+    }
+}
+
+/// A command that runs this program again (`own_exe`), shown in `ps` under
+/// the path it was started from.
+pub fn own_command() -> std::io::Result<std::process::Command> {
+    use std::os::unix::process::CommandExt;
+    let mut cmd = std::process::Command::new(own_exe()?);
+    if let Ok(path) = std::env::current_exe() {
+        let shown = path.to_string_lossy().into_owned();
+        cmd.arg0(shown.trim_end_matches(" (deleted)"));
+    }
+    Ok(cmd)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -207,31 +234,4 @@ mod tests {
             assert!(e.to_string().starts_with("--eval-every"), "{bad}: {e}");
         }
     }
-}
-
-/// The running binary, for spawning copies of this program (learners,
-/// workers, periodic evaluations). On Linux `/proc/self/exe`, which still
-/// opens the file this process was started from after a rebuild replaced
-/// it on disk; `current_exe` then names a path that is gone (" (deleted)"),
-/// and a training run beside a `cargo build` lost every periodic
-/// evaluation (stop 31).
-pub fn own_exe() -> std::io::Result<std::path::PathBuf> {
-    let proc_exe = std::path::Path::new("/proc/self/exe");
-    if proc_exe.exists() {
-        Ok(proc_exe.to_path_buf())
-    } else {
-        std::env::current_exe()
-    }
-}
-
-/// A command that runs this program again (`own_exe`), shown in `ps` under
-/// the path it was started from.
-pub fn own_command() -> std::io::Result<std::process::Command> {
-    use std::os::unix::process::CommandExt;
-    let mut cmd = std::process::Command::new(own_exe()?);
-    if let Ok(path) = std::env::current_exe() {
-        let shown = path.to_string_lossy().into_owned();
-        cmd.arg0(shown.trim_end_matches(" (deleted)"));
-    }
-    Ok(cmd)
 }

@@ -540,7 +540,7 @@ impl PpoLearner {
                         }
                         _ => -log_anchor.mean(Kind::Float),
                     };
-                    loss = loss + self.kl_weight * kl;
+                    loss += self.kl_weight * kl;
                 }
                 let loss_value = loss.double_value(&[]);
                 if !loss_value.is_finite() {

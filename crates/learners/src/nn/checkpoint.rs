@@ -37,8 +37,6 @@ use tch::{nn, Device, Tensor};
 /// 2: `meta.json` carries the SHA-256 of every weight file.
 pub const FORMAT: u32 = 2;
 
-/// The learners whose checkpoints this build can load.
-
 /// The sidecar of a checkpoint.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]

@@ -202,6 +202,12 @@ impl<'a> LeagueHooks<'a> {
 
     /// Draws world `e`'s opponent and speed for its current episode and sets
     /// the world up for them.
+    /// The opponent networks the worlds play now, which loading another
+    /// must not evict.
+    fn networks_in_use(&self) -> Vec<i64> {
+        self.worlds.iter().filter_map(|w| w.network).collect()
+    }
+
     fn draw(&mut self, venv: &mut VecEnv, e: usize) -> Result<WorldOpponent> {
         let other = self.other();
         let seed = draw_seed(self.cfg.seed, self.learner_id, e, venv.env(e).seed);
@@ -238,10 +244,10 @@ impl<'a> LeagueHooks<'a> {
                 venv.script_world(e, other, Some(spec.build(other)?));
                 None
             }
-            _ => match {
-                let in_use: Vec<i64> = self.worlds.iter().filter_map(|w| w.network).collect();
-                self.nets.load(&self.dir.root, &member, &in_use)
-            } {
+            _ => match self
+                .nets
+                .load(&self.dir.root, &member, &self.networks_in_use())
+            {
                 Ok(hidden) => {
                     venv.script_world(e, other, None);
                     Some((member.id, hidden))
@@ -689,7 +695,11 @@ impl<'a> LearnerRun<'a> {
                 self.reset()?;
                 tracing::info!("{}: back to its initial weights", self.name);
             }
-        } else if self.trainer.iteration % self.cfg.checkpoint_every == 0 {
+        } else if self
+            .trainer
+            .iteration
+            .is_multiple_of(self.cfg.checkpoint_every)
+        {
             self.checkpoint()?;
         }
         self.hooks.refresh()?;

@@ -191,7 +191,10 @@ impl TrainingRun {
             if self.recent.len() > 5 {
                 self.recent.remove(0);
             }
-            let scheduled = self.trainer.iteration % self.cfg.checkpoint_every == 0;
+            let scheduled = self
+                .trainer
+                .iteration
+                .is_multiple_of(self.cfg.checkpoint_every);
             let eval_due = self.periodic.as_ref().is_some_and(|p| p.is_due());
             if scheduled || eval_due {
                 let written = self.trainer.save(self.dir.root())?;
