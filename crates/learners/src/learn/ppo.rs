@@ -533,7 +533,7 @@ impl PpoLearner {
                         .gather(1, &anchor.unsqueeze(1), false)
                         .squeeze_dim(1);
                     let kl = match (&mb_anchor, &mb_hints) {
-                        (Some(teacher), Some(rule)) if cfg.teacher_departure_weight != 1.0 => {
+                        (Some(teacher), Some(rule)) => {
                             let departs = teacher.ne_tensor(rule).to_kind(Kind::Float);
                             let weight = departs * (cfg.teacher_departure_weight - 1.0) + 1.0;
                             -(log_anchor * weight).mean(Kind::Float)

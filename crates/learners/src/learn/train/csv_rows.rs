@@ -49,18 +49,32 @@ pub fn append_row<T: serde::Serialize>(
 
 /// Keeps the rows of the CSV file at `path` that `keep` accepts: on
 /// resume, the rows of iterations past the last checkpoint go, since the
-/// resumed run plays them again.
+/// resumed run plays them again. The file is replaced in one atomic write,
+/// so a kill in the middle leaves the old rows or the kept ones.
 pub fn keep_rows<T: serde::Serialize + serde::de::DeserializeOwned>(
     path: &std::path::Path,
     keep: impl Fn(&T) -> bool,
 ) -> Result<(), crate::error::LearnError> {
-    let rows: Vec<T> = read_csv::<T>(path)?
-        .into_iter()
-        .filter(|r| keep(r))
-        .collect();
-    let _ = std::fs::remove_file(path);
-    for row in &rows {
-        append_row(path, row)?;
+    use crate::error::LearnError;
+    if !path.exists() {
+        return Ok(());
+    }
+    let context = || format!("cannot write {}", path.display());
+    let mut w = csv::WriterBuilder::new().from_writer(Vec::new());
+    for row in read_csv::<T>(path)?.iter().filter(|r| keep(r)) {
+        w.serialize(row).map_err(|cause| LearnError::Csv {
+            context: context(),
+            cause,
+        })?;
+    }
+    let bytes = w
+        .into_inner()
+        .map_err(|e| LearnError::io(context(), e.into_error()))?;
+    if bytes.is_empty() {
+        // No row kept: no file, so that the next row brings its header.
+        std::fs::remove_file(path).map_err(|e| LearnError::io(context(), e))?;
+    } else {
+        t2e_core::fs::write_file_atomically(path, &bytes)?;
     }
     Ok(())
 }
@@ -101,6 +115,25 @@ mod tests {
                 .matches("iteration")
                 .count(),
             1
+        );
+
+        // Nothing kept: the next row starts the file again, header first.
+        keep_rows(&path, |_: &Row| false).unwrap();
+        append_row(
+            &path,
+            &Row {
+                iteration: 1,
+                share: 0.5,
+            },
+        )
+        .unwrap();
+        let rows: Vec<Row> = read_csv(&path).unwrap();
+        assert_eq!(
+            rows,
+            [Row {
+                iteration: 1,
+                share: 0.5
+            }]
         );
     }
 }
