@@ -68,7 +68,7 @@ pub struct EvalArgs {
     /// Measure |ASZ| every n-th step for SoA (0 = never; 1 = every step, as the paper).
     #[arg(long, default_value_t = 1)]
     pub soa_every: u32,
-    /// Output folder: table.md, summary.json, and per setting episodes.csv, soa.csv, soa.png.
+    /// Output folder: table.md, summary.json, and per setting episodes.csv, soa.csv, soa.png, departures.csv.
     #[arg(long, default_value = "runs/eval")]
     pub out: PathBuf,
     /// No progress bars.
@@ -244,7 +244,13 @@ fn write_setting(
     // The identity goes last: a folder without it is never taken as finished.
     let _ = std::fs::remove_file(dir.join("setting.json"));
     // Opening a FIFO left in a file's place to write would block.
-    for name in ["summary.json", "episodes.csv", "soa.csv", "soa.png"] {
+    for name in [
+        "summary.json",
+        "episodes.csv",
+        "soa.csv",
+        "soa.png",
+        "departures.csv",
+    ] {
         let path = dir.join(name);
         if std::fs::symlink_metadata(&path).is_ok_and(|m| !m.is_file()) {
             std::fs::remove_file(&path).with_context(|| {
@@ -301,6 +307,24 @@ fn write_setting(
         w.write_record(["step", "mean_asz_m2", "episodes_running"])?;
         for (t, m, n) in &summary.soa_curve {
             w.write_record([t.to_string(), format!("{m:.4}"), n.to_string()])?;
+        }
+        w.flush()?;
+    }
+    if let Some(places) = &summary.target_departure_places {
+        let path = dir.join("departures.csv");
+        let mut w = csv::Writer::from_path(&path)
+            .with_context(|| format!("cannot write {}", path.display()))?;
+        w.write_record(["by", "bin", "decisions", "departures", "departure_pct"])?;
+        for (by, bin, tally) in places.rows() {
+            w.write_record([
+                by.to_string(),
+                bin,
+                tally.decisions.to_string(),
+                tally.departures.to_string(),
+                eval::departures::share(tally)
+                    .map(|s| format!("{s:.3}"))
+                    .unwrap_or_default(),
+            ])?;
         }
         w.flush()?;
     }
@@ -524,6 +548,7 @@ mod tests {
             captor_path_len: 1.0,
             soa_m2: vec![],
             target_departures: None,
+            target_departure_places: None,
         };
         let records = vec![record(true), record(false), record(false)];
         let summary = eval::summarise(&setting, "m", &records);

@@ -140,7 +140,44 @@ fn a_targets_departures_from_the_rule_based_target_are_counted_per_decision() {
         // One decision per step the episode ran.
         let steps = if r.captured { r.steps } else { 60 };
         assert_eq!(r.target_departures, Some((steps, steps)), "{r:?}");
+        // Every decision has a nearest-captor bin; without --soa-every no
+        // state's |ASZ| is measured, so none has an |ASZ| bin.
+        let places = r.target_departure_places.expect("measured with the share");
+        let by_distance: u32 = places.by_captor_distance.iter().map(|t| t.decisions).sum();
+        assert_eq!(by_distance, steps);
+        assert!(places
+            .by_captor_distance
+            .iter()
+            .all(|t| t.departures == t.decisions));
+        assert!(places.by_asz.iter().all(|t| t.decisions == 0));
     }
+    // A capture needs a captor within a metre (the probes sit 0.3 m out),
+    // so a caught target decided at least once in the nearest bin.
+    let places = s.target_departure_places.unwrap();
+    if records.iter().any(|r| r.captured) {
+        assert!(places.by_captor_distance[0].decisions > 0, "{places:?}");
+    }
+    let total: u32 = records.iter().map(|r| r.target_departures.unwrap().1).sum();
+    assert_eq!(
+        places
+            .by_captor_distance
+            .iter()
+            .map(|t| t.decisions)
+            .sum::<u32>(),
+        total
+    );
+    // Measuring |ASZ| every step places every decision by |ASZ| too.
+    let measured = EvalSetting {
+        soa_every: 1,
+        ..still.clone()
+    };
+    let (m, _) = eval::run(&measured, &maps, "shipped:small", false).unwrap();
+    let places = m.target_departure_places.unwrap();
+    assert_eq!(
+        places.by_asz.iter().map(|t| t.decisions).sum::<u32>(),
+        total
+    );
+    assert_eq!(rule.target_departure_places, None);
     let look = EvalSetting {
         target: "lookahead:3".parse().unwrap(),
         ..base

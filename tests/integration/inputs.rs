@@ -194,6 +194,7 @@ fn summary(maps: &str, episodes: usize, episode_length: u32, sr: f64) -> Summary
         path_len: 20.0,
         mean_soa_m2: None,
         target_departure: None,
+        target_departure_places: None,
         soa_curve: Vec::new(),
     }
 }

@@ -567,6 +567,7 @@ fn a_target_leaning_on_the_rule_based_one_plays_it_and_learns_from_its_own_logit
             .into_iter()
             .map(|r| t2e_learners::eval::EpisodeRecord {
                 target_departures: None,
+                target_departure_places: None,
                 ..r
             })
             .collect::<Vec<_>>()

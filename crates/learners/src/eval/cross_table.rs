@@ -378,6 +378,7 @@ mod tests {
             path_len: if maps == "small" { 10.0 } else { 30.0 },
             mean_soa_m2: None,
             target_departure: None,
+            target_departure_places: None,
             soa_curve: Vec::new(),
         };
         (format!("{captors}-{target}-{maps}/summary.json"), s)

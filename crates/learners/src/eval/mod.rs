@@ -5,6 +5,7 @@
 use crate::controllers::ControllerError;
 use crate::controllers::ControllerSpec;
 use crate::error::{LearnError, ResultExt};
+use departures::DeparturePlaces;
 use t2e_core::asz::{cells_to_m2, AszFields};
 use t2e_core::env::vec_env::episode_seed;
 use t2e_core::env::{Action, CaptureRule, EnvConfig, Side, TrapEnv};
@@ -12,6 +13,7 @@ use t2e_core::error::{in_interval, ConfigError};
 use t2e_core::map::PreparedMap;
 
 pub mod cross_table;
+pub mod departures;
 pub mod paper_table;
 pub mod tune;
 use indicatif::{ProgressBar, ProgressStyle};
@@ -208,6 +210,9 @@ pub struct EpisodeRecord {
     /// rule-based target's in the same state: (departures, decisions).
     /// None when the target is the rule-based one (never departs).
     pub target_departures: Option<(u32, u32)>,
+    /// The same decisions by where they were taken (nearest captor, |ASZ|);
+    /// None where `target_departures` is.
+    pub target_departure_places: Option<DeparturePlaces>,
 }
 
 /// The table row of one setting.
@@ -255,6 +260,11 @@ pub struct Summary {
     /// summaries written before the field.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub target_departure: Option<f64>,
+    /// The target's decisions and departures over all episodes, by where
+    /// they were taken (`departures::DeparturePlaces`). None where
+    /// `target_departure` is.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub target_departure_places: Option<DeparturePlaces>,
 }
 
 /// 95% Wilson score interval for `successes` out of `n`, as fractions.
@@ -300,13 +310,27 @@ pub fn play_episode(
     if setting.soa_every > 0 {
         soa.push(measure(&env, asz_fields));
     }
-    let mut departures = (setting.target != ControllerSpec::Heuristic).then_some((0u32, 0u32));
+    let measured = setting.target != ControllerSpec::Heuristic;
+    let mut departures = measured.then_some((0u32, 0u32));
+    let mut places = measured.then(DeparturePlaces::default);
     while !env.is_done() {
         captors.act(&env, Side::Captors, &mut actions[..k]);
         target.act(&env, Side::Target, &mut actions[k..]);
-        if let Some((departed, decisions)) = &mut departures {
+        if let (Some((departed, decisions)), Some(places)) = (&mut departures, &mut places) {
+            let departs = actions[k] != t2e_core::heuristics::target_action(&env);
             *decisions += 1;
-            *departed += u32::from(actions[k] != t2e_core::heuristics::target_action(&env));
+            *departed += u32::from(departs);
+            let target_pos = env.target().pos;
+            let nearest = env
+                .captors()
+                .iter()
+                .map(|c| t2e_core::env::physics::dist(c.pos, target_pos))
+                .fold(f64::INFINITY, f64::min);
+            // The last |ASZ| pushed is this state's when this step is measured.
+            let asz_now = (setting.soa_every > 0 && env.steps % setting.soa_every == 0)
+                .then(|| soa.last().copied())
+                .flatten();
+            places.record(nearest, asz_now, departs);
         }
         let info = env.step_state(&actions, &mut rewards);
         if setting.soa_every > 0 && env.steps % setting.soa_every == 0 {
@@ -329,6 +353,7 @@ pub fn play_episode(
         captor_path_len: env.path_len[..k].iter().sum::<f64>() / k as f64,
         soa_m2: soa,
         target_departures: departures,
+        target_departure_places: places,
     })
 }
 
@@ -448,6 +473,19 @@ pub fn departure_share(records: &[EpisodeRecord]) -> Option<f64> {
     (decisions > 0).then(|| 100.0 * departed as f64 / decisions as f64)
 }
 
+/// The target's decisions over `records` by where they were taken; None
+/// where not measured.
+pub fn departure_places(records: &[EpisodeRecord]) -> Option<DeparturePlaces> {
+    let mut all: Option<DeparturePlaces> = None;
+    for p in records
+        .iter()
+        .filter_map(|r| r.target_departure_places.as_ref())
+    {
+        all.get_or_insert_with(DeparturePlaces::default).merge(p);
+    }
+    all
+}
+
 pub fn summarise(setting: &EvalSetting, maps_label: &str, records: &[EpisodeRecord]) -> Summary {
     let n = records.len().max(1) as f64;
     let captures = records.iter().filter(|r| r.captured).count();
@@ -489,6 +527,7 @@ pub fn summarise(setting: &EvalSetting, maps_label: &str, records: &[EpisodeReco
         path_len: records.iter().map(|r| r.captor_path_len).sum::<f64>() / n,
         mean_soa_m2: (soa_n > 0).then(|| soa_sum / soa_n as f64),
         target_departure: departure_share(records),
+        target_departure_places: departure_places(records),
         soa_curve: curve,
     }
 }
@@ -566,6 +605,7 @@ mod tests {
             captor_path_len: 2.0,
             soa_m2: soa,
             target_departures: None,
+            target_departure_places: None,
         };
         let records = vec![
             rec(true, 2, vec![4.0, 2.0, 0.0]),

@@ -434,6 +434,7 @@ mod tests {
             path_len: 25.0,
             mean_soa_m2: None,
             target_departure: None,
+            target_departure_places: None,
             soa_curve: Vec::new(),
         }
     }
