@@ -706,11 +706,65 @@ fn the_robust_target_departs_only_where_every_model_agrees() {
         .unwrap()
         .to_string()
         .contains("target only"));
-    let why = "robust:6:heuristic+ckpt:runs/x"
-        .parse::<ControllerSpec>()
-        .unwrap_err()
-        .to_string();
-    assert!(why.contains("without memory"), "{why}");
+    // A learned team is a model like any other (its memory kept: below).
+    let learned: ControllerSpec = "robust:6:heuristic+ckpt:runs/x".parse().unwrap();
+    assert!(learned.is_checkpoint());
+}
+
+/// A planner's learned model stands for a team that played the real game:
+/// after every decision it holds the GRU state of a twin of that team that
+/// stepped through the real states only, however many futures the planner
+/// simulated from it. Were the futures' steps kept, the model's memory
+/// would be that of a team that lived through them.
+#[test]
+fn a_planners_learned_model_remembers_the_real_game_not_its_futures() {
+    let ckpt = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/fixtures/stored/export-captors");
+    let model: ControllerSpec = format!("ckpt:{}", ckpt.display()).parse().unwrap();
+    let maps = t2e_core::map::catalog::load_prepared("gibson").unwrap();
+    let cfg = EnvConfig {
+        num_captors: 2,
+        episode_length: 500,
+        ..EnvConfig::default()
+    };
+    let mut env = TrapEnv::new(cfg, maps).unwrap();
+    let seed = 7;
+    env.reset_state(seed).unwrap();
+    let mut lookahead = Lookahead::new(4, model.build(Side::Captors).unwrap());
+    let mut robust = RobustLookahead::new(
+        4,
+        vec![Box::new(Heuristic), model.build(Side::Captors).unwrap()],
+    );
+    // The twin plays the real captors.
+    let mut twin = model.build(Side::Captors).unwrap();
+    lookahead.reset(&env, seed);
+    robust.reset(&env, seed);
+    twin.reset(&env, seed);
+    assert_eq!(twin.memory(), Some(Vec::new()), "a fresh episode's memory");
+    let (mut actions, mut rewards) = (vec![Action::Stop; 3], vec![0f32; 3]);
+    let mut steps = 0;
+    while steps < 12 && !env.is_done() {
+        // Both planners decide in the same state; the lookahead's move is played.
+        actions[2] = lookahead.target_action(&env);
+        robust.target_action(&env);
+        twin.act(&env, Side::Captors, &mut actions[..2]);
+        let real = twin.memory().unwrap();
+        assert_eq!(real.len(), 2 * 8, "two robots, hidden 8");
+        assert_eq!(
+            lookahead.model().memory().as_ref(),
+            Some(&real),
+            "step {steps}"
+        );
+        assert_eq!(
+            robust.models()[1].memory().as_ref(),
+            Some(&real),
+            "step {steps}"
+        );
+        env.step_state(&actions, &mut rewards);
+        steps += 1;
+    }
+    assert!(steps >= 2, "the episode ended at step {steps}");
+    assert!(twin.memory().unwrap().iter().any(|&h| h != 0.0));
 }
 
 #[test]

@@ -30,8 +30,6 @@ pub enum ControllerError {
     Lookahead(String),
     #[error("'{0}': robust:H:MODELS needs a horizon H of 1 to {max} steps and 1 to {models} captor teams joined by '+' (robust:10:heuristic+expert:1+greedy:3); a model is no lookahead or robust target", max = Lookahead::MAX_HORIZON, models = RobustLookahead::MAX_MODELS)]
     Robust(String),
-    #[error("'{0}': a robust target's models are controllers without memory (heuristic, expert:SEED, greedy:K, random, still): a learned team's recurrent state would be advanced by the simulated futures")]
-    RobustLearnedModel(String),
     #[error("'{0}' plays the target only (it looks ahead against a model of the captors)")]
     LookaheadAsCaptors(String),
     #[error("'{0}' plays the target only (a hand-made target of the rule-based target's family)")]
@@ -223,11 +221,6 @@ fn parse_robust(other: &str) -> Result<ControllerSpec, ControllerError> {
     if models.is_empty() || models.len() > RobustLookahead::MAX_MODELS || models.iter().any(planner)
     {
         return Err(refuse());
-    }
-    // A learned team's recurrent state would be advanced by every
-    // simulated step: its futures would not be the team's.
-    if models.iter().any(|m| m.is_checkpoint()) {
-        return Err(ControllerError::RobustLearnedModel(other.to_string()));
     }
     Ok(ControllerSpec::Robust { horizon, models })
 }

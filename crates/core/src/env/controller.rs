@@ -44,4 +44,15 @@ pub trait Controller: Send {
     fn reset(&mut self, _env: &TrapEnv, _seed: u64) {}
     /// Chooses the actions of `side`'s robots; `out` has one slot per robot of the side.
     fn act(&mut self, env: &TrapEnv, side: Side, out: &mut [Action]);
+    /// What it carries from the episode's earlier steps into its next
+    /// action (a recurrent policy's hidden state), as plain numbers; None
+    /// when its actions depend on the present state alone (random draws
+    /// aside). A planner that simulates futures with it as a model of a
+    /// team starts every future from this memory and puts it back after,
+    /// so the model remembers the real game, not the futures it imagined.
+    fn memory(&self) -> Option<Vec<f32>> {
+        None
+    }
+    /// Puts back what `memory` returned.
+    fn set_memory(&mut self, _memory: &[f32]) {}
 }

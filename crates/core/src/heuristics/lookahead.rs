@@ -49,8 +49,36 @@ impl Simulator {
     }
 
     /// Plays `first`, then the rule-based target, for `horizon` steps
-    /// against `captors`, on a copy of `env`.
+    /// against `captors`, on a copy of `env`. A model with memory starts
+    /// from its present memory and is left with it.
     pub(super) fn future(
+        &mut self,
+        env: &TrapEnv,
+        first: Action,
+        horizon: usize,
+        captors: &mut dyn Controller,
+    ) -> Future {
+        let memory = captors.memory();
+        let future = self.simulate(env, first, horizon, captors);
+        if let Some(memory) = &memory {
+            captors.set_memory(memory);
+        }
+        future
+    }
+
+    /// Steps a model with memory once on the real state, as the team it
+    /// stands for would have stepped, so that its next futures start from
+    /// the real game's memory. A model without memory is left alone (its
+    /// random draws, if any, as they were).
+    pub(super) fn observe(&mut self, env: &TrapEnv, captors: &mut dyn Controller) {
+        if captors.memory().is_some() {
+            let k = env.num_captors();
+            self.actions.resize(k + 1, Action::Stop);
+            captors.act(env, Side::Captors, &mut self.actions[..k]);
+        }
+    }
+
+    fn simulate(
         &mut self,
         env: &TrapEnv,
         first: Action,
@@ -128,7 +156,13 @@ impl Lookahead {
                 best = (future, action);
             }
         }
+        self.sim.observe(env, self.captors.as_mut());
         best.1
+    }
+
+    /// The model of the captors it plans against.
+    pub fn model(&self) -> &dyn Controller {
+        self.captors.as_ref()
     }
 
     fn future(&mut self, env: &TrapEnv, first: Action) -> Future {

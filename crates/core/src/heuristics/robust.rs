@@ -61,8 +61,21 @@ impl RobustLookahead {
         (self.decisions, self.departures)
     }
 
+    /// The captor models it plans against.
+    pub fn models(&self) -> &[Box<dyn Controller>] {
+        &self.models
+    }
+
     /// The target's action in `env`'s state.
     pub fn target_action(&mut self, env: &TrapEnv) -> Action {
+        let action = self.choose(env);
+        for model in &mut self.models {
+            self.sim.observe(env, model.as_mut());
+        }
+        action
+    }
+
+    fn choose(&mut self, env: &TrapEnv) -> Action {
         self.decisions += 1;
         let rule = target_action(env);
         if self.worst(env, rule).is_some() {

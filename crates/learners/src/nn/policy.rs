@@ -207,6 +207,28 @@ impl Controller for CheckpointController {
         }
     }
 
+    /// The GRU state of its robots, [robots x hidden] row by row; zeros
+    /// before its first step, which is what that step starts from.
+    fn memory(&self) -> Option<Vec<f32>> {
+        Some(match &self.hidden {
+            Some(h) => {
+                let h = h.to_kind(Kind::Float).contiguous();
+                let mut data = vec![0f32; h.numel()];
+                h.copy_data(&mut data, h.numel());
+                data
+            }
+            None => Vec::new(),
+        })
+    }
+
+    /// Empty (no step taken yet) leaves it as a fresh episode's.
+    fn set_memory(&mut self, memory: &[f32]) {
+        self.hidden = (!memory.is_empty()).then(|| {
+            Tensor::from_slice(memory)
+                .view([memory.len() as i64 / self.actor.hidden, self.actor.hidden])
+        });
+    }
+
     fn act(&mut self, env: &TrapEnv, side: Side, out: &mut [Action]) {
         let agents = side.agents(env.num_captors());
         let n = agents.len();
