@@ -2,7 +2,7 @@
 //! printed as a table beside the reference implementation's figures.
 
 use super::bench_before::BEFORE_DATE;
-use anyhow::Result;
+use anyhow::{Context, Result};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::sync::Arc;
@@ -11,6 +11,7 @@ use t2e_core::asz::{AszFields, FastMarching};
 use t2e_core::env::{Action, Controller, EnvConfig, Side, TrapEnv, VecEnv, PATCH_LEN};
 use t2e_core::heuristics::{target_action, Heuristic};
 use t2e_core::map::{self, PreparedMap};
+use t2e_learners::controllers::ControllerSpec;
 
 #[derive(clap::Args, Debug)]
 pub struct BenchArgs {
@@ -51,6 +52,12 @@ pub struct BenchArgs {
     /// The table says which count it used.
     #[arg(long, default_value_t = 0, value_name = "N")]
     pub threads: usize,
+    /// A captor team (a controller spec such as `ckpt:PATH`, three captors)
+    /// to time as a planner's model: adds the lookahead and robust
+    /// lookahead targets' rows against it, its futures batched and played
+    /// one game at a time.
+    #[arg(long, value_name = "TEAM")]
+    pub planner_model: Option<String>,
     /// Concurrent writers for --store, comma-separated.
     #[arg(long, value_delimiter = ',', default_value = "1,4,8")]
     pub writers: Vec<usize>,
@@ -278,13 +285,25 @@ pub fn run(args: BenchArgs) -> Result<()> {
         num_captors: 3,
         ..EnvConfig::default()
     };
+    // Checked before the tables, so a wrong path fails at once.
+    let planner_model = match &args.planner_model {
+        Some(spec) => {
+            let spec: ControllerSpec = spec
+                .parse()
+                .with_context(|| format!("--planner-model {spec}"))?;
+            spec.check(Side::Captors, &cfg)
+                .with_context(|| format!("--planner-model {spec}"))?;
+            Some(spec)
+        }
+        None => None,
+    };
     let on_gibson = env_spec == "gibson";
     let mut rows = single_core_rows(&cfg, &maps, secs, on_gibson)?;
     rows.extend(batched_rows(&cfg, &maps, secs, args.envs, on_gibson)?);
     rows.extend(asz_rows(&cfg, secs)?);
     print_rows(&rows, &env_spec, secs);
     // The ASZ-greedy captor does 4 ASZ per captor per step.
-    super::bench_greedy::run(&cfg, &maps, &env_spec, secs)
+    super::bench_greedy::run(&cfg, &maps, &env_spec, secs, planner_model.as_ref())
 }
 
 /// The environment's step on one core, with and without observations.

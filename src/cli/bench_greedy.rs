@@ -7,11 +7,12 @@ use super::bench_before::BEFORE_DATE;
 use anyhow::Result;
 use std::sync::Arc;
 use std::time::Instant;
-use t2e_core::env::{Action, Controller, EnvConfig, Side, TrapEnv};
+use t2e_core::env::{Action, Controller, EnvConfig, OneGameAtATime, Side, TrapEnv};
 use t2e_core::heuristics::{
     target_action, AszGreedy, Heuristic, Lookahead, RandomisedExpert, RobustLookahead,
 };
 use t2e_core::map::PreparedMap;
+use t2e_learners::controllers::ControllerSpec;
 
 /// Coarsenings timed, the spec's first.
 const COARSENINGS: [usize; 4] = [1, 2, 3, 4];
@@ -57,10 +58,78 @@ pub fn run(
     maps: &Arc<Vec<Arc<PreparedMap>>>,
     env_spec: &str,
     secs: f64,
+    planner_model: Option<&ControllerSpec>,
 ) -> Result<()> {
     let states = episode_states(cfg, maps)?;
     greedy_rows(&states, cfg.num_captors, env_spec, secs);
     target_rows(&states, secs);
+    if let Some(model) = planner_model {
+        model_rows(&states, secs, model)?;
+    }
+    Ok(())
+}
+
+/// The planners against a learned team (`--planner-model`): each target's
+/// decision with the team's futures batched (one forward per simulated
+/// step for all of them) and played one game at a time, on the same states.
+fn model_rows(states: &[TrapEnv], secs: f64, model: &ControllerSpec) -> Result<()> {
+    println!("\nAgainst `{model}` as a model:\n");
+    println!("| target controller | futures | time per decision | decisions/s | moves other than the rule-based target's |");
+    println!("|---|---|---|---|---|");
+    for robust in [false, true] {
+        for batched in [true, false] {
+            let team = model.build(Side::Captors)?;
+            let team: Box<dyn Controller> = if batched {
+                team
+            } else {
+                Box::new(OneGameAtATime(team))
+            };
+            let mut target: Box<dyn Controller> = if robust {
+                let mut models: Vec<Box<dyn Controller>> = vec![
+                    Box::new(Heuristic),
+                    Box::new(RandomisedExpert::new(1)),
+                    Box::new(RandomisedExpert::new(2)),
+                ];
+                models.push(team);
+                Box::new(RobustLookahead::new(10, models))
+            } else {
+                Box::new(Lookahead::new(10, team))
+            };
+            let name = if robust {
+                "robust:10:heuristic+expert:1+expert:2+MODEL"
+            } else {
+                "lookahead:10:MODEL"
+            };
+            let mut out = [Action::Stop];
+            let mut departures = 0;
+            for env in states {
+                target.reset(env, 0);
+                target.act(env, Side::Target, &mut out);
+                departures += usize::from(out[0] != target_action(env));
+            }
+            let start = Instant::now();
+            let mut decisions = 0usize;
+            while start.elapsed().as_secs_f64() < secs {
+                let env = &states[decisions % states.len()];
+                target.reset(env, 0);
+                target.act(env, Side::Target, &mut out);
+                decisions += 1;
+            }
+            let per = start.elapsed().as_secs_f64() / decisions as f64;
+            println!(
+                "| {name} | {} | {:.2} ms | {:.0} | {:.1}% ({departures} of {}) |",
+                if batched {
+                    "batched"
+                } else {
+                    "one game at a time"
+                },
+                per * 1e3,
+                1.0 / per,
+                100.0 * departures as f64 / states.len() as f64,
+                states.len()
+            );
+        }
+    }
     Ok(())
 }
 

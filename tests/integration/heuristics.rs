@@ -834,3 +834,200 @@ fn the_tuned_targets_rule_is_the_rule_based_target_and_each_constant_changes_dec
     }
     assert!(spec.build(Side::Captors).is_err());
 }
+
+/// The stored two-captor MAPPO team (hidden 8) and a Gibson world for it.
+fn stored_team_and_world(seed: u64) -> (ControllerSpec, TrapEnv) {
+    let ckpt = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/fixtures/stored/export-captors");
+    let model: ControllerSpec = format!("ckpt:{}", ckpt.display()).parse().unwrap();
+    let maps = t2e_core::map::catalog::load_prepared("gibson").unwrap();
+    let cfg = EnvConfig {
+        num_captors: 2,
+        episode_length: 500,
+        ..EnvConfig::default()
+    };
+    let mut env = TrapEnv::new(cfg, maps).unwrap();
+    env.reset_state(seed).unwrap();
+    (model, env)
+}
+
+#[test]
+fn a_learned_team_plays_many_games_in_one_batch_as_it_plays_each_alone() {
+    tch::set_num_threads(1);
+    let (model, env) = stored_team_and_world(3);
+    let mut batched = model.build(Side::Captors).unwrap();
+    let mut alone = model.build(Side::Captors).unwrap();
+    batched.reset(&env, 3);
+    alone.reset(&env, 3);
+    // Five games that part at their first step, as a planner's futures do;
+    // each side keeps its own memories of them.
+    let mut games: Vec<TrapEnv> = (0..5).map(|_| env.clone()).collect();
+    let mut memories = vec![Vec::new(); 5];
+    let mut alone_memories = vec![Vec::new(); 5];
+    let mut rewards = vec![0f32; 3];
+    let mut steps = 0;
+    while steps < 30 && !games.iter().any(|g| g.is_done()) {
+        let mut out = vec![Action::Stop; 5 * 2];
+        {
+            let views: Vec<&TrapEnv> = games.iter().collect();
+            batched.act_batch(&views, Side::Captors, &mut memories, &mut out);
+        }
+        for (g, game) in games.iter_mut().enumerate() {
+            alone.set_memory(&alone_memories[g]);
+            let mut one = [Action::Stop; 2];
+            alone.act(game, Side::Captors, &mut one);
+            alone_memories[g] = alone.memory().unwrap();
+            assert_eq!(&out[2 * g..2 * g + 2], &one, "game {g}, step {steps}");
+            assert_eq!(alone_memories[g].len(), 2 * 8, "game {g}, step {steps}");
+            assert_eq!(memories[g].len(), 2 * 8, "game {g}, step {steps}");
+            for (a, b) in alone_memories[g].iter().zip(&memories[g]) {
+                assert!((a - b).abs() < 1e-5, "game {g}, step {steps}: {a} vs {b}");
+            }
+            let target = if steps == 0 {
+                Action::ALL[g]
+            } else {
+                target_action(game)
+            };
+            game.step_state(&[one[0], one[1], target], &mut rewards);
+        }
+        steps += 1;
+    }
+    assert!(steps >= 10, "the games ended at step {steps}");
+    let parted = games
+        .iter()
+        .filter(|g| g.robots[2].pos != games[0].robots[2].pos)
+        .count();
+    assert!(parted >= 2, "the games never parted");
+    assert!(
+        memories.iter().any(|m| m != &memories[0]),
+        "the games' memories never parted"
+    );
+}
+
+#[test]
+fn planners_decide_alike_with_a_learned_model_batched_or_played_one_by_one() {
+    // Its many small forwards slow down many times over when libtorch's
+    // threads share the cores with the other tests.
+    tch::set_num_threads(1);
+    let (model, _) = stored_team_and_world(0);
+    let team = || model.build(Side::Captors).unwrap();
+    let one_by_one = || -> Box<dyn Controller> { Box::new(OneGameAtATime(team())) };
+    let mut lookahead = Lookahead::new(10, team());
+    let mut lookahead_one = Lookahead::new(10, one_by_one());
+    let mut robust = RobustLookahead::new(10, vec![team(), Box::new(Heuristic)]);
+    let mut robust_one = RobustLookahead::new(10, vec![one_by_one(), Box::new(Heuristic)]);
+    // Plays each future alone, the way the planners' futures are defined.
+    let mut reference = team();
+    // Each game starts in a corner of a 10 m room with the two captors
+    // close, so that the rule's move is sometimes caught and the robust
+    // target's alternatives are simulated too, the learned model first;
+    // the expert captors play.
+    let room_cfg = EnvConfig {
+        num_captors: 2,
+        episode_length: 500,
+        ..EnvConfig::default()
+    };
+    let corners = [
+        (-3.5, -3.5, 1.0),
+        (3.5, -3.5, -1.0),
+        (-3.5, 3.5, -1.0),
+        (3.5, 3.5, 1.0),
+    ];
+    let (mut actions, mut rewards) = (vec![Action::Stop; 3], vec![0f32; 3]);
+    let (mut steps, mut lookahead_departures) = (0, 0);
+    for (game, &(x, y, s)) in corners.iter().cycle().take(8).enumerate() {
+        let gap = if game < 4 { 1.0 } else { 1.5 };
+        let towards = |v: f64| if v < 0.0 { v + gap } else { v - gap };
+        let robots = vec![
+            robot(towards(x), y, 0.0),
+            robot(x, towards(y), s),
+            robot(x, y, 0.5),
+        ];
+        let mut env = common::env_with(
+            room_cfg.clone(),
+            common::maps(room(60, 260, 60, 260)),
+            robots,
+        );
+        let seed = game as u64;
+        for planner in [
+            &mut lookahead as &mut dyn Controller,
+            &mut lookahead_one,
+            &mut robust,
+            &mut robust_one,
+        ] {
+            planner.reset(&env, seed);
+        }
+        for step in 0..40 {
+            if env.is_done() {
+                break;
+            }
+            let rule = target_action(&env);
+            let mut moves = vec![rule];
+            moves.extend(Action::ALL.into_iter().filter(|&a| a != rule));
+            // Each move's future played alone, from the model's memory.
+            let mut alone = |memory: &[f32], first: Action| {
+                reference.set_memory(memory);
+                future_against(&env, first, 10, reference.as_mut())
+            };
+            let memory = lookahead.model().memory().unwrap();
+            let mut best: Option<((bool, usize), Action)> = None;
+            for &first in &moves {
+                let future = alone(&memory, first);
+                if best.is_none_or(|(b, _)| future > b) {
+                    best = Some((future, first));
+                }
+            }
+            let planned = lookahead.target_action(&env);
+            assert_eq!(planned, best.unwrap().1, "game {game}, step {step}");
+            assert_eq!(
+                planned,
+                lookahead_one.target_action(&env),
+                "game {game}, step {step}"
+            );
+            lookahead_departures += usize::from(planned != rule);
+            let memory = robust.models()[0].memory().unwrap();
+            let mut worst = |first: Action| {
+                let learned = alone(&memory, first);
+                let expert = future_against(&env, first, 10, &mut Heuristic);
+                (learned.0 && expert.0).then(|| learned.1.min(expert.1))
+            };
+            let expected = match worst(rule) {
+                Some(_) => rule,
+                None => moves[1..]
+                    .iter()
+                    .filter_map(|&a| worst(a).map(|w| (w, a)))
+                    .fold(None, |b: Option<(usize, Action)>, (w, a)| {
+                        if b.is_none_or(|(bw, _)| w > bw) {
+                            Some((w, a))
+                        } else {
+                            b
+                        }
+                    })
+                    .map_or(rule, |(_, a)| a),
+            };
+            let robust_move = robust.target_action(&env);
+            assert_eq!(robust_move, expected, "game {game}, step {step}");
+            assert_eq!(
+                robust_move,
+                robust_one.target_action(&env),
+                "game {game}, step {step}"
+            );
+            Heuristic.act(&env, Side::Captors, &mut actions[..2]);
+            actions[2] = robust_move;
+            env.step_state(&actions, &mut rewards);
+            steps += 1;
+        }
+    }
+    assert_eq!(robust.departures(), robust_one.departures());
+    assert_eq!(robust.contested(), robust_one.contested());
+    assert!(
+        robust.contested() >= 1 && robust.departures().1 >= 1,
+        "the robust target simulated its alternatives in {} of {steps} decisions and departed in {}",
+        robust.contested(),
+        robust.departures().1
+    );
+    assert!(
+        lookahead_departures > 0,
+        "the lookahead never departed in {steps} steps"
+    );
+}

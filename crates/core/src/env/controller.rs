@@ -55,4 +55,50 @@ pub trait Controller: Send {
     }
     /// Puts back what `memory` returned.
     fn set_memory(&mut self, _memory: &[f32]) {}
+    /// Chooses `side`'s actions in several games at once, game `g` from
+    /// `memories[g]` (as `memory` gives it), which it leaves holding that
+    /// game's memory after the step; `out` holds the games' slots one game
+    /// after another. A planner plays its futures with it in lockstep, so
+    /// that a network runs one forward for all of them. This default plays
+    /// them one by one; a controller whose one forward costs about the same
+    /// for many rows does them together. Its own memory afterwards is
+    /// unspecified: callers put it back.
+    fn act_batch(
+        &mut self,
+        envs: &[&TrapEnv],
+        side: Side,
+        memories: &mut [Vec<f32>],
+        out: &mut [Action],
+    ) {
+        assert_eq!(envs.len(), memories.len(), "one memory per game");
+        let slots = out.len() / envs.len().max(1);
+        for ((env, memory), out) in envs.iter().zip(memories).zip(out.chunks_mut(slots)) {
+            self.set_memory(memory);
+            self.act(env, side, out);
+            *memory = self.memory().unwrap_or_default();
+        }
+    }
+}
+
+/// A controller whose `act_batch` is the trait's own, one game after the
+/// other: what batching saves is measured against it, and batched play is
+/// checked to decide as it does.
+pub struct OneGameAtATime(pub Box<dyn Controller>);
+
+impl Controller for OneGameAtATime {
+    fn name(&self) -> String {
+        self.0.name()
+    }
+    fn reset(&mut self, env: &TrapEnv, seed: u64) {
+        self.0.reset(env, seed);
+    }
+    fn act(&mut self, env: &TrapEnv, side: Side, out: &mut [Action]) {
+        self.0.act(env, side, out);
+    }
+    fn memory(&self) -> Option<Vec<f32>> {
+        self.0.memory()
+    }
+    fn set_memory(&mut self, memory: &[f32]) {
+        self.0.set_memory(memory);
+    }
 }

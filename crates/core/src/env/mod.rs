@@ -18,7 +18,7 @@ pub mod vec_env;
 
 pub use action::Action;
 pub use config::{CaptureRule, DriveForce, EnvConfig, RobotSpec, MAX_CAPTORS};
-pub use controller::{Controller, Side};
+pub use controller::{Controller, OneGameAtATime, Side};
 pub use observe::{PATCH, PATCH_LEN};
 pub use physics::Robot;
 pub use placement::PlacementError;

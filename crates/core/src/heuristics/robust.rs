@@ -15,7 +15,7 @@
 //! the baseline's action wherever the evidence for another is not
 //! unanimous.
 
-use super::lookahead::{Future, Lookahead, Simulator};
+use super::lookahead::{End, Future, Lookahead, Simulator};
 use super::rule_based::target_action;
 use crate::env::{Action, Controller, Side, TrapEnv};
 
@@ -24,6 +24,7 @@ pub struct RobustLookahead {
     models: Vec<Box<dyn Controller>>,
     sim: Simulator,
     decisions: u64,
+    contested: u64,
     departures: u64,
 }
 
@@ -51,6 +52,7 @@ impl RobustLookahead {
             models,
             sim: Simulator::new(),
             decisions: 0,
+            contested: 0,
             departures: 0,
         }
     }
@@ -59,6 +61,12 @@ impl RobustLookahead {
     /// from the rule-based target's move.
     pub fn departures(&self) -> (u64, u64) {
         (self.decisions, self.departures)
+    }
+
+    /// Decisions since it was made in which some model caught the
+    /// rule-based move, so that the other moves were simulated.
+    pub fn contested(&self) -> u64 {
+        self.contested
     }
 
     /// The captor models it plans against.
@@ -78,15 +86,44 @@ impl RobustLookahead {
     fn choose(&mut self, env: &TrapEnv) -> Action {
         self.decisions += 1;
         let rule = target_action(env);
-        if self.worst(env, rule).is_some() {
+        let RobustLookahead {
+            horizon,
+            models,
+            sim,
+            ..
+        } = self;
+        let mut moves = vec![rule];
+        moves.extend(Action::ALL.into_iter().filter(|&a| a != rule));
+        let alternatives = &moves[1..];
+        // A model with memory (a learned team) plays all five moves in
+        // lockstep when it is first asked: one forward for five rows costs
+        // about what one for one row does, and the alternatives are at hand
+        // if the rule's move is caught.
+        let mut batched: Vec<Option<Vec<End>>> = models.iter().map(|_| None).collect();
+        let mut rule_caught = false;
+        for (model, batch) in models.iter_mut().zip(batched.iter_mut()) {
+            // The rule's move only needs to be free: its |ASZ| is never compared.
+            let end = if model.memory().is_some() {
+                let mut ends = sim.ends(env, &moves, *horizon, model.as_mut());
+                let rule_end = ends.remove(0);
+                *batch = Some(ends);
+                rule_end
+            } else {
+                sim.end(env, rule, *horizon, model.as_mut())
+            };
+            if matches!(end, End::Caught(_)) {
+                rule_caught = true;
+                break;
+            }
+        }
+        if !rule_caught {
             return rule;
         }
+        self.contested += 1;
         let mut best: Option<(usize, Action)> = None;
-        for action in Action::ALL {
-            if action == rule {
-                continue;
-            }
-            if let Some(area) = self.worst(env, action) {
+        for (i, &action) in alternatives.iter().enumerate() {
+            let area = Self::worst(sim, models, &mut batched, env, *horizon, alternatives, i);
+            if let Some(area) = area {
                 if best.is_none_or(|(b, _)| area > b) {
                     best = Some((area, action));
                 }
@@ -102,11 +139,28 @@ impl RobustLookahead {
     }
 
     /// The smallest |ASZ| (coarse cells) at the horizon over the models if
-    /// no model catches `first`, else None.
-    fn worst(&mut self, env: &TrapEnv, first: Action) -> Option<usize> {
+    /// no model catches `alternatives[i]`, else None. Models without memory
+    /// are asked move by move, model by model, as the early exit leaves
+    /// them, so their random draws come in a fixed order.
+    fn worst(
+        sim: &mut Simulator,
+        models: &mut [Box<dyn Controller>],
+        batched: &mut [Option<Vec<End>>],
+        env: &TrapEnv,
+        horizon: usize,
+        alternatives: &[Action],
+        i: usize,
+    ) -> Option<usize> {
         let mut worst = usize::MAX;
-        for model in &mut self.models {
-            match self.sim.future(env, first, self.horizon, model.as_mut()) {
+        for (model, batch) in models.iter_mut().zip(batched.iter_mut()) {
+            let end = if model.memory().is_some() {
+                let ends = batch
+                    .get_or_insert_with(|| sim.ends(env, alternatives, horizon, model.as_mut()));
+                std::mem::replace(&mut ends[i], End::Caught(0))
+            } else {
+                sim.end(env, alternatives[i], horizon, model.as_mut())
+            };
+            match sim.score(&end) {
                 Future::Caught(_) => return None,
                 Future::Free(area) => worst = worst.min(area),
             }

@@ -230,60 +230,119 @@ impl Controller for CheckpointController {
     }
 
     fn act(&mut self, env: &TrapEnv, side: Side, out: &mut [Action]) {
-        let agents = side.agents(env.num_captors());
-        let n = agents.len();
+        let n = side.agents(env.num_captors()).len();
+        let h = self.hidden.take().unwrap_or_else(|| {
+            Tensor::zeros([n as i64, self.actor.hidden], (Kind::Float, Device::Cpu))
+        });
+        let (logits, h) = self.forward(&[env], side, &h);
+        self.hidden = Some(h);
+        self.choose(logits, &[env], side, out);
+    }
+
+    /// One forward for every game's robots: the rows of game after game,
+    /// each game's GRU state from its memory (zeros when empty).
+    fn act_batch(
+        &mut self,
+        envs: &[&TrapEnv],
+        side: Side,
+        memories: &mut [Vec<f32>],
+        out: &mut [Action],
+    ) {
+        assert_eq!(envs.len(), memories.len(), "one memory per game");
+        let Some(first) = envs.first() else {
+            return;
+        };
+        let n = side.agents(first.num_captors()).len();
+        let hidden = self.actor.hidden as usize;
+        let mut rows = vec![0f32; envs.len() * n * hidden];
+        for (memory, rows) in memories.iter().zip(rows.chunks_exact_mut(n * hidden)) {
+            if !memory.is_empty() {
+                rows.copy_from_slice(memory);
+            }
+        }
+        let h = Tensor::from_slice(&rows).view([(envs.len() * n) as i64, hidden as i64]);
+        let (logits, h) = self.forward(envs, side, &h);
+        h.to_kind(Kind::Float)
+            .contiguous()
+            .copy_data(&mut rows, envs.len() * n * hidden);
+        for (memory, rows) in memories.iter_mut().zip(rows.chunks_exact(n * hidden)) {
+            memory.clear();
+            memory.extend_from_slice(rows);
+        }
+        self.choose(logits, envs, side, out);
+    }
+}
+
+impl CheckpointController {
+    /// The network's logits and next GRU state for `side`'s robots in each
+    /// of `envs`, rows game after game, from GRU state `h`.
+    fn forward(&mut self, envs: &[&TrapEnv], side: Side, h: &Tensor) -> (Tensor, Tensor) {
         // Its own inputs, whatever the env's: a policy trained with sight
         // sees with it in any env.
         let net = &self.snapshot.meta.net;
         let vl = self.snapshot.meta.vector_len();
         let pl = net.input_len();
-        self.vectors.resize(n * vl, 0.0);
-        self.patches.resize(n * pl, 0);
-        for (row, i) in agents.enumerate() {
-            env.write_observation_with(
-                net.sight,
-                i,
-                &mut self.vectors[row * vl..(row + 1) * vl],
-                &mut self.patch,
-            );
-            pool_patch(
-                &self.patch,
-                net.patch_pool as usize,
-                &mut self.patches[row * pl..(row + 1) * pl],
-            );
+        let n = envs
+            .first()
+            .map_or(0, |env| side.agents(env.num_captors()).len());
+        let rows = envs.len() * n;
+        self.vectors.resize(rows * vl, 0.0);
+        self.patches.resize(rows * pl, 0);
+        let mut row = 0;
+        for env in envs {
+            for i in side.agents(env.num_captors()) {
+                env.write_observation_with(
+                    net.sight,
+                    i,
+                    &mut self.vectors[row * vl..(row + 1) * vl],
+                    &mut self.patch,
+                );
+                pool_patch(
+                    &self.patch,
+                    net.patch_pool as usize,
+                    &mut self.patches[row * pl..(row + 1) * pl],
+                );
+                row += 1;
+            }
         }
-        let h = self.hidden.take().unwrap_or_else(|| {
-            Tensor::zeros([n as i64, self.actor.hidden], (Kind::Float, Device::Cpu))
-        });
         let (p, v) = obs_tensors(
             &self.patches,
             &self.vectors,
-            n,
+            rows,
             1,
             net.input_side(),
             Device::Cpu,
         );
-        let (logits, h) = tch::no_grad(|| self.actor.step(&p, &v, &h));
+        tch::no_grad(|| self.actor.step(&p, &v, h))
+    }
+
+    /// Each robot's action from `logits` (rows game after game): the most
+    /// likely, or drawn when it samples.
+    fn choose(&mut self, logits: Tensor, envs: &[&TrapEnv], side: Side, out: &mut [Action]) {
+        let net = &self.snapshot.meta.net;
+        let rows = out.len();
         // A checkpoint's prior is validated to be a target's (one robot).
         let logits = if net.heuristic_prior > 0.0 && side == Side::Target {
-            let hint = Tensor::from_slice(&[super::prior::target_hint(env)]);
-            super::prior::add_prior(logits, &hint, net.heuristic_prior)
+            let hints: Vec<i64> = envs
+                .iter()
+                .map(|env| super::prior::target_hint(env))
+                .collect();
+            super::prior::add_prior(logits, &Tensor::from_slice(&hints), net.heuristic_prior)
         } else {
             logits
         };
-        self.hidden = Some(h);
         if let Some(rng) = &mut self.sampler {
             let probs = logits.softmax(-1, Kind::Float);
-            let mut p = vec![0f32; n * Action::COUNT];
-            probs.copy_data(&mut p, n * Action::COUNT);
+            let mut p = vec![0f32; rows * Action::COUNT];
+            probs.copy_data(&mut p, rows * Action::COUNT);
             for (o, row) in out.iter_mut().zip(p.chunks_exact(Action::COUNT)) {
                 *o = Action::from_index(sample(row, rng));
             }
             return;
         }
         let best = logits.argmax(1, false);
-        let mut idx = vec![0i64; n];
-        best.copy_data(&mut idx, n);
+        let mut idx = vec![0i64; rows];
+        best.copy_data(&mut idx, rows);
         for (o, a) in out.iter_mut().zip(idx) {
             *o = Action::from_index(a as usize);
         }
