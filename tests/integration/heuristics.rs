@@ -718,18 +718,8 @@ fn the_robust_target_departs_only_where_every_model_agrees() {
 /// would be that of a team that lived through them.
 #[test]
 fn a_planners_learned_model_remembers_the_real_game_not_its_futures() {
-    let ckpt = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/fixtures/stored/export-captors");
-    let model: ControllerSpec = format!("ckpt:{}", ckpt.display()).parse().unwrap();
-    let maps = t2e_core::map::catalog::load_prepared("gibson").unwrap();
-    let cfg = EnvConfig {
-        num_captors: 2,
-        episode_length: 500,
-        ..EnvConfig::default()
-    };
-    let mut env = TrapEnv::new(cfg, maps).unwrap();
     let seed = 7;
-    env.reset_state(seed).unwrap();
+    let (model, mut env) = stored_team_and_world(seed);
     let mut lookahead = Lookahead::new(4, model.build(Side::Captors).unwrap());
     let mut robust = RobustLookahead::new(
         4,

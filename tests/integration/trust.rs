@@ -138,39 +138,29 @@ fn degenerate_options_are_refused() {
         .to_string()
         .contains("twice"));
 
+    let bench_args = |seconds: f64, planner_model: Option<&str>| BenchArgs {
+        maps: Some("shipped".into()),
+        seconds,
+        envs: 4,
+        train: Vec::new(),
+        iterations: 1,
+        device: None,
+        opponents: false,
+        store: None,
+        threads: 1,
+        planner_model: planner_model.map(String::from),
+        writers: vec![1],
+    };
     for seconds in [0.0, -1.0, f64::NAN, f64::INFINITY] {
-        let args = BenchArgs {
-            maps: Some("shipped".into()),
-            seconds,
-            envs: 4,
-            train: Vec::new(),
-            iterations: 1,
-            device: None,
-            opponents: false,
-            store: None,
-            threads: 0,
-            planner_model: None,
-            writers: vec![1],
-        };
-        let err = t2e::cli::bench::run(args).unwrap_err().to_string();
+        let err = t2e::cli::bench::run(bench_args(seconds, None))
+            .unwrap_err()
+            .to_string();
         assert!(err.contains("--seconds"), "{seconds}: {err}");
     }
     // A planner model that is not there, or not a captor team, is refused
     // before any table is timed, by the flag's name.
     for (team, why) in [("ckpt:/no/such/run", "no/such/run"), ("lookahead:5", "")] {
-        let args = BenchArgs {
-            maps: Some("shipped".into()),
-            seconds: 0.05,
-            envs: 4,
-            train: Vec::new(),
-            iterations: 1,
-            device: None,
-            opponents: false,
-            store: None,
-            threads: 1,
-            planner_model: Some(team.into()),
-            writers: vec![1],
-        };
+        let args = bench_args(0.05, Some(team));
         let err = format!("{:#}", t2e::cli::bench::run(args).unwrap_err());
         assert!(
             err.contains("--planner-model") && err.contains(why),
