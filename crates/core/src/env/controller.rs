@@ -55,6 +55,11 @@ pub trait Controller: Send {
     }
     /// Puts back what `memory` returned.
     fn set_memory(&mut self, _memory: &[f32]) {}
+    /// Whether `memory` is Some, without copying it out: planners ask
+    /// this of every model at every decision.
+    fn has_memory(&self) -> bool {
+        self.memory().is_some()
+    }
     /// Chooses `side`'s actions in several games at once, game `g` from
     /// `memories[g]` (as `memory` gives it), which it leaves holding that
     /// game's memory after the step; `out` holds the games' slots one game
@@ -100,5 +105,8 @@ impl Controller for OneGameAtATime {
     }
     fn set_memory(&mut self, memory: &[f32]) {
         self.0.set_memory(memory);
+    }
+    fn has_memory(&self) -> bool {
+        self.0.has_memory()
     }
 }

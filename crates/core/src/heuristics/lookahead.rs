@@ -170,7 +170,7 @@ impl Simulator {
     /// the real game's memory. A model without memory is left alone (its
     /// random draws, if any, as they were).
     pub(super) fn observe(&mut self, env: &TrapEnv, captors: &mut dyn Controller) {
-        if captors.memory().is_some() {
+        if captors.has_memory() {
             let k = env.num_captors();
             self.actions.resize(k + 1, Action::Stop);
             captors.act(env, Side::Captors, &mut self.actions[..k]);

@@ -103,7 +103,7 @@ impl RobustLookahead {
         let mut rule_caught = false;
         for (model, batch) in models.iter_mut().zip(batched.iter_mut()) {
             // The rule's move only needs to be free: its |ASZ| is never compared.
-            let end = if model.memory().is_some() {
+            let end = if model.has_memory() {
                 let mut ends = sim.ends(env, &moves, *horizon, model.as_mut());
                 let rule_end = ends.remove(0);
                 *batch = Some(ends);
@@ -153,7 +153,7 @@ impl RobustLookahead {
     ) -> Option<usize> {
         let mut worst = usize::MAX;
         for (model, batch) in models.iter_mut().zip(batched.iter_mut()) {
-            let end = if model.memory().is_some() {
+            let end = if model.has_memory() {
                 let ends = batch
                     .get_or_insert_with(|| sim.ends(env, alternatives, horizon, model.as_mut()));
                 std::mem::replace(&mut ends[i], End::Caught(0))

@@ -221,6 +221,10 @@ impl Controller for CheckpointController {
         })
     }
 
+    fn has_memory(&self) -> bool {
+        true
+    }
+
     /// Empty (no step taken yet) leaves it as a fresh episode's.
     fn set_memory(&mut self, memory: &[f32]) {
         self.hidden = (!memory.is_empty()).then(|| {
