@@ -792,3 +792,54 @@ fn a_departure_weight_makes_the_teachers_departures_outweigh_the_prior() {
         "{err}"
     );
 }
+
+/// `ppo.dagger_rollouts` replaces PPO's update by DAgger: the actor is
+/// fitted to the teacher's moves on the states of its last rollouts, with
+/// no reward. Behind a logit prior of 10 on the rule, a target that
+/// imitates `still` for 20 iterations stops in nearly every rule-based
+/// target's state, which a KL towards it beside the RL loss did not reach
+/// at that weight (`a_departure_weight_makes_...`). Each `teacher.csv` row
+/// is measured on the new rollout before the fit: the first, before any
+/// fit, follows none of the teacher's departures, the last nearly all;
+/// `dagger.csv` counts the same on the states fitted on. The aggregate
+/// needs a teacher.
+#[test]
+fn a_dagger_target_fits_the_teachers_moves_on_its_aggregated_states() {
+    use std::sync::atomic::AtomicBool;
+    use t2e_core::env::Action;
+    use t2e_learners::learn::train::run::TrainingRun;
+    let mut cfg = kl_config(0.0, None);
+    cfg.target.ppo.teacher = Some("still".into());
+    cfg.target.ppo.dagger_rollouts = 8;
+    cfg.target.net.heuristic_prior = 10.0;
+    cfg.total_env_steps = 20 * (cfg.num_envs * cfg.rollout_steps) as u64;
+    cfg.validate().unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let mut run = TrainingRun::start(cfg, maps(room(60, 260, 60, 260)), dir.path()).unwrap();
+    run.run(&AtomicBool::new(false), None, |_| {}).unwrap();
+    let stops = share_of_rule_states(dir.path(), |learned, _| learned == Action::Stop);
+    eprintln!("share of Stop after DAgger towards still behind a prior of 10: {stops:.3}");
+    assert!(stops > 0.9, "{stops}");
+
+    let followed = |file: &str| -> Vec<f64> {
+        let csv = std::fs::read_to_string(dir.path().join(file)).unwrap();
+        csv.lines()
+            .skip(1)
+            .map(|l| l.split(',').nth(6).unwrap().parse().unwrap())
+            .collect()
+    };
+    let (unseen, fitted) = (followed("teacher.csv"), followed("dagger.csv"));
+    assert_eq!((unseen.len(), fitted.len()), (20, 20));
+    assert!(unseen[0] < 0.05, "{unseen:?}");
+    assert!(*unseen.last().unwrap() > 0.9, "{unseen:?}");
+    // The fit's own minibatches: the first update's already moves.
+    assert!(*fitted.last().unwrap() > 0.9, "{fitted:?}");
+
+    let mut bad = kl_config(0.0, None);
+    bad.target.ppo.dagger_rollouts = 8;
+    let err = bad.validate().unwrap_err().to_string();
+    assert!(
+        err.starts_with("target.ppo.dagger_rollouts = 8") && err.contains("set teacher too"),
+        "{err}"
+    );
+}

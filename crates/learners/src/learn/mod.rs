@@ -5,6 +5,7 @@
 
 pub mod acting;
 pub mod adam;
+pub mod dagger;
 pub mod extra_maps;
 pub mod ippo;
 pub mod kind;

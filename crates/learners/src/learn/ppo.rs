@@ -5,6 +5,7 @@
 //! MAPPO and IPPO differ only in what the critic reads (`mappo.rs`, `ippo.rs`).
 
 use super::adam::{backward_clipped, Adam};
+use super::dagger::Aggregate;
 use super::learner::{
     file, optimizer_file, restore_optimizers, Learner, LearnerKind, NamedTensors,
 };
@@ -178,6 +179,9 @@ pub struct PpoLearner {
     /// The KL weight of the coming update: `cfg.heuristic_kl`, annealed by
     /// `set_progress` when `cfg.heuristic_kl_anneal` says so.
     pub kl_weight: f64,
+    /// The labelled states a DAgger target is fitted on
+    /// (`cfg.dagger_rollouts`; empty otherwise).
+    pub aggregate: Aggregate,
 }
 
 /// MAPPO's and IPPO's kind: PPO over the `ppo` settings, with the critic
@@ -252,6 +256,7 @@ impl PpoLearner {
             team,
             view,
             kl_weight: cfg.heuristic_kl,
+            aggregate: Aggregate::new(cfg.dagger_rollouts.max(1)),
             cfg,
         }
     }
@@ -384,6 +389,9 @@ impl PpoLearner {
         ro: &Rollout,
         rng: &mut ChaCha8Rng,
     ) -> Result<UpdateStats, BadUpdate> {
+        if self.cfg.dagger_rollouts > 0 {
+            return self.imitate(ro, rng);
+        }
         let cfg = self.cfg.clone();
         let dev = self.device;
         let (steps, rows, l, hdim) = (ro.steps, ro.rows, ro.chunk_len, ro.hidden as i64);
@@ -610,7 +618,9 @@ impl Learner for PpoLearner {
         &self.net
     }
     fn wants_hints(&self) -> bool {
-        self.net.heuristic_prior > 0.0 || self.cfg.heuristic_kl > 0.0
+        self.net.heuristic_prior > 0.0
+            || self.cfg.heuristic_kl > 0.0
+            || self.cfg.dagger_rollouts > 0
     }
     fn teacher(&self) -> Option<&str> {
         self.cfg.teacher.as_deref()
@@ -708,6 +718,10 @@ impl Learner for PpoLearner {
             dir,
         )?;
         self.value_norm = st.value_norm;
+        // As the off-policy learners' replays: the labelled states are not
+        // saved (hundreds of MB at every checkpoint); a resumed DAgger
+        // target fits on what it plays from then on.
+        self.aggregate.clear();
         Ok(())
     }
 }

@@ -109,6 +109,10 @@ pub struct UpdateStats {
     /// A target with a teacher (`ppo.teacher`): how its greedy moves
     /// matched the teacher's on this rollout, before the update.
     pub teacher: Option<super::teacher::TeacherAgreement>,
+    /// A DAgger target (`ppo.dagger_rollouts`): how its greedy moves
+    /// matched the teacher's on the aggregate's states it was fitted on
+    /// in this update, each minibatch counted before its gradient step.
+    pub fitted: Option<super::teacher::TeacherAgreement>,
 }
 
 impl UpdateStats {

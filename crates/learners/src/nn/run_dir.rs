@@ -130,6 +130,12 @@ impl RunDir {
         self.root.join("teacher.csv")
     }
 
+    /// A DAgger target's agreement with its teacher on the states it was
+    /// fitted on (`teacher.csv` holds it on each new rollout).
+    pub fn dagger_path(&self) -> PathBuf {
+        self.root.join("dagger.csv")
+    }
+
     pub fn curves_path(&self) -> PathBuf {
         self.root.join("curves.png")
     }

@@ -88,6 +88,20 @@ pub struct PpoConfig {
     /// every state alike (the default). Needs `teacher`. Left out while 1.
     #[serde(skip_serializing_if = "is_one")]
     pub teacher_departure_weight: f64,
+    /// DAgger in place of PPO (`learn/dagger.rs`): the target keeps the
+    /// teacher-labelled states of its last this many rollouts and fits its
+    /// actor to the teacher's moves on them by cross-entropy (departures
+    /// weighted by `teacher_departure_weight`), `epochs x minibatches`
+    /// gradient steps per rollout drawn from all of them. No reward enters
+    /// the update and `heuristic_kl` is not read. The aggregate is not
+    /// saved: a resumed run starts a new one. Needs `teacher`. 0: off (PPO,
+    /// the default); left out of the stored config while 0.
+    #[serde(skip_serializing_if = "is_zero_usize")]
+    pub dagger_rollouts: usize,
+}
+
+fn is_zero_usize(x: &usize) -> bool {
+    *x == 0
 }
 
 fn is_zero(x: &f64) -> bool {
@@ -121,6 +135,7 @@ impl Default for PpoConfig {
             heuristic_kl_anneal: 0.0,
             teacher: None,
             teacher_departure_weight: 1.0,
+            dagger_rollouts: 0,
         }
     }
 }
@@ -151,12 +166,25 @@ impl PpoConfig {
                 "anneals heuristic_kl, which is 0 (off): set heuristic_kl too",
             ));
         }
+        in_range(
+            "dagger_rollouts",
+            self.dagger_rollouts,
+            0..=100_000,
+            "must be in 0..=100000 (0: off)",
+        )?;
+        if self.dagger_rollouts > 0 && self.teacher.is_none() {
+            return Err(ConfigError::new(
+                "dagger_rollouts",
+                self.dagger_rollouts,
+                "keeps the states the teacher labelled, and no teacher is set: set teacher too",
+            ));
+        }
         if let Some(teacher) = &self.teacher {
-            if self.heuristic_kl == 0.0 {
+            if self.heuristic_kl == 0.0 && self.dagger_rollouts == 0 {
                 return Err(ConfigError::new(
                     "teacher",
                     format!("\"{teacher}\""),
-                    "is what heuristic_kl pulls towards, and heuristic_kl is 0 (off): set heuristic_kl too",
+                    "is what heuristic_kl pulls towards, and heuristic_kl is 0 (off): set heuristic_kl too (or dagger_rollouts)",
                 ));
             }
         }

@@ -64,6 +64,7 @@ impl SideUpdate {
         };
         if self.side == Side::Target {
             m.teacher = u.teacher;
+            m.fitted = u.fitted;
         }
         let fields = match self.side {
             Side::Captors => [
@@ -134,10 +135,15 @@ pub struct Metrics {
     /// columns they always had.
     #[serde(skip)]
     pub teacher: Option<TeacherAgreement>,
+    /// A DAgger target: its agreement with the teacher on the states it
+    /// was fitted on, written to `dagger.csv`.
+    #[serde(skip)]
+    pub fitted: Option<TeacherAgreement>,
 }
 
-/// One row of `teacher.csv`: an iteration's `TeacherAgreement`, with the
-/// share of the teacher's departures that the policy follows.
+/// One row of `teacher.csv` (or of `dagger.csv`): an iteration's
+/// `TeacherAgreement`, with the share of the teacher's departures that the
+/// policy follows.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct TeacherRow {
     pub iteration: u64,
@@ -150,8 +156,18 @@ pub struct TeacherRow {
 }
 
 impl TeacherRow {
+    /// On the new rollout, before the update (`teacher.csv`).
     pub fn of(m: &Metrics) -> Option<TeacherRow> {
-        m.teacher.map(|a| TeacherRow {
+        m.teacher.map(|a| TeacherRow::with(m, a))
+    }
+
+    /// On the states a DAgger target was fitted on (`dagger.csv`).
+    pub fn of_fitted(m: &Metrics) -> Option<TeacherRow> {
+        m.fitted.map(|a| TeacherRow::with(m, a))
+    }
+
+    fn with(m: &Metrics, a: TeacherAgreement) -> TeacherRow {
+        TeacherRow {
             iteration: m.iteration,
             env_steps: m.env_steps,
             decisions: a.decisions,
@@ -159,6 +175,6 @@ impl TeacherRow {
             followed: a.followed,
             strayed: a.strayed,
             followed_share: a.followed_share(),
-        })
+        }
     }
 }

@@ -102,9 +102,9 @@ impl TrainingRun {
         let trainer = Trainer::resume(cfg.clone(), maps, dir.root())?;
         let iteration = trainer.iteration;
         keep_rows(&dir.metrics_path(), |m: &Metrics| m.iteration <= iteration)?;
-        keep_rows(&dir.teacher_path(), |t: &TeacherRow| {
-            t.iteration <= iteration
-        })?;
+        for path in [dir.teacher_path(), dir.dagger_path()] {
+            keep_rows(&path, |t: &TeacherRow| t.iteration <= iteration)?;
+        }
         Ok(TrainingRun::around(trainer, cfg, dir))
     }
 
@@ -186,6 +186,9 @@ impl TrainingRun {
             append_row(&self.dir.metrics_path(), &m)?;
             if let Some(row) = TeacherRow::of(&m) {
                 append_row(&self.dir.teacher_path(), &row)?;
+            }
+            if let Some(row) = TeacherRow::of_fitted(&m) {
+                append_row(&self.dir.dagger_path(), &row)?;
             }
             self.recent.push(m.clone());
             if self.recent.len() > 5 {
