@@ -13,11 +13,12 @@
 //! share of the teacher's departures it follows there is its held-out
 //! recall, and its strays the held-out false departures.
 
-use super::adam::backward_clipped;
-use super::ppo::PpoLearner;
+use super::adam::{backward_clipped, Adam};
 use super::rollout::{BadUpdate, Rollout, UpdateStats};
+use super::side_config::ppo::PpoConfig;
 use super::teacher::TeacherAgreement;
 use crate::nn::prior::add_prior;
+use crate::nn::Actor;
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 use std::collections::VecDeque;
@@ -189,20 +190,32 @@ fn gather(agg: &Aggregate, picked: &[usize]) -> Batch {
     }
 }
 
-impl PpoLearner {
+/// A PPO target's actor and what DAgger fits it with: its Adam, the
+/// aggregate, its settings and the rule-based target's logit prior.
+pub struct Imitator<'a> {
+    pub actor: &'a Actor,
+    pub adam: &'a mut Adam,
+    pub aggregate: &'a mut Aggregate,
+    pub cfg: &'a PpoConfig,
+    pub prior: f64,
+    pub device: Device,
+}
+
+impl Imitator<'_> {
     /// One DAgger round: the policy's greedy moves on `ro` measured against
     /// the teacher's, `ro` added to the aggregate, then `epochs x
     /// minibatches` gradient steps of the weighted cross-entropy to the
     /// teacher's moves, each on as many sequences as one of PPO's
     /// minibatches would hold, drawn uniformly from the aggregate.
-    pub(super) fn imitate(
-        &mut self,
-        ro: &Rollout,
-        rng: &mut ChaCha8Rng,
-    ) -> Result<UpdateStats, BadUpdate> {
-        let cfg = self.cfg.clone();
-        let dev = self.device;
-        let prior = self.net.heuristic_prior;
+    pub fn imitate(self, ro: &Rollout, rng: &mut ChaCha8Rng) -> Result<UpdateStats, BadUpdate> {
+        let Imitator {
+            actor,
+            adam,
+            aggregate,
+            cfg,
+            prior,
+            device: dev,
+        } = self;
         let mut stats = UpdateStats::default();
 
         // 1. The new rollout, unseen: all its sequences at once.
@@ -212,7 +225,7 @@ impl PpoLearner {
         let b = gather(&fresh, &all);
         let greedy = tch::no_grad(|| {
             let m = b.masks.view([ro.chunk_len as i64, -1]);
-            let logits = self.actor.unroll(&b.patches, &b.vectors, &b.h0, &m);
+            let logits = actor.unroll(&b.patches, &b.vectors, &b.h0, &m);
             add_prior(logits, &b.rule, prior).argmax(-1, false)
         });
         let moves = |t: &Tensor| Vec::<i64>::try_from(t).expect("action indices");
@@ -223,17 +236,17 @@ impl PpoLearner {
         ));
 
         // 2. Into the aggregate.
-        self.aggregate.push(ro, dev);
+        aggregate.push(ro, dev);
 
         // 3. The fit.
         let per_batch = (ro.steps / ro.chunk_len * ro.rows).div_ceil(cfg.minibatches);
-        let total = self.aggregate.sequences();
+        let total = aggregate.sequences();
         let mut fitted = TeacherAgreement::default();
         for _ in 0..cfg.epochs * cfg.minibatches {
             let picked: Vec<usize> = (0..per_batch).map(|_| rng.gen_range(0..total)).collect();
-            let b = gather(&self.aggregate, &picked);
+            let b = gather(aggregate, &picked);
             let m = b.masks.view([ro.chunk_len as i64, -1]);
-            let logits = self.actor.unroll(&b.patches, &b.vectors, &b.h0, &m);
+            let logits = actor.unroll(&b.patches, &b.vectors, &b.h0, &m);
             let logp_all = add_prior(logits, &b.rule, prior).log_softmax(-1, Kind::Float);
             let log_teacher = logp_all
                 .gather(1, &b.teacher.unsqueeze(1), false)
@@ -250,11 +263,11 @@ impl PpoLearner {
             if !loss_value.is_finite() {
                 return Err(BadUpdate(format!("imitation loss = {loss_value}")));
             }
-            let norm = backward_clipped(&loss, &mut [(&mut self.actor_adam, cfg.max_grad_norm)])[0];
+            let norm = backward_clipped(&loss, &mut [(&mut *adam, cfg.max_grad_norm)])[0];
             if !norm.is_finite() {
                 return Err(BadUpdate(format!("actor gradient norm = {norm}")));
             }
-            self.actor_adam.step();
+            adam.step();
             let entropy = tch::no_grad(|| {
                 -(logp_all.exp() * &logp_all)
                     .sum_dim_intlist(-1, false, Kind::Float)

@@ -5,7 +5,7 @@
 //! MAPPO and IPPO differ only in what the critic reads (`mappo.rs`, `ippo.rs`).
 
 use super::adam::{backward_clipped, Adam};
-use super::dagger::Aggregate;
+use super::dagger::{Aggregate, Imitator};
 use super::learner::{
     file, optimizer_file, restore_optimizers, Learner, LearnerKind, NamedTensors,
 };
@@ -390,7 +390,15 @@ impl PpoLearner {
         rng: &mut ChaCha8Rng,
     ) -> Result<UpdateStats, BadUpdate> {
         if self.cfg.dagger_rollouts > 0 {
-            return self.imitate(ro, rng);
+            return Imitator {
+                actor: &self.actor,
+                adam: &mut self.actor_adam,
+                aggregate: &mut self.aggregate,
+                cfg: &self.cfg,
+                prior: self.net.heuristic_prior,
+                device: self.device,
+            }
+            .imitate(ro, rng);
         }
         let cfg = self.cfg.clone();
         let dev = self.device;
