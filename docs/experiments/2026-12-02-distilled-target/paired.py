@@ -32,24 +32,39 @@ def episodes(folder: Path) -> list[dict]:
     return played[0]
 
 
+def paired_difference(caught_rule: list[bool], caught: list[bool]) -> str:
+    """The mean per-episode difference in capture, in points, with its 95% normal interval."""
+    n = len(caught)
+    d = [int(b) - int(a) for a, b in zip(caught_rule, caught)]
+    m = sum(d) / n
+    sd = math.sqrt(sum((x - m) ** 2 for x in d) / (n - 1))
+    h = 1.959964 * sd / math.sqrt(n)
+    return f"{100 * m:+.1f} [{100 * (m - h):+.1f}, {100 * (m + h):+.1f}]"
+
+
+def table_row(team: str, ratio: str, label: str, folder: Path, rule: list[dict], is_rule: bool) -> str:
+    """One Markdown row: the episodes in `folder` beside the rule-based target's, `rule`, on the same starts."""
+    eps = episodes(folder)
+    assert [(e["seed"], e["map"]) for e in eps] == [(e["seed"], e["map"]) for e in rule], folder
+    caught = [e["captured"] == "true" for e in eps]
+    n = len(eps)
+    low, high = wilson(sum(caught), n)
+    time = sum(float(e["steps"]) for e in eps) / n
+    diff = "–" if is_rule else paired_difference([e["captured"] == "true" for e in rule], caught)
+    return f"| {team} | 1.0:{ratio} | {label} | {n} | {100 * sum(caught) / n:.1f} [{low:.1f}, {high:.1f}] | {time:.0f} | {diff} |"
+
+
 def main(out: Path, sight_out: Path) -> None:
     print("| captors | v_p:v_e | target | episodes | SR % [95%] | Time | minus the rule-based target, points [95%] |")
     print("|---|---|---|---|---|---|---|")
     for team, ratio in [("mappo-sight", "1.0"), ("mappo-sight", "1.2"), ("expert7", "1.2")]:
         base = sight_out if team == "mappo-sight" else out
         rule = episodes(base / f"{team}-heuristic-{ratio}")
-        caught_rule = [e["captured"] == "true" for e in rule]
         for name in ["heuristic", "robust", "teacher", "rule", "teacher-no-prior", "rule-no-prior", "teacher-kl50",
                      "teacher-departures100", "teacher-departures100-sight"]:
             folder = (base if name in ("heuristic", "robust") else out) / f"{team}-{name}-{ratio}"
             if not (folder.exists() and any((x / "episodes.csv").exists() for x in folder.iterdir())):
                 continue
-            eps = episodes(folder)
-            assert [(e["seed"], e["map"]) for e in eps] == [(e["seed"], e["map"]) for e in rule], folder
-            caught = [e["captured"] == "true" for e in eps]
-            n = len(eps)
-            low, high = wilson(sum(caught), n)
-            time = sum(float(e["steps"]) for e in eps) / n
             label = {
                 "heuristic": "rule-based",
                 "robust": "robust",
@@ -61,15 +76,7 @@ def main(out: Path, sight_out: Path) -> None:
                 "teacher-departures100": "distilled, prior 10, departures x100",
                 "teacher-departures100-sight": "distilled, prior 10, departures x100, sight",
             }[name]
-            if name == "heuristic":
-                diff = "–"
-            else:
-                d = [int(b) - int(a) for a, b in zip(caught_rule, caught)]
-                m = sum(d) / n
-                sd = math.sqrt(sum((x - m) ** 2 for x in d) / (n - 1))
-                h = 1.959964 * sd / math.sqrt(n)
-                diff = f"{100 * m:+.1f} [{100 * (m - h):+.1f}, {100 * (m + h):+.1f}]"
-            print(f"| {team} | 1.0:{ratio} | {label} | {n} | {100 * sum(caught) / n:.1f} [{low:.1f}, {high:.1f}] | {time:.0f} | {diff} |")
+            print(table_row(team, ratio, label, folder, rule, name == "heuristic"))
 
 
 if __name__ == "__main__":

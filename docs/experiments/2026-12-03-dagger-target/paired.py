@@ -8,12 +8,11 @@ Prints a Markdown table. The helpers are the distillation page's.
 OUT: what run.sh wrote.
 """
 
-import math
 import sys
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "2026-12-02-distilled-target"))
-from paired import episodes, wilson  # noqa: E402
+from paired import episodes, table_row  # noqa: E402
 
 LABELS = {
     "heuristic": "rule-based",
@@ -33,26 +32,11 @@ def main(out: Path) -> None:
         if not done(out / f"{team}-heuristic-{ratio}"):
             continue
         rule = episodes(out / f"{team}-heuristic-{ratio}")
-        caught_rule = [e["captured"] == "true" for e in rule]
         for name, label in LABELS.items():
             folder = out / f"{team}-{name}-{ratio}"
             if not done(folder):
                 continue
-            eps = episodes(folder)
-            assert [(e["seed"], e["map"]) for e in eps] == [(e["seed"], e["map"]) for e in rule], folder
-            caught = [e["captured"] == "true" for e in eps]
-            n = len(eps)
-            low, high = wilson(sum(caught), n)
-            time = sum(float(e["steps"]) for e in eps) / n
-            if name == "heuristic":
-                diff = "–"
-            else:
-                d = [int(b) - int(a) for a, b in zip(caught_rule, caught)]
-                m = sum(d) / n
-                sd = math.sqrt(sum((x - m) ** 2 for x in d) / (n - 1))
-                h = 1.959964 * sd / math.sqrt(n)
-                diff = f"{100 * m:+.1f} [{100 * (m - h):+.1f}, {100 * (m + h):+.1f}]"
-            print(f"| {team} | 1.0:{ratio} | {label} | {n} | {100 * sum(caught) / n:.1f} [{low:.1f}, {high:.1f}] | {time:.0f} | {diff} |")
+            print(table_row(team, ratio, label, folder, rule, name == "heuristic"))
 
 
 if __name__ == "__main__":
