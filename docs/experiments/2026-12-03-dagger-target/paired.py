@@ -20,7 +20,8 @@ LABELS = {
     "dagger-w1": "DAgger, prior 10",
     "dagger-w10": "DAgger, prior 10, departures x10",
     "dagger-w10-large-sight": "DAgger, prior 10, departures x10, larger network, sight",
-    "dagger-w10-large-sight-more-data": "DAgger, as the larger one, 3x the aggregate, 3.2 M env steps",
+    "dagger-w10-large-sight-more-data": "DAgger, as the larger one, 3x the aggregate, 2.08 M env steps",
+    "dagger-w10-large-sight-one-model": "DAgger, as the larger one, teacher robust:10:heuristic",
 }
 
 

@@ -10,7 +10,7 @@
 # protocol, one thread per command.
 #   bash run.sh BIN OUT STEP
 # STEP: sight (the test team), w1, w10, w10-large-sight or
-# w10-large-sight-more-data (a DAgger target), play-TEAM
+# w10-large-sight-more-data, w10-large-sight-one-model (a DAgger target), play-TEAM
 # (mappo-sight, expert7 or greedy2: every target against that team;
 # VARIANTS, default "w1 w10 w10-large-sight": the DAgger targets played).
 set -euo pipefail
@@ -41,7 +41,7 @@ targets() { # CAPTORS TEAM_NAME RATIO EPISODES
 }
 case $step in
     sight) train "$root/configs/cpu-3v1-1.0-heldout-sight.toml" mappo-sight-s0 --total-env-steps 3500000 ;;
-    w1 | w10 | w10-large-sight | w10-large-sight-more-data) train "$here/dagger-$step.toml" "dagger-$step" ;;
+    w1 | w10 | w10-large-sight | w10-large-sight-more-data | w10-large-sight-one-model) train "$here/dagger-$step.toml" "dagger-$step" ;;
     play-mappo-sight) for ratio in 1.2 1.0; do targets "ckpt:$out/mappo-sight-s0" mappo-sight "$ratio" 500; done ;;
     play-expert7) targets expert:7 expert7 1.2 500 ;;
     play-greedy2) targets greedy:2 greedy2 1.2 200 ;;
