@@ -7,8 +7,8 @@
 //! with beta = 0: the states are always the learner's own. No reward
 //! enters the update; the critic is not trained.
 //!
-//! What the policy does on each new rollout, before it joins the
-//! aggregate, is measured against the teacher (`TeacherAgreement`,
+//! What the policy does on each new rollout, before it is fitted on it,
+//! is measured against the teacher (`TeacherAgreement`,
 //! `teacher.csv`): states the actor has never been fitted on, so the
 //! share of the teacher's departures it follows there is its held-out
 //! recall, and its strays the held-out false departures.
@@ -105,14 +105,19 @@ impl Aggregate {
         self.rollouts.push_back(labelled);
     }
 
-    /// Sequences (whole chunks of one row) held.
+    /// Sequences (whole chunks of one row) of one rollout.
+    fn sequences_per_rollout(&self) -> usize {
+        (self.steps / self.chunk_len) * self.rows
+    }
+
+    /// Sequences held, the newest rollout's last.
     fn sequences(&self) -> usize {
-        self.rollouts.len() * (self.steps / self.chunk_len) * self.rows
+        self.rollouts.len() * self.sequences_per_rollout()
     }
 
     /// The rollout, chunk and row of the aggregate's sequence `s`.
     fn locate(&self, s: usize) -> (usize, usize, usize) {
-        let per_rollout = (self.steps / self.chunk_len) * self.rows;
+        let per_rollout = self.sequences_per_rollout();
         let (r, within) = (s / per_rollout, s % per_rollout);
         (r, within / self.rows, within % self.rows)
     }
@@ -218,11 +223,12 @@ impl Imitator<'_> {
         } = self;
         let mut stats = UpdateStats::default();
 
-        // 1. The new rollout, unseen: all its sequences at once.
-        let mut fresh = Aggregate::new(1);
-        fresh.push(ro, dev);
-        let all: Vec<usize> = (0..fresh.sequences()).collect();
-        let b = gather(&fresh, &all);
+        // 1. Into the aggregate, then the new rollout measured before any
+        // fit on it: all its sequences at once.
+        aggregate.push(ro, dev);
+        let total = aggregate.sequences();
+        let newest: Vec<usize> = (total - aggregate.sequences_per_rollout()..total).collect();
+        let b = gather(aggregate, &newest);
         let greedy = tch::no_grad(|| {
             let m = b.masks.view([ro.chunk_len as i64, -1]);
             let logits = actor.unroll(&b.patches, &b.vectors, &b.h0, &m);
@@ -235,12 +241,8 @@ impl Imitator<'_> {
             &moves(&b.rule),
         ));
 
-        // 2. Into the aggregate.
-        aggregate.push(ro, dev);
-
-        // 3. The fit.
-        let per_batch = (ro.steps / ro.chunk_len * ro.rows).div_ceil(cfg.minibatches);
-        let total = aggregate.sequences();
+        // 2. The fit.
+        let per_batch = aggregate.sequences_per_rollout().div_ceil(cfg.minibatches);
         let mut fitted = TeacherAgreement::default();
         for _ in 0..cfg.epochs * cfg.minibatches {
             let picked: Vec<usize> = (0..per_batch).map(|_| rng.gen_range(0..total)).collect();
