@@ -122,6 +122,43 @@ fn cfg_clock(seconds: f64, want: &[f64]) {
     assert!((0.0..=1.0).contains(&p), "{p}");
 }
 
+/// The actor's weights after three iterations of a run of `cfg`.
+fn trained_actor(cfg: &TrainConfig) -> Vec<(String, tch::Tensor)> {
+    let dir = tempfile::tempdir().unwrap();
+    let mut trainer = Trainer::new(cfg.clone(), chase_maps()).unwrap();
+    for _ in 0..3 {
+        trainer.iterate().unwrap();
+    }
+    let written = trainer.save(dir.path()).unwrap();
+    t2e_learners::nn::checkpoint::read_tensors(&written[0].join("actor.safetensors")).unwrap()
+}
+
+fn same_weights(a: &[(String, tch::Tensor)], b: &[(String, tch::Tensor)]) -> bool {
+    a.len() == b.len() && a.iter().zip(b).all(|((n1, t1), (n2, t2))| n1 == n2 && t1.equal(t2))
+}
+
+/// Same seed, same run: a config trained twice on one thread ends with the
+/// same weights, bit for bit, with the spec's inputs and with sight (wall
+/// rays and the coarse map); another seed ends elsewhere.
+#[test]
+fn the_same_seed_trains_the_same_weights() {
+    tch::set_num_threads(1);
+    let plain = chase_config(5);
+    let mut sighted = chase_config(5);
+    sighted.captors.net.sight = t2e_core::env::Sight {
+        wall_rays: 8,
+        map_cells: 8,
+    };
+    sighted.captors.net.vector_input = t2e_learners::nn::VectorInput::Egocentric;
+    for cfg in [&plain, &sighted] {
+        let first = trained_actor(cfg);
+        assert!(same_weights(&first, &trained_actor(cfg)), "sight {:?}", cfg.captors.net.sight);
+    }
+    let mut other = plain.clone();
+    other.seed = 6;
+    assert!(!same_weights(&trained_actor(&plain), &trained_actor(&other)));
+}
+
 #[test]
 fn checkpoints_play_as_controllers_and_resume_exactly() {
     tch::set_num_threads(1);
