@@ -122,8 +122,11 @@ fn cfg_clock(seconds: f64, want: &[f64]) {
     assert!((0.0..=1.0).contains(&p), "{p}");
 }
 
+/// A network's tensors by name, as a checkpoint stores them.
+type Weights = Vec<(String, tch::Tensor)>;
+
 /// The actor's weights after three iterations of a run of `cfg`.
-fn trained_actor(cfg: &TrainConfig) -> Vec<(String, tch::Tensor)> {
+fn trained_actor(cfg: &TrainConfig) -> Weights {
     let dir = tempfile::tempdir().unwrap();
     let mut trainer = Trainer::new(cfg.clone(), chase_maps()).unwrap();
     for _ in 0..3 {
@@ -134,7 +137,10 @@ fn trained_actor(cfg: &TrainConfig) -> Vec<(String, tch::Tensor)> {
 }
 
 fn same_weights(a: &[(String, tch::Tensor)], b: &[(String, tch::Tensor)]) -> bool {
-    a.len() == b.len() && a.iter().zip(b).all(|((n1, t1), (n2, t2))| n1 == n2 && t1.equal(t2))
+    a.len() == b.len()
+        && a.iter()
+            .zip(b)
+            .all(|((n1, t1), (n2, t2))| n1 == n2 && t1.equal(t2))
 }
 
 /// Same seed, same run: a config trained twice on one thread ends with the
@@ -152,11 +158,18 @@ fn the_same_seed_trains_the_same_weights() {
     sighted.captors.net.vector_input = t2e_learners::nn::VectorInput::Egocentric;
     for cfg in [&plain, &sighted] {
         let first = trained_actor(cfg);
-        assert!(same_weights(&first, &trained_actor(cfg)), "sight {:?}", cfg.captors.net.sight);
+        assert!(
+            same_weights(&first, &trained_actor(cfg)),
+            "sight {:?}",
+            cfg.captors.net.sight
+        );
     }
     let mut other = plain.clone();
     other.seed = 6;
-    assert!(!same_weights(&trained_actor(&plain), &trained_actor(&other)));
+    assert!(!same_weights(
+        &trained_actor(&plain),
+        &trained_actor(&other)
+    ));
 }
 
 #[test]
@@ -877,6 +890,80 @@ fn a_dagger_target_fits_the_teachers_moves_on_its_aggregated_states() {
     let err = bad.validate().unwrap_err().to_string();
     assert!(
         err.starts_with("target.ppo.dagger_rollouts = 8") && err.contains("set teacher too"),
+        "{err}"
+    );
+}
+
+/// A DAgger target's critic as built and as its newest checkpoint holds it
+/// after a run of 10 iterations with `dagger_share`, and the rows of its
+/// `dagger.csv` and `teacher.csv`.
+fn dagger_run(dagger_share: f64) -> (Weights, Weights, usize, usize) {
+    use std::sync::atomic::AtomicBool;
+    use t2e_learners::learn::train::run::TrainingRun;
+    let mut cfg = kl_config(0.0, None);
+    cfg.target.ppo.teacher = Some("still".into());
+    cfg.target.ppo.dagger_rollouts = 8;
+    cfg.target.ppo.dagger_share = dagger_share;
+    cfg.target.net.heuristic_prior = 10.0;
+    cfg.total_env_steps = 10 * (cfg.num_envs * cfg.rollout_steps) as u64;
+    cfg.validate().unwrap();
+    let critic_of = |ckpt: &Path| {
+        t2e_learners::nn::checkpoint::read_tensors(&ckpt.join("critic.safetensors")).unwrap()
+    };
+    let built = tempfile::tempdir().unwrap();
+    let trainer = Trainer::new(cfg.clone(), maps(room(60, 260, 60, 260))).unwrap();
+    let initial = critic_of(&trainer.save(built.path()).unwrap().remove(0));
+    let dir = tempfile::tempdir().unwrap();
+    let mut run = TrainingRun::start(cfg, maps(room(60, 260, 60, 260)), dir.path()).unwrap();
+    run.run(&AtomicBool::new(false), None, |_| {}).unwrap();
+    let rows = |file: &str| {
+        std::fs::read_to_string(dir.path().join(file))
+            .unwrap()
+            .lines()
+            .count()
+            - 1
+    };
+    let mut targets: Vec<_> = std::fs::read_dir(dir.path().join("checkpoints"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| {
+            p.file_name()
+                .unwrap()
+                .to_string_lossy()
+                .starts_with("target-")
+        })
+        .collect();
+    targets.sort();
+    let last = critic_of(targets.last().unwrap());
+    (initial, last, rows("dagger.csv"), rows("teacher.csv"))
+}
+
+/// `ppo.dagger_share` hands the run to PPO after its share: DAgger fits
+/// the first iterations (a `dagger.csv` row each) and leaves the critic as
+/// it was built; the PPO updates after it train the critic. The teacher
+/// labels every rollout throughout. It needs `dagger_rollouts`.
+#[test]
+fn dagger_share_hands_the_rest_of_the_run_to_ppo() {
+    let (built, dagger, fitted, labelled) = dagger_run(1.0);
+    assert_eq!((fitted, labelled), (10, 10));
+    assert!(
+        same_weights(&dagger, &built),
+        "DAgger alone trains no critic"
+    );
+    let (built, then_ppo, fitted, labelled) = dagger_run(0.5);
+    // The k-th update comes at progress (k - 1)/10, the steps before its
+    // rollout: DAgger while that is below 0.5.
+    assert_eq!((fitted, labelled), (5, 10));
+    assert!(
+        !same_weights(&then_ppo, &built),
+        "PPO after DAgger trains the critic"
+    );
+
+    let mut bad = kl_config(0.0, None);
+    bad.target.ppo.dagger_share = 0.5;
+    let err = bad.validate().unwrap_err().to_string();
+    assert!(
+        err.starts_with("target.ppo.dagger_share = 0.5") && err.contains("set dagger_rollouts too"),
         "{err}"
     );
 }

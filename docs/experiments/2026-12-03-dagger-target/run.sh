@@ -10,9 +10,12 @@
 # protocol, one thread per command.
 #   bash run.sh BIN OUT STEP
 # STEP: sight (the test team), w1, w10, w10-large-sight or
-# w10-large-sight-more-data, w10-large-sight-one-model (a DAgger target), play-TEAM
-# (mappo-sight, expert7 or greedy2: every target against that team;
-# VARIANTS, default "w1 w10 w10-large-sight": the DAgger targets played).
+# w10-large-sight-more-data, w10-large-sight-one-model,
+# w10-large-sight-then-rl (a DAgger target), play-TEAM (mappo-sight,
+# expert7, greedy2, or team-r: cooperative MAPPO with the spec's inputs,
+# the folder TEAM_R names, as ../2026-12-03-league-robust-member/run.sh
+# trains it: every target against that team; VARIANTS, default "w1 w10
+# w10-large-sight": the DAgger targets played).
 set -euo pipefail
 bin=$1
 out=$2
@@ -41,9 +44,11 @@ targets() { # CAPTORS TEAM_NAME RATIO EPISODES
 }
 case $step in
     sight) train "$root/configs/cpu-3v1-1.0-heldout-sight.toml" mappo-sight-s0 --total-env-steps 3500000 ;;
-    w1 | w10 | w10-large-sight | w10-large-sight-more-data | w10-large-sight-one-model) train "$here/dagger-$step.toml" "dagger-$step" ;;
+    w1 | w10 | w10-large-sight | w10-large-sight-more-data | w10-large-sight-one-model | w10-large-sight-then-rl)
+        train "$here/dagger-$step.toml" "dagger-$step" ;;
     play-mappo-sight) for ratio in 1.2 1.0; do targets "ckpt:$out/mappo-sight-s0" mappo-sight "$ratio" 500; done ;;
     play-expert7) targets expert:7 expert7 1.2 500 ;;
     play-greedy2) targets greedy:2 greedy2 1.2 200 ;;
+    play-team-r) targets "ckpt:$TEAM_R" team-r 1.2 500 ;;
     *) echo "run.sh: unknown step $step" >&2; exit 2 ;;
 esac

@@ -182,6 +182,9 @@ pub struct PpoLearner {
     /// The labelled states a DAgger target is fitted on
     /// (`cfg.dagger_rollouts`; empty otherwise).
     pub aggregate: Aggregate,
+    /// Whether the coming update is DAgger's: `cfg.dagger_rollouts` is set
+    /// and the run is within `cfg.dagger_share` (`set_progress`).
+    pub imitating: bool,
 }
 
 /// MAPPO's and IPPO's kind: PPO over the `ppo` settings, with the critic
@@ -257,6 +260,7 @@ impl PpoLearner {
             view,
             kl_weight: cfg.heuristic_kl,
             aggregate: Aggregate::new(cfg.dagger_rollouts.max(1)),
+            imitating: cfg.dagger_rollouts > 0,
             cfg,
         }
     }
@@ -389,7 +393,7 @@ impl PpoLearner {
         ro: &Rollout,
         rng: &mut ChaCha8Rng,
     ) -> Result<UpdateStats, BadUpdate> {
-        if self.cfg.dagger_rollouts > 0 {
+        if self.imitating {
             return Imitator {
                 actor: &self.actor,
                 adam: &mut self.actor_adam,
@@ -669,6 +673,7 @@ impl Learner for PpoLearner {
     }
     fn set_progress(&mut self, done: f64) {
         self.kl_weight = kl_weight_at(&self.cfg, done);
+        self.imitating = self.cfg.dagger_rollouts > 0 && done < self.cfg.dagger_share;
         if self.cfg.lr_anneal {
             let lr = self.cfg.lr * (1.0 - done.clamp(0.0, 1.0));
             self.actor_adam.lr = lr;

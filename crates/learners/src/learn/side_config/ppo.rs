@@ -98,6 +98,15 @@ pub struct PpoConfig {
     /// the default); left out of the stored config while 0.
     #[serde(skip_serializing_if = "is_zero_usize")]
     pub dagger_rollouts: usize,
+    /// The share of the run (by env steps or the `--for` clock, as
+    /// `lr_anneal`) that DAgger takes; PPO after it, from the imitated
+    /// actor, with `heuristic_kl` towards the teacher when that is set (its
+    /// anneal counted from the run's start, not from the switch). The
+    /// teacher's moves imitated first, reward learned from them after:
+    /// Expert Iteration's order. 1: DAgger throughout (the default).
+    /// Needs `dagger_rollouts`. Left out while 1.
+    #[serde(skip_serializing_if = "is_one")]
+    pub dagger_share: f64,
 }
 
 fn is_zero_usize(x: &usize) -> bool {
@@ -136,6 +145,7 @@ impl Default for PpoConfig {
             teacher: None,
             teacher_departure_weight: 1.0,
             dagger_rollouts: 0,
+            dagger_share: 1.0,
         }
     }
 }
@@ -177,6 +187,14 @@ impl PpoConfig {
                 "dagger_rollouts",
                 self.dagger_rollouts,
                 "keeps the states the teacher labelled, and no teacher is set: set teacher too",
+            ));
+        }
+        in_interval("dagger_share", self.dagger_share, 0.0, 1.0, false)?;
+        if self.dagger_share != 1.0 && self.dagger_rollouts == 0 {
+            return Err(ConfigError::new(
+                "dagger_share",
+                self.dagger_share,
+                "is the share of the run DAgger takes, and dagger_rollouts is 0 (off): set dagger_rollouts too",
             ));
         }
         if let Some(teacher) = &self.teacher {
