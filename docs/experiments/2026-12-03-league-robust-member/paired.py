@@ -47,6 +47,8 @@ def main(out: Path) -> None:
     print("| captors | v_p:v_e | episodes | rule-based target: SR % [95%] | Time | exported target: SR % [95%] | Time | exported minus rule-based, points [95%] |")
     print("|---|---|---|---|---|---|---|---|")
     for team, label in [("rule", "team R (cooperative MAPPO)"), ("greedy2", "`greedy:2`")]:
+        if not (out / f"{team}-vs-target-1.2").exists():
+            continue
         rule, target = episodes(out / f"{team}-vs-rule-1.2"), episodes(out / f"{team}-vs-target-1.2")
         same_starts(rule, target)
         diff = paired_difference(caught(rule), caught(target))
