@@ -4,7 +4,7 @@
 use crate::common;
 
 use common::{maps, room};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use t2e_core::env::{EnvConfig, Side, TrapEnv};
 use t2e_learners::controllers::ControllerSpec;
@@ -858,12 +858,7 @@ fn a_dagger_target_fits_the_teachers_moves_on_its_aggregated_states() {
     use std::sync::atomic::AtomicBool;
     use t2e_core::env::Action;
     use t2e_learners::learn::train::run::TrainingRun;
-    let mut cfg = kl_config(0.0, None);
-    cfg.target.ppo.teacher = Some("still".into());
-    cfg.target.ppo.dagger_rollouts = 8;
-    cfg.target.net.heuristic_prior = 10.0;
-    cfg.total_env_steps = 20 * (cfg.num_envs * cfg.rollout_steps) as u64;
-    cfg.validate().unwrap();
+    let cfg = dagger_config(20, 1.0);
     let dir = tempfile::tempdir().unwrap();
     let mut run = TrainingRun::start(cfg, maps(room(60, 260, 60, 260)), dir.path()).unwrap();
     run.run(&AtomicBool::new(false), None, |_| {}).unwrap();
@@ -894,19 +889,27 @@ fn a_dagger_target_fits_the_teachers_moves_on_its_aggregated_states() {
     );
 }
 
+/// A DAgger target imitating `still` behind a logit prior of 10 on the
+/// rule, for `iterations` iterations, DAgger's for `dagger_share` of them.
+fn dagger_config(iterations: u64, dagger_share: f64) -> TrainConfig {
+    let mut cfg = kl_config(0.0, None);
+    cfg.target.ppo.teacher = Some("still".into());
+    cfg.target.ppo.dagger_rollouts = 8;
+    cfg.target.ppo.dagger_share = dagger_share;
+    cfg.target.net.heuristic_prior = 10.0;
+    cfg.total_env_steps = iterations * (cfg.num_envs * cfg.rollout_steps) as u64;
+    cfg.validate().unwrap();
+    cfg
+}
+
 /// A DAgger target's critic as built and as its newest checkpoint holds it
 /// after a run of 10 iterations with `dagger_share`, and the rows of its
 /// `dagger.csv` and `teacher.csv`.
 fn dagger_run(dagger_share: f64) -> (Weights, Weights, usize, usize) {
     use std::sync::atomic::AtomicBool;
     use t2e_learners::learn::train::run::TrainingRun;
-    let mut cfg = kl_config(0.0, None);
-    cfg.target.ppo.teacher = Some("still".into());
-    cfg.target.ppo.dagger_rollouts = 8;
-    cfg.target.ppo.dagger_share = dagger_share;
-    cfg.target.net.heuristic_prior = 10.0;
-    cfg.total_env_steps = 10 * (cfg.num_envs * cfg.rollout_steps) as u64;
-    cfg.validate().unwrap();
+    use t2e_learners::nn::run_dir::RunDir;
+    let cfg = dagger_config(10, dagger_share);
     let critic_of = |ckpt: &Path| {
         t2e_learners::nn::checkpoint::read_tensors(&ckpt.join("critic.safetensors")).unwrap()
     };
@@ -916,26 +919,15 @@ fn dagger_run(dagger_share: f64) -> (Weights, Weights, usize, usize) {
     let dir = tempfile::tempdir().unwrap();
     let mut run = TrainingRun::start(cfg, maps(room(60, 260, 60, 260)), dir.path()).unwrap();
     run.run(&AtomicBool::new(false), None, |_| {}).unwrap();
-    let rows = |file: &str| {
-        std::fs::read_to_string(dir.path().join(file))
-            .unwrap()
-            .lines()
-            .count()
-            - 1
-    };
-    let mut targets: Vec<_> = std::fs::read_dir(dir.path().join("checkpoints"))
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| {
-            p.file_name()
-                .unwrap()
-                .to_string_lossy()
-                .starts_with("target-")
-        })
-        .collect();
-    targets.sort();
-    let last = critic_of(targets.last().unwrap());
-    (initial, last, rows("dagger.csv"), rows("teacher.csv"))
+    let run_dir = RunDir::new(dir.path());
+    let rows = |file: PathBuf| std::fs::read_to_string(file).unwrap().lines().count() - 1;
+    let last = critic_of(&run_dir.latest_checkpoint(Side::Target).unwrap());
+    (
+        initial,
+        last,
+        rows(run_dir.dagger_path()),
+        rows(run_dir.teacher_path()),
+    )
 }
 
 /// `ppo.dagger_share` hands the run to PPO after its share: DAgger fits
