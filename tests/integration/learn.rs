@@ -644,6 +644,99 @@ fn a_target_leaning_on_the_rule_based_one_plays_it_and_learns_from_its_own_logit
     assert!(err.starts_with("captors.net.heuristic_prior"), "{err}");
 }
 
+/// A target whose prior leans on a planner (`net.prior_teacher`) plays the
+/// planner, not the rule-based target: in training (its update sees the
+/// logits it acted from) and wherever its checkpoint plays, since the
+/// checkpoint's meta.json names the planner and the loader builds it. With
+/// `still` as the planner the target never moves, which the rule-based
+/// target would; with a robust lookahead target whose model draws its
+/// constants each episode, the checkpoint plays the planner's own episodes.
+#[test]
+fn a_target_leaning_on_a_planner_plays_the_planner_wherever_it_is_loaded() {
+    tch::set_num_threads(1);
+    let room_maps = || maps(room(60, 260, 60, 260));
+    let leaning_on = |planner: &str| {
+        let mut cfg = chase_config(6);
+        cfg.captors.play = "heuristic".parse().unwrap();
+        cfg.target = SideConfig {
+            play: "ippo".parse().unwrap(),
+            net: NetConfig {
+                heuristic_prior: 20.0,
+                prior_teacher: Some(planner.to_string()),
+                ..cfg.captors.net.clone()
+            },
+            ppo: t2e_learners::learn::ppo::PpoConfig {
+                epochs: 1,
+                minibatches: 1,
+                ..Default::default()
+            },
+            ..SideConfig::default()
+        };
+        cfg
+    };
+    let setting = |target: ControllerSpec| EvalSetting {
+        captors: ControllerSpec::Heuristic,
+        target,
+        num_captors: 1,
+        episodes: 4,
+        episode_length: 60,
+        soa_every: 0,
+        ..EvalSetting::default()
+    };
+    let episodes = |target: ControllerSpec| {
+        let (_, records) = eval::run(&setting(target), &room_maps(), "room", false).unwrap();
+        records
+            .into_iter()
+            .map(|r| t2e_learners::eval::EpisodeRecord {
+                target_departures: None,
+                target_departure_places: None,
+                ..r
+            })
+            .collect::<Vec<_>>()
+    };
+    for planner in ["still", "robust:10:expert:1"] {
+        let cfg = leaning_on(planner);
+        cfg.validate().unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        let mut trainer = Trainer::new(cfg, room_maps()).unwrap();
+        let m = trainer.iterate().unwrap();
+        assert!(
+            m.target_approx_kl.unwrap().abs() < 1e-4,
+            "{planner}: {:?}",
+            m.target_approx_kl
+        );
+        assert!(m.target_entropy.unwrap() < 0.01, "{planner}: {:?}", m.target_entropy);
+        trainer.save(dir.path()).unwrap();
+        let snapshot = PolicySnapshot::load(dir.path(), Side::Target).unwrap();
+        assert_eq!(snapshot.meta.net.prior_teacher.as_deref(), Some(planner));
+        let learned: ControllerSpec = format!("ckpt:{}", dir.path().display()).parse().unwrap();
+        let played = episodes(learned);
+        assert_eq!(played, episodes(planner.parse().unwrap()), "{planner}");
+        if planner == "still" {
+            assert_ne!(played, episodes(ControllerSpec::Heuristic));
+        }
+    }
+
+    // Refused, each naming the field: a planner with no prior to carry it,
+    // beside a KL teacher, reading a checkpoint, or not a target.
+    let refusal = |edit: &dyn Fn(&mut TrainConfig)| {
+        let mut cfg = leaning_on("still");
+        edit(&mut cfg);
+        cfg.validate().unwrap_err().to_string()
+    };
+    let err = refusal(&|c| c.target.net.heuristic_prior = 0.0);
+    assert!(err.starts_with("target.net.prior_teacher = \"still\""), "{err}");
+    let err = refusal(&|c| {
+        c.target.ppo.teacher = Some("heuristic".into());
+        c.target.ppo.heuristic_kl = 1.0;
+    });
+    assert!(err.starts_with("target.net.prior_teacher") && err.contains("drop one"), "{err}");
+    let err = refusal(&|c| c.target.net.prior_teacher = Some("ckpt:runs/x".into()));
+    assert!(err.contains("reads a checkpoint"), "{err}");
+    let err = refusal(&|c| c.target.net.prior_teacher = Some("expert:3".into()));
+    assert!(err.contains("is a captor team"), "{err}");
+}
+
 /// A target trained by IPPO for 20 iterations against the expert captor in
 /// a room, with a KL of weight `kl` towards `teacher` (the rule-based target
 /// when None), saved in a fresh folder.

@@ -43,6 +43,8 @@ pub enum ControllerError {
     /// The checkpoint's loader refused it; its message names the file.
     #[error("{0}")]
     Checkpoint(String),
+    #[error("'{0}' reads a checkpoint: a prior's planner is part of the network that leans on it, so it must be a scripted target (robust:H:MODELS of scripted teams, lookahead:H, tuned:..., heuristic), whose every input travels with the checkpoint's meta.json")]
+    NotScripted(String),
 }
 
 /// A controller as named on the command line.
@@ -300,8 +302,21 @@ impl ControllerSpec {
             ControllerSpec::Random => Box::new(RandomActions::new()),
             ControllerSpec::Still => Box::new(Still),
             ControllerSpec::Checkpoint(c) => {
-                let ckpt = CheckpointController::new(c.snapshot(side)?)
+                let snapshot = c.snapshot(side)?;
+                let teacher = match &snapshot.meta.net.prior_teacher {
+                    Some(text) => Some(prior_teacher(text).map_err(|e| {
+                        ControllerError::Checkpoint(format!(
+                            "{}: net.prior_teacher = \"{text}\": {e}",
+                            snapshot.dir.join("meta.json").display()
+                        ))
+                    })?),
+                    None => None,
+                };
+                let mut ckpt = CheckpointController::new(snapshot)
                     .map_err(|e| ControllerError::Checkpoint(format!("{e:#}")))?;
+                if let Some(teacher) = teacher {
+                    ckpt = ckpt.with_prior_teacher(teacher.build(Side::Target)?);
+                }
                 Box::new(if c.sampled { ckpt.sampling() } else { ckpt })
             }
         })
@@ -370,4 +385,15 @@ impl ControllerSpec {
         }
         Ok(out)
     }
+}
+
+/// Parses `NetConfig::prior_teacher`: a scripted target (none of its
+/// models a checkpoint), built once to be sure it plays the target.
+pub fn prior_teacher(text: &str) -> Result<ControllerSpec, ControllerError> {
+    let spec: ControllerSpec = text.parse()?;
+    if spec.is_checkpoint() {
+        return Err(ControllerError::NotScripted(text.to_string()));
+    }
+    spec.build(Side::Target)?;
+    Ok(spec)
 }

@@ -72,7 +72,10 @@ impl SeatRules {
             t.name = self.seat.name();
             t.seed ^= 0xE7_0000;
             if let (Side::Target, Some(prior)) = (self.seat.side, cfg.exploiters.target_prior) {
+                // Its own prior in place of the main target's, planner and
+                // all: the rule-based target's at that weight, or none.
                 t.target.net.heuristic_prior = prior;
+                t.target.net.prior_teacher = None;
             }
         }
         t

@@ -225,6 +225,10 @@ impl TrainConfig {
             super::teacher::check(teacher, side, !k.off_policy())
                 .map_err(|e| e.within("ppo").within(name))?;
         }
+        if let Some(planner) = &side_cfg.net.prior_teacher {
+            super::teacher::check_prior(planner, side_cfg.ppo.teacher.as_deref())
+                .map_err(|e| e.within("net").within(name))?;
+        }
         let chunk_len = side_cfg.chunk_len(algorithm);
         let field = k.settings_table();
         if !self.rollout_steps.is_multiple_of(chunk_len) {

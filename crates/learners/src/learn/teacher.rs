@@ -39,6 +39,20 @@ pub fn check(teacher: &str, side: Side, ppo: bool) -> Result<ControllerSpec, Con
     Ok(spec)
 }
 
+/// Checks a side's `net.prior_teacher` (its prior and side are
+/// `prior::check`'s): a scripted target, and not beside `ppo.teacher`,
+/// since the KL's rule-based anchor and the agreement counts read the
+/// prior's moves as the rule's.
+pub fn check_prior(planner: &str, kl_teacher: Option<&str>) -> Result<ControllerSpec, ConfigError> {
+    let bad = |rule: String| ConfigError::new("prior_teacher", format!("\"{planner}\""), rule);
+    if let Some(kl_teacher) = kl_teacher {
+        return Err(bad(format!(
+            "and ppo.teacher = \"{kl_teacher}\" are both set: with a planner as the prior, ppo.heuristic_kl already pulls towards the planner's moves; drop one"
+        )));
+    }
+    crate::controllers::prior_teacher(planner).map_err(|e| bad(e.to_string()))
+}
+
 /// The teacher of one world: its controller and the episode it was last
 /// reset for.
 pub struct Teacher {

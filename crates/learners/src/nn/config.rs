@@ -32,6 +32,14 @@ pub struct NetConfig {
     /// Left out of the stored config while 0, as `vector_input`.
     #[serde(skip_serializing_if = "is_zero")]
     pub heuristic_prior: f64,
+    /// Whose move the prior's weight goes to: a scripted target's spec
+    /// (`robust:10:heuristic+expert:1+expert:2`) in place of the rule-based
+    /// target's. The policy is then that planner's plus what it learns, and
+    /// pays the planner's cost at every decision, wherever it plays: the
+    /// planner is part of the network, as the prior is (`prior.rs`). None:
+    /// the rule-based target, and left out of the stored config.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub prior_teacher: Option<String>,
     /// Inputs beyond the spec's (`t2e_core::env::Sight`: wall rays across the
     /// map), appended to the agent vector; the env is built to write them.
     /// Left out of the stored config while off, as `vector_input`.
@@ -51,6 +59,7 @@ impl Default for NetConfig {
             patch_pool: 2,
             vector_input: VectorInput::LayerNorm,
             heuristic_prior: 0.0,
+            prior_teacher: None,
             sight: Sight::OFF,
         }
     }
@@ -114,6 +123,15 @@ impl NetConfig {
                 self.heuristic_prior,
                 format!("must be a number in [0, {}] (0: off)", prior::MAX_WEIGHT),
             ));
+        }
+        if let Some(teacher) = &self.prior_teacher {
+            if self.heuristic_prior == 0.0 {
+                return Err(ConfigError::new(
+                    "prior_teacher",
+                    format!("\"{teacher}\""),
+                    "is the move the prior leans on, and heuristic_prior is 0 (off): set heuristic_prior or drop prior_teacher",
+                ));
+            }
         }
         Ok(())
     }

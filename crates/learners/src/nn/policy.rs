@@ -163,6 +163,9 @@ pub struct CheckpointController {
     vectors: Vec<f32>,
     patch: Vec<u8>,
     patches: Vec<u8>,
+    /// The planner whose move the prior leans on (`NetConfig::prior_teacher`),
+    /// built by whoever builds the player; None: the rule-based target.
+    prior_teacher: Option<Box<dyn Controller>>,
 }
 
 impl CheckpointController {
@@ -177,11 +180,20 @@ impl CheckpointController {
             vectors: Vec::new(),
             patch: vec![0; PATCH_LEN],
             patches: Vec::new(),
+            prior_teacher: None,
         })
     }
 }
 
 impl CheckpointController {
+    /// The controller of `NetConfig::prior_teacher`, which the prior's
+    /// weight follows in place of the rule-based target; it is reset with
+    /// each episode and asked once per real step, as it would be playing.
+    pub fn with_prior_teacher(mut self, teacher: Box<dyn Controller>) -> CheckpointController {
+        self.prior_teacher = Some(teacher);
+        self
+    }
+
     /// Samples each action from the policy instead of taking the most likely.
     pub fn sampling(mut self) -> CheckpointController {
         self.sampler = Some(ChaCha8Rng::seed_from_u64(0));
@@ -199,8 +211,11 @@ impl Controller for CheckpointController {
         format!("{how}:{}", self.snapshot.dir.display())
     }
 
-    fn reset(&mut self, _env: &TrapEnv, seed: u64) {
+    fn reset(&mut self, env: &TrapEnv, seed: u64) {
         self.hidden = None;
+        if let Some(teacher) = &mut self.prior_teacher {
+            teacher.reset(env, seed);
+        }
         if let Some(rng) = &mut self.sampler {
             // Apart from the streams the environment draws from the seed.
             *rng = ChaCha8Rng::seed_from_u64(seed ^ 0x5a4d_504c_4520_6163);
@@ -327,10 +342,23 @@ impl CheckpointController {
         let rows = out.len();
         // A checkpoint's prior is validated to be a target's (one robot).
         let logits = if net.heuristic_prior > 0.0 && side == Side::Target {
-            let hints: Vec<i64> = envs
-                .iter()
-                .map(|env| super::prior::target_hint(env))
-                .collect();
+            let hints: Vec<i64> = match &mut self.prior_teacher {
+                // A planner keeps per-episode state: one game, its own.
+                Some(teacher) => {
+                    assert_eq!(
+                        envs.len(),
+                        1,
+                        "a target whose prior is a planner plays one game at a time"
+                    );
+                    let mut move_ = [Action::Stop];
+                    teacher.act(envs[0], Side::Target, &mut move_);
+                    vec![move_[0].index() as i64]
+                }
+                None => envs
+                    .iter()
+                    .map(|env| super::prior::target_hint(env))
+                    .collect(),
+            };
             super::prior::add_prior(logits, &Tensor::from_slice(&hints), net.heuristic_prior)
         } else {
             logits

@@ -13,6 +13,7 @@ use std::sync::Arc;
 use std::time::Instant;
 use t2e_core::env::{Action, Side, VecEnv};
 use t2e_learners::learn::acting::{gather_worlds, sample};
+use t2e_learners::learn::teacher::Teacher;
 use t2e_learners::nn::checkpoint::DoesNotFit;
 use t2e_learners::nn::prior::{add_prior, target_hint};
 use t2e_learners::nn::stacked::{PreparedActor, StackedActors};
@@ -57,6 +58,10 @@ pub struct OpponentNets {
     /// Rebuilt only when the set of network opponents in play changes.
     stacks: Vec<Stack>,
     tick: u64,
+    /// Per world, the planner a target opponent's prior leans on
+    /// (`NetConfig::prior_teacher`) and the member it serves there: a
+    /// planner keeps per-episode state, so each world has its own.
+    planners: HashMap<usize, (i64, Teacher)>,
     /// Time in opponent networks (gather, forward, sampling) and the robot
     /// rows they acted for: the cost per row of batched opponent inference.
     pub seconds: f64,
@@ -72,6 +77,7 @@ impl OpponentNets {
             cache: HashMap::new(),
             stacks: Vec::new(),
             tick: 0,
+            planners: HashMap::new(),
             seconds: 0.0,
             rows: 0,
         }
@@ -238,7 +244,10 @@ impl OpponentNets {
                 let mut hints = vec![0i64; g * r];
                 for (i, id) in stack.ids.iter().enumerate() {
                     for (w, &e) in groups[id].iter().enumerate() {
-                        hints[i * r + w] = target_hint(venv.env(e));
+                        hints[i * r + w] = match &net.prior_teacher {
+                            Some(planner) => planner_hint(&mut self.planners, e, *id, planner, venv)?,
+                            None => target_hint(venv.env(e)),
+                        };
                     }
                 }
                 let hints = Tensor::from_slice(&hints).view([g64, r64]);
@@ -279,4 +288,25 @@ impl OpponentNets {
         self.seconds += started.elapsed().as_secs_f64();
         Ok(())
     }
+}
+
+/// The move of the planner that member `member`'s prior leans on, in world
+/// `world`: that world's planner, built afresh when another member played
+/// there last.
+fn planner_hint(
+    planners: &mut HashMap<usize, (i64, Teacher)>,
+    world: usize,
+    member: i64,
+    planner: &str,
+    venv: &VecEnv,
+) -> Result<i64> {
+    if planners.get(&world).is_none_or(|(m, _)| *m != member) {
+        let spec = t2e_learners::controllers::prior_teacher(planner)?;
+        let teacher = Teacher::per_world(&spec, 1)?
+            .pop()
+            .expect("one world, one planner");
+        planners.insert(world, (member, teacher));
+    }
+    let (_, teacher) = planners.get_mut(&world).expect("inserted above");
+    Ok(teacher.label(venv.env(world), venv.episode_index(world)).index() as i64)
 }

@@ -73,8 +73,17 @@ impl Trainer {
                 let prior = lr.net().heuristic_prior;
                 // Validated: only a target (one robot per world) leans on it.
                 let hints = lr.wants_hints().then(|| {
-                    for (e, hint) in ro.hints[base..base + rows].iter_mut().enumerate() {
-                        *hint = target_hint(self.venv.env(e));
+                    let out = &mut ro.hints[base..base + rows];
+                    if ls.prior_teachers.is_empty() {
+                        for (e, hint) in out.iter_mut().enumerate() {
+                            *hint = target_hint(self.venv.env(e));
+                        }
+                    } else {
+                        crate::learn::teacher::label_worlds(
+                            &mut ls.prior_teachers,
+                            &self.venv,
+                            out,
+                        );
                     }
                     Tensor::from_slice(&ro.hints[base..base + rows])
                 });

@@ -418,6 +418,15 @@ fn learner_side(
             }
             None => Vec::new(),
         },
+        prior_teachers: match &side_cfg.net.prior_teacher {
+            Some(planner) => {
+                let spec =
+                    crate::learn::teacher::check_prior(planner, side_cfg.ppo.teacher.as_deref())
+                        .map_err(|e| e.within("net").within(side.name()))?;
+                crate::learn::teacher::Teacher::per_world(&spec, cfg.num_envs)?
+            }
+            None => Vec::new(),
+        },
     })
 }
 

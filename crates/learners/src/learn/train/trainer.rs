@@ -26,6 +26,9 @@ pub(crate) struct LearnerSide {
     pub(super) shaping: Option<(f32, f64)>,
     /// One per world where the KL pulls towards a teacher; empty elsewhere.
     pub(super) teachers: Vec<crate::learn::teacher::Teacher>,
+    /// One per world where the prior leans on a planner
+    /// (`NetConfig::prior_teacher`); empty where it is the rule-based target.
+    pub(super) prior_teachers: Vec<crate::learn::teacher::Teacher>,
 }
 
 pub struct Trainer {
