@@ -705,7 +705,11 @@ fn a_target_leaning_on_a_planner_plays_the_planner_wherever_it_is_loaded() {
             "{planner}: {:?}",
             m.target_approx_kl
         );
-        assert!(m.target_entropy.unwrap() < 0.01, "{planner}: {:?}", m.target_entropy);
+        assert!(
+            m.target_entropy.unwrap() < 0.01,
+            "{planner}: {:?}",
+            m.target_entropy
+        );
         trainer.save(dir.path()).unwrap();
         let snapshot = PolicySnapshot::load(dir.path(), Side::Target).unwrap();
         assert_eq!(snapshot.meta.net.prior_teacher.as_deref(), Some(planner));
@@ -725,12 +729,18 @@ fn a_target_leaning_on_a_planner_plays_the_planner_wherever_it_is_loaded() {
         cfg.validate().unwrap_err().to_string()
     };
     let err = refusal(&|c| c.target.net.heuristic_prior = 0.0);
-    assert!(err.starts_with("target.net.prior_teacher = \"still\""), "{err}");
+    assert!(
+        err.starts_with("target.net.prior_teacher = \"still\""),
+        "{err}"
+    );
     let err = refusal(&|c| {
         c.target.ppo.teacher = Some("heuristic".into());
         c.target.ppo.heuristic_kl = 1.0;
     });
-    assert!(err.starts_with("target.net.prior_teacher") && err.contains("drop one"), "{err}");
+    assert!(
+        err.starts_with("target.net.prior_teacher") && err.contains("drop one"),
+        "{err}"
+    );
     let err = refusal(&|c| c.target.net.prior_teacher = Some("ckpt:runs/x".into()));
     assert!(err.contains("reads a checkpoint"), "{err}");
     let err = refusal(&|c| c.target.net.prior_teacher = Some("expert:3".into()));

@@ -245,7 +245,9 @@ impl OpponentNets {
                 for (i, id) in stack.ids.iter().enumerate() {
                     for (w, &e) in groups[id].iter().enumerate() {
                         hints[i * r + w] = match &net.prior_teacher {
-                            Some(planner) => planner_hint(&mut self.planners, e, *id, planner, venv)?,
+                            Some(planner) => {
+                                planner_hint(&mut self.planners, e, *id, planner, venv)?
+                            }
                             None => target_hint(venv.env(e)),
                         };
                     }
@@ -308,5 +310,7 @@ fn planner_hint(
         planners.insert(world, (member, teacher));
     }
     let (_, teacher) = planners.get_mut(&world).expect("inserted above");
-    Ok(teacher.label(venv.env(world), venv.episode_index(world)).index() as i64)
+    Ok(teacher
+        .label(venv.env(world), venv.episode_index(world))
+        .index() as i64)
 }
