@@ -713,6 +713,11 @@ fn a_target_leaning_on_a_planner_plays_the_planner_wherever_it_is_loaded() {
         trainer.save(dir.path()).unwrap();
         let snapshot = PolicySnapshot::load(dir.path(), Side::Target).unwrap();
         assert_eq!(snapshot.meta.net.prior_teacher.as_deref(), Some(planner));
+        // Played without its planner it would play the rule: refused.
+        match t2e_learners::nn::CheckpointController::new(Arc::new(snapshot)) {
+            Ok(_) => panic!("{planner}: loaded without its planner"),
+            Err(e) => assert!(e.to_string().contains("plays only beside it"), "{e}"),
+        }
         let learned: ControllerSpec = format!("ckpt:{}", dir.path().display()).parse().unwrap();
         let played = episodes(learned);
         assert_eq!(played, episodes(planner.parse().unwrap()), "{planner}");

@@ -303,20 +303,21 @@ impl ControllerSpec {
             ControllerSpec::Still => Box::new(Still),
             ControllerSpec::Checkpoint(c) => {
                 let snapshot = c.snapshot(side)?;
-                let teacher = match &snapshot.meta.net.prior_teacher {
-                    Some(text) => Some(prior_teacher(text).map_err(|e| {
-                        ControllerError::Checkpoint(format!(
-                            "{}: net.prior_teacher = \"{text}\": {e}",
-                            snapshot.dir.join("meta.json").display()
-                        ))
-                    })?),
-                    None => None,
-                };
-                let mut ckpt = CheckpointController::new(snapshot)
-                    .map_err(|e| ControllerError::Checkpoint(format!("{e:#}")))?;
-                if let Some(teacher) = teacher {
-                    ckpt = ckpt.with_prior_teacher(teacher.build(Side::Target)?);
+                let ckpt = match &snapshot.meta.net.prior_teacher {
+                    Some(text) => {
+                        let planner = prior_teacher(text)
+                            .and_then(|spec| spec.build(Side::Target))
+                            .map_err(|e| {
+                                ControllerError::Checkpoint(format!(
+                                    "{}: net.prior_teacher = \"{text}\": {e}",
+                                    snapshot.dir.join("meta.json").display()
+                                ))
+                            })?;
+                        CheckpointController::leaning_on(snapshot, planner)
+                    }
+                    None => CheckpointController::new(snapshot),
                 }
+                .map_err(|e| ControllerError::Checkpoint(format!("{e:#}")))?;
                 Box::new(if c.sampled { ckpt.sampling() } else { ckpt })
             }
         })

@@ -203,6 +203,9 @@ pub enum CheckpointError {
         player: String,
         meta: String,
     },
+    /// A network whose prior leans on a planner, loaded without it.
+    #[error("{}: net.prior_teacher = \"{planner}\": the network leans on that planner's move and plays only beside it; load it by name (ckpt:PATH), which builds the planner", .meta.display())]
+    NeedsPlanner { meta: PathBuf, planner: String },
     #[error(transparent)]
     Fs(#[from] FsError),
 }

@@ -169,7 +169,32 @@ pub struct CheckpointController {
 }
 
 impl CheckpointController {
+    /// The player of `snapshot`; refused when its prior leans on a planner
+    /// (`leaning_on` builds that one), which it would otherwise play without.
     pub fn new(snapshot: Arc<PolicySnapshot>) -> Result<CheckpointController, CheckpointError> {
+        if let Some(planner) = &snapshot.meta.net.prior_teacher {
+            return Err(CheckpointError::NeedsPlanner {
+                meta: snapshot.dir.join("meta.json"),
+                planner: planner.clone(),
+            });
+        }
+        Self::build(snapshot, None)
+    }
+
+    /// The player of `snapshot` whose prior follows `planner`, the
+    /// controller of its `NetConfig::prior_teacher`; it is reset with each
+    /// episode and asked once per real step, as it would be playing.
+    pub fn leaning_on(
+        snapshot: Arc<PolicySnapshot>,
+        planner: Box<dyn Controller>,
+    ) -> Result<CheckpointController, CheckpointError> {
+        Self::build(snapshot, Some(planner))
+    }
+
+    fn build(
+        snapshot: Arc<PolicySnapshot>,
+        prior_teacher: Option<Box<dyn Controller>>,
+    ) -> Result<CheckpointController, CheckpointError> {
         let (vs, actor) = snapshot.build_actor(Device::Cpu)?;
         Ok(CheckpointController {
             snapshot,
@@ -180,20 +205,12 @@ impl CheckpointController {
             vectors: Vec::new(),
             patch: vec![0; PATCH_LEN],
             patches: Vec::new(),
-            prior_teacher: None,
+            prior_teacher,
         })
     }
 }
 
 impl CheckpointController {
-    /// The controller of `NetConfig::prior_teacher`, which the prior's
-    /// weight follows in place of the rule-based target; it is reset with
-    /// each episode and asked once per real step, as it would be playing.
-    pub fn with_prior_teacher(mut self, teacher: Box<dyn Controller>) -> CheckpointController {
-        self.prior_teacher = Some(teacher);
-        self
-    }
-
     /// Samples each action from the policy instead of taking the most likely.
     pub fn sampling(mut self) -> CheckpointController {
         self.sampler = Some(ChaCha8Rng::seed_from_u64(0));
