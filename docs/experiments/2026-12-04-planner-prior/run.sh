@@ -1,12 +1,15 @@
 #!/usr/bin/env bash
-# A learned target leaning on the robust lookahead target (planner-prior.toml,
-# 600 k env steps against the expert captors at 1.0:1.2 on generated maps),
-# then played by `greedy:2`, a team it never met, on the large Gibson maps:
-# 500 episodes at 1.0:1.0 and at 1.0:1.2, evaluation seed 0, the starts the
-# rule-based and robust targets were played on (folders of the same names
-# in OUT from ../2026-12-01-robust-target's commands). Held-out protocol,
-# one thread per command.
-#   bash run.sh BIN OUT STEP      STEP: train, play-1.0 or play-1.2
+# Learned targets leaning on the robust lookahead target (planner-prior.toml,
+# prior 10; planner-prior-w3.toml, prior 3; 600 k env steps against the
+# expert captors at 1.0:1.2 on generated maps), then played by `greedy:2`,
+# a team they never met, on the large Gibson maps, evaluation seed 0, the
+# starts the rule-based and robust targets were played on (folders
+# greedy2-heuristic-R and greedy2-robust-R in OUT, from
+# ../2026-12-01-robust-target's commands): 500 episodes at 1.0:1.0 and at
+# 1.0:1.2. Held-out protocol, one thread per command.
+#   bash run.sh BIN OUT STEP
+# STEP: train or train-w3; play-1.0 or play-1.2 (prior 10); play-w3-1.0 or
+# play-w3-1.2 (prior 3).
 set -euo pipefail
 bin=$1
 out=$2
@@ -14,16 +17,22 @@ step=$3
 here=$(cd "$(dirname "$0")" && pwd)
 export OMP_NUM_THREADS=1 RAYON_NUM_THREADS=1
 mkdir -p "$out"
-play() { # RATIO
-    "$bin" eval --captors greedy:2 --target "ckpt:$out/planner-prior" --k 3 --speed-ratio "$1" \
+train() { # NAME
+    local resume
+    resume=$([ -f "$out/$1/state.json" ] && echo --resume || true)
+    "$bin" train --config "$here/$1.toml" --out "$out/$1" --threads 1 --quiet $resume
+}
+play() { # NAME RATIO
+    "$bin" eval --captors greedy:2 --target "ckpt:$out/$1" --k 3 --speed-ratio "$2" \
         --maps large --episodes 500 --episode-length 500 --seed 0 --soa-every 0 --quiet --resume \
-        --out "$out/greedy2-planner-prior-$1"
+        --out "$out/greedy2-$1-$2"
 }
 case $step in
-    train)
-        resume=$([ -f "$out/planner-prior/state.json" ] && echo --resume || true)
-        "$bin" train --config "$here/planner-prior.toml" --out "$out/planner-prior" --threads 1 --quiet $resume ;;
-    play-1.0) play 1.0 ;;
-    play-1.2) play 1.2 ;;
+    train) train planner-prior ;;
+    train-w3) train planner-prior-w3 ;;
+    play-1.0) play planner-prior 1.0 ;;
+    play-1.2) play planner-prior 1.2 ;;
+    play-w3-1.0) play planner-prior-w3 1.0 ;;
+    play-w3-1.2) play planner-prior-w3 1.2 ;;
     *) echo "run.sh: unknown step $step" >&2; exit 2 ;;
 esac
