@@ -552,21 +552,17 @@ fn off_policy_checkpoints_keep_their_target_networks_resume_and_play() {
     );
 }
 
-/// A learning target with a heavy heuristic prior (weight 20, the most
-/// accepted) plays the rule-based target: its PPO update sees the same
-/// logits it acted from (no KL between them), and its checkpoint, loaded as
-/// a controller, plays the rule-based target's episodes exactly.
-#[test]
-fn a_target_leaning_on_the_rule_based_one_plays_it_and_learns_from_its_own_logits() {
-    tch::set_num_threads(1);
-    let dir = tempfile::tempdir().unwrap();
-    let room_maps = || maps(room(60, 260, 60, 260));
+/// An IPPO target with the heaviest prior (20) on the rule-based target's
+/// move, or on `planner`'s, against the expert captor in a room; one epoch
+/// of one minibatch, so that an update's ratio reads the logits it acted from.
+fn prior_20_config(planner: Option<&str>) -> TrainConfig {
     let mut cfg = chase_config(6);
     cfg.captors.play = "heuristic".parse().unwrap();
     cfg.target = SideConfig {
         play: "ippo".parse().unwrap(),
         net: NetConfig {
             heuristic_prior: 20.0,
+            prior_teacher: planner.map(str::to_string),
             ..cfg.captors.net.clone()
         },
         ppo: t2e_learners::learn::ppo::PpoConfig {
@@ -576,6 +572,47 @@ fn a_target_leaning_on_the_rule_based_one_plays_it_and_learns_from_its_own_logit
         },
         ..SideConfig::default()
     };
+    cfg
+}
+
+/// Episode records without the departure counts, which only a target
+/// other than the rule-based one carries: two targets' episodes compared.
+fn without_departures(
+    records: Vec<t2e_learners::eval::EpisodeRecord>,
+) -> Vec<t2e_learners::eval::EpisodeRecord> {
+    records
+        .into_iter()
+        .map(|r| t2e_learners::eval::EpisodeRecord {
+            target_departures: None,
+            target_departure_places: None,
+            ..r
+        })
+        .collect()
+}
+
+/// Four 60-step episodes of `target` against the expert captor in a room.
+fn room_setting(target: ControllerSpec) -> EvalSetting {
+    EvalSetting {
+        captors: ControllerSpec::Heuristic,
+        target,
+        num_captors: 1,
+        episodes: 4,
+        episode_length: 60,
+        soa_every: 0,
+        ..EvalSetting::default()
+    }
+}
+
+/// A learning target with a heavy heuristic prior (weight 20, the most
+/// accepted) plays the rule-based target: its PPO update sees the same
+/// logits it acted from (no KL between them), and its checkpoint, loaded as
+/// a controller, plays the rule-based target's episodes exactly.
+#[test]
+fn a_target_leaning_on_the_rule_based_one_plays_it_and_learns_from_its_own_logits() {
+    tch::set_num_threads(1);
+    let dir = tempfile::tempdir().unwrap();
+    let room_maps = || maps(room(60, 260, 60, 260));
+    let cfg = prior_20_config(None);
     let mut trainer = Trainer::new(cfg.clone(), room_maps()).unwrap();
     let m = trainer.iterate().unwrap();
     // Acting and the update both add the prior: the one gradient step's
@@ -588,19 +625,10 @@ fn a_target_leaning_on_the_rule_based_one_plays_it_and_learns_from_its_own_logit
     assert!(m.target_entropy.unwrap() < 0.01, "{:?}", m.target_entropy);
     trainer.save(dir.path()).unwrap();
 
-    let setting = |target: ControllerSpec| EvalSetting {
-        captors: ControllerSpec::Heuristic,
-        target,
-        num_captors: 1,
-        episodes: 4,
-        episode_length: 60,
-        soa_every: 0,
-        ..EvalSetting::default()
-    };
     let learned: ControllerSpec = format!("ckpt:{}", dir.path().display()).parse().unwrap();
-    let (_, with_prior) = eval::run(&setting(learned), &room_maps(), "room", false).unwrap();
+    let (_, with_prior) = eval::run(&room_setting(learned), &room_maps(), "room", false).unwrap();
     let (_, rule_based) = eval::run(
-        &setting(ControllerSpec::Heuristic),
+        &room_setting(ControllerSpec::Heuristic),
         &room_maps(),
         "room",
         false,
@@ -612,16 +640,6 @@ fn a_target_leaning_on_the_rule_based_one_plays_it_and_learns_from_its_own_logit
         assert_eq!((departed, decisions), (0, learned.steps), "{learned:?}");
         assert_eq!(rule.target_departures, None);
     }
-    let without_departures = |records: Vec<t2e_learners::eval::EpisodeRecord>| {
-        records
-            .into_iter()
-            .map(|r| t2e_learners::eval::EpisodeRecord {
-                target_departures: None,
-                target_departure_places: None,
-                ..r
-            })
-            .collect::<Vec<_>>()
-    };
     assert_eq!(without_departures(with_prior), rule_based);
 
     // Without the prior, the same untrained network plays other episodes.
@@ -634,7 +652,7 @@ fn a_target_leaning_on_the_rule_based_one_plays_it_and_learns_from_its_own_logit
     let unled: ControllerSpec = format!("ckpt:{}", plain_dir.path().display())
         .parse()
         .unwrap();
-    let (_, without) = eval::run(&setting(unled), &room_maps(), "room", false).unwrap();
+    let (_, without) = eval::run(&room_setting(unled), &room_maps(), "room", false).unwrap();
     assert_ne!(without_departures(without), rule_based);
 
     // The captors have no rule-based action to lean on.
@@ -655,44 +673,10 @@ fn a_target_leaning_on_the_rule_based_one_plays_it_and_learns_from_its_own_logit
 fn a_target_leaning_on_a_planner_plays_the_planner_wherever_it_is_loaded() {
     tch::set_num_threads(1);
     let room_maps = || maps(room(60, 260, 60, 260));
-    let leaning_on = |planner: &str| {
-        let mut cfg = chase_config(6);
-        cfg.captors.play = "heuristic".parse().unwrap();
-        cfg.target = SideConfig {
-            play: "ippo".parse().unwrap(),
-            net: NetConfig {
-                heuristic_prior: 20.0,
-                prior_teacher: Some(planner.to_string()),
-                ..cfg.captors.net.clone()
-            },
-            ppo: t2e_learners::learn::ppo::PpoConfig {
-                epochs: 1,
-                minibatches: 1,
-                ..Default::default()
-            },
-            ..SideConfig::default()
-        };
-        cfg
-    };
-    let setting = |target: ControllerSpec| EvalSetting {
-        captors: ControllerSpec::Heuristic,
-        target,
-        num_captors: 1,
-        episodes: 4,
-        episode_length: 60,
-        soa_every: 0,
-        ..EvalSetting::default()
-    };
+    let leaning_on = |planner: &str| prior_20_config(Some(planner));
     let episodes = |target: ControllerSpec| {
-        let (_, records) = eval::run(&setting(target), &room_maps(), "room", false).unwrap();
-        records
-            .into_iter()
-            .map(|r| t2e_learners::eval::EpisodeRecord {
-                target_departures: None,
-                target_departure_places: None,
-                ..r
-            })
-            .collect::<Vec<_>>()
+        let (_, records) = eval::run(&room_setting(target), &room_maps(), "room", false).unwrap();
+        without_departures(records)
     };
     for planner in ["still", "robust:10:expert:1"] {
         let cfg = leaning_on(planner);
