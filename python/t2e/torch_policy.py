@@ -256,6 +256,14 @@ def _read_meta(folder: Path) -> dict:
     prior = net.get("heuristic_prior", 0.0)
     if isinstance(prior, bool) or not isinstance(prior, (int, float)) or not math.isfinite(prior) or not 0 <= prior <= MAX_PRIOR:
         raise _refuse(path, f"net.heuristic_prior = {prior!r}: must be a number in [0, {MAX_PRIOR}]")
+    if "prior_teacher" in net:
+        # Its prior leans on a planner this actor does not run: without it
+        # the prior would fall on the rule-based target's move.
+        raise _refuse(
+            path,
+            f"net.prior_teacher = {net['prior_teacher']!r}: the network leans on that planner's move, which the PyTorch actor does not compute; "
+            "play it by name from Rust (ckpt:PATH, e.g. t2e.vector_env(target='ckpt:PATH')), which builds the planner",
+        )
     files = meta.get("files", {})
     if not isinstance(files, dict):
         raise _refuse(path, "files is not an object")

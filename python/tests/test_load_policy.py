@@ -171,6 +171,7 @@ def test_an_export_is_checked_against_its_sha256sums_before_meta_json_is_believe
         (lambda m: m["net"].update(patch_pool=0), "patch_pool"),
         (lambda m: m["net"].update(heuristic_prior=float("nan")), "NaN"),
         (lambda m: m["net"].update(heuristic_prior=25.0), "heuristic_prior"),
+        (lambda m: m["net"].update(heuristic_prior=10.0, prior_teacher="robust:10:heuristic"), "prior_teacher.*planner"),
         (lambda m: m.update(num_captors=0), "num_captors"),
         (lambda m: m.update(num_captors="3"), "num_captors"),
         (lambda m: m.pop("num_captors"), "num_captors"),
