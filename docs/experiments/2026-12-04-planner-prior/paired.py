@@ -43,7 +43,7 @@ def paired(a, b) -> str:
 def main(out: Path) -> None:
     print("| v_p:v_e | learned target | target | episodes | SR % [95%] | Time | learned minus it, points [95%] | departures from the rule % | episodes ended as the robust target's % |")
     print("|---|---|---|---|---|---|---|---|---|")
-    for variant in ["planner-prior", "planner-prior-w3"]:
+    for variant in ["planner-prior", "planner-prior-w6", "planner-prior-w3"]:
         for ratio in ["1.0", "1.2"]:
             try:
                 learned, learned_summary = setting(out / f"greedy2-{variant}-{ratio}")
