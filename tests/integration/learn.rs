@@ -736,6 +736,140 @@ fn a_target_leaning_on_a_planner_plays_the_planner_wherever_it_is_loaded() {
     assert!(err.contains("is a captor team"), "{err}");
 }
 
+/// A league's learner plays target members whose prior leans on a planner
+/// through its opponent networks, one planner per world and member: each
+/// member's greedy move in every world, episode after episode, is that of
+/// a controller of its planner built for that world when the member came
+/// to play there and reset for each of its episodes. Four members in eight
+/// worlds, the member of a world changing every second episode: one
+/// leaning on `still` (it never moves, where the rule-based target would),
+/// one on the rule-based target, one on the robust lookahead target, and
+/// one on a lookahead target whose model, the expert captors of seed 1,
+/// draws its constants each episode (so its moves need the world's own
+/// planner, reset per episode).
+#[test]
+fn a_league_opponent_leaning_on_a_planner_plays_it_in_every_world_and_episode() {
+    use league::run::seat::opponents::{OpponentNets, WorldOpponent};
+    use league::store::{Kind, Player};
+    use rand::SeedableRng;
+    use t2e_core::env::controller::Controller;
+    use t2e_core::env::{Action, VecEnv};
+    tch::set_num_threads(1);
+    let room_maps = || maps(room(60, 260, 60, 260));
+    let root = tempfile::tempdir().unwrap();
+    let planners = [
+        Some("still"),
+        None,
+        Some("robust:10:expert:1"),
+        Some("lookahead:6:expert:1"),
+    ];
+    let mut members = Vec::new();
+    let mut env_cfg = None;
+    for (i, planner) in planners.iter().enumerate() {
+        let cfg = prior_20_config(*planner);
+        env_cfg.get_or_insert(cfg.env.clone());
+        let mut trainer = Trainer::new(cfg, room_maps()).unwrap();
+        trainer.iterate().unwrap();
+        let rel = format!("pool/member-{i}");
+        std::fs::create_dir_all(root.path().join("pool")).unwrap();
+        // As a league writes its snapshots.
+        let label = serde_json::json!({ "member": i });
+        trainer
+            .side(Side::Target)
+            .unwrap()
+            .save_new(&root.path().join(&rel), label)
+            .unwrap();
+        let meta_sha =
+            t2e_core::util::sha256_file(&root.path().join(&rel).join("meta.json")).unwrap();
+        members.push(Player {
+            id: 10 + i as i64,
+            name: format!("target-snap-{i}"),
+            side: Side::Target,
+            kind: Kind::Snapshot,
+            parent: None,
+            created_at_ms: 0,
+            env_steps: 0,
+            curriculum_stage: 0,
+            checkpoint: Some((rel, meta_sha)),
+            quarantined: None,
+        });
+    }
+    // What each member's moves must be: its planner's, or the rule's.
+    let spec_of =
+        |m: usize| -> ControllerSpec { planners[m].unwrap_or("heuristic").parse().unwrap() };
+
+    let env_cfg = EnvConfig {
+        episode_length: 15,
+        ..env_cfg.unwrap()
+    };
+    let worlds_n = 8;
+    let mut venv = VecEnv::new(env_cfg, room_maps(), worlds_n, 7).unwrap();
+    venv.script(Side::Captors, || {
+        ControllerSpec::Heuristic.build(Side::Captors).unwrap()
+    });
+    venv.reset().unwrap();
+    let mut nets = OpponentNets::new(Side::Target, 8, true);
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(0);
+    let member_of = |world: usize, episode: u64| (world + episode as usize / 2) % members.len();
+    // Per world: the member playing it, the episode it began, and the
+    // controller that says what its moves must be.
+    type Playing = (usize, u64, Box<dyn Controller>);
+    let mut playing: Vec<Option<Playing>> = (0..worlds_n).map(|_| None).collect();
+    let mut worlds: Vec<WorldOpponent> = Vec::new();
+    let na = venv.num_agents();
+    let mut actions = vec![Action::Stop; worlds_n * na];
+    let (mut checked, mut still_apart_from_rule, mut episodes_per_member) = (0, 0, [0usize; 4]);
+    let mut rule = ControllerSpec::Heuristic.build(Side::Target).unwrap();
+    for _step in 0..90 {
+        for w in 0..worlds_n {
+            let episode = venv.episode_index(w);
+            if playing[w].as_ref().is_none_or(|(_, e, _)| *e != episode) {
+                let m = member_of(w, episode);
+                let hidden = nets.load(root.path(), &members[m], &[]).unwrap();
+                let world = WorldOpponent {
+                    player: members[m].id,
+                    network: Some(members[m].id),
+                    hidden: vec![0.0; hidden],
+                    speed: 1.0,
+                };
+                if worlds.len() == worlds_n {
+                    worlds[w] = world;
+                } else {
+                    worlds.push(world);
+                }
+                let mut expected = spec_of(m).build(Side::Target).unwrap();
+                expected.reset(venv.env(w), venv.env(w).seed);
+                playing[w] = Some((m, episode, expected));
+                episodes_per_member[m] += 1;
+            }
+        }
+        nets.act(&venv, &mut worlds, 1, &mut rng, &mut actions)
+            .unwrap();
+        for w in 0..worlds_n {
+            let (m, _, expected) = playing[w].as_mut().unwrap();
+            let mut want = [Action::Stop];
+            expected.act(venv.env(w), Side::Target, &mut want);
+            let played = actions[w * na + na - 1];
+            assert_eq!(played, want[0], "world {w}, member {m}, step {_step}");
+            if *m == 0 {
+                let mut by_rule = [Action::Stop];
+                rule.act(venv.env(w), Side::Target, &mut by_rule);
+                still_apart_from_rule += (by_rule[0] != played) as usize;
+            }
+            checked += 1;
+        }
+        venv.step(&actions).unwrap();
+    }
+    assert_eq!(checked, 90 * worlds_n);
+    assert!(
+        episodes_per_member.iter().all(|&n| n >= 6),
+        "{episodes_per_member:?}"
+    );
+    // Leaning on `still` is not leaning on the rule: the two part somewhere.
+    assert!(still_apart_from_rule > 10, "{still_apart_from_rule}");
+    assert_eq!(nets.rows, checked as u64);
+}
+
 /// A target trained by IPPO for 20 iterations against the expert captor in
 /// a room, with a KL of weight `kl` towards `teacher` (the rule-based target
 /// when None), saved in a fresh folder.
