@@ -1,12 +1,13 @@
 """The planner-prior target against the rule-based and the robust targets
-on the same starts: per speed ratio, each target's capture rate by
-`greedy:2` (SR, 95% Wilson) and mean Time (steps; failures count 500), the
+on the same starts: per speed ratio, each target's capture rate by one
+test team (SR, 95% Wilson) and mean Time (steps; failures count 500), the
 paired difference of captures (planner-prior minus the other, points,
 95% normal interval), the share (%) of its decisions that departed from
 the rule-based move, and the share of episodes it ends exactly as the
 robust target does (the same outcome at the same step). Prints Markdown.
 
-    python paired.py OUT   (run.sh's folder, beside greedy2-heuristic-R and greedy2-robust-R)
+    python paired.py OUT [TEAM]   (run.sh's folder, beside TEAM-heuristic-R and TEAM-robust-R;
+                                   TEAM greedy2 (the default), expert7 or mappo-sight)
 """
 
 import csv
@@ -40,18 +41,18 @@ def paired(a, b) -> str:
     return f"{100 * mean:+.1f} [{100 * (mean - half):+.1f}, {100 * (mean + half):+.1f}]"
 
 
-def main(out: Path) -> None:
+def main(out: Path, team: str) -> None:
     print("| v_p:v_e | learned target | target | episodes | SR % [95%] | Time | learned minus it, points [95%] | departures from the rule % | episodes ended as the robust target's % |")
     print("|---|---|---|---|---|---|---|---|---|")
-    for variant in ["planner-prior", "planner-prior-w6", "planner-prior-w3"]:
+    for variant in ["planner-prior", "planner-prior-w8", "planner-prior-w6", "planner-prior-w3"]:
         for ratio in ["1.0", "1.2"]:
             try:
-                learned, learned_summary = setting(out / f"greedy2-{variant}-{ratio}")
+                learned, learned_summary = setting(out / f"{team}-{variant}-{ratio}")
                 # The learned target's episodes are the first of the others'.
                 n = len(learned)
                 others = {}
                 for t in ["heuristic", "robust"]:
-                    episodes, summary = setting(out / f"greedy2-{t}-{ratio}")
+                    episodes, summary = setting(out / f"{team}-{t}-{ratio}")
                     # Its departures cover all its episodes: shown only when those are the n.
                     others[t] = (episodes[:n], summary if len(episodes) == n else {})
             except (FileNotFoundError, ValueError):
@@ -74,4 +75,4 @@ def main(out: Path) -> None:
 
 
 if __name__ == "__main__":
-    main(Path(sys.argv[1]))
+    main(Path(sys.argv[1]), sys.argv[2] if len(sys.argv) > 2 else "greedy2")
