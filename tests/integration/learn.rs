@@ -763,6 +763,7 @@ fn a_league_opponent_leaning_on_a_planner_plays_it_in_every_world_and_episode() 
         Some("robust:10:expert:1"),
         Some("lookahead:6:expert:1"),
     ];
+    std::fs::create_dir_all(root.path().join("pool")).unwrap();
     let mut members = Vec::new();
     let mut env_cfg = None;
     for (i, planner) in planners.iter().enumerate() {
@@ -771,7 +772,6 @@ fn a_league_opponent_leaning_on_a_planner_plays_it_in_every_world_and_episode() 
         let mut trainer = Trainer::new(cfg, room_maps()).unwrap();
         trainer.iterate().unwrap();
         let rel = format!("pool/member-{i}");
-        std::fs::create_dir_all(root.path().join("pool")).unwrap();
         // As a league writes its snapshots.
         let label = serde_json::json!({ "member": i });
         trainer
@@ -820,7 +820,7 @@ fn a_league_opponent_leaning_on_a_planner_plays_it_in_every_world_and_episode() 
     let mut actions = vec![Action::Stop; worlds_n * na];
     let (mut checked, mut still_apart_from_rule, mut episodes_per_member) = (0, 0, [0usize; 4]);
     let mut rule = ControllerSpec::Heuristic.build(Side::Target).unwrap();
-    for _step in 0..90 {
+    for step in 0..90 {
         for w in 0..worlds_n {
             let episode = venv.episode_index(w);
             if playing[w].as_ref().is_none_or(|(_, e, _)| *e != episode) {
@@ -850,7 +850,7 @@ fn a_league_opponent_leaning_on_a_planner_plays_it_in_every_world_and_episode() 
             let mut want = [Action::Stop];
             expected.act(venv.env(w), Side::Target, &mut want);
             let played = actions[w * na + na - 1];
-            assert_eq!(played, want[0], "world {w}, member {m}, step {_step}");
+            assert_eq!(played, want[0], "world {w}, member {m}, step {step}");
             if *m == 0 {
                 let mut by_rule = [Action::Stop];
                 rule.act(venv.env(w), Side::Target, &mut by_rule);
